@@ -1,0 +1,5 @@
+import sys
+
+from usarsim.cli import main
+
+sys.exit(main())

@@ -1,0 +1,199 @@
+"""The ``usarsim`` command: argument parsing and wiring only."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+import sys
+
+from usarsim import __version__
+
+log = logging.getLogger("usarsim")
+
+
+def _speed(text: str) -> float | None:
+    if text.lower() == "max":
+        return None
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number > 0 or 'max', got {text!r}") from None
+    if not (v > 0 and v < 1e6):
+        raise argparse.ArgumentTypeError(f"expected a number > 0 or 'max', got {text!r}")
+    return v
+
+
+def _port(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}") from None
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}")
+    return v
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="usarsim",
+        description="A USARSim-compatible robot simulator on MuJoCo. Controllers written for USARSim 3.x "
+                    "connect on TCP port 3000 and drive simulated robots unmodified.",
+        epilog="Run 'usarsim COMMAND --help' for the options of a command.")
+    p.add_argument("--version", action="version", version=f"usarsim {__version__}")
+    p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    s = sub.add_parser("serve", help="run the simulator and its servers",
+                       description="Load a world and serve the USARSim control protocol until SIGINT/SIGTERM.")
+    s.add_argument("--world", default="DM-USAR_yellow",
+                   help="world name (see 'usarsim worlds') or path of a world file (default: %(default)s)")
+    s.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default: %(default)s, this machine only; 0.0.0.0 exposes the "
+                        "simulator to the network)")
+    s.add_argument("--port", type=_port, default=3000, help="control port (default: %(default)s; 0 picks a free port)")
+    s.add_argument("--seed", type=int, default=0, help="seed of every random generator (default: %(default)s)")
+    s.add_argument("--speed", type=_speed, default=1.0, metavar="FACTOR|max",
+                   help="simulated seconds per wall-clock second: 1 is real time (default), 4 runs four times "
+                        "faster, 'max' as fast as the machine can")
+    s.add_argument("--lockstep", action="store_true",
+                   help="the world stands still until a client sends STEP {Time seconds}; the server then "
+                        "advances that much simulated time and replies STEPPED {Time t}")
+    s.add_argument("--max-connections", type=int, default=64, help="control connections (robots) at most "
+                   "(default: %(default)s)")
+
+    v = sub.add_parser("validate", help="check a world or robot file",
+                       description="Load a world or robot file, build its MuJoCo model and print a one-line "
+                                   "summary, or the error with the file, the key and what is allowed.")
+    v.add_argument("path", help="path of a .yaml world or robot file")
+
+    sub.add_parser("worlds", help="list the worlds that come with usarsim")
+    sub.add_parser("robots", help="list the robot classes that come with usarsim")
+
+    b = sub.add_parser("bench", help="measure the real-time factor with N robots",
+                       description="Spawn N P2ATs with their full sensor kit, each driven by its own TCP client "
+                                   "over loopback, run S simulated seconds as fast as possible and report the "
+                                   "real-time factor beside that of bare mj_step on the same model.")
+    b.add_argument("--robots", type=int, default=1, help="number of robots (default: %(default)s)")
+    b.add_argument("--seconds", type=float, default=10.0, help="simulated seconds to run (default: %(default)s)")
+    b.add_argument("--world", default="DM-USAR_yellow", help="world (default: %(default)s)")
+    b.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    return p
+
+
+def _setup_logging(verbose: int) -> None:
+    level = logging.WARNING if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG
+    logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+
+
+def cmd_serve(args) -> int:
+    from usarsim.config.catalog import resolve_world
+    from usarsim.errors import UsarsimError
+    from usarsim.server.app import Application
+
+    try:
+        world = resolve_world(args.world)
+    except UsarsimError as exc:
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
+    if args.verbose == 0:
+        logging.getLogger("usarsim").setLevel(logging.INFO)
+    app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
+                      lockstep=args.lockstep, max_connections=args.max_connections)
+
+    async def main() -> None:
+        loop = asyncio.get_running_loop()
+        stop = asyncio.Event()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        try:
+            await app.start()
+        except OSError as exc:
+            print(f"usarsim: error: cannot listen on {args.host}:{args.port}: {exc.strerror}", file=sys.stderr)
+            raise SystemExit(1) from exc
+        for service, host, port in app.listeners():
+            print(f"usarsim: {service} listening on {host}:{port}", flush=True)
+        mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
+        log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
+        await stop.wait()
+        log.info("shutting down")
+        await app.stop()
+
+    try:
+        asyncio.run(main())
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    return 0
+
+
+def cmd_validate(args) -> int:
+    from usarsim.config.catalog import file_kind
+    from usarsim.errors import UsarsimError
+
+    try:
+        kind = file_kind(args.path)
+        if kind == "world":
+            from usarsim.config.world import check_world_file
+            from usarsim.sim.simulation import Simulation
+
+            w = check_world_file(args.path)
+            sim = Simulation(w)
+            print(f"ok: world {w.name}: {len(w.objects)} objects, {len(w.start_poses)} start poses, "
+                  f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms")
+        else:
+            from usarsim.config.robot import load_robot
+            from usarsim.sim.builder import robot_model_summary
+            from usarsim.sim.simulation import describe_items
+
+            r = load_robot(args.path)
+            items = describe_items(r)
+            print(f"ok: robot {r.class_name}: {r.steering_type}, {r.mass_kg:g} kg, {len(items)} sensors, "
+                  f"MuJoCo model with {robot_model_summary(r)}")
+    except UsarsimError as exc:
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_worlds(args) -> int:
+    from usarsim.config.catalog import world_files
+    from usarsim.config.world import load_world
+
+    for name, path in world_files().items():
+        w = load_world(path)
+        print(f"{w.name}  {w.description}")
+    return 0
+
+
+def cmd_robots(args) -> int:
+    from usarsim.config.catalog import robot_files
+    from usarsim.config.robot import load_robot
+
+    for name, path in robot_files().items():
+        r = load_robot(path)
+        kit = ", ".join(sorted({i.item_type for i in r.items}))
+        print(f"{r.class_name}  {r.steering_type}  {kit}")
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from usarsim.bench import run_bench
+
+    return run_bench(args)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _setup_logging(args.verbose)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    handler = {"serve": cmd_serve, "validate": cmd_validate, "worlds": cmd_worlds, "robots": cmd_robots,
+               "bench": cmd_bench}[args.command]
+    return handler(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

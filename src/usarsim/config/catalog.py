@@ -1,0 +1,76 @@
+"""Where robot and world files live, and lookup by name.
+
+Robots and worlds shipped with usarsim are package data (``usarsim/data``);
+a path to a file of one's own works wherever a name does.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from usarsim.config.reader import did_you_mean, load_yaml
+from usarsim.config.robot import RobotConfig, load_robot
+from usarsim.config.world import WorldConfig, load_world
+from usarsim.errors import ConfigError
+
+DATA_DIR = Path(__file__).resolve().parent.parent / "data"
+ROBOTS_DIR = DATA_DIR / "robots"
+WORLDS_DIR = DATA_DIR / "worlds"
+DEFAULT_WORLD = "DM-USAR_yellow"
+
+
+def world_files() -> dict[str, Path]:
+    return {p.stem: p for p in sorted(WORLDS_DIR.glob("*.yaml"))}
+
+
+def robot_files() -> dict[str, Path]:
+    return {p.stem: p for p in sorted(ROBOTS_DIR.glob("*.yaml"))}
+
+
+def resolve_world(name_or_path: str) -> WorldConfig:
+    p = Path(name_or_path)
+    if p.suffix in (".yaml", ".yml") or p.exists():
+        if not p.exists():
+            raise ConfigError("no such world file", path=str(p))
+        return load_world(p)
+    files = world_files()
+    for stem, path in files.items():
+        if stem.lower() == name_or_path.lower():
+            return load_world(path)
+    raise ConfigError(f"unknown world '{name_or_path}'{did_you_mean(name_or_path, files)}; "
+                      "or give the path of a world file", key="--world")
+
+
+@lru_cache(maxsize=None)
+def _robot_cached(path: str, mtime: float) -> RobotConfig:
+    return load_robot(path)
+
+
+def robot_class_names() -> list[str]:
+    return list(robot_files())
+
+
+def resolve_robot(class_name: str) -> RobotConfig:
+    """A robot class by name (``P2AT``, ``USARBot.P2AT``, any case) or by file path."""
+    p = Path(class_name)
+    if p.suffix in (".yaml", ".yml"):
+        if not p.exists():
+            raise ConfigError("no such robot file", path=str(p))
+        return _robot_cached(str(p), p.stat().st_mtime)
+    bare = class_name.split(".", 1)[1] if class_name.lower().startswith("usarbot.") else class_name
+    for stem, path in robot_files().items():
+        if stem.lower() == bare.lower():
+            return _robot_cached(str(path), path.stat().st_mtime)
+    raise ConfigError(f"unknown robot class '{class_name}'{did_you_mean(bare, robot_files())}")
+
+
+def file_kind(path: str | Path) -> str:
+    """'robot' or 'world', decided by the keys the file holds."""
+    data = load_yaml(path)
+    if "class_name" in data:
+        return "robot"
+    if "start_poses" in data or "floor" in data:
+        return "world"
+    raise ConfigError("cannot tell whether this is a robot file (it would have 'class_name') "
+                      "or a world file (it would have 'floor' and 'start_poses')", path=str(path))

@@ -1,0 +1,154 @@
+"""Strict reading of YAML mappings into typed values, with errors that name the
+file, the key path, the value received and what is allowed."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from pathlib import Path
+from typing import Any, Iterable
+
+import yaml
+
+from usarsim.errors import ConfigError
+
+
+def load_yaml(path: str | Path) -> dict:
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot read file ({exc.strerror})", path=str(p)) from exc
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ConfigError(f"not valid YAML{where}: {getattr(exc, 'problem', exc)}", path=str(p)) from exc
+    if not isinstance(data, dict):
+        raise ConfigError("the file must hold a mapping of keys (name: ..., ...)", path=str(p))
+    return data
+
+
+def did_you_mean(word: str, allowed: Iterable[str]) -> str:
+    allowed = list(allowed)
+    close = difflib.get_close_matches(word, allowed, n=1, cutoff=0.6)
+    if not close:
+        lowered = {a.lower(): a for a in allowed}
+        if word.lower() in lowered:
+            close = [lowered[word.lower()]]
+    hint = f" (did you mean '{close[0]}'?)" if close else ""
+    return f"{hint}; allowed: {', '.join(sorted(allowed))}"
+
+
+class Section:
+    """A mapping being read; every key must be consumed or it is reported as unknown."""
+
+    def __init__(self, data: Any, *, path: str, key: str = ""):
+        self.path = path
+        self.key = key
+        if not isinstance(data, dict):
+            raise ConfigError(f"expected a mapping, got {type(data).__name__} {data!r}", path=path, key=key or None)
+        self.data = data
+        self._used: set[str] = set()
+
+    def _k(self, name: str) -> str:
+        return f"{self.key}.{name}" if self.key else name
+
+    def error(self, name: str, message: str) -> ConfigError:
+        return ConfigError(message, path=self.path, key=self._k(name))
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def raw(self, name: str, default: Any = ..., *, required: bool = False) -> Any:
+        self._used.add(name)
+        if name in self.data:
+            return self.data[name]
+        if required or default is ...:
+            raise self.error(name, "required key is missing")
+        return default
+
+    def str(self, name: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:
+        v = self.raw(name, default)
+        if v is default and default is not ...:
+            return v
+        if not isinstance(v, str) or not v.strip():
+            raise self.error(name, f"expected a non-empty text, got {v!r}")
+        if choices is not None:
+            choices = list(choices)
+            if v not in choices:
+                raise self.error(name, f"'{v}' is not allowed{did_you_mean(v, choices)}")
+        return v
+
+    def float(self, name: str, default: Any = ..., *, min: float | None = None, max: float | None = None,
+              min_exclusive: bool = False) -> float:
+        v = self.raw(name, default)
+        if v is default and default is not ...:
+            return v
+        return check_float(v, self.path, self._k(name), min=min, max=max, min_exclusive=min_exclusive)
+
+    def int(self, name: str, default: Any = ..., *, min: int | None = None) -> int:
+        v = self.raw(name, default)
+        if v is default and default is not ...:
+            return v
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.error(name, f"expected an integer, got {v!r}")
+        if min is not None and v < min:
+            raise self.error(name, f"must be >= {min}, got {v}")
+        return v
+
+    def bool(self, name: str, default: Any = ...) -> bool:
+        v = self.raw(name, default)
+        if not isinstance(v, bool):
+            raise self.error(name, f"expected true or false, got {v!r}")
+        return v
+
+    def vec(self, name: str, n: int = 3, default: Any = ..., *, positive: bool = False) -> tuple[float, ...]:
+        v = self.raw(name, default)
+        if v is default and default is not ...:
+            return v
+        return check_vec(v, n, self.path, self._k(name), positive=positive)
+
+    def section(self, name: str, default: Any = ...) -> "Section":
+        v = self.raw(name, default)
+        return Section(v if v is not None else {}, path=self.path, key=self._k(name))
+
+    def list(self, name: str, default: Any = ...) -> list:
+        v = self.raw(name, default)
+        if v is None:
+            return []
+        if not isinstance(v, list):
+            raise self.error(name, f"expected a list, got {type(v).__name__}")
+        return v
+
+    def finish(self, allowed_extra: Iterable[str] = ()) -> None:
+        """Fail on the first key that nothing read."""
+        known = self._used | set(allowed_extra)
+        for k in self.data:
+            if k not in known:
+                raise self.error(str(k), f"unknown key '{k}'{did_you_mean(str(k), known)}")
+
+
+def check_float(v: Any, path: str, key: str, *, min: float | None = None, max: float | None = None,
+                min_exclusive: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ConfigError(f"expected a number, got {v!r}", path=path, key=key)
+    f = float(v)
+    if not math.isfinite(f):
+        raise ConfigError(f"expected a finite number, got {v!r}", path=path, key=key)
+    if min is not None and (f < min or (min_exclusive and f == min)):
+        op = ">" if min_exclusive else ">="
+        raise ConfigError(f"must be {op} {min}, got {f}", path=path, key=key)
+    if max is not None and f > max:
+        raise ConfigError(f"must be <= {max}, got {f}", path=path, key=key)
+    return f
+
+
+def check_vec(v: Any, n: int, path: str, key: str, *, positive: bool = False) -> tuple[float, ...]:
+    if not isinstance(v, (list, tuple)) or len(v) != n:
+        raise ConfigError(f"expected a list of {n} numbers, got {v!r}", path=path, key=key)
+    out = tuple(check_float(x, path, f"{key}[{i}]") for i, x in enumerate(v))
+    if positive and any(x <= 0 for x in out):
+        raise ConfigError(f"every value must be > 0, got {list(out)}", path=path, key=key)
+    return out

@@ -1,0 +1,176 @@
+"""Robot files: one YAML file per robot class (geometry, masses, wheels, mounts,
+default sensors, battery).  Adding a robot needs no code unless it has a new kind
+of drive.  Coordinates are in the robot's USARSim frame (X forward, Y right,
+Z down) relative to the chassis origin; metres, radians, kilograms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from usarsim.config.reader import Section, did_you_mean, load_yaml
+from usarsim.errors import ConfigError
+
+Vec3 = tuple[float, float, float]
+
+VEHICLE_TYPES = ("GroundVehicle", "AerialVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform")
+STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive", "None")
+DRIVES = ("skid",)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChassisBox:
+    center: Vec3
+    size: Vec3
+    mass_kg: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class Wheel:
+    name: str
+    position: Vec3
+    radius_m: float
+    width_m: float
+    mass_kg: float
+    side: str  # "left" | "right"
+    driven: bool = True
+
+
+@dataclass(frozen=True, kw_only=True)
+class MountedItem:
+    """A sensor (or effecter) entry: its type, name, pose and raw configuration keys.
+
+    ``params`` keeps the keys as written (USARSim ini names or our own); the
+    plugin's Config validates them when the robot is checked or spawned.
+    """
+
+    item_type: str
+    name: str
+    location: Vec3
+    orientation: Vec3
+    mount: str
+    params: dict[str, Any]
+    key_path: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotGeometryConfig:
+    dimensions: Vec3
+    cog: Vec3
+    wheel_radius_m: float
+    wheel_separation_m: float
+    wheel_base_m: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotConfig:
+    class_name: str
+    description: str
+    path: str
+    vehicle_type: str
+    steering_type: str
+    drive: str
+    mass_kg: float
+    max_speed_rad_s: float
+    max_torque_nm: float
+    max_front_steer_rad: float
+    max_rear_steer_rad: float
+    battery_s: float
+    status_interval_s: float
+    geometry: RobotGeometryConfig
+    chassis: tuple[ChassisBox, ...]
+    wheels: tuple[Wheel, ...]
+    items: tuple[MountedItem, ...]
+    wheel_friction: float = 1.0
+    wheel_gain: float = 20.0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def total_mass_kg(self) -> float:
+        return sum(c.mass_kg for c in self.chassis) + sum(w.mass_kg for w in self.wheels)
+
+
+def load_robot(path: str | Path) -> RobotConfig:
+    path = str(path)
+    top = Section(load_yaml(path), path=path)
+    class_name = top.str("class_name")
+    if any(c in class_name for c in "{} \t."):
+        raise top.error("class_name", f"a class name may not contain spaces, dots or braces, got {class_name!r}")
+    desc = top.str("description", "")
+    vehicle_type = top.str("vehicle_type", choices=VEHICLE_TYPES)
+    steering = top.str("steering_type", choices=STEERING_TYPES)
+    drive = top.str("drive", choices=DRIVES)
+    mass = top.float("mass_kg", min=0.01)
+    max_speed = top.float("max_speed_rad_s", min=0.0, min_exclusive=True)
+    max_torque = top.float("max_torque_nm", min=0.0, min_exclusive=True)
+    mfs = top.float("max_front_steer_rad", 0.0, min=0.0)
+    mrs = top.float("max_rear_steer_rad", 0.0, min=0.0)
+    battery = top.float("battery_s", 1200.0, min=0.0, min_exclusive=True)
+    status_interval = top.float("status_interval_s", 0.2, min=0.01, max=10.0)
+    wheel_friction = top.float("wheel_friction", 1.0, min=0.0, max=10.0)
+    wheel_gain = top.float("wheel_gain", 20.0, min=0.0, min_exclusive=True)
+
+    g = top.section("geometry")
+    geometry = RobotGeometryConfig(
+        dimensions=g.vec("dimensions", positive=True), cog=g.vec("cog", 3, (0.0, 0.0, 0.0)),
+        wheel_radius_m=g.float("wheel_radius", 0.0, min=0.0), wheel_separation_m=g.float("wheel_separation", 0.0, min=0.0),
+        wheel_base_m=g.float("wheel_base", 0.0, min=0.0))
+    g.finish()
+
+    chassis = []
+    for i, raw in enumerate(top.list("chassis")):
+        s = Section(raw, path=path, key=f"chassis[{i}]")
+        chassis.append(ChassisBox(center=s.vec("center"), size=s.vec("size", positive=True), mass_kg=s.float("mass_kg", min=0.001)))
+        s.finish()
+    if not chassis:
+        raise top.error("chassis", "a robot needs at least one chassis box")
+
+    wheels = []
+    wnames: set[str] = set()
+    for i, raw in enumerate(top.list("wheels", [])):
+        s = Section(raw, path=path, key=f"wheels[{i}]")
+        w = Wheel(name=s.str("name"), position=s.vec("position"), radius_m=s.float("radius_m", min=0.001),
+                  width_m=s.float("width_m", min=0.001), mass_kg=s.float("mass_kg", min=0.001),
+                  side=s.str("side", choices=("left", "right")), driven=s.bool("driven", True))
+        if w.name in wnames:
+            raise s.error("name", f"duplicate wheel name '{w.name}'")
+        wnames.add(w.name)
+        s.finish()
+        wheels.append(w)
+    if drive == "skid" and not (any(w.side == "left" for w in wheels) and any(w.side == "right" for w in wheels)):
+        raise top.error("wheels", "a skid-steered robot needs at least one left and one right wheel")
+
+    items = []
+    inames: set[tuple[str, str]] = set()
+    for i, raw in enumerate(top.list("sensors", [])):
+        key = f"sensors[{i}]"
+        s = Section(raw, path=path, key=key)
+        itype = s.str("type")
+        iname = s.str("name")
+        if any(c in iname for c in "{} \t"):
+            raise s.error("name", f"an item name may not contain spaces or braces, got {iname!r}")
+        if (itype.lower(), iname.lower()) in inames:
+            raise s.error("name", f"duplicate {itype} name '{iname}'")
+        inames.add((itype.lower(), iname.lower()))
+        loc = s.vec("location", 3, (0.0, 0.0, 0.0))
+        ori = s.vec("orientation", 3, (0.0, 0.0, 0.0))
+        mount = s.str("mount", "HARD")
+        if mount != "HARD" and mount not in wnames:
+            raise s.error("mount", f"unknown mount '{mount}'{did_you_mean(mount, ['HARD', *wnames])}")
+        params = {k: v for k, v in s.data.items() if k not in ("type", "name", "location", "orientation", "mount")}
+        items.append(MountedItem(item_type=itype, name=iname, location=loc, orientation=ori, mount=mount,
+                                 params=params, key_path=key))
+    top.finish()
+
+    total = sum(c.mass_kg for c in chassis) + sum(w.mass_kg for w in wheels)
+    if abs(total - mass) > 0.01 * mass + 1e-6:
+        raise ConfigError(f"chassis and wheel masses add up to {total:.3f} kg but mass_kg is {mass}; make them agree",
+                          path=path, key="mass_kg")
+    return RobotConfig(class_name=class_name, description=desc, path=path, vehicle_type=vehicle_type,
+                       steering_type=steering, drive=drive, mass_kg=mass, max_speed_rad_s=max_speed,
+                       max_torque_nm=max_torque, max_front_steer_rad=mfs, max_rear_steer_rad=mrs,
+                       battery_s=battery, status_interval_s=status_interval, geometry=geometry,
+                       chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
+                       wheel_friction=wheel_friction, wheel_gain=wheel_gain)

@@ -1,0 +1,206 @@
+"""Typed values that flow from the simulation to the protocol layer.
+
+Sensors produce these frozen dataclasses; only :mod:`usarsim.protocol` turns them
+into text.  This module imports the standard library only, so both the simulation
+layer and the sans-IO protocol layer may depend on it.
+
+Conventions: metres, radians, seconds of simulated time; vectors and orientations
+in the USARSim frame (X forward, Y right, Z down; roll, pitch, yaw with yaw
+positive clockwise seen from above).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class RangeItem:
+    """One single-beam range value inside a packed Sonar/IR/RangeSensor line."""
+
+    name: str
+    range_m: float
+
+
+@dataclass(frozen=True, slots=True)
+class RangeReading:
+    """All single-beam range sensors of one type on a robot (packed in one SEN line).
+
+    ``sensor_type`` is the USARSim type name: ``Sonar``, ``IR`` or ``RangeSensor``.
+    """
+
+    sensor_type: str
+    items: tuple[RangeItem, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class RangeScanReading:
+    """One sweep of a scanning range finder; ``ranges_m[0]`` is the rightmost beam.
+
+    ``sensor_type`` is ``RangeScanner`` or ``IRScanner``.
+    """
+
+    sensor_type: str
+    name: str
+    resolution_rad: float
+    fov_rad: float
+    ranges_m: tuple[float, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class RangeScan3DReading:
+    """A 3D sweep, row-major: one horizontal line per vertical step."""
+
+    name: str
+    resolution_rad: tuple[float, float]  # vertical, horizontal
+    fov_rad: tuple[float, float]  # vertical, horizontal
+    ranges_m: tuple[float, ...]
+    sensor_type: str = "RangeScanner3D"
+
+
+@dataclass(frozen=True, slots=True)
+class OdometryReading:
+    name: str
+    x_m: float
+    y_m: float
+    theta_rad: float
+
+
+@dataclass(frozen=True, slots=True)
+class EncoderItem:
+    name: str
+    tick: int
+
+
+@dataclass(frozen=True, slots=True)
+class EncoderReading:
+    """All encoders of a robot (packed in one SEN line)."""
+
+    items: tuple[EncoderItem, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class PoseReading:
+    """A pose sensor: ``GroundTruth`` or ``INS`` (orientation in [0, 2 pi))."""
+
+    sensor_type: str
+    name: str
+    location: Vec3
+    orientation: Vec3
+
+
+@dataclass(frozen=True, slots=True)
+class OrientationReading:
+    """``INU`` (old orientation-only sensor)."""
+
+    name: str
+    orientation: Vec3
+    sensor_type: str = "INU"
+
+
+@dataclass(frozen=True, slots=True)
+class TouchItem:
+    name: str
+    touching: bool
+
+
+@dataclass(frozen=True, slots=True)
+class TouchReading:
+    items: tuple[TouchItem, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class GpsReading:
+    """``latitude``/``longitude`` are (degrees, minutes, hemisphere) or None without a fix."""
+
+    name: str
+    fix: bool
+    satellites: int
+    latitude: tuple[int, float, str] | None = None
+    longitude: tuple[int, float, str] | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class TachometerReading:
+    name: str
+    velocities_rad_s: tuple[float, ...]
+    positions_rad: tuple[float, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ImuReading:
+    """UDK-style IMU: accelerations, angular velocities and orientation."""
+
+    name: str
+    acceleration: Vec3
+    angular_velocity: Vec3
+    angular_acceleration: Vec3
+    orientation: Vec3
+
+
+@dataclass(frozen=True, slots=True)
+class VictimPart:
+    part_name: str
+    location: Vec3
+
+
+@dataclass(frozen=True, slots=True)
+class VictimReading:
+    name: str
+    parts: tuple[VictimPart, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class RfidTag:
+    tag_id: int
+    location: Vec3
+    memory: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class RfidReading:
+    name: str
+    tags: tuple[RfidTag, ...]
+
+
+Reading = (
+    RangeReading
+    | RangeScanReading
+    | RangeScan3DReading
+    | OdometryReading
+    | EncoderReading
+    | PoseReading
+    | OrientationReading
+    | TouchReading
+    | GpsReading
+    | TachometerReading
+    | ImuReading
+    | VictimReading
+    | RfidReading
+)
+
+
+@dataclass(frozen=True, slots=True)
+class RobotStatus:
+    """The STA values of a robot at one instant."""
+
+    vehicle_type: str
+    battery_s: int
+    front_steer: float = 0.0
+    rear_steer: float = 0.0
+    joints: tuple[tuple[str, float], ...] = ()
+    light_toggle: bool = False
+    light_intensity: int = 0
+    view: int = -1
+
+
+@dataclass(frozen=True, slots=True)
+class CommandResult:
+    """The outcome of a SET (an RES line): ``extra`` are item-specific (key, value) pairs."""
+
+    item_type: str
+    name: str
+    status: str
+    extra: tuple[tuple[str, str], ...] = ()

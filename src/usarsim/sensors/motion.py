@@ -1,0 +1,234 @@
+"""Wheel-based and pose sensors: Odometry (protocol.md 7.4), Encoder (7.5),
+GroundTruth (7.8) and INS (7.7)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from usarsim.readings import EncoderItem, EncoderReading, OdometryReading, PoseReading
+from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sim.frames import wrap_2pi, wrap_pi
+
+
+@dataclass(frozen=True, kw_only=True)
+class OdometryConfig(SensorConfig):
+    # UT CONF example (protocol.md 6.7): ScanInterval 0.2, EncoderResolution 0.0099 rad.
+    scan_interval_s: float = 0.2
+    encoder_resolution_rad: float = 0.0099
+    left_wheel: str = ""
+    right_wheel: str = ""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.encoder_resolution_rad < 0:
+            raise ValueError(f"encoder_resolution_rad must be >= 0, got {self.encoder_resolution_rad}")
+
+
+def _quantise(angle: float, resolution: float) -> float:
+    if resolution <= 0:
+        return angle
+    return math.floor(angle / resolution + 0.5) * resolution
+
+
+@SENSORS.register("Odometry")
+class Odometry(Sensor):
+    """Differential dead reckoning from the left and right wheel angles, quantised by
+    EncoderResolution; pose relative to the spawn pose (or the last RESET); positive
+    theta is a clockwise (right) turn, as in the Z-down frame."""
+
+    Config = OdometryConfig
+    ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel"}
+
+    def configure(self, view) -> None:
+        wheels = {w.name: w for w in self.robot.wheels}
+        left = self.config.left_wheel or next(w.name for w in self.robot.wheels if w.side == "left")
+        right = self.config.right_wheel or next(w.name for w in self.robot.wheels if w.side == "right")
+        self._left, self._right = left, right
+        self._radius = wheels[left].radius_m
+        # sep = 2 x the lateral offset of the right wheel (protocol.md 7.4)
+        self._sep = 2.0 * abs(wheels[right].position[1])
+
+    def _angles(self, view) -> tuple[float, float]:
+        q = view.data.qpos
+        res = self.config.encoder_resolution_rad
+        return (_quantise(float(q[self.handle.joint_qpos[self._left]]), res),
+                _quantise(float(q[self.handle.joint_qpos[self._right]]), res))
+
+    def reset(self, view) -> None:
+        self.x = self.y = self.theta = 0.0
+        self._last = self._angles(view)
+
+    def measure(self, view) -> OdometryReading:
+        left, right = self._angles(view)
+        dl, dr = left - self._last[0], right - self._last[1]
+        self._last = (left, right)
+        ds = self._radius * (dl + dr) / 2.0
+        dtheta = self._radius * (dl - dr) / self._sep
+        mid = self.theta + dtheta / 2.0
+        self.x += ds * math.cos(mid)
+        self.y += ds * math.sin(mid)
+        self.theta = wrap_pi(self.theta + dtheta)
+        return OdometryReading(self.name, self.x, self.y, self.theta)
+
+    def operate(self, view, opcode, params):
+        if opcode.upper() == "RESET":
+            self.reset(view)
+            return "OK"
+        return None
+
+    def conf_fields(self):
+        return (("ScanInterval", self.config.scan_interval_s), ("EncoderResolution", self.config.encoder_resolution_rad))
+
+
+@dataclass(frozen=True, kw_only=True)
+class EncoderConfig(SensorConfig):
+    # Encoder (protocol.md 7.5): Resolution 0.01745 rad per tick, Noise 0.005; the
+    # sensor base ScanInterval is 0.1 s (7.1).
+    scan_interval_s: float = 0.1
+    resolution_rad: float = 0.01745
+    noise: float = 0.005
+    wheel: str = ""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.resolution_rad <= 0:
+            raise ValueError(f"resolution_rad must be > 0, got {self.resolution_rad}")
+
+
+@SENSORS.register("Encoder")
+class Encoder(Sensor):
+    """Tick = round(accumulated wheel angle x (1 + U(-Noise, Noise)) / Resolution);
+    forward rotation counts up."""
+
+    PACKED = True
+    Config = EncoderConfig
+    ALIASES = {"Resolution": "resolution_rad", "Wheel": "wheel", "Joint": "wheel"}
+
+    def configure(self, view) -> None:
+        self._wheel = self.config.wheel or self.robot.wheels[0].name
+        if self._wheel not in {w.name for w in self.robot.wheels}:
+            raise ValueError(f"encoder {self.name}: unknown wheel {self._wheel}")
+
+    def reset(self, view) -> None:
+        self._zero = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
+
+    def measure(self, view) -> EncoderItem:
+        angle = float(view.data.qpos[self.handle.joint_qpos[self._wheel]]) - self._zero
+        noisy = float(self.relative_noise(np.array(angle)))
+        return EncoderItem(self.name, int(round(noisy / self.config.resolution_rad)))
+
+    @classmethod
+    def combine(cls, parts):
+        return EncoderReading(tuple(parts))
+
+    def operate(self, view, opcode, params):
+        if opcode.upper() == "RESET":
+            self.reset(view)
+            return "OK"
+        return None
+
+    def conf_fields(self):
+        return (("Resolution", self.config.resolution_rad),)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GroundTruthConfig(SensorConfig):
+    # GroundTruth ScanInterval 0.1 (protocol.md 7.8).
+    scan_interval_s: float = 0.1
+
+
+@SENSORS.register("GroundTruth")
+class GroundTruth(Sensor):
+    """The exact pose of the robot's origin in the world frame, no noise."""
+
+    Config = GroundTruthConfig
+
+    def measure(self, view) -> PoseReading:
+        d = view.data
+        r, p, y = self.handle.orientation(d)
+        return PoseReading("GroundTruth", self.name, self.handle.location(d), (wrap_2pi(r), wrap_2pi(p), wrap_2pi(y)))
+
+
+@dataclass(frozen=True, kw_only=True)
+class InsConfig(SensorConfig):
+    # INS (protocol.md 7.7): ScanInterval 0.2, Sigma 0.05, Precision 1000, Drifting.
+    scan_interval_s: float = 0.2
+    sigma: float = 0.05
+    mean: float = 0.0
+    precision: float = 1000.0
+    drifting: bool = False
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.sigma < 0 or self.precision <= 0:
+            raise ValueError("sigma must be >= 0 and precision > 0")
+
+
+@SENSORS.register("INS")
+class INS(Sensor):
+    """Integrates noisy increments of the true pose: each tick the true change of
+    every Euler angle is scaled by (1 + N(meanRot, Sigma)) and the true displacement d
+    gets d x N(meanPos, Sigma) per axis.  With Drifting, per-axis biases are drawn
+    once.  Integration starts after the robot has been at rest for one tick."""
+
+    Config = InsConfig
+    ALIASES = {"Sigma": "sigma", "Mean": "mean", "Precision": "precision", "Drifting": "drifting"}
+
+    def _true(self, view):
+        d = view.data
+        return np.array(self.handle.location(d)), np.array(self.handle.orientation(d))
+
+    def reset(self, view) -> None:
+        loc, ori = self._true(view)
+        self.est_loc = loc.copy()
+        self.est_ori = ori.copy()
+        self._last_loc, self._last_ori = loc, ori
+        self._started = False
+        self._reset_time = view.time
+        self._draw_biases()
+
+    def _draw_biases(self) -> None:
+        c = self.config
+        if c.drifting:
+            self._mean_rot = self.rng.uniform(-0.5, 0.5, 3) / c.precision ** 2
+            self._mean_pos = self.rng.uniform(-0.5, 0.5, 3) / c.precision
+        else:
+            self._mean_rot = np.full(3, c.mean)
+            self._mean_pos = np.full(3, c.mean)
+
+    def measure(self, view) -> PoseReading:
+        c = self.config
+        loc, ori = self._true(view)
+        dloc = loc - self._last_loc
+        dori = (ori - self._last_ori + math.pi) % (2 * math.pi) - math.pi
+        self._last_loc, self._last_ori = loc, ori
+        moved = float(np.linalg.norm(dloc))
+        if not self._started:
+            # wait until the robot has settled (e.g. after dropping onto the floor):
+            # a tick after spawn with the chassis at rest
+            qv = view.data.qvel[self.handle.root_qvel:self.handle.root_qvel + 6]
+            if view.time > self._reset_time and float(np.abs(qv).max()) < 0.02:
+                self._started = True
+            self.est_loc, self.est_ori = loc.copy(), ori.copy()
+        else:
+            self.est_ori = self.est_ori + dori * (1.0 + self.rng.normal(self._mean_rot, c.sigma))
+            self.est_loc = self.est_loc + dloc + moved * self.rng.normal(self._mean_pos, c.sigma)
+        o = tuple(wrap_2pi(float(a)) for a in self.est_ori)
+        return PoseReading("INS", self.name, tuple(float(v) for v in self.est_loc), o)
+
+    def operate(self, view, opcode, params):
+        if opcode.upper() == "POSE" and params:
+            try:
+                vals = [float(v) for v in params.replace(",", " ").split()]
+            except ValueError:
+                return "Failed"
+            if len(vals) != 6 or not all(math.isfinite(v) for v in vals):
+                return "Failed"
+            self.est_loc = np.array(vals[:3])
+            self.est_ori = np.array(vals[3:])
+            self._draw_biases()
+            return "OK"
+        return None

@@ -1,0 +1,187 @@
+"""The control server (TCP 3000): one robot per connection.
+
+asyncio glue only: bytes -> lines (protocol.framing) -> session -> simulation
+facade; simulation outputs -> protocol messages -> the owning connection.
+
+Slow readers: periodic messages (STA, SEN) are latest-wins per stream while the
+socket's send buffer is above its high-water mark; replies (NFO, GEO, CONF, RES,
+STEPPED) are always queued.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import Any
+
+from usarsim.protocol import messages as M
+from usarsim.protocol.framing import LineBuffer
+from usarsim.readings import CommandResult, RobotStatus
+from usarsim.server.session import CLOSED, Session
+from usarsim.sim.facade import SimFacade
+from usarsim.sim.simulation import Output
+
+log = logging.getLogger("usarsim.server")
+
+HIGH_WATER = 256 * 1024
+
+
+def output_to_message(o: Output) -> Any:
+    v = o.value
+    if isinstance(v, RobotStatus):
+        if v.vehicle_type == "AerialVehicle":
+            return M.AerialVehicleStatus(time=o.time, light_toggle=v.light_toggle, light_intensity=v.light_intensity,
+                                         battery_s=v.battery_s, view=v.view)
+        return M.GroundVehicleStatus(time=o.time, front_steer=v.front_steer, rear_steer=v.rear_steer, joints=v.joints,
+                                     light_toggle=v.light_toggle, light_intensity=v.light_intensity,
+                                     battery_s=v.battery_s, view=v.view, vehicle_type=v.vehicle_type)
+    if isinstance(v, CommandResult):
+        return M.Result(time=o.time, item_type=v.item_type, name=v.name, status=v.status, extra=v.extra)
+    return M.SensorMessage(time=o.time, reading=v)
+
+
+class Connection(asyncio.Protocol):
+    def __init__(self, server: "ControlServer"):
+        self.server = server
+        self.transport: asyncio.Transport | None = None
+        self.peer = "?"
+        self.buffer = LineBuffer(max_line_bytes=server.max_line_bytes)
+        self.session: Session | None = None
+        self._paused = False
+        self._held: dict[str, bytes] = {}  # latest periodic line per stream while paused
+        self.dropped_periodic = 0
+
+    # asyncio.Protocol -----------------------------------------------------------------
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        transport.set_write_buffer_limits(high=HIGH_WATER)
+        peer = transport.get_extra_info("peername")
+        self.peer = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
+        srv = self.server
+        if len(srv.connections) >= srv.max_connections:
+            log.warning("%s: refused: %d connections already (limit --max-connections %d)", self.peer,
+                        len(srv.connections), srv.max_connections)
+            transport.close()
+            return
+        uid = srv.next_uid()
+        self.session = Session(self, uid)
+        srv.connections[uid] = self
+        log.info("%s: connected (robot id %d)", self.peer, uid)
+        self.send_reply(M.GameInfo(level=srv.facade.world_name, time_limit=srv.facade.world.time_limit_min))
+
+    def data_received(self, data: bytes) -> None:
+        if self.session is None:
+            return
+        before = self.buffer.dropped_lines
+        lines = self.buffer.feed(data)
+        if self.buffer.dropped_lines != before:
+            self.session.log_once("too-long", "dropped a line longer than %d bytes", self.buffer.max_line_bytes)
+        for line in lines:
+            try:
+                self.session.handle_line(line)
+            except Exception:  # nothing a client sends may take the server down
+                log.exception("%s: error while handling %.200r", self.peer, line)
+
+    def connection_lost(self, exc) -> None:
+        s = self.session
+        if s is None:
+            return
+        self.server.connections.pop(s.uid, None)
+        if s.state != "new":
+            self.server.facade.remove(s.uid)
+        s.state = CLOSED
+        log.info("%s: disconnected%s", self.peer, f" ({exc})" if exc else "")
+
+    def pause_writing(self) -> None:
+        self._paused = True
+
+    def resume_writing(self) -> None:
+        self._paused = False
+        held, self._held = self._held, {}
+        if held and self.transport is not None:
+            self.transport.write(b"".join(held.values()))
+
+    # Output ----------------------------------------------------------------------------
+    def send_reply(self, msg) -> None:
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.write(M.format_message(msg).encode("ascii", "replace"))
+
+    def send_periodic(self, key: str, data: bytes) -> None:
+        if self.transport is None or self.transport.is_closing():
+            return
+        if self._paused:
+            if key in self._held:
+                self.dropped_periodic += 1
+            self._held[key] = data
+            return
+        self.transport.write(data)
+
+    # Callbacks from the simulation thread -------------------------------------------------
+    def spawn_done_threadsafe(self, result, error) -> None:
+        self.server.loop.call_soon_threadsafe(self._spawn_done, result, error)
+
+    def _spawn_done(self, result, error) -> None:
+        if self.session is not None:
+            self.session.spawn_done(result, error)
+
+    def stepped_threadsafe(self, sim_time: float) -> None:
+        self.server.loop.call_soon_threadsafe(self.send_reply, M.Stepped(time=sim_time))
+
+
+class ControlServer:
+    def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3000,
+                 max_connections: int = 64, max_line_bytes: int = 8192):
+        self.facade = facade
+        self.host = host
+        self.port = port
+        self.max_connections = max_connections
+        self.max_line_bytes = max_line_bytes
+        self.connections: dict[int, Connection] = {}
+        self._uid = 0
+        self._server: asyncio.base_events.Server | None = None
+        self.loop: asyncio.AbstractEventLoop | None = None
+
+    def next_uid(self) -> int:
+        self._uid += 1
+        return self._uid
+
+    async def start(self) -> int:
+        self.loop = asyncio.get_running_loop()
+        self.facade.set_deliver(self._deliver_threadsafe)
+        self._server = await self.loop.create_server(lambda: Connection(self), self.host, self.port,
+                                                     reuse_address=True)
+        self.port = self._server.sockets[0].getsockname()[1]
+        return self.port
+
+    def _deliver_threadsafe(self, outs: list[Output]) -> None:
+        loop = self.loop
+        if loop is not None and not loop.is_closed():
+            try:
+                loop.call_soon_threadsafe(self.dispatch, outs)
+            except RuntimeError:  # the loop closed meanwhile
+                pass
+
+    def dispatch(self, outs: list[Output]) -> None:
+        conns = self.connections
+        for o in outs:
+            conn = conns.get(o.uid)
+            if conn is None:
+                continue
+            try:
+                data = M.format_message(output_to_message(o)).encode("ascii", "replace")
+            except Exception:
+                log.exception("cannot format %r", o)
+                continue
+            if o.periodic:
+                conn.send_periodic(o.key, data)
+            elif conn.transport is not None and not conn.transport.is_closing():
+                conn.transport.write(data)
+
+    async def stop(self) -> None:
+        if self._server is not None:
+            self._server.close()
+        for conn in list(self.connections.values()):
+            if conn.transport is not None:
+                conn.transport.close()
+        if self._server is not None:
+            await self._server.wait_closed()

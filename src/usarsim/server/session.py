@@ -1,0 +1,218 @@
+"""One control connection's state machine: before INIT -> robot alive -> closed.
+
+A dispatch table maps each command type to a handler; handlers call the
+simulation facade and return message objects.  No string building happens here:
+the protocol layer formats every message.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import TYPE_CHECKING, Callable
+
+from usarsim.config.catalog import resolve_robot
+from usarsim.config.robot import RobotConfig
+from usarsim.errors import ConfigError, ProtocolError
+from usarsim.protocol import commands as C
+from usarsim.protocol import messages as M
+from usarsim.protocol.numbers import f4
+from usarsim.sensors import SENSORS
+
+if TYPE_CHECKING:
+    from usarsim.server.control import Connection
+
+log = logging.getLogger("usarsim.server")
+
+NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
+
+
+def _r2(v: float) -> float:
+    """The value as GETSTARTPOSES prints it (2 decimals), so that a pose copied from
+    the reply spawns a robot exactly where ``{Start name}`` does."""
+    return float(f"{v:.2f}")
+
+
+def conf_value(v) -> str:
+    if isinstance(v, bool):
+        return "True" if v else "False"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f4(v)
+    return str(v)
+
+
+class Session:
+    def __init__(self, conn: "Connection", uid: int):
+        self.conn = conn
+        self.uid = uid
+        self.state = NEW
+        self.robot: RobotConfig | None = None
+        self.robot_name: str | None = None
+        self._logged: set[str] = set()
+        self.handlers: dict[type, Callable] = {
+            C.Init: self.on_init,
+            C.GetStartPoses: self.on_get_start_poses,
+            C.Drive: self.on_drive,
+            C.GetGeo: self.on_get_geo,
+            C.GetConf: self.on_get_conf,
+            C.Set: self.on_set,
+            C.Step: self.on_step,
+        }
+
+    @property
+    def facade(self):
+        return self.conn.server.facade
+
+    def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:
+        if kind in self._logged:
+            log.debug("%s: " + msg, self.conn.peer, *args)
+            return
+        self._logged.add(kind)
+        log.log(level, "%s: " + msg, self.conn.peer, *args)
+
+    # Entry point ---------------------------------------------------------------------
+    def handle_line(self, line: str) -> None:
+        try:
+            cmd = C.parse_command(line)
+        except ProtocolError as exc:
+            self.log_once("malformed", "ignored a malformed line (%s): %.200r", exc, line)
+            return
+        handler = self.handlers.get(type(cmd))
+        if handler is None:
+            if isinstance(cmd, C.UnknownCommand):
+                self.log_once(f"unknown:{cmd.type}", "ignored unknown command %s", cmd.type, level=logging.INFO)
+            else:
+                self.log_once(f"unsupported:{type(cmd).__name__}", "command %s is not supported by this robot; ignored",
+                              type(cmd).__name__.upper(), level=logging.INFO)
+            return
+        handler(cmd)
+
+    def send(self, msg) -> None:
+        self.conn.send_reply(msg)
+
+    # Handlers ------------------------------------------------------------------------
+    def on_get_start_poses(self, cmd: C.GetStartPoses) -> None:
+        poses = tuple(M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
+                      for p in self.facade.start_poses)
+        self.send(M.StartPoses(poses=poses))
+
+    def on_init(self, cmd: C.Init) -> None:
+        if self.state != NEW:
+            self.log_once("init-twice", "a second INIT on the same connection is ignored (one robot per connection)")
+            return
+        if not cmd.class_name:
+            self.log_once("init", "INIT without ClassName ignored")
+            return
+        try:
+            robot = resolve_robot(cmd.class_name)
+        except ConfigError as exc:
+            self.log_once("init", "INIT ignored: %s", exc)
+            return
+        if cmd.start:
+            pose = next((p for p in self.facade.start_poses if p.name.lower() == cmd.start.lower()), None)
+            if pose is None:
+                names = ", ".join(p.name for p in self.facade.start_poses)
+                self.log_once("init", "INIT ignored: unknown start pose %r (known: %s)", cmd.start, names)
+                return
+            location = tuple(_r2(v) for v in pose.location)
+            rotation = tuple(_r2(v) for v in pose.rotation)
+        elif cmd.location is not None:
+            location = cmd.location
+            rotation = cmd.rotation or (0.0, 0.0, 0.0)
+        else:
+            poses = self.facade.start_poses
+            if not poses:
+                self.log_once("init", "INIT ignored: no Location and the world has no start pose")
+                return
+            location = tuple(_r2(v) for v in poses[0].location)
+            rotation = tuple(_r2(v) for v in poses[0].rotation)
+            log.info("%s: INIT without Location or Start: using start pose %s", self.conn.peer, poses[0].name)
+        if not all(math.isfinite(v) for v in (*location, *rotation)):
+            self.log_once("init", "INIT ignored: location and rotation must be finite")
+            return
+        self.robot = robot
+        self.robot_name = cmd.name or f"Robot{self.uid}"
+        self.state = SPAWNING
+        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self.conn.spawn_done_threadsafe)
+
+    def spawn_done(self, result, error) -> None:
+        if self.state == CLOSED:
+            return
+        if error is not None:
+            self.state = NEW
+            self.robot = None
+            log.warning("%s: INIT failed: %s", self.conn.peer, error)
+            return
+        self.state = ALIVE
+
+    def on_drive(self, cmd: C.Drive) -> None:
+        if self.state != ALIVE:
+            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            return
+        skid = cmd.left is not None or cmd.right is not None
+        if skid or cmd.light is not None:
+            self.facade.drive_skid(self.uid, cmd.left, cmd.right, bool(cmd.normalized), cmd.light)
+
+    def _items(self, item_type: str, name: str | None):
+        assert self.robot is not None
+        t = item_type.lower()
+        canonical = SENSORS.canonical(item_type) or item_type
+        found = [d for d in self.facade.describe(self.robot) if d.item_type.lower() in (t, canonical.lower())
+                 and (not name or d.name.lower() == name.lower())]
+        return found
+
+    def on_get_geo(self, cmd: C.GetGeo) -> None:
+        if self.robot is None:
+            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            return
+        if not cmd.type:
+            self.send(M.EmptyGeometry(item_type="", name=cmd.name))
+            return
+        if cmd.type.lower() == "robot":
+            r, g = self.robot, self.robot.geometry
+            self.send(M.RobotGeometry(vehicle_type=r.vehicle_type, class_name=r.class_name, dimensions=g.dimensions,
+                                      cog=g.cog, wheel_radius=g.wheel_radius_m, wheel_separation=g.wheel_separation_m,
+                                      wheel_base=g.wheel_base_m))
+            return
+        items = self._items(cmd.type, cmd.name)
+        if not items:
+            self.send(M.EmptyGeometry(item_type=cmd.type, name=cmd.name))
+            return
+        self.send(M.ItemGeometry(item_type=items[0].item_type, items=tuple(
+            M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount) for d in items)))
+
+    def on_get_conf(self, cmd: C.GetConf) -> None:
+        if self.robot is None:
+            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            return
+        if not cmd.type:
+            self.send(M.EmptyConfiguration(item_type="", name=cmd.name))
+            return
+        if cmd.type.lower() == "robot":
+            r = self.robot
+            self.send(M.RobotConfiguration(vehicle_type=r.vehicle_type, class_name=r.class_name,
+                                           steering_type=r.steering_type, mass_kg=r.mass_kg,
+                                           max_speed=r.max_speed_rad_s, max_torque=r.max_torque_nm,
+                                           max_front_steer=r.max_front_steer_rad, max_rear_steer=r.max_rear_steer_rad))
+            return
+        items = self._items(cmd.type, cmd.name)
+        if not items:
+            self.send(M.EmptyConfiguration(item_type=cmd.type, name=cmd.name))
+            return
+        self.send(M.ItemConfiguration(item_type=items[0].item_type, items=tuple(
+            M.ItemConf(name=d.name, fields=tuple((k, conf_value(v)) for k, v in d.conf)) for d in items)))
+
+    def on_set(self, cmd: C.Set) -> None:
+        if self.state != ALIVE:
+            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            return
+        t = (cmd.type or "").lower()
+        if t in ("viewports", "joint") or (t == "camera" and (cmd.client is not None or cmd.robot is not None)):
+            self.log_once(f"set:{t}", "SET {Type %s} is not supported yet; ignored", cmd.type, level=logging.INFO)
+            return
+        self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, cmd.params)
+
+    def on_step(self, cmd: C.Step) -> None:
+        self.facade.step(cmd.time_s, self.conn.stepped_threadsafe)

@@ -1,0 +1,142 @@
+"""Building the MuJoCo model: a world file becomes an ``MjSpec``; robots are added
+to and removed from that spec while the simulation runs (``MjSpec.recompile``
+carries the state of everything else over)."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from usarsim.config.robot import RobotConfig
+from usarsim.config.world import WorldConfig
+from usarsim.sim import frames
+from usarsim.sim.view import GROUP_ROBOT, GROUP_STATIC, GROUP_WHEEL
+
+# Wheel rolling friction and torsional friction: MuJoCo's defaults for the
+# second and third friction coefficients.
+SPIN_FRICTION = 0.005
+ROLL_FRICTION = 0.0001
+
+
+def world_spec(world: WorldConfig) -> mujoco.MjSpec:
+    s = mujoco.MjSpec()
+    s.modelname = world.name
+    o = s.option
+    o.timestep = world.timestep_s
+    # implicitfast: explicit Euler goes unstable with stiff wheel velocity servos
+    o.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    o.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
+    o.gravity = [0.0, 0.0, -world.gravity_m_s2]
+    s.visual.global_.offwidth = 640
+    s.visual.global_.offheight = 480
+
+    fl = world.floor
+    floor_mat = world.materials[fl.material]
+    g = s.worldbody.add_geom()
+    g.name = "floor"
+    g.type = mujoco.mjtGeom.mjGEOM_BOX
+    # a thick box so that nothing tunnels through; top face at z = 0
+    g.size = [fl.size[0] / 2.0, fl.size[1] / 2.0, 0.5]
+    g.pos = [fl.center[0], -fl.center[1], -0.5]
+    g.rgba = list(floor_mat.rgba)
+    g.friction = [floor_mat.friction, SPIN_FRICTION, ROLL_FRICTION]
+    g.group = GROUP_STATIC
+
+    for obj in world.objects:
+        mat = world.materials[obj.material]
+        g = s.worldbody.add_geom()
+        g.name = f"world/{obj.name}"
+        g.pos = frames.to_mj_vec(obj.center).tolist()
+        g.quat = frames.usar_euler_to_mj_quat(obj.rotation).tolist()
+        if obj.shape == "box":
+            g.type = mujoco.mjtGeom.mjGEOM_BOX
+            g.size = [obj.size[0] / 2.0, obj.size[1] / 2.0, obj.size[2] / 2.0]
+        else:
+            g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+            g.size = [obj.radius_m, obj.length_m / 2.0, 0.0]
+        g.rgba = list(mat.rgba)
+        g.friction = [mat.friction, SPIN_FRICTION, ROLL_FRICTION]
+        g.group = GROUP_STATIC
+
+    light = s.worldbody.add_light()
+    light.name = "sun"
+    light.pos = [fl.center[0], -fl.center[1], 10.0]
+    light.dir = [0.0, 0.0, -1.0]
+    return s
+
+
+def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation) -> mujoco.MjsBody:
+    """Add a robot's bodies, joints and actuators under ``prefix``; its chassis origin at
+    ``location`` (USARSim frame) with ``rotation`` (roll, pitch, yaw)."""
+    body = spec.worldbody.add_body()
+    body.name = prefix
+    body.pos = frames.to_mj_vec(location).tolist()
+    body.quat = frames.usar_euler_to_mj_quat(rotation).tolist()
+    root = body.add_freejoint()
+    root.name = f"{prefix}/root"
+    for i, box in enumerate(robot.chassis):
+        g = body.add_geom()
+        g.name = f"{prefix}/chassis{i}"
+        g.type = mujoco.mjtGeom.mjGEOM_BOX
+        g.size = [box.size[0] / 2.0, box.size[1] / 2.0, box.size[2] / 2.0]
+        g.pos = frames.to_mj_vec(box.center).tolist()
+        g.mass = box.mass_kg
+        g.rgba = [0.75, 0.1, 0.1, 1.0]
+        g.group = GROUP_ROBOT
+    # wheel cylinders lie along MuJoCo's Y axis (the axle)
+    axle_quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]
+    for w in robot.wheels:
+        wb = body.add_body()
+        wb.name = f"{prefix}/{w.name}"
+        wb.pos = frames.to_mj_vec(w.position).tolist()
+        j = wb.add_joint()
+        j.name = f"{prefix}/{w.name}"
+        j.type = mujoco.mjtJoint.mjJNT_HINGE
+        j.axis = [0.0, 1.0, 0.0]  # MuJoCo +Y is the robot's left: positive spin rolls forward
+        j.armature = 0.01
+        g = wb.add_geom()
+        g.name = f"{prefix}/{w.name}"
+        g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+        g.size = [w.radius_m, w.width_m / 2.0, 0.0]
+        g.quat = axle_quat
+        g.mass = w.mass_kg
+        g.friction = [robot.wheel_friction, SPIN_FRICTION, ROLL_FRICTION]
+        g.rgba = [0.1, 0.1, 0.1, 1.0]
+        g.group = GROUP_WHEEL
+        if w.driven:
+            a = spec.add_actuator()
+            a.name = f"{prefix}/{w.name}"
+            a.target = f"{prefix}/{w.name}"
+            a.trntype = mujoco.mjtTrn.mjTRN_JOINT
+            a.set_to_velocity(kv=robot.wheel_gain)
+            a.forcelimited = 1
+            a.forcerange = [-robot.max_torque_nm, robot.max_torque_nm]
+    return body
+
+
+def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
+    for a in list(spec.actuators):
+        if a.name.startswith(prefix + "/"):
+            spec.delete(a)
+    body = spec.body(prefix)
+    if body is not None:
+        spec.delete(body)
+
+
+def robot_model_summary(robot: RobotConfig) -> str:
+    """Compile a robot alone on a plane: checks that MuJoCo accepts it."""
+    from usarsim.config.world import Floor, WorldConfig
+
+    world = WorldConfig(name="check", description="", path="", floor=Floor(center=(0, 0), size=(10, 10)),
+                        materials={"floor": __import__("usarsim.config.world", fromlist=["Material"]).Material(name="floor")},
+                        objects=(), start_poses=())
+    spec = world_spec(world)
+    add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0))
+    m = spec.compile()
+    return f"{m.nbody - 1} bodies, {m.njnt} joints, {m.nu} actuators, {m.ngeom - 1} geoms"
+
+
+def state_is_finite(d: mujoco.MjData) -> bool:
+    return bool(np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all())

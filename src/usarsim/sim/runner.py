@@ -1,0 +1,177 @@
+"""The simulation thread: applies client requests, advances the simulated clock in
+one of three modes and hands outputs to the server.
+
+Modes (``--speed``/``--lockstep``):
+
+* real time: simulated time paced to the wall clock (``speed`` 1);
+* accelerated: ``speed`` > 1 runs that many times faster; ``speed`` None (``max``)
+  runs as fast as it can;
+* lock-step: the world stands still until a STEP request; then exactly that much
+  simulated time is run, every output due in it is delivered, and the STEP's
+  ``on_done`` callback is called.  Spawns and removals happen at once; every other
+  request waits for the start of the next STEP, in arrival order.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from usarsim.errors import UsarsimError
+from usarsim.sim.simulation import Output, Simulation
+
+log = logging.getLogger("usarsim.sim")
+
+
+@dataclass
+class Request:
+    """A unit of work for the simulation thread.
+
+    ``action(sim)`` runs on the simulation thread; ``immediate`` requests (spawn,
+    remove, queries) run at once even in lock-step mode; ``on_done(result, error)`` is
+    called on the simulation thread afterwards.
+    """
+
+    action: Callable[[Simulation], Any]
+    immediate: bool = False
+    on_done: Callable[[Any, BaseException | None], None] | None = None
+
+
+@dataclass
+class StepRequest:
+    seconds: float
+    on_done: Callable[[float], None]
+
+
+@dataclass
+class _Stop:
+    done: threading.Event = field(default_factory=threading.Event)
+
+
+class SimulationRunner:
+    """Owns the simulation thread.  ``deliver(outputs)`` is called from that thread
+    with each batch of outputs, in order; the server makes it thread-safe."""
+
+    CHUNK_S = 0.02  # most simulated time run between two looks at the request queue
+
+    def __init__(self, sim: Simulation, deliver: Callable[[list[Output]], None], *,
+                 speed: float | None = 1.0, lockstep: bool = False):
+        self.sim = sim
+        self.deliver = deliver
+        self.speed = speed
+        self.lockstep = lockstep
+        self.queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, name="usarsim-sim", daemon=True)
+        self._pending: list[Request] = []
+        self.error: BaseException | None = None
+
+    # Thread-safe API ---------------------------------------------------------------
+    def submit(self, req: Request | StepRequest) -> None:
+        self.queue.put(req)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self, timeout: float = 5.0) -> None:
+        stop = _Stop()
+        self.queue.put(stop)
+        self._thread.join(timeout)
+
+    @property
+    def alive(self) -> bool:
+        return self._thread.is_alive()
+
+    # Thread body -------------------------------------------------------------------
+    def _run(self) -> None:
+        try:
+            if self.lockstep:
+                self._run_lockstep()
+            else:
+                self._run_clocked()
+        except BaseException as exc:  # the thread must never die silently
+            self.error = exc
+            log.exception("the simulation thread stopped on an unexpected error")
+
+    def _execute(self, req: Request) -> None:
+        result, error = None, None
+        try:
+            result = req.action(self.sim)
+        except UsarsimError as exc:
+            error = exc
+        except Exception as exc:  # a bad request must not stop the world
+            log.exception("request failed")
+            error = exc
+        if req.on_done is not None:
+            req.on_done(result, error)
+
+    def _flush(self) -> None:
+        outs = self.sim.take_outputs()
+        if outs:
+            self.deliver(outs)
+
+    def _run_lockstep(self) -> None:
+        while True:
+            item = self.queue.get()
+            if isinstance(item, _Stop):
+                return
+            if isinstance(item, StepRequest):
+                pending, self._pending = self._pending, []
+                for req in pending:
+                    self._execute(req)
+                self.sim.advance(item.seconds)
+                self._flush()
+                item.on_done(self.sim.time)
+            elif item.immediate:
+                self._execute(item)
+                self._flush()
+            else:
+                self._pending.append(item)
+
+    def _run_clocked(self) -> None:
+        sim = self.sim
+        wall0 = time.perf_counter()
+        sim0 = sim.time
+        while True:
+            # apply everything that arrived
+            while True:
+                try:
+                    item = self.queue.get_nowait()
+                except queue.Empty:
+                    break
+                if isinstance(item, _Stop):
+                    return
+                if isinstance(item, StepRequest):
+                    item.on_done(sim.time)  # STEP outside lock-step: nothing to do
+                    continue
+                self._execute(item)
+            if self.speed is None:
+                sim.advance(self.CHUNK_S)
+                self._flush()
+                continue
+            target = sim0 + (time.perf_counter() - wall0) * self.speed
+            ahead = target - sim.time
+            if ahead >= sim.dt:
+                sim.advance(min(ahead, self.CHUNK_S))
+                self._flush()
+                if target - sim.time > 1.0:
+                    # more than a second behind: do not try to catch up in a burst
+                    log.warning("simulation running behind real time by %.1f s; resynchronising",
+                                target - sim.time)
+                    wall0 = time.perf_counter()
+                    sim0 = sim.time
+                continue
+            wait = (sim.dt - ahead) / self.speed
+            try:
+                item = self.queue.get(timeout=max(wait, 0.0005))
+            except queue.Empty:
+                continue
+            if isinstance(item, _Stop):
+                return
+            if isinstance(item, StepRequest):
+                item.on_done(sim.time)
+                continue
+            self._execute(item)

@@ -1,0 +1,347 @@
+"""The authoritative simulation: one MuJoCo world, a fixed physics step on a
+simulated clock, robots spawned and removed while others run, sensors measured at
+their own ScanInterval of simulated time.
+
+This object is used from one thread only (the simulation thread, see
+:mod:`usarsim.sim.runner`); readings leave it as :class:`Output` records.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from usarsim.config.robot import RobotConfig
+from usarsim.config.world import WorldConfig
+from usarsim.errors import ConfigError, SimulationError
+from usarsim.readings import CommandResult, RobotStatus
+from usarsim.sensors import Sensor, make_sensor
+from usarsim.sim import builder
+from usarsim.sim.view import RayCaster, RobotHandle, WorldView
+
+log = logging.getLogger("usarsim.sim")
+
+EPS = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class Output:
+    """One message-worth of data for the client that owns robot ``uid``.
+
+    ``key`` identifies the periodic stream (``STA``, ``SEN:Sonar``, ``SEN:RangeScanner:Scanner1``)
+    for latest-wins dropping; ``periodic`` is False for replies that must not be dropped.
+    """
+
+    uid: int
+    time: float | None
+    value: Any
+    key: str
+    periodic: bool = True
+
+
+@dataclass(eq=False)
+class _Unit:
+    """A scheduled measurement: one sensor, or all packed sensors of a type on a robot."""
+
+    robot: "SimRobot"
+    sensors: list[Sensor]
+    interval: float
+    t0: float
+    key: str
+    status: bool = False
+    k: int = 0
+
+    @property
+    def due(self) -> float:
+        return self.t0 + self.k * self.interval
+
+
+@dataclass(eq=False)
+class SimRobot:
+    uid: int
+    name: str
+    config: RobotConfig
+    prefix: str
+    spawn_time: float
+    handle: RobotHandle
+    sensors: list[Sensor]
+    units: list[_Unit] = field(default_factory=list)
+    left: float = 0.0
+    right: float = 0.0
+    light: bool = False
+    battery_empty: bool = False
+    removed: bool = False
+
+    def battery_left(self, now: float) -> float:
+        return max(0.0, self.config.battery_s - (now - self.spawn_time))
+
+
+@dataclass(frozen=True)
+class ItemDescription:
+    """What GETGEO/GETCONF report for one mounted item."""
+
+    item_type: str
+    name: str
+    location: tuple[float, float, float]
+    orientation: tuple[float, float, float]
+    mount: str
+    conf: tuple[tuple[str, Any], ...]
+
+
+def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:
+    """The mounted items of a robot class as GETGEO/GETCONF describe them (also
+    validates every sensor's configuration)."""
+    out = []
+    for item in robot.items:
+        s = make_sensor(item, robot, seed, "describe")
+        out.append(ItemDescription(s.TYPE, item.name, item.location, item.orientation, item.mount, s.conf_fields()))
+    return out
+
+
+class Simulation:
+    def __init__(self, world: WorldConfig, *, seed: int = 0):
+        self.world = world
+        self.seed = seed
+        self.dt = world.timestep_s
+        self.spec = builder.world_spec(world)
+        self.model = self.spec.compile()
+        self.data = mujoco.MjData(self.model)
+        mujoco.mj_forward(self.model, self.data)
+        self.step_count = 0
+        self.robots: dict[int, SimRobot] = {}
+        self._heap: list[tuple[float, int, _Unit]] = []
+        self._seq = itertools.count()
+        self.outbox: list[Output] = []
+        self.caster = RayCaster(self.model, self.data)
+        self.physics_steps = 0
+        self.resets = 0
+
+    # Clock -------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        return self.step_count * self.dt
+
+    def view(self) -> WorldView:
+        return WorldView(self.model, self.data, self.time, self.caster)
+
+    # Model changes ------------------------------------------------------------
+    def _rebuild(self) -> None:
+        self.model, self.data = self.spec.recompile(self.model, self.data)
+        mujoco.mj_forward(self.model, self.data)
+        self.caster = RayCaster(self.model, self.data)
+        view = self.view()
+        for r in self.robots.values():
+            self._configure(r, view)
+
+    def _configure(self, r: SimRobot, view: WorldView) -> None:
+        r.handle.resolve(self.model, [w.name for w in r.config.wheels if w.driven or True])
+        for s in r.sensors:
+            s.configure(view)
+        self._apply_ctrl(r)
+
+    def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation) -> SimRobot:
+        """Add a robot at once, at the current simulated time; others keep their state."""
+        if uid in self.robots:
+            raise SimulationError(f"robot id {uid} already exists")
+        loc = tuple(float(v) for v in location)
+        rot = tuple(float(v) for v in rotation)
+        if not all(math.isfinite(v) for v in loc + rot):
+            raise SimulationError(f"location and rotation must be finite numbers, got {loc} {rot}")
+        fl = self.world.floor
+        if not (abs(loc[0] - fl.center[0]) <= fl.size[0] / 2 and abs(loc[1] - fl.center[1]) <= fl.size[1] / 2):
+            raise SimulationError(
+                f"location {loc[0]:.2f},{loc[1]:.2f} is outside the world '{self.world.name}' "
+                f"(x within {fl.center[0] - fl.size[0] / 2:.2f}..{fl.center[0] + fl.size[0] / 2:.2f}, "
+                f"y within {fl.center[1] - fl.size[1] / 2:.2f}..{fl.center[1] + fl.size[1] / 2:.2f})")
+        if not (-100.0 <= loc[2] <= 100.0):
+            raise SimulationError(f"location z {loc[2]:.2f} is too far from the floor (allowed -100..100 m)")
+        prefix = f"robot{uid}"
+        try:
+            sensors = [make_sensor(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
+        except ConfigError as exc:
+            raise SimulationError(str(exc)) from exc
+        builder.add_robot(self.spec, robot, prefix, loc, rot)
+        r = SimRobot(uid=uid, name=name, config=robot, prefix=prefix, spawn_time=self.time,
+                     handle=RobotHandle(prefix), sensors=sensors)
+        for s in sensors:
+            s.handle = r.handle
+        self.robots[uid] = r
+        try:
+            self._rebuild()
+        except Exception:
+            del self.robots[uid]
+            builder.remove_robot(self.spec, prefix)
+            self._rebuild()
+            raise
+        view = self.view()
+        for s in sensors:
+            s.reset(view)
+        self._schedule_robot(r)
+        log.info("spawned %s '%s' (id %d) at %.2f,%.2f,%.2f at t=%.3f", robot.class_name, name, uid, *loc, self.time)
+        return r
+
+    def remove(self, uid: int) -> None:
+        r = self.robots.pop(uid, None)
+        if r is None:
+            return
+        r.removed = True
+        builder.remove_robot(self.spec, r.prefix)
+        self._rebuild()
+        log.info("removed robot '%s' (id %d) at t=%.3f", r.name, uid, self.time)
+
+    def _schedule_robot(self, r: SimRobot) -> None:
+        now = self.time
+        units = [_Unit(r, [], r.config.status_interval_s, now, "STA", status=True)]
+        packed: dict[str, _Unit] = {}
+        for s in r.sensors:
+            if s.PACKED:
+                u = packed.get(s.TYPE)
+                if u is None:
+                    u = _Unit(r, [], s.config.scan_interval_s, now, f"SEN:{s.TYPE}")
+                    packed[s.TYPE] = u
+                    units.append(u)
+                u.sensors.append(s)
+            else:
+                units.append(_Unit(r, [s], s.config.scan_interval_s, now, f"SEN:{s.TYPE}:{s.name}"))
+        r.units = units
+        for u in units:
+            heapq.heappush(self._heap, (u.due, next(self._seq), u))
+
+    # Commands -----------------------------------------------------------------
+    def drive_skid(self, uid: int, left: float | None, right: float | None, normalized: bool = False,
+                   light: bool | None = None) -> None:
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty:
+            return
+        if light is not None:
+            r.light = bool(light)
+        if r.config.drive != "skid":
+            return
+        vmax = r.config.max_speed_rad_s
+        scale = vmax / 100.0 if normalized else 1.0
+        if left is not None and math.isfinite(left):
+            r.left = max(-vmax, min(vmax, left * scale))
+        if right is not None and math.isfinite(right):
+            r.right = max(-vmax, min(vmax, right * scale))
+        self._apply_ctrl(r)
+
+    def _apply_ctrl(self, r: SimRobot) -> None:
+        ctrl = self.data.ctrl
+        for w in r.config.wheels:
+            if not w.driven:
+                continue
+            a = r.handle.actuator[w.name]
+            if r.battery_empty:
+                ctrl[a] = 0.0
+            else:
+                ctrl[a] = r.left if w.side == "left" else r.right
+
+    def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
+                params: str | None) -> CommandResult | None:
+        """``SET {Type} {Name} {Opcode} {Params}`` on a mounted item; None when the robot is gone."""
+        r = self.robots.get(uid)
+        if r is None:
+            return None
+        t = item_type or ""
+        if r.battery_empty:
+            return None
+        for s in r.sensors:
+            if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
+                status = s.operate(self.view(), opcode or "", params) if opcode else None
+                if status is None:
+                    return CommandResult(s.TYPE, s.name, "Failed")
+                if status == "OK" and (opcode or "").upper() == "SCAN":
+                    self._emit(r, s.TYPE, [s], f"SEN:{s.TYPE}:{s.name}")
+                return CommandResult(s.TYPE, s.name, status)
+        return CommandResult(t, name or "", "Failed")
+
+    # Stepping -----------------------------------------------------------------
+    def advance(self, seconds: float) -> None:
+        """Run whole physics steps covering ``seconds`` of simulated time, measuring
+        every sensor that falls due (including at the final instant)."""
+        target = self.step_count + max(0, int(round(seconds / self.dt)))
+        while True:
+            self._fire_due()
+            if self.step_count >= target:
+                break
+            n = target - self.step_count
+            if self._heap:
+                due = self._heap[0][0]
+                n = max(1, min(n, int(math.ceil(due / self.dt - EPS)) - self.step_count))
+            self._step(n)
+
+    def _step(self, n: int) -> None:
+        mujoco.mj_step(self.model, self.data, n)
+        self.step_count += n
+        self.physics_steps += n
+        if not builder.state_is_finite(self.data):
+            self._recover()
+        self._check_batteries()
+
+    def _recover(self) -> None:
+        """The state became NaN/inf: put every robot back at its last known-good place."""
+        self.resets += 1
+        log.error("physics became unstable at t=%.3f; resetting the robots' velocities", self.time)
+        bad_q = ~np.isfinite(self.data.qpos)
+        self.data.qpos[bad_q] = 0.0
+        self.data.qvel[:] = 0.0
+        self.data.qacc_warmstart[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
+    def _check_batteries(self) -> None:
+        now = self.time
+        for r in self.robots.values():
+            if not r.battery_empty and r.battery_left(now) <= 0.0:
+                r.battery_empty = True
+                r.left = r.right = 0.0
+                self._apply_ctrl(r)
+                log.info("robot '%s' (id %d): battery empty at t=%.3f", r.name, r.uid, now)
+
+    def _fire_due(self) -> None:
+        now = self.time
+        heap = self._heap
+        while heap and heap[0][0] <= now + EPS:
+            _, _, u = heapq.heappop(heap)
+            r = u.robot
+            if r.removed:
+                continue
+            # next due: the first multiple of the interval after now
+            u.k += 1
+            while u.due <= now + EPS:
+                u.k += 1
+            heapq.heappush(heap, (u.due, next(self._seq), u))
+            if u.status:
+                self.outbox.append(Output(r.uid, now, self.status_of(r), "STA"))
+            elif not r.battery_empty:
+                self._emit(r, u.sensors[0].TYPE, u.sensors, u.key)
+
+    def _emit(self, r: SimRobot, stype: str, sensors: list[Sensor], key: str) -> None:
+        view = self.view()
+        if sensors[0].PACKED:
+            value = type(sensors[0]).combine([s.measure(view) for s in sensors])
+        else:
+            value = sensors[0].measure(view)
+        t = self.time if sensors[0].config.with_time_stamp else None
+        self.outbox.append(Output(r.uid, t, value, key))
+
+    def status_of(self, r: SimRobot) -> RobotStatus:
+        left = r.battery_left(self.time)
+        return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
+                           light_toggle=r.light, light_intensity=100 if r.light else 0, view=-1)
+
+    def take_outputs(self) -> list[Output]:
+        out, self.outbox = self.outbox, []
+        return out
+
+    def pose_of(self, uid: int) -> tuple[tuple[float, float, float], tuple[float, float, float]] | None:
+        r = self.robots.get(uid)
+        if r is None:
+            return None
+        return r.handle.location(self.data), r.handle.orientation(self.data)
