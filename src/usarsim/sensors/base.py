@@ -82,6 +82,11 @@ class Sensor:
         raise NotImplementedError
 
     @classmethod
+    def measure_group(cls, sensors: list["Sensor"], view: "WorldView") -> list[Any]:
+        """Packed sensors: every item's part, measured together (override to batch)."""
+        return [s.measure(view) for s in sensors]
+
+    @classmethod
     def combine(cls, parts: list[Any]) -> Any:
         """Packed sensors: build one reading from every item's part."""
         raise NotImplementedError

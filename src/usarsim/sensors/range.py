@@ -11,6 +11,7 @@ import numpy as np
 
 from usarsim.readings import RangeItem, RangeReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sim import frames
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
 
@@ -108,6 +109,7 @@ class Sonar(RangeSensor):
                 yaws.append(cone * math.cos(a))
                 pitches.append(cone * math.sin(a))
         self._dirs = unit_dirs_yaw_pitch(np.array(yaws), np.array(pitches))
+        self._mount = None
 
     def _directions(self) -> np.ndarray:
         return self._dirs
@@ -128,6 +130,35 @@ class Sonar(RangeSensor):
     def conf_fields(self):
         return (("MaxRange", self.config.max_range_m), ("MinRange", self.config.min_range_m),
                 ("BeamAngle", self.config.beam_angle_rad))
+
+    @classmethod
+    def measure_group(cls, sensors: list["Sonar"], view) -> list[RangeItem]:
+        """All sonars of a robot: one batched ray cast per sonar (every cone ray from
+        the sonar's own position), with the mount transforms computed once."""
+        first = sensors[0]
+        h, d = first.handle, view.data
+        rot = h.rotation_mj(d)
+        origin = h.position_mj(d)
+        cos_max = None
+        items = []
+        for s in sensors:
+            cfg = s.config
+            if s._mount is None:
+                s._mount = (frames.to_mj_vec(s.item.location),
+                            s._dirs @ frames.usar_euler_to_mj_mat(s.item.orientation).T)
+            loc, local_dirs = s._mount
+            u = local_dirs @ rot.T
+            dist, nrm, _ = view.caster.cast(origin + rot @ loc, u, cfg.max_range_m, h.body_id, normals=True)
+            cos_max = math.cos(cfg.max_angle_of_incidence_rad)
+            ok = np.isfinite(dist)
+            if ok.any():
+                ok &= np.abs(np.einsum("ij,ij->i", u, nrm)) >= cos_max
+            if ok.any():
+                value = float(s.relative_noise(np.array(dist[ok].min())))
+            else:
+                value = cfg.max_range_m
+            items.append(RangeItem(s.name, min(max(value, cfg.min_range_m), cfg.max_range_m)))
+        return items
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -325,7 +325,8 @@ class Simulation:
     def _emit(self, r: SimRobot, stype: str, sensors: list[Sensor], key: str) -> None:
         view = self.view()
         if sensors[0].PACKED:
-            value = type(sensors[0]).combine([s.measure(view) for s in sensors])
+            cls = type(sensors[0])
+            value = cls.combine(cls.measure_group(sensors, view))
         else:
             value = sensors[0].measure(view)
         t = self.time if sensors[0].config.with_time_stamp else None

@@ -1,0 +1,185 @@
+"""``usarsim bench``: the real-time factor of the whole simulator with N robots.
+
+N P2ATs with their full sensor kit are spawned in the world, each by its own TCP
+client over loopback (a separate process reads every line they are sent and
+drives them); the simulator runs as fast as it can (``--speed max``) for S
+simulated seconds.  Beside it, bare ``mj_step`` on the same compiled model gives
+the physics-only real-time factor; ``ratio`` = ``rtf`` / ``raw_mujoco_rtf`` is the
+share of the machine that stays with physics.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+
+
+def free_spots(world, n: int, clearance: float = 0.6, spacing: float = 0.9) -> list[tuple[float, float, float]]:
+    """Start poses first, then grid points at least ``clearance`` from every static object."""
+    from usarsim.sim.frames import euler_to_mat
+
+    spots = [tuple(p.location) + (p.rotation[2],) for p in world.start_poses]
+    boxes = []
+    for o in world.objects:
+        if o.shape == "box":
+            half = np.abs(euler_to_mat(*o.rotation)) @ (np.array(o.size) / 2.0)
+        else:
+            half = np.abs(euler_to_mat(*o.rotation)) @ np.array([o.radius_m, o.radius_m, o.length_m / 2.0])
+        center = np.array(o.center)
+        if center[2] - half[2] < -0.02:  # objects lower than 2 cm (plates, ramps' feet) do not block
+            boxes.append((center[:2], half[:2]))
+    fl = world.floor
+    xs = np.arange(fl.center[0] - fl.size[0] / 2 + 1.0, fl.center[0] + fl.size[0] / 2 - 1.0, spacing)
+    ys = np.arange(fl.center[1] - fl.size[1] / 2 + 1.0, fl.center[1] + fl.size[1] / 2 - 1.0, spacing)
+    taken = [np.array(s[:2]) for s in spots]
+    for x in xs:
+        for y in ys:
+            p = np.array([x, y])
+            free = all(np.any(np.abs(p - c) > h + clearance) for c, h in boxes)
+            if free and all(np.linalg.norm(p - t) >= spacing * 0.99 for t in taken):
+                spots.append((float(x), float(y), -0.25, 0.0))
+                taken.append(p)
+    if len(spots) < n:
+        raise SystemExit(f"usarsim bench: the world has room for {len(spots)} robots, {n} asked")
+    return [s for s in spots[:n]]
+
+
+async def _client_main(port: int, poses: list, seconds_hint: float) -> None:
+    """Child process: one connection per robot, INIT, then drive and read everything."""
+    conns = []
+    for i, (x, y, z, yaw) in enumerate(poses):
+        r, w = await asyncio.open_connection("127.0.0.1", port, limit=1 << 20)
+        w.write(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench{i + 1}}} {{Location {x:.2f},{y:.2f},{z:.2f}}} "
+                f"{{Rotation 0,0,{yaw:.4f}}}\r\n".encode())
+        conns.append((r, w))
+
+    async def drive(i, r, w):
+        lines = 0
+        phase = 0
+        last_t = -1.0
+        try:
+            while True:
+                line = await r.readline()
+                if not line:
+                    return
+                lines += 1
+                if line.startswith(b"STA"):
+                    t = float(line.split(b"{Time ", 1)[1].split(b"}", 1)[0])
+                    if t - last_t >= 2.0:
+                        last_t = t
+                        phase += 1
+                        left, right = ((2.0, 2.0), (-1.0, 1.0), (1.5, 1.5), (1.0, -1.0))[(phase + i) % 4]
+                        w.write(f"DRIVE {{Left {left}}} {{Right {right}}}\r\n".encode())
+        except (ConnectionError, OSError):
+            return
+
+    await asyncio.gather(*(drive(i, r, w) for i, (r, w) in enumerate(conns)))
+
+
+def run_bench(args) -> int:
+    from usarsim.config.catalog import resolve_world
+    from usarsim.server.app import Application
+
+    logging_quiet()
+    world = resolve_world(args.world)
+    n = int(args.robots)
+    seconds = float(args.seconds)
+    if n < 1 or not (seconds > 0 and math.isfinite(seconds)):
+        print("usarsim bench: --robots must be >= 1 and --seconds > 0", file=sys.stderr)
+        return 2
+    poses = free_spots(world, n)
+    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n))
+    loop = asyncio.new_event_loop()
+    ready = threading.Event()
+
+    def serve():
+        asyncio.set_event_loop(loop)
+        loop.run_until_complete(app.start())
+        ready.set()
+        loop.run_forever()
+
+    th = threading.Thread(target=serve, name="bench-server", daemon=True)
+    th.start()
+    ready.wait(30)
+    port = app.control.port
+    client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
+                               str(seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    sim = app.facade.sim
+    progress = sys.stderr.isatty() and not args.json
+    try:
+        deadline = time.monotonic() + 120
+        while len(sim.robots) < n:
+            if time.monotonic() > deadline or client.poll() is not None:
+                print(f"usarsim bench: only {len(sim.robots)} of {n} robots spawned", file=sys.stderr)
+                return 1
+            time.sleep(0.01)
+        # let every robot land and its client start driving
+        t_settle = sim.time + 1.0
+        while sim.time < t_settle:
+            time.sleep(0.01)
+        rays0 = sim.caster.rays_cast
+        sim_start, wall_start = sim.time, time.perf_counter()
+        while sim.time - sim_start < seconds:
+            time.sleep(0.005)
+            if progress:
+                done = sim.time - sim_start
+                print(f"\r  {done:7.1f} / {seconds:g} simulated s", end="", file=sys.stderr, flush=True)
+        sim_end, wall_end = sim.time, time.perf_counter()
+        if progress:
+            print(file=sys.stderr)
+        model = sim.model
+    finally:
+        client.terminate()
+        client.wait(10)
+        fut = asyncio.run_coroutine_threadsafe(app.stop(), loop)
+        fut.result(10)
+        loop.call_soon_threadsafe(loop.stop)
+        th.join(5)
+        loop.close()
+
+    sim_s = sim_end - sim_start
+    wall_s = wall_end - wall_start
+    rtf = sim_s / wall_s
+    raw = raw_mujoco_rtf(model, min(seconds, 5.0))
+    result = {"robots": n, "sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(rtf, 3),
+              "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
+              "world": world.name, "cpu_count": os.cpu_count()}
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"robots {n}: {sim_s:.1f} simulated s in {wall_s:.2f} s wall -> real-time factor {rtf:.2f}; "
+              f"bare mj_step {raw:.2f}; ratio {rtf / raw:.2f}")
+    return 0
+
+
+def raw_mujoco_rtf(model, seconds: float) -> float:
+    """Real-time factor of bare ``mj_step`` on ``model`` with every wheel turning."""
+    import mujoco
+
+    d = mujoco.MjData(model)
+    mujoco.mj_forward(model, d)
+    d.ctrl[:] = 2.0
+    steps = max(1, int(round(seconds / model.opt.timestep)))
+    mujoco.mj_step(model, d, min(steps, 50))  # warm up
+    t0 = time.perf_counter()
+    mujoco.mj_step(model, d, steps)
+    wall = time.perf_counter() - t0
+    return steps * model.opt.timestep / wall
+
+
+def logging_quiet() -> None:
+    import logging
+
+    logging.getLogger("usarsim").setLevel(logging.WARNING)
+
+
+if __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "--client":
+    asyncio.run(_client_main(int(sys.argv[2]), json.loads(sys.argv[3]), float(sys.argv[4])))
