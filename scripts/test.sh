@@ -2,6 +2,7 @@
 # Install usarsim with its test dependencies and run the whole test suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-python3 -m pip install --quiet --disable-pip-version-check -e ".[test]"
+source scripts/_env.sh
+"$USARSIM_PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
-python3 -m pytest -q "$@"
+exec "$USARSIM_PYTHON" -m pytest -q "$@"

@@ -51,10 +51,11 @@ def robot_class_names() -> list[str]:
     return list(robot_files())
 
 
-def resolve_robot(class_name: str) -> RobotConfig:
-    """A robot class by name (``P2AT``, ``USARBot.P2AT``, any case) or by file path."""
+def resolve_robot(class_name: str, *, allow_path: bool = False) -> RobotConfig:
+    """A robot class by name (``P2AT``, ``USARBot.P2AT``, any case), or by file path
+    when ``allow_path`` (never for names that come from the network)."""
     p = Path(class_name)
-    if p.suffix in (".yaml", ".yml"):
+    if allow_path and p.suffix in (".yaml", ".yml"):
         if not p.exists():
             raise ConfigError("no such robot file", path=str(p))
         return _robot_cached(str(p), p.stat().st_mtime)
