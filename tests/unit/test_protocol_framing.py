@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from usarsim.protocol.framing import LineBuffer
@@ -127,6 +127,7 @@ def test_invalid_max_line_bytes() -> None:
         LineBuffer(max_line_bytes=0)
 
 
+@settings(max_examples=50)
 @given(
     lines=st.lists(
         st.text(alphabet=st.characters(min_codepoint=32, max_codepoint=126), min_size=1, max_size=40)
@@ -148,6 +149,7 @@ def test_any_split_of_the_stream_gives_the_same_lines(
     assert buf.dropped_lines == 0
 
 
+@settings(max_examples=50)
 @given(chunks=st.lists(st.binary(max_size=64), max_size=20), limit=st.integers(1, 32))
 def test_arbitrary_bytes_never_raise_and_respect_the_limit(chunks: list[bytes], limit: int) -> None:
     buf = LineBuffer(max_line_bytes=limit)

@@ -800,7 +800,7 @@ def test_every_message_type_has_a_round_trip_strategy() -> None:
 
 
 @pytest.mark.parametrize("kind", list(MESSAGE_STRATEGIES), ids=lambda k: k.__name__)
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(data=st.data())
 def test_round_trip(kind: type, data: st.DataObject) -> None:
     msg = data.draw(MESSAGE_STRATEGIES[kind])
@@ -837,7 +837,7 @@ def _mutated_golden_lines(draw: st.DrawFn) -> str:
     return " {".join([head, *segments])
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(st.text(max_size=80) | _mutated_golden_lines())
 def test_parse_message_raises_only_protocol_error(line: str) -> None:
     try:

@@ -16,6 +16,10 @@ Parsing rules, common to every command:
   :class:`~usarsim.errors.ProtocolError` naming the command, the key, the value received and
   what is allowed.  NaN and infinite numbers are never accepted.
 * A field is ``None`` when its key was not sent; the session keeps the previous value.
+
+Commands are frozen, keyword-only dataclasses; the small group records inside them
+(:class:`WheelDrive`, :class:`JointDrive`, :class:`LinkCommand`) and :class:`UnknownCommand`
+also accept positional arguments.
 """
 
 from __future__ import annotations
@@ -116,7 +120,7 @@ class GetStartPoses:
     keyword: ClassVar[str] = "GETSTARTPOSES"
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class WheelDrive:
     """One ``{WheelNumber n} {WheelSpeed v} {WheelSteer a}`` group of an omni DRIVE (§5.3c)."""
 
@@ -125,7 +129,7 @@ class WheelDrive:
     steer: float | None = None
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class JointDrive:
     """One ``{Name j} {Value v} {Steer s} {Order o}`` group of a joint DRIVE (§5.3f).
 
@@ -227,7 +231,7 @@ class GetConf:
     name: str | None = None
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class LinkCommand:
     """One ``{Link n} {Value v} [{Order o}]`` group of MISPKG or ACT (§5.6, §5.8).
 
@@ -347,7 +351,7 @@ class Step:
     time_s: float
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class UnknownCommand:
     """A line whose command word is not known; servers ignore it.  ``type`` is upper-cased."""
 

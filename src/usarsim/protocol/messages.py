@@ -15,6 +15,10 @@ Precision per key (protocol.md §2.4):
 
 Names and other text fields are written as given; they come from validated configuration
 and must not contain braces or line breaks.
+
+Every class is a frozen dataclass.  ``GameInfo``, the two STA classes, ``RobotGeometry`` and
+``RobotConfiguration`` (a required field follows a defaulted one) take keyword arguments
+only; the others also accept their fields positionally, in the order listed.
 """
 
 from __future__ import annotations
@@ -108,7 +112,7 @@ class GameInfo:
     time_limit: int = 0
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class StartPose:
     """A named pose: start poses and path nodes (metres, radians, Z down)."""
 
@@ -117,21 +121,21 @@ class StartPose:
     rotation: Vec3
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class StartPoses:
     """Reply to GETSTARTPOSES: all poses in one segment, 2 decimals (§5.2)."""
 
     poses: tuple[StartPose, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class PathNodes:
     """Reply to GETPATHNODES (UDK): same layout as start poses under ``PathNodes``."""
 
     nodes: tuple[StartPose, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ClosestPathNode:
     """Reply to GETCLOSESTPATHNODE (UDK): ``NFO {Pathnode name} {Location x,y,z}``."""
 
@@ -176,7 +180,7 @@ class AerialVehicleStatus:
 # --------------------------------------------------------------------------- SEN
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class SensorMessage:
     """A ``SEN`` line (§6.3): ``{Time t}`` first (4 decimals) unless ``time`` is None."""
 
@@ -217,7 +221,7 @@ class RobotConfiguration:
     max_rear_steer: float = 0.0
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ItemPose:
     """Mount pose of one sensor or effecter, relative to ``mount`` (``HARD`` = chassis)."""
 
@@ -227,7 +231,7 @@ class ItemPose:
     mount: str = "HARD"
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ItemGeometry:
     """``GEO {Type T} {Name N Location ... Orientation ... Mount M} ...`` (packed, §6.8)."""
 
@@ -235,7 +239,7 @@ class ItemGeometry:
     items: tuple[ItemPose, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class EmptyGeometry:
     """``GEO {Type T}`` or ``GEO {Type T} {Name N}``: nothing matched the query (§5.5)."""
 
@@ -243,7 +247,7 @@ class EmptyGeometry:
     name: str | None = None
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ItemConf:
     """Configuration of one item: ``(key, already formatted value)`` pairs in order."""
 
@@ -251,7 +255,7 @@ class ItemConf:
     fields: tuple[tuple[str, str], ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ItemConfiguration:
     """``CONF {Type T} {Name N1} {Key v} ... {Name N2} ...`` (repeated-key groups, §6.7).
 
@@ -264,7 +268,7 @@ class ItemConfiguration:
     items: tuple[ItemConf, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class EmptyConfiguration:
     """``CONF {Type T}`` or ``CONF {Type T} {Name N}``: nothing matched the query (§5.5)."""
 
@@ -272,7 +276,7 @@ class EmptyConfiguration:
     name: str | None = None
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class LinkGeometry:
     """One link of a mission package GEO: pose relative to ``parent_link`` (-1 = chassis)."""
 
@@ -282,13 +286,13 @@ class LinkGeometry:
     orientation: Vec3
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class PackageGeometry:
     name: str
     links: tuple[LinkGeometry, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class MisPkgGeometry:
     """``GEO {Type MisPkg} {Name P} {Link 1} {ParentLink -1} {Location ...} {Orientation ...}``.
 
@@ -299,7 +303,7 @@ class MisPkgGeometry:
     packages: tuple[PackageGeometry, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class LinkConfiguration:
     """One link of a mission package CONF; ``min_range > max_range`` = unlimited joint."""
 
@@ -311,13 +315,13 @@ class LinkConfiguration:
     max_range: float
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class PackageConfiguration:
     name: str
     links: tuple[LinkConfiguration, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class MisPkgConfiguration:
     """``CONF {Type MisPkg} {Name P} {Link 1} {JointType Revolute} {MaxSpeed ...} ...``."""
 
@@ -327,14 +331,14 @@ class MisPkgConfiguration:
 # --------------------------------------------------------------------------- MISSTA
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class LinkState:
     link: int
     value: float
     torque: float
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class MisPkgStatus:
     """``MISSTA {Time t} {Name P} {Link 1} {Value v} {Torque q} ...`` (§6.4)."""
 
@@ -346,7 +350,7 @@ class MisPkgStatus:
 # --------------------------------------------------------------------------- RES / EFF / DIE
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class Result:
     """``RES {Time t} {Type T} {Name N} {Status S}`` plus item-specific ``extra`` segments.
 
@@ -361,22 +365,25 @@ class Result:
     extra: tuple[tuple[str, str], ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class CameraZoom:
     name: str
     fov: float
     status: str = "OK"
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class CameraZoomResult:
-    """``RES {Time t} {Type Camera} {Name cam} {FOV f} {Status OK|Failed}`` (one triple per camera)."""
+    """``RES {Time t} {Type Camera} {Name cam} {FOV f} {Status OK|Failed}``.
+
+    One Name/FOV/Status triple per camera.
+    """
 
     time: float
     cameras: tuple[CameraZoom, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ViewportState:
     """``{ViewportN camera} {Status s}``: camera is a name, ``Disabled`` or ``None``."""
 
@@ -385,7 +392,7 @@ class ViewportState:
     status: str = "OK"
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class ViewportsResult:
     """``RES {Time t} {Type Viewports} {Config c} {Status s} {Viewport1 cam} {Status s} ...``."""
 
@@ -395,7 +402,7 @@ class ViewportsResult:
     viewports: tuple[ViewportState, ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class EffecterStatus:
     """``EFF {Time t} {Type T} {Name N} {Status S}`` plus ``extra`` (§6.6).
 
@@ -409,7 +416,7 @@ class EffecterStatus:
     extra: tuple[tuple[str, str], ...] = ()
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class Die:
     """``DIE {Killer name} {DamageType type}`` (§6.9)."""
 
@@ -417,14 +424,14 @@ class Die:
     damage_type: str
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class Stepped:
     """``STEPPED {Time t}``: the lock-step interval is done (§18), 4 decimals."""
 
     time: float
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(frozen=True, slots=True)
 class UnknownMessage:
     """A line :func:`parse_message` does not know; formatted back as it was."""
 
@@ -599,7 +606,11 @@ def _sen_gps(r: GpsReading) -> str:
             _gps_coordinate(r.longitude),
             r.satellites,
         )
-    return "{Type GPS} {Name %s} {Fix %d} {Satellites %d}" % (r.name, 1 if r.fix else 0, r.satellites)
+    return "{Type GPS} {Name %s} {Fix %d} {Satellites %d}" % (
+        r.name,
+        1 if r.fix else 0,
+        r.satellites,
+    )
 
 
 def _sen_tachometer(r: TachometerReading) -> str:
@@ -966,12 +977,13 @@ _STA_KEYS = frozenset(
 
 
 def _parse_sta(r: _Reader) -> Message:
+    # Type, Time and Battery are required; UDK lines may lack the others (defaults used).
     vehicle_type = r.text("Type")
     time = r.req_float("Time")
-    light = r.bool(r.seg("LightToggle"))
-    intensity = r.req_int("LightIntensity")
     battery = r.req_int("Battery")
-    view = r.req_int("View")
+    light = r.bool(r.seg("LightToggle")) if r.raw.has("LightToggle") else False
+    intensity = r.req_int("LightIntensity") if r.raw.has("LightIntensity") else 0
+    view = r.req_int("View") if r.raw.has("View") else -1
     if vehicle_type == "AerialVehicle":
         return AerialVehicleStatus(
             time=time, light_toggle=light, light_intensity=intensity, battery_s=battery, view=view
@@ -1069,7 +1081,9 @@ def _sen_parse_pose(r: _Reader, t: str) -> Reading:
 
 
 def _sen_parse_orientation(r: _Reader, t: str) -> Reading:
-    return OrientationReading(sensor_type=t, name=r.text("Name"), orientation=r.req_vec3("Orientation"))
+    return OrientationReading(
+        sensor_type=t, name=r.text("Name"), orientation=r.req_vec3("Orientation")
+    )
 
 
 def _sen_parse_touch(r: _Reader, t: str) -> Reading:
@@ -1129,7 +1143,8 @@ def _sen_parse_victim(r: _Reader, t: str) -> Reading:
         elif k == "location":
             if part is None:
                 raise r.error(s.key, s.value, "{PartName p} before each {Location}")
-            parts.append(VictimPart(part_name=part, location=r.vector(s.key, s.value)))  # type: ignore[arg-type]
+            location = r.vector(s.key, s.value)
+            parts.append(VictimPart(part_name=part, location=location))  # type: ignore[arg-type]
             part = None
     # "{Status NoVictims}" lines carry no Name; the UT sensor is named VictSensor.
     return VictimReading(name=r.raw.get("Name") or "VictSensor", parts=tuple(parts))
@@ -1206,7 +1221,9 @@ def _groups(segments: tuple[Segment, ...], start: str) -> list[list[Segment]]:
 
 def _only_type_and_name(raw: RawMessage) -> bool:
     keys = [s.key.lower() for s in raw.segments]
-    return keys == ["type"] or (keys == ["type", "name"] and len(raw.segments[1].value.split()) == 1)
+    if keys == ["type"]:
+        return True
+    return keys == ["type", "name"] and len(raw.segments[1].value.split()) == 1
 
 
 def _parse_geo(r: _Reader) -> Message:
@@ -1251,11 +1268,13 @@ def _parse_geo(r: _Reader) -> Message:
             name = group[0].value
         if "location" not in fields or "orientation" not in fields:
             raise r.error("Name", group[0].value, "'name Location x,y,z Orientation r,p,y Mount m'")
+        location = r.vector("Location", fields["location"])
+        orientation = r.vector("Orientation", fields["orientation"])
         items.append(
             ItemPose(
                 name=name,
-                location=r.vector("Location", fields["location"]),  # type: ignore[arg-type]
-                orientation=r.vector("Orientation", fields["orientation"]),  # type: ignore[arg-type]
+                location=location,  # type: ignore[arg-type]
+                orientation=orientation,  # type: ignore[arg-type]
                 mount=fields.get("mount", "HARD"),
             )
         )
@@ -1308,7 +1327,11 @@ def _parse_missta(r: _Reader) -> Message:
     for group in _groups(r.raw.segments, "Link"):
         lr = _Reader(RawMessage(r.raw.type, tuple(group)), r.what)
         links.append(
-            LinkState(link=lr.req_int("Link"), value=lr.req_float("Value"), torque=lr.req_float("Torque"))
+            LinkState(
+                link=lr.req_int("Link"),
+                value=lr.req_float("Value"),
+                torque=lr.req_float("Torque"),
+            )
         )
     return MisPkgStatus(time=r.req_float("Time"), name=r.text("Name"), links=tuple(links))
 
@@ -1334,7 +1357,8 @@ def _parse_res(r: _Reader) -> Message:
         for i, s in enumerate(segs):
             m = _VIEWPORT_KEY.match(s.key)
             if m is not None:
-                status = segs[i + 1].value if i + 1 < len(segs) and segs[i + 1].key == "Status" else ""
+                has_status = i + 1 < len(segs) and segs[i + 1].key == "Status"
+                status = segs[i + 1].value if has_status else ""
                 views.append(ViewportState(index=int(m.group(1)), camera=s.value, status=status))
         return ViewportsResult(
             time=time,
@@ -1355,7 +1379,11 @@ def _parse_res(r: _Reader) -> Message:
     if "status" not in head:
         raise r.missing("Status")
     return Result(
-        time=time, item_type=item_type, name=head.get("name"), status=head["status"], extra=tuple(extra)
+        time=time,
+        item_type=item_type,
+        name=head.get("name"),
+        status=head["status"],
+        extra=tuple(extra),
     )
 
 
