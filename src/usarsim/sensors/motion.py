@@ -71,7 +71,8 @@ class Odometry(Sensor):
         self.x += ds * math.cos(mid)
         self.y += ds * math.sin(mid)
         self.theta = wrap_pi(self.theta + dtheta)
-        return OdometryReading(self.name, self.x, self.y, self.theta)
+        # reported in [0, 2 pi) as UT2004 did (protocol.md 6.3 example: 6.2432)
+        return OdometryReading(self.name, self.x, self.y, wrap_2pi(self.theta))
 
     def operate(self, view, opcode, params):
         if opcode.upper() == "RESET":
@@ -131,7 +132,8 @@ class Encoder(Sensor):
         return None
 
     def conf_fields(self):
-        return (("Resolution", self.config.resolution_rad),)
+        # printed truncated, as USARSim did (0.01745 -> 0.0174, protocol.md 6.7)
+        return (("Resolution", math.trunc(self.config.resolution_rad * 1e4) / 1e4),)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -148,7 +148,8 @@ class Session:
         self.state = ALIVE
 
     def on_drive(self, cmd: C.Drive) -> None:
-        if self.state != ALIVE:
+        # SPAWNING too: the spawn request is ahead of this one in the simulation's queue
+        if self.state not in (SPAWNING, ALIVE):
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
         skid = cmd.left is not None or cmd.right is not None
@@ -205,7 +206,7 @@ class Session:
             M.ItemConf(name=d.name, fields=tuple((k, conf_value(v)) for k, v in d.conf)) for d in items)))
 
     def on_set(self, cmd: C.Set) -> None:
-        if self.state != ALIVE:
+        if self.state not in (SPAWNING, ALIVE):
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
         t = (cmd.type or "").lower()
@@ -214,5 +215,12 @@ class Session:
             return
         self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, cmd.params)
 
+    MAX_STEP_S = 3600.0
+
     def on_step(self, cmd: C.Step) -> None:
-        self.facade.step(cmd.time_s, self.conn.stepped_threadsafe)
+        seconds = cmd.time_s
+        if seconds > self.MAX_STEP_S:
+            self.log_once("step", "STEP {Time %g} is longer than %g s; the world was not advanced", seconds,
+                          self.MAX_STEP_S)
+            seconds = 0.0
+        self.facade.step(seconds, self.conn.stepped_threadsafe)

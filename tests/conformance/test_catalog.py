@@ -1,0 +1,129 @@
+"""Every robot file and world file shipped in usarsim/data, and every registered sensor plugin.
+
+* robots: validate, compile in MuJoCo, mount only registered sensor types, describe every item;
+* worlds: validate, compile, at least 4 start poses, and a P2AT dropped at every start pose
+  lands on its wheels (after 2 s: level within 0.1 rad, resting height within 2 cm);
+* sensor plugins: each can be mounted on a P2AT, measured in a world and written as a SEN line.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot
+from usarsim.config.robot import load_robot
+from usarsim.config.world import check_world_file, load_world
+from usarsim.protocol.messages import SensorMessage, format_message, parse_message
+from usarsim.sensors import SENSORS
+from usarsim.sim.builder import robot_model_summary
+from usarsim.sim.simulation import Output, Simulation, describe_items
+
+ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
+WORLD_FILES = sorted(WORLDS_DIR.glob("*.yaml"))
+P2AT_REST_Z = -0.1455  # chassis origin 0.14565 m above the floor (P2AT.yaml), Z down
+
+
+def test_the_catalogue_is_not_empty():
+    assert ROBOT_FILES and WORLD_FILES
+    assert "P2AT" in [p.stem for p in ROBOT_FILES]
+    assert "DM-USAR_yellow" in [p.stem for p in WORLD_FILES]
+
+
+# --------------------------------------------------------------------------- robots
+
+
+@pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
+def test_robot_file_validates_and_compiles(path: Path):
+    r = load_robot(path)
+    assert r.class_name == path.stem  # INIT {ClassName USARBot.<stem>} finds it
+    assert resolve_robot(f"USARBot.{r.class_name}").path == resolve_robot(r.class_name).path
+    summary = robot_model_summary(r)
+    assert f"{sum(w.driven for w in r.wheels)} actuators" in summary
+    for item in r.items:
+        assert item.item_type in SENSORS, f"{path.name}: {item.item_type} is not a registered sensor type"
+    described = describe_items(r)
+    assert [(d.item_type, d.name) for d in described] == [(SENSORS.canonical(i.item_type), i.name) for i in r.items]
+    names = [(d.item_type.lower(), d.name.lower()) for d in described]
+    assert len(set(names)) == len(names)
+    assert r.total_mass_kg == pytest.approx(r.mass_kg, rel=0.01)
+
+
+# --------------------------------------------------------------------------- worlds
+
+
+@pytest.mark.parametrize("path", WORLD_FILES, ids=lambda p: p.stem)
+def test_world_file_validates_and_compiles(path: Path):
+    w = check_world_file(path)
+    assert w.name == path.stem  # --world <stem> finds it
+    sim = Simulation(w)
+    assert sim.model.ngeom >= 1 + len(w.objects)
+    assert len(w.start_poses) >= 4
+    fl = w.floor
+    for p in w.start_poses:
+        assert abs(p.location[0] - fl.center[0]) <= fl.size[0] / 2
+        assert abs(p.location[1] - fl.center[1]) <= fl.size[1] / 2
+
+
+def _start_poses():
+    out = []
+    for path in WORLD_FILES:
+        w = load_world(path)
+        out += [pytest.param(path, p.name, id=f"{path.stem}:{p.name}") for p in w.start_poses]
+    return out
+
+
+@pytest.fixture(scope="module")
+def worlds():
+    return {p: load_world(p) for p in WORLD_FILES}
+
+
+@pytest.mark.parametrize("path, pose_name", _start_poses())
+def test_p2at_lands_on_its_wheels_at_every_start_pose(worlds, path, pose_name):
+    w = worlds[path]
+    pose = w.start_pose(pose_name)
+    robot = resolve_robot("P2AT")
+    rest_z = -max(wh.position[2] + wh.radius_m for wh in robot.wheels)
+    assert rest_z == pytest.approx(P2AT_REST_Z, abs=5e-4)
+    sim = Simulation(w, seed=0)
+    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    sim.advance(2.0)
+    (x, y, z), (roll, pitch, yaw) = sim.pose_of(1)
+    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1, f"rolled over: roll {roll:.3f}"
+    assert abs(math.remainder(pitch, 2 * math.pi)) < 0.1, f"tipped: pitch {pitch:.3f}"
+    assert z == pytest.approx(rest_z, abs=0.02), f"not resting on the floor: z {z:.4f}"
+    assert math.hypot(x - pose.location[0], y - pose.location[1]) < 0.05  # it did not slide or get pushed
+    assert abs(math.remainder(yaw - pose.rotation[2], 2 * math.pi)) < 0.1
+    assert sim.resets == 0  # no physics blow-up
+
+
+# --------------------------------------------------------------------------- sensor plugins
+
+
+@pytest.mark.parametrize("sensor_type", SENSORS.names())
+def test_every_registered_sensor_mounts_measures_and_formats(tmp_path, sensor_type):
+    """Mount the plugin with its defaults on a copy of the P2AT, run, and write its SEN line."""
+    p2at = (ROBOTS_DIR / "P2AT.yaml").read_text()
+    head = p2at.split("\nsensors:")[0].replace("class_name: P2AT", "class_name: Probe")
+    text = head + f"\nsensors:\n  - {{type: {sensor_type}, name: Probe1, location: [0.1, 0.0, -0.1]}}\n"
+    path = tmp_path / "Probe.yaml"
+    path.write_text(text)
+    robot = load_robot(path)
+    (desc,) = describe_items(robot)
+    assert desc.item_type == sensor_type
+    assert desc.conf  # CONF has something to say about it
+    world = load_world(WORLD_FILES[0])
+    start = world.start_poses[0]
+    sim = Simulation(world, seed=0)
+    sim.spawn(1, robot, "R1", start.location, start.rotation)
+    sim.advance(1.0)
+    outs: list[Output] = [o for o in sim.take_outputs() if o.key != "STA"]
+    assert outs, f"{sensor_type} produced no reading in 1 s"
+    for o in outs:
+        line = format_message(SensorMessage(time=o.time, reading=o.value))
+        assert line.startswith("SEN ") and line.endswith("\r\n")
+        assert "{Type %s}" % sensor_type in line
+        assert "nan" not in line.lower() and "inf" not in line.lower()
+        parse_message(line[:-2])  # a client can read it back

@@ -1,0 +1,213 @@
+"""The ``usarsim`` command as a real process (``python -m usarsim``)."""
+
+from __future__ import annotations
+
+import os
+import re
+import selectors
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from helpers import Client, sensor_lines
+
+NFO_ON_CONNECT = b"NFO {Gametype BotDeathMatch} {Level DM-USAR_yellow} {TimeLimit 0}\r\n"
+LISTENING = re.compile(r"usarsim: control listening on 127\.0\.0\.1:(\d+)")
+SHIPPED = Path(__import__("usarsim").__file__).parent / "data"
+
+
+def usarsim(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "usarsim", *args], capture_output=True, text=True,
+                          timeout=timeout, check=False)
+
+
+class Serve:
+    """``python -m usarsim serve ...`` with its stdout read line by line under a deadline."""
+
+    def __init__(self, *args: str, stderr_path: Path):
+        self._stderr = open(stderr_path, "wb")
+        self.stderr_path = stderr_path
+        self.proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", *args], stdout=subprocess.PIPE,
+                                     stderr=self._stderr, stdin=subprocess.DEVNULL)
+        self._sel = selectors.DefaultSelector()
+        self._sel.register(self.proc.stdout, selectors.EVENT_READ)
+        self._buf = b""
+
+    def read_line(self, timeout: float = 30.0) -> str:
+        deadline = time.monotonic() + timeout
+        while b"\n" not in self._buf:
+            left = deadline - time.monotonic()
+            if left <= 0 or not self._sel.select(left):
+                raise AssertionError(f"no line from usarsim serve within {timeout} s; stderr: {self.stderr()}")
+            chunk = os.read(self.proc.stdout.fileno(), 4096)
+            if not chunk:
+                raise AssertionError(f"usarsim serve closed its stdout (exit {self.proc.poll()}); "
+                                     f"stderr: {self.stderr()}")
+            self._buf += chunk
+        line, self._buf = self._buf.split(b"\n", 1)
+        return line.decode()
+
+    def port(self) -> int:
+        line = self.read_line()
+        m = LISTENING.fullmatch(line)
+        assert m, line
+        return int(m.group(1))
+
+    def stderr(self) -> str:
+        self._stderr.flush()
+        return self.stderr_path.read_text(errors="replace")
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+        self._sel.close()
+        self.proc.stdout.close()
+        self._stderr.close()
+
+
+@pytest.fixture
+def serve(tmp_path):
+    started: list[Serve] = []
+
+    def start(*args: str) -> Serve:
+        s = Serve(*args, stderr_path=tmp_path / f"serve{len(started)}.err")
+        started.append(s)
+        return s
+
+    yield start
+    for s in started:
+        s.close()
+
+
+# --------------------------------------------------------------------------- help and listings
+
+
+def test_help_lists_the_commands():
+    out = usarsim("--help")
+    assert out.returncode == 0
+    for word in ("serve", "validate", "worlds", "robots", "--version", "--verbose"):
+        assert word in out.stdout
+
+
+def test_serve_help_lists_the_options():
+    out = usarsim("serve", "--help")
+    assert out.returncode == 0
+    for option in ("--world", "--host", "--port", "--seed", "--speed", "--lockstep", "--max-connections"):
+        assert option in out.stdout
+    assert "DM-USAR_yellow" in out.stdout  # the default world is named
+
+
+def test_console_script_is_installed():
+    exe = shutil.which("usarsim")
+    if exe is None:
+        pytest.skip("the 'usarsim' console script is not on PATH (package not installed as a script)")
+    out = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=60, check=False)
+    assert out.returncode == 0 and out.stdout.startswith("usarsim ")
+
+
+def test_worlds_and_robots_list_the_shipped_files():
+    worlds = usarsim("worlds")
+    robots = usarsim("robots")
+    assert worlds.returncode == 0 and robots.returncode == 0
+    assert worlds.stdout.startswith("DM-USAR_yellow ")
+    assert re.search(r"^P2AT\s+SkidSteered\s+.*RangeScanner", robots.stdout, re.M)
+
+
+def test_no_command_prints_help_and_exits_2():
+    out = usarsim()
+    assert out.returncode == 2
+    assert "serve" in out.stdout
+
+
+# --------------------------------------------------------------------------- validate
+
+
+def test_validate_shipped_files():
+    for path, prefix in ((SHIPPED / "worlds" / "DM-USAR_yellow.yaml", "ok: world DM-USAR_yellow: "),
+                         (SHIPPED / "robots" / "P2AT.yaml", "ok: robot P2AT: ")):
+        out = usarsim("validate", str(path))
+        assert out.returncode == 0, out.stderr
+        assert out.stdout.startswith(prefix)
+        assert out.stdout.count("\n") == 1
+        assert out.stderr == ""
+
+
+def test_validate_bad_file_exits_1_with_the_reason_on_stderr(tmp_path):
+    p = tmp_path / "w.yaml"
+    p.write_text("name: W\nfloor: {center: [0, 0], size: [4, 4]}\nstart_poses: []\nstrat_poses: []\n")
+    out = usarsim("validate", str(p))
+    assert out.returncode == 1
+    assert out.stdout == ""
+    assert "usarsim: error:" in out.stderr
+    assert str(p) in out.stderr and "strat_poses" in out.stderr and "did you mean 'start_poses'" in out.stderr
+
+
+# --------------------------------------------------------------------------- serve
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_serve_listens_serves_and_exits_cleanly_on_signal(serve, sig):
+    s = serve("--port", "0", "--world", "DM-USAR_yellow")
+    port = s.port()
+    assert 0 < port < 65536
+    with Client(port) as c:
+        assert c.next_line().raw == NFO_ON_CONNECT
+        assert c.ask("GETSTARTPOSES", "NFO").text.startswith("NFO {StartPoses 12} {PlayerStart1 ")
+        c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}")
+        # real-time mode: data flows without STEP
+        c.wait_line(lambda ln: ln.text.startswith("SEN") and "{Type GroundTruth}" in ln.text)
+        s.proc.send_signal(sig)
+        assert s.proc.wait(5) == 0, s.stderr()
+        c.wait_closed(5)  # the server closed the connection (raises on timeout)
+    assert "Traceback" not in s.stderr()
+
+
+def test_serve_lockstep_with_seed(serve):
+    s = serve("--port", "0", "--lockstep", "--seed", "42")
+    port = s.port()
+    with Client(port) as c:
+        c.nfo()
+        c.send("INIT {ClassName P2AT} {Name R1} {Start PlayerStart2}")
+        lines = c.step(0.5)
+        assert lines[-1].text == "STEPPED {Time 0.5000}"
+        assert len(sensor_lines(lines, "GroundTruth")) == 6
+        more = c.step(0.3)
+        assert more[-1].text == "STEPPED {Time 0.8000}"
+    s.proc.send_signal(signal.SIGTERM)
+    assert s.proc.wait(5) == 0
+
+
+def test_unknown_world_exits_1_listing_the_known_ones():
+    out = usarsim("serve", "--port", "0", "--world", "DM-NoSuchMap")
+    assert out.returncode == 1
+    assert "DM-NoSuchMap" in out.stderr
+    assert "DM-USAR_yellow" in out.stderr
+    assert out.stdout == ""
+
+
+def test_port_in_use_exits_1(tmp_path):
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        port = busy.getsockname()[1]
+        out = usarsim("serve", "--port", str(port))
+    assert out.returncode == 1
+    assert f"cannot listen on 127.0.0.1:{port}" in out.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--port", "70000"], "expected a port number"),
+    (["--speed", "fast"], "expected a number > 0 or 'max'"),
+    (["--speed", "0"], "expected a number > 0 or 'max'"),
+])
+def test_bad_option_values_are_rejected(args, message):
+    out = usarsim("serve", *args)
+    assert out.returncode == 2
+    assert message in out.stderr

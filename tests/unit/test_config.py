@@ -1,0 +1,369 @@
+"""World and robot files: strict loading with errors that name the file, the key path,
+the value received and what is allowed; ``usarsim validate`` on good and bad files."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from usarsim.cli import main as cli_main
+from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot, resolve_world
+from usarsim.config.robot import load_robot
+from usarsim.config.world import check_world_file, load_world
+from usarsim.errors import ConfigError, UsarsimError
+from usarsim.sim.simulation import describe_items
+
+WORLD_OK = """\
+name: Tiny
+floor: {center: [0.0, 0.0], size: [10.0, 8.0]}
+materials:
+  wall: {rgba: [0.9, 0.8, 0.4, 1.0], friction: 0.8}
+  wood: {friction: 0.9}
+objects:
+  - {name: w1, shape: box, center: [4.0, 0.0, -0.5], size: [0.1, 4.0, 1.0], material: wall}
+  - {name: pipe, shape: cylinder, center: [0.0, 2.0, -0.06], radius: 0.06, length: 1.0, rotation: [1.5708, 0, 0]}
+start_poses:
+  - {name: A, location: [0.0, 0.0, -0.2]}
+  - {name: B, location: [-2.0, 0.0, -0.2], rotation: [0, 0, 1.5708]}
+"""
+
+ROBOT_OK = """\
+class_name: Tiny2W
+vehicle_type: GroundVehicle
+steering_type: SkidSteered
+drive: skid
+mass_kg: 3.0
+max_speed_rad_s: 4.0
+max_torque_nm: 10.0
+geometry: {dimensions: [0.3, 0.3, 0.2], wheel_radius: 0.05, wheel_separation: 0.3, wheel_base: 0.0}
+chassis:
+  - {center: [0.0, 0.0, 0.0], size: [0.3, 0.2, 0.1], mass_kg: 2.0}
+wheels:
+  - {name: L, position: [0.0, -0.15, 0.05], radius_m: 0.05, width_m: 0.02, mass_kg: 0.5, side: left}
+  - {name: R, position: [0.0, 0.15, 0.05], radius_m: 0.05, width_m: 0.02, mass_kg: 0.5, side: right}
+sensors:
+  - {type: Sonar, name: S1, location: [0.15, 0.0, 0.0]}
+  - {type: GroundTruth, name: GroundTruth}
+"""
+
+
+@pytest.fixture(autouse=True)
+def restore_logging():
+    """``usarsim.cli.main`` configures logging on the (captured) stderr: undo that afterwards."""
+    import logging
+
+    root = logging.getLogger()
+    handlers, level = list(root.handlers), root.level
+    usarsim_level = logging.getLogger("usarsim").level
+    yield
+    for h in root.handlers[:]:
+        if h not in handlers:
+            root.removeHandler(h)
+    root.setLevel(level)
+    logging.getLogger("usarsim").setLevel(usarsim_level)
+
+
+def write(tmp_path: Path, text: str, name: str = "file.yaml") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def config_error(loader, path: Path) -> ConfigError:
+    with pytest.raises(ConfigError) as info:
+        loader(path)
+    return info.value
+
+
+# --------------------------------------------------------------------------- the good files
+
+
+def test_a_minimal_world_loads_with_its_values(tmp_path):
+    w = load_world(write(tmp_path, WORLD_OK))
+    assert w.name == "Tiny"
+    assert w.floor.size == (10.0, 8.0)
+    assert [o.name for o in w.objects] == ["w1", "pipe"]
+    assert w.objects[0].material == "wall" and w.objects[1].material == "default"
+    assert w.materials["wall"].friction == 0.8
+    assert [p.name for p in w.start_poses] == ["A", "B"]
+    assert w.start_poses[1].rotation == (0.0, 0.0, 1.5708)
+    assert w.start_pose("b") is w.start_poses[1]  # case-insensitive look-up (protocol.md 5.1)
+
+
+def test_a_minimal_robot_loads_with_its_values(tmp_path):
+    r = load_robot(write(tmp_path, ROBOT_OK))
+    assert r.class_name == "Tiny2W"
+    assert r.battery_s == 1200.0  # default (protocol.md 7.12)
+    assert [w.name for w in r.wheels] == ["L", "R"]
+    assert [(i.item_type, i.name) for i in r.items] == [("Sonar", "S1"), ("GroundTruth", "GroundTruth")]
+    assert [d.item_type for d in describe_items(r)] == ["Sonar", "GroundTruth"]
+
+
+# --------------------------------------------------------------------------- world errors
+
+
+def test_world_unknown_top_level_key_suggests_the_right_one(tmp_path):
+    p = write(tmp_path, WORLD_OK.replace("start_poses:", "start_pose:"))
+    err = config_error(load_world, p)
+    msg = str(err)
+    assert str(p) in msg
+    assert err.key == "start_pose"
+    assert "unknown key 'start_pose'" in msg
+    assert "did you mean 'start_poses'" in msg
+    assert "allowed:" in msg and "floor" in msg  # the allowed keys are listed
+
+
+def test_world_unknown_nested_key_names_the_key_path(tmp_path):
+    p = write(tmp_path, WORLD_OK.replace("material: wall}", "matrial: wall}"))
+    err = config_error(load_world, p)
+    assert err.path == str(p)
+    assert err.key == "objects[0].matrial"
+    assert f"{p}: objects[0].matrial: unknown key 'matrial'" in str(err)
+    assert "did you mean 'material'" in str(err)
+
+
+def test_world_wrong_type_names_value_and_expectation(tmp_path):
+    p = write(tmp_path, WORLD_OK.replace("size: [10.0, 8.0]", "size: [10.0, wide]"))
+    err = config_error(load_world, p)
+    assert err.key == "floor.size[1]"
+    assert "expected a number" in str(err) and "'wide'" in str(err)
+    assert str(p) in str(err)
+
+
+def test_world_wrong_integer_type(tmp_path):
+    p = write(tmp_path, "time_limit_min: ten\n" + WORLD_OK)
+    err = config_error(load_world, p)
+    assert err.key == "time_limit_min"
+    assert "expected an integer" in str(err) and "'ten'" in str(err)
+
+
+def test_world_bad_material_lists_the_known_ones(tmp_path):
+    p = write(tmp_path, WORLD_OK.replace("material: wall}", "material: wal}"))
+    err = config_error(load_world, p)
+    msg = str(err)
+    assert err.key == "objects[0].material"
+    assert "unknown material 'wal'" in msg
+    assert "did you mean 'wall'" in msg
+    allowed = msg.split("allowed:", 1)[1]
+    for name in ("default", "floor", "wall", "wood"):
+        assert name in allowed
+
+
+def test_world_bad_shape_lists_the_allowed_shapes(tmp_path):
+    p = write(tmp_path, WORLD_OK.replace("shape: cylinder", "shape: cilinder"))
+    err = config_error(load_world, p)
+    assert err.key == "objects[1].shape"
+    assert "did you mean 'cylinder'" in str(err)
+    assert "box" in str(err).split("allowed:", 1)[1]
+
+
+@pytest.mark.parametrize("old, new, key, what", [
+    ("{name: pipe,", "{name: w1,", "objects[1].name", "duplicate object name 'w1'"),
+    ("{name: B,", "{name: a,", "start_poses[1].name", "duplicate start pose name 'a'"),
+])
+def test_world_duplicate_names(tmp_path, old, new, key, what):
+    p = write(tmp_path, WORLD_OK.replace(old, new))
+    err = config_error(load_world, p)
+    assert err.key == key
+    assert what in str(err)
+    assert str(p) in str(err)
+
+
+def test_world_missing_floor(tmp_path):
+    text = "\n".join(ln for ln in WORLD_OK.splitlines() if not ln.startswith("floor:")) + "\n"
+    p = write(tmp_path, text)
+    err = config_error(load_world, p)
+    assert err.key == "floor"
+    assert "required key is missing" in str(err)
+
+
+def test_world_missing_nested_key(tmp_path):
+    p = write(tmp_path, WORLD_OK.replace("{name: A, location: [0.0, 0.0, -0.2]}", "{name: A}"))
+    err = config_error(load_world, p)
+    assert err.key == "start_poses[0].location"
+    assert "required key is missing" in str(err)
+
+
+def test_world_without_start_poses_fails_the_check(tmp_path):
+    text = WORLD_OK.split("start_poses:")[0]
+    p = write(tmp_path, text)
+    assert load_world(p).start_poses == ()
+    err = config_error(check_world_file, p)
+    assert err.key == "start_poses"
+
+
+def test_world_not_yaml_names_line(tmp_path):
+    p = write(tmp_path, "name: x\nfloor: {center: [0, 0]\n")
+    err = config_error(load_world, p)
+    assert str(p) in str(err)
+    assert "not valid YAML" in str(err) and "line" in str(err)
+
+
+def test_world_missing_file(tmp_path):
+    p = tmp_path / "nope.yaml"
+    err = config_error(load_world, p)
+    assert str(p) in str(err) and "cannot read file" in str(err)
+
+
+# --------------------------------------------------------------------------- robot errors
+
+
+def test_robot_bad_choice_lists_allowed_values(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("steering_type: SkidSteered", "steering_type: SkidSteer"))
+    err = config_error(load_robot, p)
+    msg = str(err)
+    assert err.key == "steering_type"
+    assert "'SkidSteer' is not allowed" in msg
+    assert "did you mean 'SkidSteered'" in msg
+    for allowed in ("AckermanSteered", "HolonomSteered", "SkidSteered"):
+        assert allowed in msg.split("allowed:", 1)[1]
+
+
+def test_robot_unknown_optional_key_did_you_mean(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("drive: skid", "drive: skid\nbatery_s: 600"))
+    err = config_error(load_robot, p)
+    assert err.key == "batery_s"
+    assert "unknown key 'batery_s'" in str(err) and "did you mean 'battery_s'" in str(err)
+
+
+def test_robot_wrong_type(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("mass_kg: 3.0", "mass_kg: heavy"))
+    err = config_error(load_robot, p)
+    assert err.key == "mass_kg"
+    assert "expected a number" in str(err) and "'heavy'" in str(err)
+
+
+def test_robot_duplicate_wheel_name(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("{name: R,", "{name: L,"))
+    err = config_error(load_robot, p)
+    assert err.key == "wheels[1].name"
+    assert "duplicate wheel name 'L'" in str(err)
+
+
+def test_robot_duplicate_sensor_name(tmp_path):
+    p = write(tmp_path, ROBOT_OK + "  - {type: sonar, name: s1}\n")
+    err = config_error(load_robot, p)
+    assert err.key == "sensors[2].name"
+    assert "duplicate" in str(err) and "s1" in str(err)
+
+
+def test_robot_missing_key(tmp_path):
+    text = "\n".join(ln for ln in ROBOT_OK.splitlines() if not ln.startswith("class_name")) + "\n"
+    p = write(tmp_path, text)
+    err = config_error(load_robot, p)
+    assert err.key == "class_name"
+    assert "required key is missing" in str(err)
+
+
+def test_robot_masses_must_agree(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("mass_kg: 3.0", "mass_kg: 5.0"))
+    err = config_error(load_robot, p)
+    assert err.key == "mass_kg" and "add up to 3.000 kg" in str(err)
+
+
+def test_robot_unknown_mount_lists_allowed(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("{type: Sonar, name: S1,", "{type: Sonar, name: S1, mount: Q,"))
+    err = config_error(load_robot, p)
+    assert err.key == "sensors[0].mount"
+    assert "HARD" in str(err).split("allowed:", 1)[1]
+
+
+def test_robot_unknown_sensor_setting_is_found_when_describing(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("location: [0.15, 0.0, 0.0]}", "location: [0.15, 0.0, 0.0], MaxRang: 3}"))
+    r = load_robot(p)  # sensor settings are checked by the plugin
+    with pytest.raises(ConfigError) as info:
+        describe_items(r)
+    err = info.value
+    assert err.path == str(p)
+    assert err.key == "sensors[0].MaxRang"
+    assert "did you mean 'MaxRange'" in str(err)
+
+
+def test_robot_unknown_sensor_type_names_the_registered_ones(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("{type: Sonar,", "{type: Sonr,"))
+    r = load_robot(p)
+    with pytest.raises(UsarsimError) as info:
+        describe_items(r)
+    msg = str(info.value)
+    assert "unknown sensor type 'Sonr'" in msg and "did you mean 'Sonar'" in msg
+    assert "RangeScanner" in msg.split("allowed:", 1)[1]
+
+
+def test_robot_bad_sensor_value(tmp_path):
+    p = write(tmp_path, ROBOT_OK.replace("location: [0.15, 0.0, 0.0]}", "location: [0.15, 0.0, 0.0], MaxRange: far}"))
+    with pytest.raises(ConfigError) as info:
+        describe_items(load_robot(p))
+    assert info.value.key == "sensors[0].MaxRange"
+    assert "expected a finite number" in str(info.value) and "'far'" in str(info.value)
+
+
+# --------------------------------------------------------------------------- catalogue look-ups
+
+
+@pytest.mark.parametrize("name", ["P2AT", "p2at", "USARBot.P2AT", "usarbot.p2at"])
+def test_robot_class_names_resolve_case_insensitively(name):
+    assert resolve_robot(name).class_name == "P2AT"
+
+
+def test_unknown_robot_class_suggests():
+    with pytest.raises(ConfigError, match=r"did you mean 'P2AT'"):
+        resolve_robot("USARBot.P2ATT")
+
+
+def test_unknown_world_lists_the_known_ones():
+    with pytest.raises(ConfigError) as info:
+        resolve_world("DM-USAR_yelow")
+    assert "did you mean 'DM-USAR_yellow'" in str(info.value)
+    assert "DM-USAR_yellow" in str(info.value).split("allowed:", 1)[1]
+
+
+# --------------------------------------------------------------------------- usarsim validate (in-process)
+
+
+def test_validate_shipped_world_prints_one_line(capsys):
+    code = cli_main(["validate", str(WORLDS_DIR / "DM-USAR_yellow.yaml")])
+    out, err = capsys.readouterr()
+    assert code == 0
+    assert err == ""
+    lines = out.splitlines()
+    assert len(lines) == 1
+    assert re.match(r"ok: world DM-USAR_yellow: \d+ objects, 12 start poses", lines[0]), lines[0]
+
+
+def test_validate_shipped_robot_prints_one_line(capsys):
+    code = cli_main(["validate", str(ROBOTS_DIR / "P2AT.yaml")])
+    out, err = capsys.readouterr()
+    assert code == 0
+    assert err == ""
+    lines = out.splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("ok: robot P2AT: SkidSteered, 14 kg, 22 sensors")
+
+
+def test_validate_bad_world_exits_1_with_the_message_on_stderr(tmp_path, capsys):
+    p = write(tmp_path, WORLD_OK.replace("material: wall}", "material: wal}"), "bad_world.yaml")
+    code = cli_main(["validate", str(p)])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert out == ""
+    assert err.startswith("usarsim: error: ")
+    assert str(p) in err and "objects[0].material" in err and "did you mean 'wall'" in err
+
+
+def test_validate_bad_robot_sensor_exits_1(tmp_path, capsys):
+    p = write(tmp_path, ROBOT_OK.replace("{type: Sonar,", "{type: Sonr,"), "bad_robot.yaml")
+    code = cli_main(["validate", str(p)])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert out == ""
+    assert "unknown sensor type 'Sonr'" in err
+
+
+def test_validate_unrecognised_file_exits_1(tmp_path, capsys):
+    p = write(tmp_path, "hello: world\n", "what.yaml")
+    code = cli_main(["validate", str(p)])
+    _, err = capsys.readouterr()
+    assert code == 1
+    assert str(p) in err and "class_name" in err
