@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 
-def free_spots(world, n: int, clearance: float = 0.6, spacing: float = 0.9) -> list[tuple[float, float, float]]:
+def free_spots(world, n: int, clearance: float = 0.4, spacing: float = 0.7) -> list[tuple[float, float, float]]:
     """Start poses first, then grid points at least ``clearance`` from every static object."""
     from usarsim.sim.frames import euler_to_mat
 
