@@ -139,7 +139,6 @@ class Sonar(RangeSensor):
         h, d = first.handle, view.data
         rot = h.rotation_mj(d)
         origin = h.position_mj(d)
-        cos_max = None
         items = []
         for s in sensors:
             cfg = s.config

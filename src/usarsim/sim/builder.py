@@ -127,11 +127,10 @@ def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
 
 def robot_model_summary(robot: RobotConfig) -> str:
     """Compile a robot alone on a plane: checks that MuJoCo accepts it."""
-    from usarsim.config.world import Floor, WorldConfig
+    from usarsim.config.world import Floor, Material
 
     world = WorldConfig(name="check", description="", path="", floor=Floor(center=(0, 0), size=(10, 10)),
-                        materials={"floor": __import__("usarsim.config.world", fromlist=["Material"]).Material(name="floor")},
-                        objects=(), start_poses=())
+                        materials={"floor": Material(name="floor")}, objects=(), start_poses=())
     spec = world_spec(world)
     add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0))
     m = spec.compile()

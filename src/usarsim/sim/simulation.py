@@ -141,7 +141,7 @@ class Simulation:
             self._configure(r, view)
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
-        r.handle.resolve(self.model, [w.name for w in r.config.wheels if w.driven or True])
+        r.handle.resolve(self.model, r.config.wheels)
         for s in r.sensors:
             s.configure(view)
         self._apply_ctrl(r)

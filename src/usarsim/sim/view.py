@@ -77,7 +77,8 @@ class RobotHandle:
         self.joint_qvel: dict[str, int] = {}
         self.actuator: dict[str, int] = {}
 
-    def resolve(self, m: mujoco.MjModel, wheel_names) -> None:
+    def resolve(self, m: mujoco.MjModel, wheels) -> None:
+        """Look the chassis, every wheel joint and every driven wheel's actuator up by name."""
         self.body_id = m.body(self.prefix).id
         j = m.joint(f"{self.prefix}/root")
         self.root_qpos = int(m.jnt_qposadr[j.id])
@@ -85,11 +86,12 @@ class RobotHandle:
         self.joint_qpos.clear()
         self.joint_qvel.clear()
         self.actuator.clear()
-        for w in wheel_names:
-            jid = m.joint(f"{self.prefix}/{w}").id
-            self.joint_qpos[w] = int(m.jnt_qposadr[jid])
-            self.joint_qvel[w] = int(m.jnt_dofadr[jid])
-            self.actuator[w] = m.actuator(f"{self.prefix}/{w}").id
+        for w in wheels:
+            jid = m.joint(f"{self.prefix}/{w.name}").id
+            self.joint_qpos[w.name] = int(m.jnt_qposadr[jid])
+            self.joint_qvel[w.name] = int(m.jnt_dofadr[jid])
+            if w.driven:
+                self.actuator[w.name] = m.actuator(f"{self.prefix}/{w.name}").id
 
     # Pose of the chassis in the USARSim frame ------------------------------------
     def position_mj(self, d: mujoco.MjData) -> np.ndarray:
