@@ -136,6 +136,7 @@ def run_bench(args) -> int:
         if progress:
             print(file=sys.stderr)
         model = sim.model
+        state = snapshot_state(sim, app.facade.runner)
     finally:
         client.terminate()
         client.wait(10)
@@ -148,10 +149,10 @@ def run_bench(args) -> int:
     sim_s = sim_end - sim_start
     wall_s = wall_end - wall_start
     rtf = sim_s / wall_s
-    raw = raw_mujoco_rtf(model, min(seconds, 5.0))
+    raw = raw_mujoco_rtf(model, min(seconds, 5.0), state)
     result = {"robots": n, "sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(rtf, 3),
               "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
-              "world": world.name, "cpu_count": os.cpu_count()}
+              "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": sim.resets}
     if args.json:
         print(json.dumps(result))
     else:
@@ -160,13 +161,43 @@ def run_bench(args) -> int:
     return 0
 
 
-def raw_mujoco_rtf(model, seconds: float) -> float:
-    """Real-time factor of bare ``mj_step`` on ``model`` with every wheel turning."""
+def snapshot_state(sim, runner=None) -> "np.ndarray":
+    """The full physics state (with the controls) of the running simulation, taken
+    from its own thread so that it is consistent."""
+    import mujoco
+
+    from usarsim.sim.runner import Request
+
+    done = threading.Event()
+    box = {}
+
+    def take(s):
+        spec = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) | int(mujoco.mjtState.mjSTATE_CTRL)
+        buf = np.empty(mujoco.mj_stateSize(s.model, spec))
+        mujoco.mj_getState(s.model, s.data, buf, spec)
+        box["state"] = buf
+
+    if runner is None or not runner.alive:
+        take(sim)
+    else:
+        runner.submit(Request(take, immediate=True, on_done=lambda result, error: done.set()))
+        done.wait(10)
+    return box.get("state")
+
+
+def raw_mujoco_rtf(model, seconds: float, state: "np.ndarray | None" = None) -> float:
+    """Real-time factor of bare ``mj_step`` on ``model``, from ``state`` (the scene the
+    benchmark ended with, robots driving as they were) or, without it, from the
+    initial state with every wheel turning."""
     import mujoco
 
     d = mujoco.MjData(model)
+    spec = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) | int(mujoco.mjtState.mjSTATE_CTRL)
+    if state is not None and state.size == mujoco.mj_stateSize(model, spec):
+        mujoco.mj_setState(model, d, state, spec)
+    else:
+        d.ctrl[:] = 2.0
     mujoco.mj_forward(model, d)
-    d.ctrl[:] = 2.0
     steps = max(1, int(round(seconds / model.opt.timestep)))
     mujoco.mj_step(model, d, min(steps, 50))  # warm up
     t0 = time.perf_counter()

@@ -211,3 +211,23 @@ def test_bad_option_values_are_rejected(args, message):
     out = usarsim("serve", *args)
     assert out.returncode == 2
     assert message in out.stderr
+
+
+def test_bench_reports_real_time_factors_as_json():
+    import json
+
+    out = usarsim("bench", "--robots", "2", "--seconds", "2", "--json", timeout=180)
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    for key in ("robots", "sim_seconds", "wall_seconds", "rtf", "raw_mujoco_rtf", "ratio"):
+        assert key in result, key
+    assert result["robots"] == 2
+    assert result["sim_seconds"] >= 2.0
+    assert result["rtf"] > 0 and result["raw_mujoco_rtf"] > 0
+    assert result["ratio"] == pytest.approx(result["rtf"] / result["raw_mujoco_rtf"], rel=0.01)
+    assert result["physics_resets"] == 0
+
+
+def test_bench_refuses_nonsense():
+    out = usarsim("bench", "--robots", "0", "--seconds", "2")
+    assert out.returncode == 2 and "--robots" in out.stderr

@@ -221,3 +221,43 @@ def test_spawning_and_removing_robots_does_not_disturb_a_driving_robot(arena):
     late = jumps[10:]
     assert min(late) > 0.015 and max(late) < 0.04, late
     c.close()
+
+
+# --------------------------------------------------------------------------- blow-ups
+
+
+def _twin(test_world, perturb: bool):
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.simulation import Simulation
+
+    sim = Simulation(test_world, seed=1)
+    robot = resolve_robot("P2AT")
+    for uid, pose in ((1, "Open"), (2, "Far")):
+        p = test_world.start_pose(pose)
+        sim.spawn(uid, robot, f"R{uid}", p.location, p.rotation)
+    sim.advance(1.0)
+    for uid in (1, 2):
+        sim.drive_skid(uid, 2.0, 1.0)
+    sim.advance(1.0)
+    if perturb:  # robot 1 blows up: its chassis spins at an absurd rate
+        h = sim.robots[1].handle
+        sim.data.qvel[h.root_qvel + 3:h.root_qvel + 6] = 5.0e4
+    sim.advance(2.0)
+    return sim
+
+
+def test_a_robot_that_blows_up_is_reset_alone(test_world, caplog):
+    calm, hurt = _twin(test_world, False), _twin(test_world, True)
+    assert calm.resets == 0
+    assert hurt.resets >= 1 and hurt.robots[1].resets >= 1 and hurt.robots[2].resets == 0
+    assert "R1" in caplog.text and "unstable" in caplog.text
+    # the victim is back on its wheels near where it was, and at rest or driving again
+    (x, y, z), (roll, pitch, _) = hurt.pose_of(1)
+    p0 = test_world.start_pose("Open").location
+    assert math.hypot(x - p0[0], y - p0[1]) < 1.5
+    assert abs(math.remainder(roll, 2 * math.pi)) < 0.2 and abs(math.remainder(pitch, 2 * math.pi)) < 0.2
+    assert z == pytest.approx(REST_Z, abs=0.05)
+    # the other robot did not notice anything
+    (xa, ya, _), (_, _, yawa) = calm.pose_of(2)
+    (xb, yb, _), (_, _, yawb) = hurt.pose_of(2)
+    assert math.hypot(xa - xb, ya - yb) < 1e-6 and abs(yawa - yawb) < 1e-6

@@ -85,7 +85,14 @@ class RobotConfig:
     items: tuple[MountedItem, ...]
     wheel_friction: float = 1.0
     wheel_gain: float = 20.0
+    wheel_torque_nm: float | None = None
     extra: dict = field(default_factory=dict)
+
+    @property
+    def wheel_torque_limit_nm(self) -> float:
+        """The physical torque limit of each driven wheel (``max_torque_nm`` is the
+        value CONF reports, in USARSim's engine units)."""
+        return self.max_torque_nm if self.wheel_torque_nm is None else self.wheel_torque_nm
 
     @property
     def total_mass_kg(self) -> float:
@@ -111,6 +118,7 @@ def load_robot(path: str | Path) -> RobotConfig:
     status_interval = top.float("status_interval_s", 0.2, min=0.01, max=10.0)
     wheel_friction = top.float("wheel_friction", 1.0, min=0.0, max=10.0)
     wheel_gain = top.float("wheel_gain", 20.0, min=0.0, min_exclusive=True)
+    wheel_torque = top.float("wheel_torque_nm", None, min=0.0, min_exclusive=True)
 
     g = top.section("geometry")
     geometry = RobotGeometryConfig(
@@ -173,4 +181,5 @@ def load_robot(path: str | Path) -> RobotConfig:
                        max_torque_nm=max_torque, max_front_steer_rad=mfs, max_rear_steer_rad=mrs,
                        battery_s=battery, status_interval_s=status_interval, geometry=geometry,
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
-                       wheel_friction=wheel_friction, wheel_gain=wheel_gain)
+                       wheel_friction=wheel_friction, wheel_gain=wheel_gain,
+                       wheel_torque_nm=wheel_torque)

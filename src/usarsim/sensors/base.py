@@ -40,6 +40,8 @@ class SensorConfig:
             raise ValueError(f"noise must be within [0, 1), got {self.noise}")
 
 
+NOISE_BLOCK = 1024  # uniform draws a sensor takes from its generator at a time
+
 COMMON_ALIASES = {
     "ScanInterval": "scan_interval_s",
     "bWithTimeStamp": "with_time_stamp",
@@ -69,6 +71,8 @@ class Sensor:
         self.config = config
         self.robot = robot
         self.rng = np.random.default_rng(seed)
+        self._ubuf: np.ndarray | None = None
+        self._upos = 0
 
     # Lifecycle -------------------------------------------------------------------
     def configure(self, view: "WorldView") -> None:
@@ -101,10 +105,29 @@ class Sensor:
 
     # Noise -----------------------------------------------------------------------
     def relative_noise(self, values: np.ndarray) -> np.ndarray:
+        """``values`` with the relative noise of the config: each multiplied by
+        1 + u, u uniform in [-noise, noise]."""
         n = self.config.noise
         if n <= 0:
             return values
-        return values * (1.0 + self.rng.uniform(-n, n, size=np.shape(values)))
+        values = np.asarray(values, dtype=float)
+        return values * (1.0 + n * self.uniform(values.size).reshape(values.shape))
+
+    def relative_noise_scalar(self, value: float) -> float:
+        n = self.config.noise
+        if n <= 0:
+            return value
+        return value * (1.0 + n * float(self.uniform(1)[0]))
+
+    def uniform(self, k: int) -> np.ndarray:
+        """``k`` draws, uniform in [-1, 1), from this sensor's own seeded generator
+        (drawn ahead in blocks: a call costs a slice, not a generator call)."""
+        buf, i = self._ubuf, self._upos
+        if buf is None or i + k > len(buf):
+            buf = self.rng.uniform(-1.0, 1.0, size=max(NOISE_BLOCK, k))
+            self._ubuf, i = buf, 0
+        self._upos = i + k
+        return buf[i:i + k]
 
 
 class Registry:

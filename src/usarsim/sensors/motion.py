@@ -118,7 +118,7 @@ class Encoder(Sensor):
 
     def measure(self, view) -> EncoderItem:
         angle = float(view.data.qpos[self.handle.joint_qpos[self._wheel]]) - self._zero
-        noisy = float(self.relative_noise(np.array(angle)))
+        noisy = self.relative_noise_scalar(angle)
         return EncoderItem(self.name, int(round(noisy / self.config.resolution_rad)))
 
     @classmethod

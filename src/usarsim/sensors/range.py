@@ -52,7 +52,7 @@ class RangeSensor(Sensor):
         if math.isinf(r):
             value = cfg.max_range_m
         else:
-            value = float(self.relative_noise(np.array(r)))
+            value = self.relative_noise_scalar(r)
         value = min(max(value, cfg.min_range_m), cfg.max_range_m)
         return RangeItem(self.name, value)
 
@@ -109,7 +109,7 @@ class Sonar(RangeSensor):
                 yaws.append(cone * math.cos(a))
                 pitches.append(cone * math.sin(a))
         self._dirs = unit_dirs_yaw_pitch(np.array(yaws), np.array(pitches))
-        self._mount = None
+        self._stack = None  # the robot's stacked sonar mounts, built on the first group measurement
 
     def _directions(self) -> np.ndarray:
         return self._dirs
@@ -133,27 +133,33 @@ class Sonar(RangeSensor):
 
     @classmethod
     def measure_group(cls, sensors: list["Sonar"], view) -> list[RangeItem]:
-        """All sonars of a robot: one batched ray cast per sonar (every cone ray from
-        the sonar's own position), with the mount transforms computed once."""
+        """All sonars of a robot in one batched cast: every cone ray from its own
+        sonar's position, with the mount transforms stacked once per robot."""
         first = sensors[0]
         h, d = first.handle, view.data
+        key = tuple(id(s) for s in sensors)
+        stack = first._stack
+        if stack is None or stack[0] != key:
+            locs = np.concatenate([np.repeat(frames.to_mj_vec(s.item.location)[None, :], len(s._dirs), axis=0)
+                                   for s in sensors])
+            dirs = np.concatenate([s._dirs @ frames.usar_euler_to_mj_mat(s.item.orientation).T for s in sensors])
+            counts = np.array([len(s._dirs) for s in sensors])
+            stack = (key, locs, dirs, np.repeat(np.arange(len(sensors)), counts), np.cumsum(counts) - counts,
+                     np.array([math.cos(s.config.max_angle_of_incidence_rad) for s in sensors]),
+                     max(s.config.max_range_m for s in sensors))
+            first._stack = stack
+        _, locs, local_dirs, owner, starts, cos_max, reach = stack
         rot = h.rotation_mj(d)
-        origin = h.position_mj(d)
+        origins = locs @ rot.T + h.position_mj(d)
+        u = local_dirs @ rot.T
+        dist, nrm, _ = view.caster.cast_from(origins, u, reach, h.body_id, normals=True)
+        seen = np.isfinite(dist) & (np.abs(np.einsum("ij,ij->i", u, nrm)) >= cos_max[owner])
+        nearest = np.minimum.reduceat(np.where(seen, dist, np.inf), starts)
         items = []
-        for s in sensors:
+        for s, r in zip(sensors, nearest.tolist()):
             cfg = s.config
-            if s._mount is None:
-                s._mount = (frames.to_mj_vec(s.item.location),
-                            s._dirs @ frames.usar_euler_to_mj_mat(s.item.orientation).T)
-            loc, local_dirs = s._mount
-            u = local_dirs @ rot.T
-            dist, nrm, _ = view.caster.cast(origin + rot @ loc, u, cfg.max_range_m, h.body_id, normals=True)
-            cos_max = math.cos(cfg.max_angle_of_incidence_rad)
-            ok = np.isfinite(dist)
-            if ok.any():
-                ok &= np.abs(np.einsum("ij,ij->i", u, nrm)) >= cos_max
-            if ok.any():
-                value = float(s.relative_noise(np.array(dist[ok].min())))
+            if r <= cfg.max_range_m:
+                value = s.relative_noise_scalar(r)
             else:
                 value = cfg.max_range_m
             items.append(RangeItem(s.name, min(max(value, cfg.min_range_m), cfg.max_range_m)))

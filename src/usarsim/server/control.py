@@ -162,7 +162,9 @@ class ControlServer:
                 pass
 
     def dispatch(self, outs: list[Output]) -> None:
+        """Format a batch of outputs and write them, one write per connection."""
         conns = self.connections
+        batches: dict[int, list[bytes]] = {}
         for o in outs:
             conn = conns.get(o.uid)
             if conn is None:
@@ -172,10 +174,14 @@ class ControlServer:
             except Exception:
                 log.exception("cannot format %r", o)
                 continue
-            if o.periodic:
-                conn.send_periodic(o.key, data)
-            elif conn.transport is not None and not conn.transport.is_closing():
-                conn.transport.write(data)
+            if o.periodic and conn._paused:
+                conn.send_periodic(o.key, data)  # held, latest-wins
+            else:
+                batches.setdefault(o.uid, []).append(data)
+        for uid, chunks in batches.items():
+            conn = conns[uid]
+            if conn.transport is not None and not conn.transport.is_closing():
+                conn.transport.write(chunks[0] if len(chunks) == 1 else b"".join(chunks))
 
     async def stop(self) -> None:
         if self._server is not None:

@@ -14,6 +14,13 @@ from usarsim.config.world import WorldConfig
 from usarsim.sim import frames
 from usarsim.sim.view import GROUP_ROBOT, GROUP_STATIC, GROUP_WHEEL
 
+# Collision classes (MuJoCo contype/conaffinity bits): world geometry and chassis
+# collide with everything; wheels collide with world geometry and chassis but not
+# with other wheels (cylinder-cylinder contacts between robots rubbing side by side
+# give unstable contact normals that launch robots).
+SOLID_CONTYPE, SOLID_CONAFFINITY = 1, 3
+WHEEL_CONTYPE, WHEEL_CONAFFINITY = 2, 0
+
 # Wheel rolling friction and torsional friction: MuJoCo's defaults for the
 # second and third friction coefficients.
 SPIN_FRICTION = 0.005
@@ -29,6 +36,9 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     o.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     o.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
     o.gravity = [0.0, 0.0, -world.gravity_m_s2]
+    # A blow-up must not reset the whole world: the simulation resets only the robot
+    # concerned (Simulation._check_health).
+    o.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     s.visual.global_.offwidth = 640
     s.visual.global_.offheight = 480
 
@@ -36,13 +46,15 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     floor_mat = world.materials[fl.material]
     g = s.worldbody.add_geom()
     g.name = "floor"
-    g.type = mujoco.mjtGeom.mjGEOM_BOX
-    # a thick box so that nothing tunnels through; top face at z = 0
-    g.size = [fl.size[0] / 2.0, fl.size[1] / 2.0, 0.5]
-    g.pos = [fl.center[0], -fl.center[1], -0.5]
+    # a plane at z = 0: contacts with it are analytic (cheap) and nothing tunnels
+    # through it; ray casts see it within the floor's rectangle only
+    g.type = mujoco.mjtGeom.mjGEOM_PLANE
+    g.size = [fl.size[0] / 2.0, fl.size[1] / 2.0, 0.1]
+    g.pos = [fl.center[0], -fl.center[1], 0.0]
     g.rgba = list(floor_mat.rgba)
     g.friction = [floor_mat.friction, SPIN_FRICTION, ROLL_FRICTION]
     g.group = GROUP_STATIC
+    g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
     for obj in world.objects:
         mat = world.materials[obj.material]
@@ -59,6 +71,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         g.rgba = list(mat.rgba)
         g.friction = [mat.friction, SPIN_FRICTION, ROLL_FRICTION]
         g.group = GROUP_STATIC
+        g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
     light = s.worldbody.add_light()
     light.name = "sun"
@@ -85,6 +98,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         g.mass = box.mass_kg
         g.rgba = [0.75, 0.1, 0.1, 1.0]
         g.group = GROUP_ROBOT
+        g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
     # wheel cylinders lie along MuJoCo's Y axis (the axle)
     axle_quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]
     for w in robot.wheels:
@@ -105,6 +119,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         g.friction = [robot.wheel_friction, SPIN_FRICTION, ROLL_FRICTION]
         g.rgba = [0.1, 0.1, 0.1, 1.0]
         g.group = GROUP_WHEEL
+        g.contype, g.conaffinity = WHEEL_CONTYPE, WHEEL_CONAFFINITY
         if w.driven:
             a = spec.add_actuator()
             a.name = f"{prefix}/{w.name}"
@@ -112,7 +127,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
             a.trntype = mujoco.mjtTrn.mjTRN_JOINT
             a.set_to_velocity(kv=robot.wheel_gain)
             a.forcelimited = 1
-            a.forcerange = [-robot.max_torque_nm, robot.max_torque_nm]
+            a.forcerange = [-robot.wheel_torque_limit_nm, robot.wheel_torque_limit_nm]
     return body
 
 

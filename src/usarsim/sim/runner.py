@@ -57,6 +57,7 @@ class SimulationRunner:
     with each batch of outputs, in order; the server makes it thread-safe."""
 
     CHUNK_S = 0.02  # most simulated time run between two looks at the request queue
+    MAX_LAG_S = 0.1  # real-time modes: most wall time the simulated clock may trail by
 
     def __init__(self, sim: Simulation, deliver: Callable[[list[Output]], None], *,
                  speed: float | None = 1.0, lockstep: bool = False):
@@ -68,6 +69,8 @@ class SimulationRunner:
         self._thread = threading.Thread(target=self._run, name="usarsim-sim", daemon=True)
         self._pending: list[Request] = []
         self.error: BaseException | None = None
+        self._lag_lost = 0.0
+        self._lag_logged = 0.0
 
     # Thread-safe API ---------------------------------------------------------------
     def submit(self, req: Request | StepRequest) -> None:
@@ -152,17 +155,24 @@ class SimulationRunner:
                 sim.advance(self.CHUNK_S)
                 self._flush()
                 continue
-            target = sim0 + (time.perf_counter() - wall0) * self.speed
+            now = time.perf_counter()
+            target = sim0 + (now - wall0) * self.speed
             ahead = target - sim.time
+            max_lag = self.MAX_LAG_S * self.speed
+            if ahead > max_lag:
+                # behind the wall clock (a stall, or more robots than the machine can run
+                # in real time): do not catch up in a burst, let the excess go
+                self._lag_lost += ahead - max_lag
+                sim0, wall0 = sim.time + max_lag, now
+                ahead = max_lag
+                if now - self._lag_logged > 10.0:
+                    log.warning("simulation behind real time: %.2f simulated s skipped in the last %.0f s "
+                                "(the clock does not catch up in bursts)", self._lag_lost,
+                                min(now - self._lag_logged, 10.0) if self._lag_logged else 0.0)
+                    self._lag_logged, self._lag_lost = now, 0.0
             if ahead >= sim.dt:
                 sim.advance(min(ahead, self.CHUNK_S))
                 self._flush()
-                if target - sim.time > 1.0:
-                    # more than a second behind: do not try to catch up in a burst
-                    log.warning("simulation running behind real time by %.1f s; resynchronising",
-                                target - sim.time)
-                    wall0 = time.perf_counter()
-                    sim0 = sim.time
                 continue
             wait = (sim.dt - ahead) / self.speed
             try:

@@ -29,6 +29,11 @@ from usarsim.sim.view import RayCaster, RobotHandle, WorldView
 log = logging.getLogger("usarsim.sim")
 
 EPS = 1e-9
+# No joint of a robot moves faster than this (m/s or rad/s): a robot beyond it has
+# blown up numerically (wheels top out near 5 rad/s, a fall from 10 m reaches 14 m/s).
+MAX_SANE_VELOCITY = 100.0
+# What a physics step changes: kept before each stretch of steps to replay it on a blow-up.
+STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,6 +83,8 @@ class SimRobot:
     light: bool = False
     battery_empty: bool = False
     removed: bool = False
+    resets: int = 0
+    spawn_qpos: np.ndarray | None = None
 
     def battery_left(self, now: float) -> float:
         return max(0.0, self.config.battery_s - (now - self.spawn_time))
@@ -122,6 +129,8 @@ class Simulation:
         self.caster = RayCaster(self.model, self.data)
         self.physics_steps = 0
         self.resets = 0
+        self._good_qpos: np.ndarray | None = None
+        self._snapshot: np.ndarray | None = None
 
     # Clock -------------------------------------------------------------------
     @property
@@ -136,6 +145,7 @@ class Simulation:
         self.model, self.data = self.spec.recompile(self.model, self.data)
         mujoco.mj_forward(self.model, self.data)
         self.caster = RayCaster(self.model, self.data)
+        self._good_qpos = self.data.qpos.copy()
         view = self.view()
         for r in self.robots.values():
             self._configure(r, view)
@@ -183,6 +193,9 @@ class Simulation:
         view = self.view()
         for s in sensors:
             s.reset(view)
+        h = r.handle
+        r.spawn_qpos = self.data.qpos[h.root_qpos:h.root_qpos + 7].copy()
+        self._good_qpos = self.data.qpos.copy()
         self._schedule_robot(r)
         log.info("spawned %s '%s' (id %d) at %.2f,%.2f,%.2f at t=%.3f", robot.class_name, name, uid, *loc, self.time)
         return r
@@ -278,22 +291,68 @@ class Simulation:
             self._step(n)
 
     def _step(self, n: int) -> None:
-        mujoco.mj_step(self.model, self.data, n)
+        """``n`` physics steps in one call.  If a robot blows up on the way, the
+        stretch is run again one step at a time from its start, and each robot is
+        caught at the step where it goes wrong, before it can disturb the others."""
+        m, d = self.model, self.data
+        if self._snapshot is None or self._snapshot.size != mujoco.mj_stateSize(m, STATE):
+            self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
+        mujoco.mj_getState(m, d, self._snapshot, STATE)
+        mujoco.mj_step(m, d, n)
+        if self._healthy():
+            self._good_qpos = d.qpos.copy()
+        else:
+            mujoco.mj_setState(m, d, self._snapshot, STATE)
+            self._repair()
+            for _ in range(n):
+                mujoco.mj_step(m, d)
+                if self._healthy():
+                    self._good_qpos = d.qpos.copy()
+                else:
+                    self._repair()
         self.step_count += n
         self.physics_steps += n
-        if not builder.state_is_finite(self.data):
-            self._recover()
         self._check_batteries()
 
-    def _recover(self) -> None:
-        """The state became NaN/inf: put every robot back at its last known-good place."""
-        self.resets += 1
-        log.error("physics became unstable at t=%.3f; resetting the robots' velocities", self.time)
-        bad_q = ~np.isfinite(self.data.qpos)
-        self.data.qpos[bad_q] = 0.0
-        self.data.qvel[:] = 0.0
-        self.data.qacc_warmstart[:] = 0.0
-        mujoco.mj_forward(self.model, self.data)
+    def _healthy(self) -> bool:
+        """No velocity beyond :data:`MAX_SANE_VELOCITY` and nothing non-finite (a NaN
+        or an infinity makes the max and the sum non-finite)."""
+        d = self.data
+        if d.qvel.size == 0:
+            return True
+        return float(np.abs(d.qvel).max()) < MAX_SANE_VELOCITY and math.isfinite(float(d.qpos.sum()))
+
+    def _repair(self) -> None:
+        """Put every robot whose state is not finite, or whose joints move faster than
+        anything real (:data:`MAX_SANE_VELOCITY`), back where it last was healthy, at
+        rest; the other robots are not touched."""
+        d = self.data
+        good = self._good_qpos if self._good_qpos is not None and len(self._good_qpos) == len(d.qpos) else None
+        for r in self.robots.values():
+            h = r.handle
+            nq, nv = 7 + len(h.joint_qpos), 6 + len(h.joint_qvel)
+            qs, vs = slice(h.root_qpos, h.root_qpos + nq), slice(h.root_qvel, h.root_qvel + nv)
+            v = d.qvel[vs]
+            if np.isfinite(v).all() and np.isfinite(d.qpos[qs]).all() and float(np.abs(v).max()) < MAX_SANE_VELOCITY:
+                continue
+            self.resets += 1
+            r.resets += 1
+            log.error("robot '%s' (id %d) became physically unstable at t=%.3f; it is put back where it last "
+                      "was stable, at rest", r.name, r.uid, d.time)
+            if good is not None and np.isfinite(good[qs]).all():
+                d.qpos[qs] = good[qs]
+            else:  # no healthy pose known: its spawn pose
+                q = d.qpos[qs]
+                q[:7] = r.spawn_qpos
+                q[7:] = 0.0
+            d.qvel[vs] = 0.0
+            d.qacc_warmstart[vs] = 0.0
+        # whatever else is not finite (not part of a robot) is cleared too
+        for arr in (d.qpos, d.qvel, d.qacc_warmstart, d.act):
+            bad = ~np.isfinite(arr)
+            if bad.any():
+                arr[bad] = 0.0
+        mujoco.mj_forward(self.model, d)
 
     def _check_batteries(self) -> None:
         now = self.time
@@ -307,6 +366,7 @@ class Simulation:
     def _fire_due(self) -> None:
         now = self.time
         heap = self._heap
+        view = None
         while heap and heap[0][0] <= now + EPS:
             _, _, u = heapq.heappop(heap)
             r = u.robot
@@ -320,16 +380,19 @@ class Simulation:
             if u.status:
                 self.outbox.append(Output(r.uid, now, self.status_of(r), "STA"))
             elif not r.battery_empty:
-                self._emit(r, u.sensors[0].TYPE, u.sensors, u.key)
+                if view is None:
+                    view = self.view()
+                self._emit(r, u.sensors[0].TYPE, u.sensors, u.key, view)
 
-    def _emit(self, r: SimRobot, stype: str, sensors: list[Sensor], key: str) -> None:
-        view = self.view()
-        if sensors[0].PACKED:
-            cls = type(sensors[0])
+    def _emit(self, r: SimRobot, stype: str, sensors: list[Sensor], key: str, view: WorldView | None = None) -> None:
+        view = view or self.view()
+        first = sensors[0]
+        if first.PACKED:
+            cls = type(first)
             value = cls.combine(cls.measure_group(sensors, view))
         else:
-            value = sensors[0].measure(view)
-        t = self.time if sensors[0].config.with_time_stamp else None
+            value = first.measure(view)
+        t = view.time if first.config.with_time_stamp else None
         self.outbox.append(Output(r.uid, t, value, key))
 
     def status_of(self, r: SimRobot) -> RobotStatus:

@@ -7,6 +7,7 @@ them in ``configure``, which runs after every (re)compilation.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import mujoco
@@ -23,21 +24,38 @@ RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
 
 
 class RayCaster:
-    """Batched ray casts (one ``mj_multiRay`` call per origin) with the caller's
-    robot excluded and a cutoff at the sensor's maximum range."""
+    """Batched ray casts with the caller's robot excluded and a cutoff at the
+    sensor's maximum range.
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData):
+    Rays are cast by the compiled kernel of :mod:`usarsim.sim.raycast` (one call
+    for a whole batch, one origin per ray, geoms out of reach culled); models
+    with shapes it does not handle, or ``USARSIM_RAYCAST=mujoco`` in the
+    environment, use ``mj_multiRay`` (one call per distinct origin).  Both give
+    the same distances.
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, backend: str | None = None):
         self.m = model
         self.d = data
-        self._buf: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.rays_cast = 0
+        m = model
+        alpha = np.where(m.geom_matid >= 0, m.mat_rgba[np.maximum(m.geom_matid, 0), 3] if m.nmat else 0.0,
+                         m.geom_rgba[:, 3])
+        group = np.clip(m.geom_group, 0, 5)
+        self._visible = (RAY_GROUPS[group] != 0) & (alpha != 0)
+        self._gtype = np.ascontiguousarray(m.geom_type, dtype=np.int64)
+        self._gbody = np.ascontiguousarray(m.geom_bodyid, dtype=np.int64)
+        backend = backend or os.environ.get("USARSIM_RAYCAST", "") or "compiled"
+        if backend not in ("compiled", "mujoco"):
+            raise ValueError(f"USARSIM_RAYCAST must be 'compiled' or 'mujoco', got {backend!r}")
+        if backend == "compiled":
+            from usarsim.sim import raycast
 
-    def _buffers(self, n: int):
-        b = self._buf.get(n)
-        if b is None:
-            b = (np.zeros(n, np.int32), np.zeros(n), np.zeros(3 * n))
-            self._buf[n] = b
-        return b
+            if not np.isin(self._gtype[self._visible], raycast.SUPPORTED).all():
+                backend = "mujoco"
+            else:
+                raycast.warm_up()
+        self.backend = backend
 
     def cast(self, origin: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
              normals: bool = False) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
@@ -46,15 +64,47 @@ class RayCaster:
         Returns (distance, normals, geom ids): distance is ``inf`` where nothing is
         hit within ``max_range``.
         """
+        dirs = np.ascontiguousarray(dirs, dtype=float).reshape(-1, 3)
+        origins = np.broadcast_to(np.asarray(origin, dtype=float), dirs.shape)
+        return self.cast_from(origins, dirs, max_range, exclude_body, normals)
+
+    def cast_from(self, origins: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
+                  normals: bool = False) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """Cast ray i from ``origins[i]`` along ``dirs[i]`` (n x 3 each, MuJoCo frame)."""
+        dirs = np.ascontiguousarray(dirs, dtype=float).reshape(-1, 3)
+        origins = np.ascontiguousarray(origins, dtype=float).reshape(-1, 3)
         n = len(dirs)
-        gid, dist, nrm = self._buffers(n)
-        vec = np.ascontiguousarray(dirs, dtype=float).reshape(-1)
-        mujoco.mj_multiRay(self.m, self.d, np.asarray(origin, dtype=float), vec, RAY_GROUPS, 1, exclude_body,
-                           gid, dist, nrm if normals else None, n, float(max_range))
         self.rays_cast += n
-        out = dist.copy()
-        out[(gid < 0) | (out < 0) | (out > max_range)] = np.inf
-        return out, (nrm.reshape(n, 3).copy() if normals else None), gid.copy()
+        dist = np.empty(n)
+        gid = np.empty(n, np.int32)
+        nrm = np.zeros((n, 3))
+        if self.backend == "compiled":
+            from usarsim.sim.raycast import cast_kernel
+
+            m, d = self.m, self.d
+            cast_kernel(origins, dirs, float(max_range), self._gtype, m.geom_size, m.geom_rbound, self._gbody,
+                        self._visible, d.geom_xpos, d.geom_xmat, int(exclude_body), normals, dist, gid, nrm)
+        else:
+            self._cast_mujoco(origins, dirs, float(max_range), int(exclude_body), normals, dist, gid, nrm)
+        return dist, (nrm if normals else None), gid
+
+    def _cast_mujoco(self, origins, dirs, max_range, exclude_body, normals, dist, gid, nrm) -> None:
+        starts = np.flatnonzero(np.any(origins[1:] != origins[:-1], axis=1)) + 1
+        bounds = [0, *starts.tolist(), len(dirs)]
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            k = b - a
+            g = np.zeros(k, np.int32)
+            dd = np.zeros(k)
+            nn = np.zeros(3 * k)
+            mujoco.mj_multiRay(self.m, self.d, origins[a].copy(), dirs[a:b].reshape(-1).copy(), RAY_GROUPS, 1,
+                               exclude_body, g, dd, nn if normals else None, k, max_range)
+            miss = (g < 0) | (dd < 0) | (dd > max_range)
+            dd[miss] = np.inf
+            g[miss] = -1
+            dist[a:b] = dd
+            gid[a:b] = g
+            if normals:
+                nrm[a:b] = nn.reshape(k, 3)
 
 
 @dataclass

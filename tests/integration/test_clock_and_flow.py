@@ -1,0 +1,119 @@
+"""The clock modes measured against the wall clock, a client that never reads, and a
+battery that runs out."""
+
+from __future__ import annotations
+
+import dataclasses
+import socket
+import time
+
+import pytest
+
+from helpers import segments, wait_for
+
+INIT = "INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}"
+
+
+def sim_time(server) -> float:
+    return server.on_sim(lambda sim: sim.time)
+
+
+def wall_seconds_for(server, sim_seconds: float) -> float:
+    """Wall time the server takes to run ``sim_seconds`` of simulated time."""
+    t0 = sim_time(server)
+    w0 = time.perf_counter()
+    wait_for(lambda: sim_time(server) >= t0 + sim_seconds, timeout=30, interval=0.002,
+             what=f"{sim_seconds} simulated seconds")
+    return time.perf_counter() - w0
+
+
+@pytest.mark.parametrize("speed", [1.0, 4.0])
+def test_real_time_and_accelerated_clocks_follow_the_wall_clock(server_factory, speed):
+    srv = server_factory(lockstep=False, speed=speed)
+    c = srv.connect()
+    c.nfo()
+    c.send(INIT)
+    c.wait_line("STA")
+    wall = wall_seconds_for(srv, 1.0 * speed)
+    assert wall == pytest.approx(1.0, abs=0.25), f"--speed {speed}: {speed:g} simulated s took {wall:.3f} s"
+    # the Time stamps of the stream advance with the simulated clock
+    times = [float(segments(c.wait_line("STA").text)["Time"]) for _ in range(3)]
+    assert times[1] - times[0] == pytest.approx(0.2, abs=1e-6) and times[2] - times[1] == pytest.approx(0.2, abs=1e-6)
+
+
+def test_max_speed_runs_faster_than_real_time(server_factory):
+    srv = server_factory(lockstep=False, speed=None)
+    c = srv.connect()
+    c.nfo()
+    c.send(INIT)
+    c.wait_line("STA")
+    wall = wall_seconds_for(srv, 5.0)
+    assert wall < 2.5, f"5 simulated seconds took {wall:.2f} s at --speed max"
+
+
+def test_a_client_that_never_reads_is_bounded_and_harms_nobody(server_factory):
+    srv = server_factory(lockstep=False, speed=None)
+    # the sleeper: a small receive buffer, INIT, then it never reads
+    sleeper = socket.create_connection(("127.0.0.1", srv.port))
+    sleeper.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 65536)
+    sleeper.sendall(b"INIT {ClassName USARBot.P2AT} {Name Sleeper} {Start PlayerStart2}\r\n")
+    wait_for(lambda: srv.robot_count() == 1, what="the sleeper's robot")
+    awake = srv.connect()
+    awake.nfo()
+    awake.send("INIT {ClassName USARBot.P2AT} {Name Awake} {Start PlayerStart1}")
+    awake.wait_line("STA")
+
+    def sleeper_conn():
+        return next(c for c in srv.app.control.connections.values() if c.session and c.session.robot_name == "Sleeper")
+
+    # its output piles up until the server holds back its periodic lines
+    wait_for(lambda: srv.on_loop(lambda: sleeper_conn().dropped_periodic) > 100, timeout=60,
+             what="periodic lines dropped for the sleeper")
+    for _ in range(3):
+        buffered = srv.on_loop(lambda: sleeper_conn().transport.get_write_buffer_size())
+        held = srv.on_loop(lambda: len(sleeper_conn()._held))
+        assert buffered < 2 * 256 * 1024, f"{buffered} bytes queued for a client that does not read"
+        assert held <= 8  # one line per stream: STA and the seven sensor streams of a P2AT
+        wall_seconds_for(srv, 2.0)
+    # meanwhile the other robot got every STA, 0.2 simulated seconds apart
+    start = float(segments(awake.wait_line("STA").text)["Time"])
+    stamps = [start] + [float(segments(awake.wait_line("STA").text)["Time"]) for _ in range(25)]
+    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+    assert all(g == pytest.approx(0.2, abs=1e-6) for g in gaps), gaps
+    # a reply to the sleeper is never dropped: it is there when it finally reads
+    sleeper.sendall(b"GETGEO {Type Robot}\r\n")
+    sleeper.settimeout(10)
+    got = b""
+    deadline = time.monotonic() + 30
+    while b"GEO {Type GroundVehicle}" not in got and time.monotonic() < deadline:
+        got = (got + sleeper.recv(1 << 20))[-(1 << 21):]
+    assert b"GEO {Type GroundVehicle}" in got
+    sleeper.close()
+    wait_for(lambda: srv.robot_count() == 1, what="the sleeper's robot removed")
+
+
+def test_when_the_battery_runs_out_the_robot_stops(test_world):
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.simulation import Simulation
+
+    robot = dataclasses.replace(resolve_robot("P2AT"), battery_s=3.0)
+    sim = Simulation(test_world, seed=1)
+    pose = test_world.start_pose("Open")
+    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    sim.drive_skid(1, 3.0, 3.0)
+    sim.advance(2.0)
+    x_moving = sim.pose_of(1)[0][0]
+    assert x_moving > pose.location[0] + 0.3  # it drove
+    sim.take_outputs()
+    sim.advance(3.0)  # the battery dies at t = 3 s
+    outs = sim.take_outputs()
+    sta = [o for o in outs if o.key == "STA"]
+    assert sta[-1].value.battery_s == 0
+    assert sta[0].value.battery_s > 0
+    # after it died: no more sensor lines, only STA
+    dead_at = next(o.time for o in sta if o.value.battery_s == 0)
+    assert not [o for o in outs if o.key != "STA" and o.time is not None and o.time > dead_at + 1e-9]
+    x_dead = sim.pose_of(1)[0][0]
+    sim.drive_skid(1, 3.0, 3.0)  # ignored: no power
+    sim.advance(2.0)
+    assert abs(sim.pose_of(1)[0][0] - x_dead) < 0.02
