@@ -197,6 +197,13 @@ class RobotStatus:
 
 
 @dataclass(frozen=True, slots=True)
+class ZoomResult:
+    """The outcome of ``SET {Type Camera} {Opcode Zoom}``: (name, fov, status) per camera."""
+
+    cameras: tuple[tuple[str, float, str], ...]
+
+
+@dataclass(frozen=True, slots=True)
 class CommandResult:
     """The outcome of a SET (an RES line): ``extra`` are item-specific (key, value) pairs."""
 

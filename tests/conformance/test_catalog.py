@@ -102,28 +102,48 @@ def test_p2at_lands_on_its_wheels_at_every_start_pose(worlds, path, pose_name):
 # --------------------------------------------------------------------------- sensor plugins
 
 
-@pytest.mark.parametrize("sensor_type", SENSORS.names())
-def test_every_registered_sensor_mounts_measures_and_formats(tmp_path, sensor_type):
-    """Mount the plugin with its defaults on a copy of the P2AT, run, and write its SEN line."""
+def _probe_run(tmp_path, sensor_type: str, seed: int, seconds: float):
     p2at = (ROBOTS_DIR / "P2AT.yaml").read_text()
     head = p2at.split("\nsensors:")[0].replace("class_name: P2AT", "class_name: Probe")
     text = head + f"\nsensors:\n  - {{type: {sensor_type}, name: Probe1, location: [0.1, 0.0, -0.1]}}\n"
-    path = tmp_path / "Probe.yaml"
+    path = tmp_path / f"Probe{seed}.yaml"
     path.write_text(text)
     robot = load_robot(path)
-    (desc,) = describe_items(robot)
-    assert desc.item_type == sensor_type
-    assert desc.conf  # CONF has something to say about it
     world = load_world(WORLD_FILES[0])
     start = world.start_poses[0]
-    sim = Simulation(world, seed=0)
+    sim = Simulation(world, seed=seed)
     sim.spawn(1, robot, "R1", start.location, start.rotation)
-    sim.advance(1.0)
-    outs: list[Output] = [o for o in sim.take_outputs() if o.key != "STA"]
-    assert outs, f"{sensor_type} produced no reading in 1 s"
+    sim.drive_skid(1, 1.0, 1.2)  # moving, so that readings change
+    sim.advance(seconds)
+    return robot, sim, [o for o in sim.take_outputs() if o.key != "STA"]
+
+
+@pytest.mark.parametrize("sensor_type", SENSORS.names())
+def test_every_registered_sensor_mounts_reports_on_time_and_formats(tmp_path, sensor_type):
+    """Every plugin, mounted with its defaults on a copy of the P2AT: CONF has something to
+    say, SEN lines come at its ScanInterval of simulated time, the same seed gives the same
+    readings, and each line is exact SEN syntax that the codec reads back."""
+    robot, sim, outs = _probe_run(tmp_path, sensor_type, 0, 2.0)
+    (desc,) = describe_items(robot)
+    assert desc.item_type == sensor_type
+    cls = SENSORS.get(sensor_type)
+    if not cls.PERIODIC:  # cameras and effecters send no SEN on the control port
+        assert outs == []
+        return
+    assert desc.conf  # CONF has something to say about it
+    assert outs, f"{sensor_type} produced no reading in 2 s"
+    interval = dict(desc.conf).get("ScanInterval") or cls.Config().scan_interval_s
+    times = [o.time for o in outs]
+    gaps = {round(b - a, 6) for a, b in zip(times, times[1:])}
+    every = 4 if sensor_type == "VictSensor" else 1  # the victim sensor reports every 4th scan
+    assert gaps == {round(interval * every, 6)}, f"{sensor_type}: gaps {gaps}, ScanInterval {interval}"
+    assert len(outs) == (int(2.0 / interval + 1e-9) + 1) // every  # ticks at 0, interval, ... 2 s
+    _, _, again = _probe_run(tmp_path, sensor_type, 0, 2.0)
+    assert [o.value for o in again] == [o.value for o in outs], "not deterministic under a seed"
     for o in outs:
         line = format_message(SensorMessage(time=o.time, reading=o.value))
         assert line.startswith("SEN ") and line.endswith("\r\n")
         assert "{Type %s}" % sensor_type in line
         assert "nan" not in line.lower() and "inf" not in line.lower()
-        parse_message(line[:-2])  # a client can read it back
+        back = parse_message(line[:-2])  # a client can read it back
+        assert format_message(back) == line

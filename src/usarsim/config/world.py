@@ -15,6 +15,11 @@ from usarsim.errors import ConfigError
 Vec3 = tuple[float, float, float]
 
 SHAPES = ("box", "cylinder")
+# Sensor kinds a material can let rays through (glass: IR and cameras, manual 3.2.1).
+SEE_THROUGH_KINDS = ("ir", "camera", "laser", "sonar")
+# Body parts a victim is made of (protocol.md 7.9: the UT2004 victim model's collision boxes).
+VICTIM_PARTS = ("Head", "Chest", "Pelvis", "Arm", "Hand", "Leg", "Foot")
+VICTIM_POSTURES = ("lying", "sitting")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -22,6 +27,7 @@ class Material:
     name: str
     rgba: tuple[float, float, float, float] = (0.7, 0.7, 0.7, 1.0)
     friction: float = 1.0
+    see_through: tuple[str, ...] = ()  # sensor kinds whose rays pass through (SEE_THROUGH_KINDS)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -51,6 +57,53 @@ class Floor:
 
 
 @dataclass(frozen=True, kw_only=True)
+class GeoReference:
+    """Geographic coordinate of the world origin, for GPS (protocol.md 7.6): world +X is
+    north, +Y east.  Defaults: USARSim's ZeroZeroLocation (NIST Gaithersburg,
+    39 deg 8.0273' N, 77 deg 12.998' W) and its scales, 111200 m per degree of latitude
+    and 71670 m per degree of longitude."""
+
+    latitude_deg: float = 39.0 + 8.0273 / 60.0
+    longitude_deg: float = -(77.0 + 12.998 / 60.0)
+    scale_latitude_m: float = 111200.0
+    scale_longitude_m: float = 71670.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Victim:
+    """A person to be found: body parts the victim sensor can see, optionally waving
+    (its arm moves) and making sounds."""
+
+    name: str
+    location: Vec3  # the pelvis, on the floor: z is the height of the body's centre line
+    rotation: Vec3 = (0.0, 0.0, 0.0)
+    posture: str = "lying"
+    waving: bool = False
+    sound_loudness_db: float = 0.0  # 0: silent
+    sound_period_s: float = 5.0
+    sound_duration_s: float = 1.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class FalseAlarm:
+    """An object that fools the victim sensor: a box reported as a body part."""
+
+    name: str
+    center: Vec3
+    size: Vec3
+    rotation: Vec3 = (0.0, 0.0, 0.0)
+    part: str = "Head"
+    material: str = "default"
+
+
+@dataclass(frozen=True, kw_only=True)
+class RfidTagConfig:
+    tag_id: int
+    location: Vec3
+    memory: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
 class WorldConfig:
     name: str
     description: str
@@ -62,6 +115,10 @@ class WorldConfig:
     time_limit_min: int = 0
     timestep_s: float = 0.004
     gravity_m_s2: float = 9.81
+    geo: GeoReference = field(default_factory=GeoReference)
+    victims: tuple[Victim, ...] = ()
+    false_alarms: tuple[FalseAlarm, ...] = ()
+    rfid_tags: tuple[RfidTagConfig, ...] = ()
     extra: dict = field(default_factory=dict)
 
     def start_pose(self, name: str) -> StartPose | None:
@@ -93,7 +150,15 @@ def load_world(path: str | Path) -> WorldConfig:
         rgba = ms.vec("rgba", 4, (0.7, 0.7, 0.7, 1.0))
         if any(c < 0 or c > 1 for c in rgba):
             raise ms.error("rgba", f"each colour component must be within [0, 1], got {list(rgba)}")
-        materials[str(mname)] = Material(name=str(mname), rgba=rgba, friction=ms.float("friction", 1.0, min=0.0, max=10.0))
+        see = ms.list("see_through", [])
+        for k in see:
+            if k not in SEE_THROUGH_KINDS:
+                from usarsim.config.reader import did_you_mean
+
+                raise ms.error("see_through", f"unknown sensor kind {k!r}{did_you_mean(str(k), SEE_THROUGH_KINDS)}; "
+                                              f"allowed: {', '.join(SEE_THROUGH_KINDS)}")
+        materials[str(mname)] = Material(name=str(mname), rgba=rgba, friction=ms.float("friction", 1.0, min=0.0, max=10.0),
+                                         see_through=tuple(see))
         ms.finish()
 
     def check_material(sec: Section, key: str, value: str) -> None:
@@ -143,10 +208,63 @@ def load_world(path: str | Path) -> WorldConfig:
         poses.append(StartPose(name=pname, location=s.vec("location"), rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0))))
         s.finish()
 
+    g = top.section("geo_reference", {})
+    geo = GeoReference(latitude_deg=g.float("latitude_deg", GeoReference.latitude_deg, min=-89.0, max=89.0),
+                       longitude_deg=g.float("longitude_deg", GeoReference.longitude_deg, min=-180.0, max=180.0),
+                       scale_latitude_m=g.float("scale_latitude_m", 111200.0, min=1.0),
+                       scale_longitude_m=g.float("scale_longitude_m", 71670.0, min=1.0))
+    g.finish()
+
+    victims: list[Victim] = []
+    for i, raw in enumerate(top.list("victims", [])):
+        s = Section(raw, path=path, key=f"victims[{i}]")
+        vname = s.str("name")
+        if vname in names:
+            raise s.error("name", f"duplicate name '{vname}'")
+        names.add(vname)
+        sound = s.section("sound", {})
+        victims.append(Victim(name=vname, location=s.vec("location"), rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0)),
+                              posture=s.str("posture", "lying", choices=VICTIM_POSTURES),
+                              waving=s.bool("waving", False),
+                              sound_loudness_db=sound.float("loudness_db", 0.0, min=0.0, max=200.0),
+                              sound_period_s=sound.float("period_s", 5.0, min=0.1),
+                              sound_duration_s=sound.float("duration_s", 1.0, min=0.01)))
+        sound.finish()
+        s.finish()
+
+    alarms: list[FalseAlarm] = []
+    for i, raw in enumerate(top.list("false_alarms", [])):
+        s = Section(raw, path=path, key=f"false_alarms[{i}]")
+        aname = s.str("name")
+        if aname in names:
+            raise s.error("name", f"duplicate name '{aname}'")
+        names.add(aname)
+        material = s.str("material", "default")
+        check_material(s, "material", material)
+        alarms.append(FalseAlarm(name=aname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
+                                 rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0)),
+                                 part=s.str("part", "Head", choices=VICTIM_PARTS), material=material))
+        s.finish()
+
+    tags: list[RfidTagConfig] = []
+    ids: set[int] = set()
+    for i, raw in enumerate(top.list("rfid_tags", [])):
+        s = Section(raw, path=path, key=f"rfid_tags[{i}]")
+        tid = s.int("id", min=0)
+        if tid in ids:
+            raise s.error("id", f"duplicate RFID tag id {tid}")
+        ids.add(tid)
+        mem = s.str("memory", "")
+        if any(c in mem for c in "{}\r\n"):
+            raise s.error("memory", "tag memory may not contain braces or line breaks")
+        tags.append(RfidTagConfig(tag_id=tid, location=s.vec("location"), memory=mem))
+        s.finish()
+
     top.finish()
     return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
                        objects=tuple(objects), start_poses=tuple(poses), time_limit_min=time_limit,
-                       timestep_s=timestep, gravity_m_s2=gravity)
+                       timestep_s=timestep, gravity_m_s2=gravity, geo=geo, victims=tuple(victims),
+                       false_alarms=tuple(alarms), rfid_tags=tuple(tags))
 
 
 def check_world_file(path: str | Path) -> WorldConfig:

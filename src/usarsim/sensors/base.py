@@ -61,6 +61,7 @@ class Sensor:
 
     TYPE: ClassVar[str] = ""
     PACKED: ClassVar[bool] = False
+    PERIODIC: ClassVar[bool] = True  # False for items that never send SEN (effecters such as RFIDReleaser)
     Config: ClassVar[type] = SensorConfig
     ALIASES: ClassVar[dict[str, str]] = {}
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {}
@@ -95,8 +96,10 @@ class Sensor:
         """Packed sensors: build one reading from every item's part."""
         raise NotImplementedError
 
-    def operate(self, view: "WorldView", opcode: str, params: str | None) -> str | None:
-        """Handle ``SET {Opcode ...}``; return the RES status, or None if unsupported."""
+    def operate(self, view: "WorldView", opcode: str, params: str | None) -> Any:
+        """Handle ``SET {Opcode ...}``: return the RES status (``OK``, ``Failed``), or
+        (status, extra key/value pairs), or a ready reading of the result; None if the
+        opcode is not supported."""
         return None
 
     def conf_fields(self) -> tuple[tuple[str, Any], ...]:

@@ -34,6 +34,7 @@ class RangeSensor(Sensor):
     """One ray along the sensor's X axis; MaxRange when nothing is hit; clamped."""
 
     PACKED = True
+    RAY_KIND = "laser"  # which materials the rays pass through (world materials' see_through)
     Config = RangeSensorConfig
     ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m"}
 
@@ -43,7 +44,7 @@ class RangeSensor(Sensor):
     def _true_range(self, view) -> float:
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
         dirs = self._directions() @ rot.T
-        dist, _, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id)
+        dist, _, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
         return float(dist.min())
 
     def measure(self, view) -> RangeItem:
@@ -93,6 +94,7 @@ class Sonar(RangeSensor):
     they hit is below the maximum (specular surfaces at grazing angles are not seen)."""
 
     Config = SonarConfig
+    RAY_KIND = "sonar"
     ALIASES = {**RangeSensor.ALIASES, "BeamAngle": "beam_angle_rad", "beamAngle": "beam_angle_rad",
                "maxAngleOfIncidence": "max_angle_of_incidence_rad", "numberOfCones": "number_of_cones",
                "tracesPerCone": "traces_per_cone"}
@@ -117,7 +119,8 @@ class Sonar(RangeSensor):
     def _true_range(self, view) -> float:
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
         dirs = self._dirs @ rot.T
-        dist, nrm, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True)
+        dist, nrm, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True,
+                                        kind=self.RAY_KIND)
         hit = np.isfinite(dist)
         if not hit.any():
             return math.inf
@@ -152,7 +155,7 @@ class Sonar(RangeSensor):
         rot = h.rotation_mj(d)
         origins = locs @ rot.T + h.position_mj(d)
         u = local_dirs @ rot.T
-        dist, nrm, _ = view.caster.cast_from(origins, u, reach, h.body_id, normals=True)
+        dist, nrm, _ = view.caster.cast_from(origins, u, reach, h.body_id, normals=True, kind=first.RAY_KIND)
         seen = np.isfinite(dist) & (np.abs(np.einsum("ij,ij->i", u, nrm)) >= cos_max[owner])
         nearest = np.minimum.reduceat(np.where(seen, dist, np.inf), starts)
         items = []
@@ -175,6 +178,7 @@ class IRConfig(RangeSensorConfig):
 
 @SENSORS.register("IR")
 class IR(RangeSensor):
-    """A single ray (glass handling comes with world materials)."""
+    """A single ray that passes through the materials IR sees through (glass), protocol.md 7.2."""
 
     Config = IRConfig
+    RAY_KIND = "ir"

@@ -1,5 +1,5 @@
 """Scanning range finders (protocol.md 7.3): RangeScanner with SICK LMS200 and
-Hokuyo URG-04LX presets.  All beams of one sweep are cast at one instant in one
+Hokuyo URG-04LX presets, IRScanner, RangeScanner3D.  All beams of one sweep are cast at one instant in one
 batched ray cast; the first value is the rightmost beam."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.readings import RangeScanReading
+from usarsim.readings import RangeScan3DReading, RangeScanReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
@@ -48,6 +48,7 @@ class RangeScannerConfig(SensorConfig):
 @SENSORS.register("RangeScanner")
 class RangeScanner(Sensor):
     Config = RangeScannerConfig
+    RAY_KIND = "laser"  # which materials the beams pass through (world materials' see_through)
     ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m", "Resolution": "resolution_rad",
                "ScanFov": "fov_rad", "Fov": "fov_rad", "bYaw": "panning", "bPitch": "tilting",
                "Paning": "panning", "Panning": "panning", "Tilting": "tilting"}
@@ -76,7 +77,8 @@ class RangeScanner(Sensor):
     def measure(self, view) -> RangeScanReading:
         cfg = self.config
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
-        dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id)
+        dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id,
+                                      kind=self.RAY_KIND)
         hit = np.isfinite(dist)
         values = np.full(len(dist), cfg.max_range_m)
         if hit.any():
@@ -94,3 +96,103 @@ class RangeScanner(Sensor):
         c = self.config
         return (("MaxRange", c.max_range_m), ("MinRange", c.min_range_m), ("Resolution", trunc4(c.resolution_rad)),
                 ("Fov", trunc4(c.fov_rad)), ("Paning", c.panning), ("Tilting", c.tilting))
+
+
+@dataclass(frozen=True, kw_only=True)
+class IRScannerConfig(RangeScannerConfig):
+    # IRScanner (protocol.md 7.3): MaxRange 10, Resolution 0.087, ScanFov 3.14.
+    max_range_m: float = 10.0
+    resolution_rad: float = 0.087
+    fov_rad: float = 3.14
+
+
+@SENSORS.register("IRScanner")
+class IRScanner(RangeScanner):
+    """A scanning infrared range finder: its beams pass through what IR sees through (glass)."""
+
+    Config = IRScannerConfig
+    RAY_KIND = "ir"
+    PRESETS = {}
+
+
+@dataclass(frozen=True, kw_only=True)
+class RangeScanner3DConfig(SensorConfig):
+    # RangeScanner3D (protocol.md 7.3, UT Tarantula/Ardabot configs): MaxRange 1000
+    # (effectively unlimited), ScanInterval 0.4, HorizontalFOV 1.0472, HorizontalResolution
+    # 0.0209, VerticalFOV 0.4363, VerticalResolution 0.0145 -> 51 x 31 points.
+    max_range_m: float = 1000.0
+    min_range_m: float = 0.1
+    scan_interval_s: float = 0.4
+    horizontal_fov_rad: float = 1.0472
+    horizontal_resolution_rad: float = 0.0209
+    vertical_fov_rad: float = 0.4363
+    vertical_resolution_rad: float = 0.0145
+    panning: bool = False
+    tilting: bool = True
+    noise: float = 0.001
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not (0.0 <= self.min_range_m < self.max_range_m):
+            raise ValueError(f"need 0 <= min_range_m < max_range_m, got {self.min_range_m}, {self.max_range_m}")
+        for res, fov, what in ((self.horizontal_resolution_rad, self.horizontal_fov_rad, "horizontal"),
+                               (self.vertical_resolution_rad, self.vertical_fov_rad, "vertical")):
+            if not (0.0 < res <= fov <= 2 * math.pi):
+                raise ValueError(f"need 0 < {what} resolution <= {what} fov <= 2 pi, got {res}, {fov}")
+        if self.counts[0] * self.counts[1] > 100_000:
+            raise ValueError(f"{self.counts[0]} x {self.counts[1]} beams is more than 100000 per scan")
+
+    @property
+    def counts(self) -> tuple[int, int]:
+        """(rows, columns): vertical steps, horizontal steps."""
+        return (int(math.floor(self.vertical_fov_rad / self.vertical_resolution_rad + 1e-6)) + 1,
+                int(math.floor(self.horizontal_fov_rad / self.horizontal_resolution_rad + 1e-6)) + 1)
+
+
+@SENSORS.register("RangeScanner3D", "3DRangeScanner")
+class RangeScanner3D(Sensor):
+    """A 3D laser (a tilting or panning 2D scanner, as on Kurt3D): all beams of a sweep
+    at one instant, row-major -- one horizontal line per vertical step, the top row
+    first, each row from its rightmost beam to its leftmost, as the 2D scanner."""
+
+    Config = RangeScanner3DConfig
+    RAY_KIND = "laser"
+    ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m",
+               "HorizontalFOV": "horizontal_fov_rad", "HorizontalResolution": "horizontal_resolution_rad",
+               "VerticalFOV": "vertical_fov_rad", "VerticalResolution": "vertical_resolution_rad",
+               "bYaw": "panning", "bPitch": "tilting", "Paning": "panning", "Panning": "panning",
+               "Tilting": "tilting"}
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        c = self.config
+        rows, cols = c.counts
+        pitches = c.vertical_fov_rad / 2.0 - c.vertical_resolution_rad * np.arange(rows)  # top row first
+        yaws = c.horizontal_fov_rad / 2.0 - c.horizontal_resolution_rad * np.arange(cols)  # rightmost first
+        pp, yy = np.meshgrid(pitches, yaws, indexing="ij")
+        self._dirs = unit_dirs_yaw_pitch(yy.reshape(-1), pp.reshape(-1))
+
+    def measure(self, view) -> RangeScan3DReading:
+        c = self.config
+        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, c.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
+        values = np.full(len(dist), c.max_range_m)
+        hit = np.isfinite(dist)
+        if hit.any():
+            values[hit] = self.relative_noise(dist[hit])
+        np.clip(values, c.min_range_m, c.max_range_m, out=values)
+        return RangeScan3DReading(self.name, (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
+                                  (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)), tuple(values.tolist()),
+                                  sensor_type=self.TYPE)
+
+    def operate(self, view, opcode, params):
+        if opcode.upper() == "SCAN":
+            return "OK"
+        return None
+
+    def conf_fields(self):
+        c = self.config
+        return (("MaxRange", c.max_range_m), ("MinRange", c.min_range_m),
+                ("Resolution", (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad))),
+                ("Fov", (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad))),
+                ("Paning", c.panning), ("Tilting", c.tilting))

@@ -40,6 +40,9 @@ def conf_value(v) -> str:
         return str(v)
     if isinstance(v, float):
         return f4(v)
+    if isinstance(v, (tuple, list)):
+        return ",".join(conf_value(float(x)) if isinstance(x, (int, float)) and not isinstance(x, bool)
+                        else conf_value(x) for x in v)
     return str(v)
 
 

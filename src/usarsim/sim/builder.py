@@ -73,11 +73,107 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
+    for v in world.victims:
+        add_victim(s, v)
+    for a in world.false_alarms:
+        mat = world.materials[a.material]
+        g = s.worldbody.add_geom()
+        g.name = f"falsealarm/{a.name}/{a.part}"
+        g.type = mujoco.mjtGeom.mjGEOM_BOX
+        g.size = [a.size[0] / 2.0, a.size[1] / 2.0, a.size[2] / 2.0]
+        g.pos = frames.to_mj_vec(a.center).tolist()
+        g.quat = frames.usar_euler_to_mj_quat(a.rotation).tolist()
+        g.rgba = list(mat.rgba)
+        g.group = GROUP_STATIC
+        g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+
     light = s.worldbody.add_light()
     light.name = "sun"
     light.pos = [fl.center[0], -fl.center[1], 10.0]
     light.dir = [0.0, 0.0, -1.0]
     return s
+
+
+# A victim's body, lying on its back along its own +X axis (head forward), in its own
+# USARSim frame (X forward, Y right, Z down) with the origin at the pelvis centre.
+# Rounded adult body dimensions (estimates for a 1.75 m adult; the manual's victims,
+# section 3.2.1, are life-size human models): (part, shape, centre, size) where a box
+# size is its full extents, a sphere size its radius and a capsule (along X) its
+# radius and half-length.
+VICTIM_LYING = (
+    ("Head", "sphere", (0.78, 0.0, 0.0), (0.10,)),
+    ("Chest", "box", (0.40, 0.0, 0.0), (0.46, 0.36, 0.20)),
+    ("Pelvis", "box", (0.0, 0.0, 0.0), (0.26, 0.34, 0.20)),
+    ("Arm", "capsule", (0.40, -0.24, 0.0), (0.05, 0.22)),
+    ("Arm", "capsule", (0.40, 0.24, 0.0), (0.05, 0.22)),
+    ("Hand", "sphere", (0.08, -0.25, 0.0), (0.05,)),
+    ("Hand", "sphere", (0.08, 0.25, 0.0), (0.05,)),
+    ("Leg", "capsule", (-0.45, -0.10, 0.0), (0.07, 0.30)),
+    ("Leg", "capsule", (-0.45, 0.10, 0.0), (0.07, 0.30)),
+    ("Foot", "box", (-0.86, -0.10, -0.05), (0.08, 0.09, 0.22)),
+    ("Foot", "box", (-0.86, 0.10, -0.05), (0.08, 0.09, 0.22)),
+)
+# The waving arm (the right one) swings about the shoulder, 0.6 rad either way, once
+# every 2 s (the manual's victims wave an arm to draw attention, section 3.2.1).
+SHOULDER = (0.62, 0.24, 0.0)  # the right shoulder, victim frame
+WAVE_AMPLITUDE_RAD = 0.6
+WAVE_PERIOD_S = 2.0
+VICTIM_RGBA = [0.87, 0.68, 0.55, 1.0]
+
+
+def victim_part_pose(posture: str, centre, size, shape):
+    """Centre and rotation (USARSim rpy) of a part for a posture: sitting raises the
+    upper body (Head, Chest, Arms, Hands) upright above the pelvis."""
+    x, y, z = centre
+    if posture == "sitting" and x > 0.05:
+        # rotate the upper body by -90 degrees of pitch about the pelvis: +X becomes -Z (up)
+        return (0.0, y, z - x), (0.0, math.pi / 2, 0.0)
+    return (x, y, z), (0.0, 0.0, 0.0)
+
+
+def add_victim(spec: mujoco.MjSpec, victim) -> None:
+    body = spec.worldbody.add_body()
+    body.name = f"victim/{victim.name}"
+    body.pos = frames.to_mj_vec(victim.location).tolist()
+    body.quat = frames.usar_euler_to_mj_quat(victim.rotation).tolist()
+    for i, (part, shape, centre, size) in enumerate(VICTIM_LYING):
+        waving = victim.waving and part in ("Arm", "Hand") and centre[1] > 0
+        parent = body
+        c, rot = victim_part_pose(victim.posture, centre, size, shape)
+        if waving:
+            # the right arm and hand hang from a shoulder body that is moved kinematically
+            shoulder = spec.body(f"victim/{victim.name}/shoulder")
+            if shoulder is None:
+                shoulder = spec.worldbody.add_body()
+                shoulder.name = f"victim/{victim.name}/shoulder"
+                shoulder.mocap = True
+                loc = np.array(victim.location, dtype=float)
+                rot_v = frames.euler_to_mat(*victim.rotation)
+                sh = victim_part_pose(victim.posture, SHOULDER, None, None)[0]
+                shoulder.pos = frames.to_mj_vec(loc + rot_v @ np.array(sh)).tolist()
+                shoulder.quat = frames.usar_euler_to_mj_quat(victim.rotation).tolist()
+            parent = shoulder
+            sh = victim_part_pose(victim.posture, SHOULDER, None, None)[0]
+            c = tuple(np.array(c) - np.array(sh))
+        g = parent.add_geom()
+        g.name = f"victim/{victim.name}/{part}/{i}"
+        g.pos = frames.to_mj_vec(c).tolist()
+        if shape == "sphere":
+            g.type = mujoco.mjtGeom.mjGEOM_SPHERE
+            g.size = [size[0], 0.0, 0.0]
+        elif shape == "capsule":
+            g.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+            g.size = [size[0], size[1], 0.0]
+            # MuJoCo capsules lie along their own Z; the part lies along the victim's X
+            r = np.array(rot, dtype=float) + np.array([0.0, math.pi / 2, 0.0])
+            g.quat = frames.usar_euler_to_mj_quat(tuple(r)).tolist()
+        else:
+            g.type = mujoco.mjtGeom.mjGEOM_BOX
+            g.size = [size[0] / 2.0, size[1] / 2.0, size[2] / 2.0]
+            g.quat = frames.usar_euler_to_mj_quat(rot).tolist()
+        g.rgba = VICTIM_RGBA
+        g.group = GROUP_STATIC
+        g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
 
 def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation) -> mujoco.MjsBody:

@@ -24,6 +24,7 @@ from usarsim.errors import ConfigError, SimulationError
 from usarsim.readings import CommandResult, RobotStatus
 from usarsim.sensors import Sensor, make_sensor
 from usarsim.sim import builder
+from usarsim.sim.entities import Entities
 from usarsim.sim.view import RayCaster, RobotHandle, WorldView
 
 log = logging.getLogger("usarsim.sim")
@@ -126,7 +127,9 @@ class Simulation:
         self._heap: list[tuple[float, int, _Unit]] = []
         self._seq = itertools.count()
         self.outbox: list[Output] = []
-        self.caster = RayCaster(self.model, self.data)
+        self.entities = Entities(world)
+        self.entities.resolve(self.model)
+        self.caster = RayCaster(self.model, self.data, see_through=self.entities.see_through)
         self.physics_steps = 0
         self.resets = 0
         self._good_qpos: np.ndarray | None = None
@@ -138,13 +141,15 @@ class Simulation:
         return self.step_count * self.dt
 
     def view(self) -> WorldView:
-        return WorldView(self.model, self.data, self.time, self.caster)
+        return WorldView(self.model, self.data, self.time, self.caster, self.world, self.entities)
 
     # Model changes ------------------------------------------------------------
     def _rebuild(self) -> None:
         self.model, self.data = self.spec.recompile(self.model, self.data)
+        self.entities.resolve(self.model)
+        self.entities.update(self.data, self.time)
         mujoco.mj_forward(self.model, self.data)
-        self.caster = RayCaster(self.model, self.data)
+        self.caster = RayCaster(self.model, self.data, see_through=self.entities.see_through)
         self._good_qpos = self.data.qpos.copy()
         view = self.view()
         for r in self.robots.values():
@@ -214,6 +219,8 @@ class Simulation:
         units = [_Unit(r, [], r.config.status_interval_s, now, "STA", status=True)]
         packed: dict[str, _Unit] = {}
         for s in r.sensors:
+            if not s.PERIODIC:
+                continue
             if s.PACKED:
                 u = packed.get(s.TYPE)
                 if u is None:
@@ -270,9 +277,14 @@ class Simulation:
                 status = s.operate(self.view(), opcode or "", params) if opcode else None
                 if status is None:
                     return CommandResult(s.TYPE, s.name, "Failed")
-                if status == "OK" and (opcode or "").upper() == "SCAN":
+                extra: tuple = ()
+                if isinstance(status, tuple):
+                    status, extra = status
+                elif not isinstance(status, str):
+                    return status  # an item-specific result (e.g. a camera zoom)
+                if status == "OK" and (opcode or "").upper() == "SCAN" and s.PERIODIC:
                     self._emit(r, s.TYPE, [s], f"SEN:{s.TYPE}:{s.name}")
-                return CommandResult(s.TYPE, s.name, status)
+                return CommandResult(s.TYPE, s.name, status, tuple(extra))
         return CommandResult(t, name or "", "Failed")
 
     # Stepping -----------------------------------------------------------------
@@ -295,6 +307,8 @@ class Simulation:
         stretch is run again one step at a time from its start, and each robot is
         caught at the step where it goes wrong, before it can disturb the others."""
         m, d = self.model, self.data
+        if self.entities.has_motion:
+            self.entities.update(d, self.time)
         if self._snapshot is None or self._snapshot.size != mujoco.mj_stateSize(m, STATE):
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
         mujoco.mj_getState(m, d, self._snapshot, STATE)
@@ -392,6 +406,8 @@ class Simulation:
             value = cls.combine(cls.measure_group(sensors, view))
         else:
             value = first.measure(view)
+        if value is None:  # nothing to report this tick (e.g. a sensor that accumulates scans)
+            return
         t = view.time if first.config.with_time_stamp else None
         self.outbox.append(Output(r.uid, t, value, key))
 

@@ -9,11 +9,16 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from usarsim.sim import frames
+
+if TYPE_CHECKING:
+    from usarsim.config.world import GeoReference, WorldConfig
+    from usarsim.sim.entities import Entities
 
 # Geom groups: which geoms ray-cast sensors can see.
 GROUP_STATIC = 0  # world geometry
@@ -34,7 +39,8 @@ class RayCaster:
     the same distances.
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, backend: str | None = None):
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, backend: str | None = None,
+                 see_through: dict[str, np.ndarray] | None = None):
         self.m = model
         self.d = data
         self.rays_cast = 0
@@ -43,6 +49,9 @@ class RayCaster:
                          m.geom_rgba[:, 3])
         group = np.clip(m.geom_group, 0, 5)
         self._visible = (RAY_GROUPS[group] != 0) & (alpha != 0)
+        # per sensor kind (ir, camera, laser, sonar): the geoms its rays pass through (glass)
+        self._see_through = {k: v for k, v in (see_through or {}).items() if len(v) == m.ngeom and v.any()}
+        self._masks = {k: self._visible & ~v for k, v in self._see_through.items()}
         self._gtype = np.ascontiguousarray(m.geom_type, dtype=np.int64)
         self._gbody = np.ascontiguousarray(m.geom_bodyid, dtype=np.int64)
         backend = backend or os.environ.get("USARSIM_RAYCAST", "") or "compiled"
@@ -58,18 +67,19 @@ class RayCaster:
         self.backend = backend
 
     def cast(self, origin: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
-             normals: bool = False) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+             normals: bool = False, kind: str | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Cast ``dirs`` (n x 3 unit vectors, MuJoCo frame) from ``origin``.
 
         Returns (distance, normals, geom ids): distance is ``inf`` where nothing is
-        hit within ``max_range``.
+        hit within ``max_range``.  ``kind`` (``ir``, ``camera``, ``laser``, ``sonar``)
+        lets the rays pass through the materials that kind sees through.
         """
         dirs = np.ascontiguousarray(dirs, dtype=float).reshape(-1, 3)
         origins = np.broadcast_to(np.asarray(origin, dtype=float), dirs.shape)
-        return self.cast_from(origins, dirs, max_range, exclude_body, normals)
+        return self.cast_from(origins, dirs, max_range, exclude_body, normals, kind)
 
     def cast_from(self, origins: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
-                  normals: bool = False) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+                  normals: bool = False, kind: str | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Cast ray i from ``origins[i]`` along ``dirs[i]`` (n x 3 each, MuJoCo frame)."""
         dirs = np.ascontiguousarray(dirs, dtype=float).reshape(-1, 3)
         origins = np.ascontiguousarray(origins, dtype=float).reshape(-1, 3)
@@ -82,8 +92,18 @@ class RayCaster:
             from usarsim.sim.raycast import cast_kernel
 
             m, d = self.m, self.d
+            mask = self._masks.get(kind, self._visible) if kind else self._visible
             cast_kernel(origins, dirs, float(max_range), self._gtype, m.geom_size, m.geom_rbound, self._gbody,
-                        self._visible, d.geom_xpos, d.geom_xmat, int(exclude_body), normals, dist, gid, nrm)
+                        mask, d.geom_xpos, d.geom_xmat, int(exclude_body), normals, dist, gid, nrm)
+        elif kind in self._see_through:
+            # mj_multiRay filters by group only: hide the see-through geoms in an unseen group
+            hide = self._see_through[kind]
+            saved = self.m.geom_group[hide].copy()
+            self.m.geom_group[hide] = 5
+            try:
+                self._cast_mujoco(origins, dirs, float(max_range), int(exclude_body), normals, dist, gid, nrm)
+            finally:
+                self.m.geom_group[hide] = saved
         else:
             self._cast_mujoco(origins, dirs, float(max_range), int(exclude_body), normals, dist, gid, nrm)
         return dist, (nrm if normals else None), gid
@@ -113,6 +133,14 @@ class WorldView:
     data: mujoco.MjData
     time: float
     caster: RayCaster
+    world: "WorldConfig | None" = None
+    entities: "Entities | None" = None
+
+    @property
+    def geo(self) -> "GeoReference":
+        from usarsim.config.world import GeoReference
+
+        return self.world.geo if self.world is not None else GeoReference()
 
 
 class RobotHandle:

@@ -1,0 +1,86 @@
+"""Cameras on the protocol side (protocol.md 7.11, 6.7, 5.4): CONF, GEO and zoom.
+Pictures come from the image server; over the control port a UT2004 camera sends no
+SEN line.  Covers ``Camera`` and the omnidirectional ``OmniCam``."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from usarsim.readings import ZoomResult
+from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+
+
+@dataclass(frozen=True, kw_only=True)
+class CameraConfig(SensorConfig):
+    # UT CONF example (protocol.md 6.7): CameraDefFov 0.8727, CameraMinFov 0.3491,
+    # CameraMaxFov 1.5708 (the zoom range of the UT test UI, 20 to 90 degrees).
+    def_fov_rad: float = 0.8727
+    min_fov_rad: float = 0.3491
+    max_fov_rad: float = 1.5708
+    width_px: int = 320  # RoboCup Rescue image tiles were 320 x 240 (protocol.md 7.11)
+    height_px: int = 240
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not (0.0 < self.min_fov_rad <= self.def_fov_rad <= self.max_fov_rad < math.pi * 2):
+            raise ValueError(f"need 0 < min_fov <= def_fov <= max_fov, got {self.min_fov_rad}, {self.def_fov_rad}, "
+                             f"{self.max_fov_rad}")
+        if self.width_px < 1 or self.height_px < 1:
+            raise ValueError("width_px and height_px must be >= 1")
+
+
+@SENSORS.register("Camera")
+class Camera(Sensor):
+    """A robot camera: its current field of view changes with ``SET {Opcode Zoom}``."""
+
+    PERIODIC = False
+    Config = CameraConfig
+    ALIASES = {"CameraDefFov": "def_fov_rad", "CameraMinFov": "min_fov_rad", "CameraMaxFov": "max_fov_rad",
+               "FOV": "def_fov_rad", "Width": "width_px", "Height": "height_px"}
+
+    def reset(self, view) -> None:
+        self.fov_rad = self.config.def_fov_rad
+
+    def zoom(self, fov: float) -> tuple[float, str]:
+        """Set the field of view: 0 restores the default, others are clamped to
+        [min, max]; the status is Failed when the value was reset or clamped (5.4)."""
+        c = self.config
+        if fov == 0.0:
+            self.fov_rad = c.def_fov_rad
+            return self.fov_rad, "Failed"
+        clamped = min(max(fov, c.min_fov_rad), c.max_fov_rad)
+        self.fov_rad = clamped
+        return clamped, ("OK" if clamped == fov else "Failed")
+
+    def operate(self, view, opcode, params):
+        if opcode.lower() not in ("zoom", "fov"):
+            return None
+        try:
+            fov = float(str(params).replace(",", " ").split()[0])
+        except (ValueError, IndexError):
+            return ZoomResult(((self.name, self.fov_rad, "Failed"),))
+        if not math.isfinite(fov) or fov < 0:
+            return ZoomResult(((self.name, self.fov_rad, "Failed"),))
+        value, status = self.zoom(fov)
+        return ZoomResult(((self.name, value, status),))
+
+    def conf_fields(self):
+        c = self.config
+        return (("CameraDefFov", c.def_fov_rad), ("CameraMinFov", c.min_fov_rad), ("CameraMaxFov", c.max_fov_rad),
+                ("CameraFov", getattr(self, "fov_rad", c.def_fov_rad)))
+
+
+@dataclass(frozen=True, kw_only=True)
+class OmniCamConfig(CameraConfig):
+    # An omnidirectional camera sees all around: a fixed 360 degree field of view.
+    def_fov_rad: float = 2 * math.pi - 1e-6
+    min_fov_rad: float = 2 * math.pi - 1e-6
+    max_fov_rad: float = 2 * math.pi - 1e-6
+
+
+@SENSORS.register("OmniCam", "OmniCamera")
+class OmniCam(Camera):
+    """The omnidirectional camera of the OmniP2AT/OmniP2DX (protocol.md 9): no zoom."""
+
+    Config = OmniCamConfig

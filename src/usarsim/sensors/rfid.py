@@ -1,0 +1,193 @@
+"""RFID: the tag reader (``RFID``, protocol.md 7.10 and 5.4, manual section 10.9) and
+the tag dropper (``RFIDReleaser``, usually named ``Gun``, protocol.md 8).
+
+Tags are world entities (the world file's ``rfid_tags``, plus the ones robots drop),
+each with an integer id and a memory that any robot's reader can read and write: the
+tag keeps what was written, for everyone.
+
+The reader's three sensing modes, after the UT2004 RFID sensor (manual 10.9.3):
+
+* 0, radius: every tag within MaxRange is detected, walls or not;
+* 1, radius with occlusion: ... and the straight line to it is free;
+* 2, signal strength: the tag's signal at the reader, P(d) = P(1 m) - 10 n log10(d) -
+  ObstacleLoss x (walls crossed), must reach the Threshold (and d <= MaxRange).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from usarsim.readings import RfidReading, RfidTag
+from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sim import frames
+
+MAX_OBSTACLES = 10  # walls counted along a line at most (each needs a ray cast)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RfidConfig(SensorConfig):
+    # The reader's range was not recovered from any USARSim source (protocol.md 7.10:
+    # "a few metres"); 3 m is an estimate for a passive UHF tag reader.
+    max_range_m: float = 3.0
+    sensing_mode: int = 0
+    # Signal-strength mode (estimates, no USARSim figures survive): -40 dBm at 1 m,
+    # free-space exponent 2, 10 dB per wall, detection down to -75 dBm.
+    signal_at_1m_dbm: float = -40.0
+    path_loss_exponent: float = 2.0
+    obstacle_loss_db: float = 10.0
+    threshold_dbm: float = -75.0
+    scan_interval_s: float = 0.2
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.max_range_m <= 0:
+            raise ValueError(f"max_range_m must be > 0, got {self.max_range_m}")
+        if self.sensing_mode not in (0, 1, 2):
+            raise ValueError(f"sensing_mode must be 0 (radius), 1 (radius with occlusion) or 2 (signal strength), "
+                             f"got {self.sensing_mode}")
+
+
+def _tag_id(text: str | None) -> int | None:
+    try:
+        return int(str(text).strip().split()[0])
+    except (ValueError, IndexError):
+        return None
+
+
+@SENSORS.register("RFID", "RFIDSensor")
+class RFID(Sensor):
+    Config = RfidConfig
+    RAY_KIND = "laser"  # radio does not pass walls any better than light here; glass counts as a wall
+    ALIASES = {"MaxRange": "max_range_m", "SensingMode": "sensing_mode", "ObstacleLoss": "obstacle_loss_db",
+               "Threshold": "threshold_dbm"}
+
+    def _detected(self, view) -> list[tuple[int, tuple[float, float, float]]]:
+        """(tag id, tag position in the sensor frame) of every tag the reader senses now."""
+        ents = view.entities
+        if ents is None or not ents.tags:
+            return []
+        c = self.config
+        d = view.data
+        pos, rot = self.handle.sensor_frame(d, self.item.location, self.item.orientation)
+        ids = list(ents.tags)
+        world = np.array([frames.to_mj_vec(ents.tags[i].location) for i in ids])
+        delta = world - pos
+        dist = np.linalg.norm(delta, axis=1)
+        near = np.flatnonzero(dist <= c.max_range_m)
+        out = []
+        if len(near) and c.sensing_mode > 0:
+            dirs = delta[near] / np.maximum(dist[near], 1e-9)[:, None]
+            walls = self._obstacles(view, pos, dirs, dist[near], stop_at_first=c.sensing_mode == 1)
+        for k, i in enumerate(near.tolist()):
+            if c.sensing_mode == 1 and walls[k] > 0:
+                continue
+            if c.sensing_mode == 2:
+                r = max(float(dist[i]), 0.01)
+                p = c.signal_at_1m_dbm - 10.0 * c.path_loss_exponent * math.log10(r) - c.obstacle_loss_db * walls[k]
+                if p < c.threshold_dbm:
+                    continue
+            local = rot.T @ delta[i]
+            out.append((ids[i], frames.from_mj_vec(local)))
+        return out
+
+    def _obstacles(self, view, pos, dirs, lengths, stop_at_first: bool) -> list[int]:
+        """Walls crossed on each line from ``pos`` (rays cast again just past each hit)."""
+        counts = [0] * len(dirs)
+        origins = np.repeat(pos[None, :], len(dirs), axis=0)
+        left = np.array(lengths, dtype=float) - 0.01  # a tag lying on a surface is not behind it
+        active = np.flatnonzero(left > 0)
+        for _ in range(MAX_OBSTACLES):
+            if not len(active):
+                break
+            hit, _, _ = view.caster.cast_from(origins[active], dirs[active], float(left[active].max()),
+                                              self.handle.body_id, kind=self.RAY_KIND)
+            still = []
+            for j, a in enumerate(active.tolist()):
+                h = float(hit[j])
+                if h < left[a]:
+                    counts[a] += 1
+                    step = h + 0.005
+                    origins[a] = origins[a] + dirs[a] * step
+                    left[a] -= step
+                    if not stop_at_first and left[a] > 0:
+                        still.append(a)
+            active = np.array(still, dtype=int)
+        return counts
+
+    def measure(self, view) -> RfidReading:
+        ents = view.entities
+        tags = []
+        for tid, loc in self._detected(view):
+            mem = ents.tags[tid].memory
+            tags.append(RfidTag(tid, loc, mem if mem else None))
+        return RfidReading(self.name, tuple(tags))
+
+    def operate(self, view, opcode, params):
+        """Read, Write and Erase of a tag's memory (protocol.md 5.4; manual 10.9.5-10.9.7):
+        the tag must be sensed now.  Read replies ``{ID id} {Mem data}``."""
+        op = opcode.lower()
+        if op not in ("read", "write", "erase"):
+            return None
+        tid = _tag_id(params)
+        ents = view.entities
+        if tid is None or ents is None or tid not in {t for t, _ in self._detected(view)}:
+            return "Failed"
+        tag = ents.tags[tid]
+        if op == "read":
+            return "OK", (("ID", str(tid)), ("Mem", tag.memory))
+        if op == "erase":
+            tag.memory = ""
+            return "OK"
+        data = str(params).strip().split(None, 1)
+        text = data[1] if len(data) > 1 else ""
+        if any(ch in text for ch in "{}\r\n") or len(text) > 1024:
+            return "Failed"
+        tag.memory = text
+        return "OK"
+
+    def conf_fields(self):
+        return (("ScanInterval", self.config.scan_interval_s), ("MaxRange", self.config.max_range_m))
+
+
+@dataclass(frozen=True, kw_only=True)
+class RfidReleaserConfig(SensorConfig):
+    # The magazine's size was not recovered (protocol.md 8): 10 tags, an estimate.
+    capacity: int = 10
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.capacity < 0:
+            raise ValueError(f"capacity must be >= 0, got {self.capacity}")
+
+
+@SENSORS.register("RFIDReleaser")
+class RFIDReleaser(Sensor):
+    """An effecter: ``SET {Type RFIDReleaser} {Name Gun} {Opcode Release}`` drops a new
+    tag on the ground under the robot (RES OK), or fails when the magazine is empty."""
+
+    PERIODIC = False
+    Config = RfidReleaserConfig
+    ALIASES = {"Capacity": "capacity", "NumberOfTags": "capacity"}
+
+    def reset(self, view) -> None:
+        self.left = self.config.capacity
+
+    def operate(self, view, opcode, params):
+        if opcode.lower() != "release":
+            return None
+        if self.left <= 0 or view.entities is None:
+            return "Failed"
+        d = view.data
+        pos, _ = self.handle.sensor_frame(d, self.item.location, self.item.orientation)
+        down = np.array([[0.0, 0.0, -1.0]])
+        dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
+        ground = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)
+        view.entities.release_tag(frames.from_mj_vec(ground))
+        self.left -= 1
+        return "OK"
+
+    def conf_fields(self):
+        return ()

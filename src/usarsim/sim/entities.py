@@ -1,0 +1,97 @@
+"""Things in a world that sensors look for, beyond plain geometry: victims and their
+body parts, false alarms, RFID tags (with writable memory, shared by every robot),
+and which geoms each kind of sensor sees through (glass).
+
+Geoms are found by the names the builder gives them (``victim/<name>/<Part>/<i>``,
+``falsealarm/<name>/<Part>``, ``world/<object>``), again after every model build.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from usarsim.config.world import SEE_THROUGH_KINDS, WorldConfig
+from usarsim.sim import builder, frames
+
+# Tag ids handed to tags dropped by an RFIDReleaser start here (world tags keep theirs).
+RELEASED_TAG_FIRST_ID = 20000
+
+
+@dataclass
+class Tag:
+    """An RFID tag: integer id, world position (USARSim frame) and memory."""
+
+    tag_id: int
+    location: tuple[float, float, float]
+    memory: str = ""
+
+
+@dataclass(frozen=True)
+class PartHit:
+    owner: str  # victim or false-alarm name
+    part: str  # Head, Chest, ...
+    false_alarm: bool
+
+
+class Entities:
+    def __init__(self, world: WorldConfig):
+        self.world = world
+        self.tags: dict[int, Tag] = {t.tag_id: Tag(t.tag_id, tuple(t.location), t.memory) for t in world.rfid_tags}
+        self._next_id = max([RELEASED_TAG_FIRST_ID - 1, *self.tags]) + 1
+        self.parts: dict[int, PartHit] = {}
+        self.see_through: dict[str, np.ndarray] = {}
+        self._wavers: list[tuple[int, object]] = []
+        self._victims = {v.name: v for v in world.victims}
+
+    # After each build ---------------------------------------------------------------
+    def resolve(self, m: mujoco.MjModel) -> None:
+        self.parts.clear()
+        mats = {f"world/{o.name}": self.world.materials[o.material] for o in self.world.objects}
+        mats["floor"] = self.world.materials[self.world.floor.material]
+        for a in self.world.false_alarms:
+            mats[f"falsealarm/{a.name}/{a.part}"] = self.world.materials[a.material]
+        see = {k: np.zeros(m.ngeom, dtype=bool) for k in SEE_THROUGH_KINDS}
+        for g in range(m.ngeom):
+            name = m.geom(g).name
+            if name.startswith("victim/"):
+                _, owner, part, _ = name.split("/", 3)
+                self.parts[g] = PartHit(owner, part, False)
+            elif name.startswith("falsealarm/"):
+                _, owner, part = name.split("/", 2)
+                self.parts[g] = PartHit(owner, part, True)
+            mat = mats.get(name)
+            if mat is not None:
+                for k in mat.see_through:
+                    see[k][g] = True
+        self.see_through = see
+        self._wavers = []
+        for v in self.world.victims:
+            if v.waving:
+                b = m.body(f"victim/{v.name}/shoulder")
+                self._wavers.append((int(m.body_mocapid[b.id]), v))
+
+    # Each stretch of physics steps ------------------------------------------------------
+    def update(self, d: mujoco.MjData, time: float) -> None:
+        """Move the waving victims' arms to their angle at ``time``."""
+        for mocap, v in self._wavers:
+            swing = builder.WAVE_AMPLITUDE_RAD * math.sin(2.0 * math.pi * time / builder.WAVE_PERIOD_S)
+            roll, pitch, yaw = v.rotation
+            d.mocap_quat[mocap] = frames.usar_euler_to_mj_quat((roll + swing, pitch, yaw))
+
+    @property
+    def has_motion(self) -> bool:
+        return bool(self._wavers)
+
+    def victim(self, name: str):
+        return self._victims.get(name)
+
+    # RFID --------------------------------------------------------------------------------
+    def release_tag(self, location: tuple[float, float, float]) -> Tag:
+        tag = Tag(self._next_id, tuple(float(v) for v in location), "")
+        self._next_id += 1
+        self.tags[tag.tag_id] = tag
+        return tag
