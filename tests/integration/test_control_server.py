@@ -286,9 +286,9 @@ def test_geo_and_conf_by_name(robot):
 
 
 @pytest.mark.parametrize("query, reply", [
-    ("GETGEO {Type Camera}", "GEO {Type Camera}"),
+    ("GETGEO {Type Gripper}", "GEO {Type Gripper}"),
     ("GETCONF {Type Gripper}", "CONF {Type Gripper}"),
-    ("GETCONF {Type Camera} {Name Camera}", "CONF {Type Camera} {Name Camera}"),
+    ("GETCONF {Type Camera} {Name Camera2}", "CONF {Type Camera} {Name Camera2}"),
     ("GETGEO {Type Sonar} {Name X9}", "GEO {Type Sonar} {Name X9}"),
     ("GETCONF {Type MisPkg}", "CONF {Type MisPkg}"),
 ])

@@ -61,6 +61,7 @@ class Sensor:
 
     TYPE: ClassVar[str] = ""
     PACKED: ClassVar[bool] = False
+    LIVE_CONF: ClassVar[bool] = False  # True when SET operations change what CONF reports
     PERIODIC: ClassVar[bool] = True  # False for items that never send SEN (effecters such as RFIDReleaser)
     Config: ClassVar[type] = SensorConfig
     ALIASES: ClassVar[dict[str, str]] = {}

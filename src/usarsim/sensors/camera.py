@@ -35,6 +35,7 @@ class Camera(Sensor):
     """A robot camera: its current field of view changes with ``SET {Opcode Zoom}``."""
 
     PERIODIC = False
+    LIVE_CONF = True  # CameraFov follows the zoom
     Config = CameraConfig
     ALIASES = {"CameraDefFov": "def_fov_rad", "CameraMinFov": "min_fov_rad", "CameraMaxFov": "max_fov_rad",
                "FOV": "def_fov_rad", "Width": "width_px", "Height": "height_px"}

@@ -205,8 +205,11 @@ class Session:
         if not items:
             self.send(M.EmptyConfiguration(item_type=cmd.type, name=cmd.name))
             return
-        self.send(M.ItemConfiguration(item_type=items[0].item_type, items=tuple(
-            M.ItemConf(name=d.name, fields=tuple((k, conf_value(v)) for k, v in d.conf)) for d in items)))
+        confs = []
+        for d in items:
+            fields = self.facade.live_conf(self.uid, d.item_type, d.name) or d.conf
+            confs.append(M.ItemConf(name=d.name, fields=tuple((k, conf_value(v)) for k, v in fields)))
+        self.send(M.ItemConfiguration(item_type=items[0].item_type, items=tuple(confs)))
 
     def on_set(self, cmd: C.Set) -> None:
         if self.state not in (SPAWNING, ALIVE):

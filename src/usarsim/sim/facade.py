@@ -60,6 +60,10 @@ class SimFacade:
             self._descriptions[robot.path] = d
         return d
 
+    def live_conf(self, uid: int, item_type: str, name: str):
+        """CONF fields of a robot's item that changed at run time, or None."""
+        return self.sim.live_conf.get((uid, item_type, name))
+
     # Requests ----------------------------------------------------------------------
     def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation,
               on_done: Callable[[Any, BaseException | None], None]) -> None:

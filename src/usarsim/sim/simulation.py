@@ -133,6 +133,9 @@ class Simulation:
         self.physics_steps = 0
         self.resets = 0
         self._good_qpos: np.ndarray | None = None
+        # CONF fields that changed at run time (a camera's zoom), by (robot id, type, name);
+        # read by the server thread (plain dict reads and replacements are atomic)
+        self.live_conf: dict[tuple[int, str, str], tuple] = {}
         self._snapshot: np.ndarray | None = None
 
     # Clock -------------------------------------------------------------------
@@ -210,6 +213,8 @@ class Simulation:
         if r is None:
             return
         r.removed = True
+        for key in [k for k in self.live_conf if k[0] == uid]:
+            del self.live_conf[key]
         builder.remove_robot(self.spec, r.prefix)
         self._rebuild()
         log.info("removed robot '%s' (id %d) at t=%.3f", r.name, uid, self.time)
@@ -275,6 +280,8 @@ class Simulation:
         for s in r.sensors:
             if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
                 status = s.operate(self.view(), opcode or "", params) if opcode else None
+                if s.LIVE_CONF:
+                    self.live_conf[(uid, s.TYPE, s.name)] = s.conf_fields()
                 if status is None:
                     return CommandResult(s.TYPE, s.name, "Failed")
                 extra: tuple = ()

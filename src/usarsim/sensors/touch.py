@@ -1,0 +1,132 @@
+"""The Touch contact sensor (protocol.md 7.2): True while a small sphere at the sensor's
+mount touches anything but its own robot.  All Touch sensors of a robot are reported
+together in one packed SEN line (protocol.md 6.3: ``{Name Touch Touch False}``).
+
+Model: the sphere (``Diameter`` 0.01 m, protocol.md 7.2) touches a geom when the
+distance from its centre to that geom's surface is at most its radius, or when the
+centre is inside the geom.  The distance is computed analytically in the geom's own
+frame (signed distance functions of MuJoCo's plane, sphere, capsule, ellipsoid,
+cylinder and box); other shapes (meshes, height fields) are taken as their local
+bounding box.  Candidates are every collidable geom (contype or conaffinity set) that
+does not belong to the robot itself: world geometry, the floor plane, victims and other
+robots, wheels included (ray casts would miss wheels, which sit in a geom group rays do
+not see, and a centre already inside a solid).  A bounding-sphere test first leaves only
+the geoms within reach, so a measurement costs a few vector operations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from usarsim.readings import TouchItem, TouchReading
+from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sim import frames
+
+_PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
+_SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+_CAPSULE = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
+_ELLIPSOID = int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)
+_CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+_BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
+
+
+def _box_sd(p: np.ndarray, half: np.ndarray) -> float:
+    q = np.abs(p) - half
+    outside = float(np.linalg.norm(np.maximum(q, 0.0)))
+    return outside + min(float(q.max()), 0.0)
+
+
+def signed_distance(gtype: int, size: np.ndarray, aabb: np.ndarray, p: np.ndarray) -> float:
+    """Signed distance from ``p`` (in the geom's own frame) to the geom's surface:
+    negative inside.  ``size`` is MuJoCo's geom_size, ``aabb`` its geom_aabb (centre,
+    half sizes in the geom frame), used for shapes without a formula here."""
+    if gtype == _PLANE:
+        return float(p[2])  # the solid half-space below z = 0, as MuJoCo collides with it
+    if gtype == _SPHERE:
+        return float(np.linalg.norm(p)) - float(size[0])
+    if gtype == _CAPSULE:
+        h = float(size[1])
+        z = min(max(float(p[2]), -h), h)
+        return math.hypot(float(p[0]), float(p[1]), float(p[2]) - z) - float(size[0])
+    if gtype == _CYLINDER:
+        dr = math.hypot(float(p[0]), float(p[1])) - float(size[0])
+        dz = abs(float(p[2])) - float(size[1])
+        return math.hypot(max(dr, 0.0), max(dz, 0.0)) + min(max(dr, dz), 0.0)
+    if gtype == _BOX:
+        return _box_sd(p, np.asarray(size, dtype=float))
+    if gtype == _ELLIPSOID:
+        # a bound that is exact on the surface and close near it (Quilez's
+        # ellipsoid approximation); the radii are all > 0
+        r = np.asarray(size, dtype=float)
+        k0 = float(np.linalg.norm(p / r))
+        if k0 == 0.0:
+            return -float(r.min())
+        k1 = float(np.linalg.norm(p / (r * r)))
+        return k0 * (k0 - 1.0) / k1
+    # meshes, height fields, SDF geoms: their local bounding box
+    return _box_sd(p - aabb[:3], aabb[3:])
+
+
+@dataclass(frozen=True, kw_only=True)
+class TouchConfig(SensorConfig):
+    # Touch (protocol.md 7.2): Diameter 0.01 m, ScanInterval 0.1.
+    scan_interval_s: float = 0.1
+    diameter_m: float = 0.01
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not (self.diameter_m > 0 and math.isfinite(self.diameter_m)):
+            raise ValueError(f"diameter_m must be > 0, got {self.diameter_m}")
+
+
+@SENSORS.register("Touch")
+class Touch(Sensor):
+    """True while the sphere of ``Diameter`` at the mount touches (or has its centre
+    inside) anything other than the robot's own bodies."""
+
+    PACKED = True
+    Config = TouchConfig
+    ALIASES = {"Diameter": "diameter_m"}
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._offset_mj = frames.to_mj_vec(self.item.location)
+        self._radius = self.config.diameter_m / 2.0
+
+    def configure(self, view) -> None:
+        m = view.model
+        own = m.body_rootid[m.geom_bodyid] == self.handle.body_id
+        collides = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
+        cand = np.flatnonzero(collides & ~own)
+        is_plane = m.geom_type[cand] == _PLANE
+        self._planes = cand[is_plane]
+        self._solids = cand[~is_plane]
+        self._reach = m.geom_rbound[self._solids] + self._radius
+
+    def touching(self, view) -> bool:
+        m, d = view.model, view.data
+        h = self.handle
+        centre = d.xpos[h.body_id] + h.rotation_mj(d) @ self._offset_mj
+        r = self._radius
+        for g in self._planes:
+            local = d.geom_xmat[g].reshape(3, 3).T @ (centre - d.geom_xpos[g])
+            if local[2] <= r:
+                return True
+        if len(self._solids):
+            gap = np.linalg.norm(d.geom_xpos[self._solids] - centre, axis=1)
+            for g in self._solids[gap <= self._reach]:
+                local = d.geom_xmat[g].reshape(3, 3).T @ (centre - d.geom_xpos[g])
+                if signed_distance(int(m.geom_type[g]), m.geom_size[g], m.geom_aabb[g], local) <= r:
+                    return True
+        return False
+
+    def measure(self, view) -> TouchItem:
+        return TouchItem(self.name, self.touching(view))
+
+    @classmethod
+    def combine(cls, parts: list[TouchItem]) -> TouchReading:
+        return TouchReading(tuple(parts))

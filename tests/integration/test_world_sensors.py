@@ -1,0 +1,358 @@
+"""Sensors that look for things in the world: glass for IR and lasers, victims and false
+alarms for the victim sensor, RFID tags, the tag dropper, camera zoom, the 3D scanner.
+
+A world with everything at known places (ENTITY_WORLD); physics and readings are checked
+on the Simulation directly, the protocol lines through a lock-step server.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from helpers import segments, wait_for
+from usarsim.config.catalog import resolve_robot
+from usarsim.config.robot import load_robot
+from usarsim.config.world import load_world
+from usarsim.readings import (RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading)
+from usarsim.sim.simulation import Simulation
+
+REST_Z = -0.1455  # P2AT chassis origin above the floor (Z down)
+
+ENTITY_WORLD = """\
+name: EntityArena
+description: glass, victims, false alarms and RFID tags at known places (tests only)
+floor: {center: [0.0, 0.0], size: [40.0, 40.0]}
+materials:
+  wall: {rgba: [0.9, 0.8, 0.4, 1.0]}
+  glass: {rgba: [0.7, 0.9, 1.0, 0.3], see_through: [ir, camera]}
+objects:
+  # lane y = 0: a glass pane whose face is at x = 1.0, a wall whose face is at x = 1.4
+  - {name: pane, shape: box, center: [1.01, 0.0, -0.6], size: [0.02, 2.0, 1.2], material: glass}
+  - {name: back, shape: box, center: [1.45, 0.0, -0.6], size: [0.1, 2.0, 1.2], material: wall}
+  # lane y = 5: a wall at y = 6.0 between the reader and tag 3
+  - {name: tagwall, shape: box, center: [0.5, 6.0, -0.6], size: [2.0, 0.1, 1.2], material: wall}
+  # lane y = 15: a wall behind the victim... in front of it, so that it is hidden
+  - {name: hide, shape: box, center: [1.5, 15.0, -0.6], size: [0.1, 3.0, 1.2], material: wall}
+victims:
+  - {name: Alice, location: [2.5, 10.0, -0.1], rotation: [0.0, 0.0, 1.5708]}
+  - {name: Bob, location: [2.5, -10.0, -0.1], rotation: [0.0, 0.0, 1.5708], waving: true}
+  - {name: Carol, location: [3.0, 15.0, -0.1], rotation: [0.0, 0.0, 1.5708]}
+false_alarms:
+  - {name: glove, center: [2.0, -5.0, -0.1], size: [0.2, 0.2, 0.2], part: Hand}
+rfid_tags:
+  - {id: 11137, location: [1.0, 5.0, -0.02], memory: found-nothing}
+  - {id: 11138, location: [6.0, 5.0, -0.02]}
+  - {id: 11139, location: [0.5, 6.8, -0.02]}
+start_poses:
+  - {name: Glass, location: [0.0, 0.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+  - {name: Tags, location: [0.0, 5.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+  - {name: TagsOpposite, location: [2.0, 5.0, -0.2], rotation: [0.0, 0.0, 3.14159]}
+  - {name: Victim, location: [0.0, 10.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+  - {name: Waver, location: [0.0, -10.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+  - {name: Alarm, location: [0.0, -5.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+  - {name: Hidden, location: [0.0, 15.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+  - {name: Away, location: [0.0, 10.0, -0.2], rotation: [0.0, 0.0, 3.14159]}
+"""
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory):
+    p = tmp_path_factory.mktemp("entity") / "EntityArena.yaml"
+    p.write_text(ENTITY_WORLD)
+    return load_world(p)
+
+
+def probe_robot(tmp_path, sensors: str, name: str = "Probe"):
+    """A P2AT body with only the given sensor lines (YAML list items)."""
+    from usarsim.config.catalog import ROBOTS_DIR
+
+    head = (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0].replace("class_name: P2AT",
+                                                                                  f"class_name: {name}")
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(head + "\nsensors:\n" + sensors)
+    return load_robot(path)
+
+
+def settled(world, robot, pose: str, seed: int = 5, uid: int = 1, sim: Simulation | None = None) -> Simulation:
+    sim = sim or Simulation(world, seed=seed)
+    p = world.start_pose(pose)
+    sim.spawn(uid, robot, f"R{uid}", p.location, p.rotation)
+    sim.advance(1.0)
+    sim.take_outputs()
+    return sim
+
+
+def set_res(c, line: str, seconds: float = 0.05):
+    """Lock-step: send a SET, step, and return its RES line (applied at the next STEP)."""
+    c.send(line)
+    res = [ln for ln in c.step(seconds) if ln.text.startswith("RES")]
+    assert len(res) == 1, (line, res)
+    return res[0]
+
+
+def values(sim, kind, seconds, uid=1):
+    sim.advance(seconds)
+    return [o.value for o in sim.take_outputs() if isinstance(o.value, kind) and o.uid == uid]
+
+
+# --------------------------------------------------------------------------- glass
+
+
+def test_ir_sees_through_glass_where_laser_and_sonar_stop(world, tmp_path):
+    robot = probe_robot(tmp_path, """\
+  - {type: IR, name: IR1, location: [0.27, 0.0, -0.1]}
+  - {type: RangeSensor, name: Beam, location: [0.27, 0.0, -0.1]}
+  - {type: Sonar, name: S1, location: [0.27, 0.0, -0.1]}
+  - {type: IRScanner, name: IRScan, location: [0.27, 0.0, -0.1]}
+  - {type: RangeScanner, name: Laser, location: [0.27, 0.0, -0.1], preset: SICK}
+""")
+    sim = settled(world, robot, "Glass")
+    x = sim.pose_of(1)[0][0] + 0.27
+    readings = values(sim, RangeReading, 1.0)
+    ir = [r.items[0].range_m for r in readings if r.sensor_type == "IR"]
+    beam = [r.items[0].range_m for r in readings if r.sensor_type == "RangeSensor"]
+    sonar = [r.items[0].range_m for r in readings if r.sensor_type == "Sonar"]
+    assert ir and beam and sonar
+    assert np.mean(ir) == pytest.approx(1.4 - x, abs=0.01)  # through the pane, onto the wall
+    assert np.mean(beam) == pytest.approx(1.0 - x, abs=0.01)  # the pane
+    assert np.mean(sonar) == pytest.approx(1.0 - x, abs=0.01)
+    scans = values(sim, RangeScanReading, 1.0)
+    ir_scan = [s for s in scans if s.sensor_type == "IRScanner"][-1]
+    laser = [s for s in scans if s.sensor_type == "RangeScanner"][-1]
+    mid_ir = ir_scan.ranges_m[len(ir_scan.ranges_m) // 2]
+    assert mid_ir == pytest.approx(1.4 - x, abs=0.01)
+    assert laser.ranges_m[90] == pytest.approx(1.0 - x, abs=0.01)
+
+
+# --------------------------------------------------------------------------- victims
+
+
+VICT = "  - {type: VictSensor, name: VictSensor, location: [0.2, 0.0, -0.3]}\n"
+
+
+def victim_reports(world, tmp_path, pose, seconds=3.2, seed=5):
+    sim = settled(world, probe_robot(tmp_path, VICT), pose, seed=seed)
+    return sim, values(sim, VictimReading, seconds)
+
+
+def test_victim_sensor_reports_body_parts_where_the_victim_lies(world, tmp_path):
+    sim, reports = victim_reports(world, tmp_path, "Victim")
+    assert len(reports) == 4  # every 4th scan of 0.2 s: 4 reports in 3.2 s
+    parts = [p for r in reports for p in r.parts]
+    names = {p.part_name for p in parts}
+    assert {"Chest", "Pelvis"} <= names and names <= {"Head", "Chest", "Pelvis", "Arm", "Hand", "Leg", "Foot"}
+    # Alice lies across the lane 2.5 m ahead (pelvis at x = 2.5, body along +Y), 0.1 m up
+    (rx, ry, _), _ = sim.pose_of(1)
+    sensor_x = rx + 0.2
+    pelvis = [p.location for p in parts if p.part_name == "Pelvis"]
+    xs = np.array([loc[0] for loc in pelvis])
+    assert np.all(np.abs(xs - (2.5 - sensor_x)) < 0.2 + 0.05 * 3 * 2.5)
+    assert abs(float(np.median(xs)) - (2.5 - 0.17 - sensor_x)) < 0.15  # the near face of the pelvis
+    # her head is on her right (+Y): heads right of the chest
+    heads = [p.location[1] for p in parts if p.part_name == "Head"]
+    chests = [p.location[1] for p in parts if p.part_name == "Chest"]
+    if heads:
+        assert np.median(heads) > np.median(chests)
+
+
+def test_nothing_seen_gives_no_victims(world, tmp_path):
+    _, reports = victim_reports(world, tmp_path, "Away")
+    assert reports and all(r.parts == () for r in reports)
+    _, hidden = victim_reports(world, tmp_path, "Hidden")
+    assert hidden and all(r.parts == () for r in hidden)  # Carol lies behind a wall
+
+
+def test_a_false_alarm_is_reported_as_its_part(world, tmp_path):
+    _, reports = victim_reports(world, tmp_path, "Alarm", seconds=6.4)
+    parts = [p for r in reports for p in r.parts]
+    assert parts and {p.part_name for p in parts} == {"Hand"}
+    # the Gaussian test lets most rays through at 2 m (|2 (g - 0)| > 0.05 x 4 / 3 for most g)
+    rays = sum(1 for _ in parts)
+    assert rays >= 8
+
+
+def test_victim_location_noise_grows_with_distance(world, tmp_path):
+    _, reports = victim_reports(world, tmp_path, "Victim", seconds=16.0, seed=9)
+    chest = np.array([p.location for r in reports for p in r.parts if p.part_name == "Chest"])
+    assert len(chest) > 20
+    d = np.linalg.norm(chest, axis=1).mean()
+    spread_z = chest[:, 2].std()  # the chest's top is flat: z varies by noise mostly
+    assert 0.5 * 0.05 * d < spread_z < 2.0 * 0.05 * d + 0.05
+
+
+def test_a_waving_victim_moves_its_arm(world, tmp_path):
+    sim = settled(world, probe_robot(tmp_path, VICT), "Waver")
+    m, d = sim.model, sim.data
+    mocap = m.body_mocapid[m.body("victim/Bob/shoulder").id]
+    quats = []
+    for _ in range(8):
+        sim.advance(0.25)
+        quats.append(d.mocap_quat[mocap].copy())
+    angles = {round(2 * math.acos(min(1.0, abs(float(q @ quats[0])))), 3) for q in quats}
+    assert len(angles) >= 3 and max(angles) > 0.5  # it swings by up to 2 x 0.6 rad
+
+
+def test_victim_sensor_conf_and_sen_lines(server_factory, world):
+    srv = server_factory(world=world, seed=2)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start Victim}")
+    c.step(1.0)
+    conf = c.ask("GETCONF {Type VictSensor}", "CONF").text
+    assert conf == "CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}"
+    lines = [ln.text for ln in c.step(2.0) if ln.text.startswith("SEN") and "{Type VictSensor}" in ln.text]
+    assert lines
+    for text in lines:
+        assert re.fullmatch(r"SEN \{Time \d+\.\d{4}\} \{Type VictSensor\} \{Name VictSensor\}"
+                            r"( \{PartName (Head|Chest|Pelvis|Arm|Hand|Leg|Foot)\} \{Location -?\d+\.\d{4},-?\d+\.\d{4},-?\d+\.\d{4}\})+",
+                            text), text
+    c.send("INIT {ClassName USARBot.P2AT} {Name R2} {Start Away}")  # ignored: one robot per connection
+    d = srv.connect()
+    d.nfo()
+    d.send("INIT {ClassName USARBot.P2AT} {Name R2} {Start Away}")
+    d.step(1.0)
+    away = [ln.text for ln in d.step(1.6) if "{Type VictSensor}" in ln.text]
+    assert away and all(re.fullmatch(r"SEN \{Time \d+\.\d{4}\} \{Type VictSensor\} \{Status NoVictims\}", t)
+                        for t in away)
+
+
+# --------------------------------------------------------------------------- RFID
+
+
+RFID = "  - {{type: RFID, name: RFID, location: [0.0, 0.0, 0.0]{extra}}}\n"
+
+
+def rfid_reading(world, tmp_path, pose="Tags", extra="", seed=5) -> tuple[Simulation, RfidReading]:
+    sim = settled(world, probe_robot(tmp_path, RFID.format(extra=extra)), pose, seed=seed)
+    return sim, values(sim, RfidReading, 0.4)[-1]
+
+
+def test_rfid_detects_tags_in_range_at_their_place(world, tmp_path):
+    sim, r = rfid_reading(world, tmp_path)
+    ids = {t.tag_id for t in r.tags}
+    assert 11137 in ids and 11138 not in ids  # 1 m away; 6 m is beyond the 3 m range
+    assert 11139 in ids  # radius mode: the wall does not matter
+    (rx, ry, rz), _ = sim.pose_of(1)
+    tag = next(t for t in r.tags if t.tag_id == 11137)
+    assert tag.location == pytest.approx((1.0 - rx, 5.0 - ry, -0.02 - rz), abs=0.01)
+    assert tag.memory == "found-nothing"
+
+
+def test_rfid_occlusion_and_signal_modes(world, tmp_path):
+    _, occl = rfid_reading(world, tmp_path, extra=", SensingMode: 1")
+    assert {t.tag_id for t in occl.tags} == {11137}  # 11139 is behind the wall
+    _, sig = rfid_reading(world, tmp_path, extra=", SensingMode: 2, ObstacleLoss: 40.0")
+    assert {t.tag_id for t in sig.tags} == {11137}  # one wall costs 40 dB: below the threshold
+    _, weak = rfid_reading(world, tmp_path, extra=", SensingMode: 2, ObstacleLoss: 5.0")
+    assert {t.tag_id for t in weak.tags} == {11137, 11139}
+
+
+def test_a_tag_written_by_one_robot_is_read_back_by_another(server_factory, world):
+    srv = server_factory(world=world, seed=2)
+    a, b = srv.connect(), srv.connect()
+    a.nfo()
+    b.nfo()
+    a.send("INIT {ClassName USARBot.P2AT} {Name Writer} {Start Tags}")
+    b.send("INIT {ClassName USARBot.P2AT} {Name Reader} {Start TagsOpposite}")
+    a.step(1.0)
+    b.sync()
+    res = set_res(a, "SET {Type RFID} {Name RFID} {Opcode Write} {Params 11137 victim Alice, 2 m north}")
+    assert re.fullmatch(r"RES \{Time \d+\.\d+\} \{Type RFID\} \{Name RFID\} \{Status OK\}", res.text), res.text
+    b.send("SET {Type RFID} {Name RFID} {Opcode Read} {Params 11137}")
+    a.step(0.2)
+    got = b.wait_line("RES")
+    assert re.fullmatch(r"RES \{Time \d+\.\d+\} \{Type RFID\} \{Name RFID\} \{Status OK\} \{ID 11137\} "
+                        r"\{Mem victim Alice, 2 m north\}", got.text), got.text
+    # the reader's SEN carries the memory too
+    sen = b.wait_line(lambda ln: ln.text.startswith("SEN") and "{Type RFID}" in ln.text)
+    assert "{ID 11137} {Location " in sen.text and "{Mem victim Alice, 2 m north}" in sen.text
+    # a tag out of range, an unknown tag, a bad opcode: Failed
+    for line in ("SET {Type RFID} {Name RFID} {Opcode Read} {Params 11138}",
+                 "SET {Type RFID} {Name RFID} {Opcode Read} {Params 4242}",
+                 "SET {Type RFID} {Name RFID} {Opcode Read} {Params x}",
+                 "SET {Type RFID} {Name RFID} {Opcode Burn} {Params 11137}"):
+        assert set_res(a, line).segment("Status") == "Failed", line
+    # erase
+    assert set_res(a, "SET {Type RFID} {Name RFID} {Opcode Erase} {Params 11137}").segment("Status") == "OK"
+    b.send("SET {Type RFID} {Name RFID} {Opcode Read} {Params 11137}")
+    a.step(0.1)
+    assert b.wait_line("RES").text.endswith("{ID 11137} {Mem}")
+
+
+def test_the_gun_drops_tags_until_its_magazine_is_empty(server_factory, world):
+    srv = server_factory(world=world, seed=2)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start Glass}")
+    c.step(1.0)
+    before = srv.on_sim(lambda sim: set(sim.entities.tags))
+    statuses = []
+    for _ in range(11):
+        res = set_res(c, "SET {Type RFIDReleaser} {Name Gun} {Opcode Release}")
+        assert res.text.startswith("RES {Time ") and "{Type RFIDReleaser} {Name Gun}" in res.text
+        statuses.append(res.segment("Status"))
+    assert statuses == ["OK"] * 10 + ["Failed"]  # a magazine of 10
+    new = srv.on_sim(lambda sim: {i: sim.entities.tags[i].location for i in set(sim.entities.tags) - before})
+    assert len(new) == 10
+    (x, y, _), _ = srv.on_sim(lambda sim: sim.pose_of(1))
+    for loc in new.values():  # on the floor under the back of the robot
+        assert loc[2] == pytest.approx(0.0, abs=0.01)
+        assert math.hypot(loc[0] - (x - 0.2), loc[1] - y) < 0.05
+    # the robot's own reader sees them
+    sen = c.step(0.3)
+    rfid = [ln.text for ln in sen if "{Type RFID}" in ln.text][-1]
+    assert all(f"{{ID {i}}}" in rfid for i in new)
+    conf = c.ask("GETCONF {Type RFIDReleaser}", "CONF").text
+    assert conf == "CONF {Type RFIDReleaser} {Name Gun}"
+
+
+# --------------------------------------------------------------------------- camera
+
+
+def test_camera_zoom_is_clamped_and_answered(server_factory, world):
+    srv = server_factory(world=world, seed=2)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start Glass}")
+    c.step(0.5)
+    assert c.ask("GETCONF {Type Camera}", "CONF").text == (
+        "CONF {Type Camera} {Name Camera} {CameraDefFov 0.8727} {CameraMinFov 0.3491} {CameraMaxFov 1.5708} "
+        "{CameraFov 0.8727}")
+    assert c.ask("GETGEO {Type Camera}", "GEO").text == (
+        "GEO {Type Camera} {Name Camera Location 0.2059,0.0002,-0.1423 Orientation 0.0000,0.0000,0.0000 Mount HARD}")
+    cases = [("{Params 0.5}", "0.5000", "OK"), ("{Params 3.0}", "1.5708", "Failed"),
+             ("{Params 0.1}", "0.3491", "Failed"), ("{0.6}", "0.6000", "OK"), ("{Params 0}", "0.8727", "Failed")]
+    for params, fov, status in cases:
+        res = set_res(c, f"SET {{Type Camera}} {{Name Camera}} {{Opcode Zoom}} {params}").text
+        assert re.fullmatch(r"RES \{Time \d+\.\d+\} \{Type Camera\} \{Name Camera\} \{FOV %s\} \{Status %s\}"
+                            % (re.escape(fov), status), res), (params, res)
+    set_res(c, "SET {Type Camera} {Name Camera} {Opcode Zoom} {Params 0.7}")
+    assert c.ask("GETCONF {Type Camera} {Name Camera}", "CONF").text.endswith("{CameraFov 0.7000}")
+    # cameras send no SEN on the control port
+    assert not [ln for ln in c.step(1.0) if "{Type Camera}" in ln.text]
+
+
+# --------------------------------------------------------------------------- 3D scanner
+
+
+def test_range_scanner_3d_is_row_major_top_row_first(world, tmp_path):
+    robot = probe_robot(tmp_path, "  - {type: RangeScanner3D, name: Scanner3D, location: [0.27, 0.0, -0.1]}\n")
+    sim = settled(world, robot, "Glass")
+    scan = values(sim, RangeScan3DReading, 0.4)[-1]
+    rows, cols = 31, 51
+    assert len(scan.ranges_m) == rows * cols
+    grid = np.array(scan.ranges_m).reshape(rows, cols)
+    x = sim.pose_of(1)[0][0] + 0.27
+    d = 1.0 - x  # the glass pane (lasers do not pass it)
+    assert grid[rows // 2, cols // 2] == pytest.approx(d, abs=0.01)
+    # a vertical plane: each beam reads d / (cos(pitch) cos(yaw)); the top row looks up
+    pitch_top, yaw_right = 0.4363 / 2, 1.0472 / 2
+    assert grid[0, cols // 2] == pytest.approx(d / math.cos(pitch_top), abs=0.02)
+    assert grid[rows // 2, 0] == pytest.approx(d / math.cos(yaw_right), abs=0.02)
+    # the bottom rows see the floor before the pane? (0.245 m up, 12.5 degrees down: 1.1 m) no:
+    # all rows end on the pane at this distance
+    assert grid.max() < d / (math.cos(pitch_top) * math.cos(yaw_right)) + 0.02
