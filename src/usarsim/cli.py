@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import os
 import signal
 import sys
+from pathlib import Path
 
 from usarsim import __version__
 
@@ -62,6 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "advances that much simulated time and replies STEPPED {Time t}")
     s.add_argument("--max-connections", type=int, default=64, help="control connections (robots) at most "
                    "(default: %(default)s)")
+    s.add_argument("--robot-dir", action="append", default=[], metavar="DIR",
+                   help="a folder of robot files of your own (one YAML file per class, named after the class); "
+                        "clients INIT them by class name like the shipped robots; may be repeated")
 
     v = sub.add_parser("validate", help="check a world or robot file",
                        description="Load a world or robot file, build its MuJoCo model and print a one-line "
@@ -99,8 +104,22 @@ def cmd_serve(args) -> int:
         return 1
     if args.verbose == 0:
         logging.getLogger("usarsim").setLevel(logging.INFO)
+    for d in args.robot_dir:
+        if not os.path.isdir(d):
+            print(f"usarsim: error: --robot-dir {d}: no such folder", file=sys.stderr)
+            return 1
+    try:
+        from usarsim.config.robot import load_robot
+
+        for d in args.robot_dir:
+            for path in sorted(Path(d).glob("*.yaml")):
+                load_robot(path)  # a broken robot file is reported now, not when a client asks for it
+    except UsarsimError as exc:
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
     app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
-                      lockstep=args.lockstep, max_connections=args.max_connections)
+                      lockstep=args.lockstep, max_connections=args.max_connections,
+                      robot_dirs=tuple(args.robot_dir))
 
     async def main() -> None:
         loop = asyncio.get_running_loop()

@@ -165,6 +165,24 @@ class RfidReading:
     tags: tuple[RfidTag, ...]
 
 
+@dataclass(frozen=True, slots=True)
+class SoundReading:
+    """``{Loudness l} {Duration d}``: the loudest sound heard (dB at the sensor) and how
+    long it lasts (s); 0, 0 when all is quiet."""
+
+    name: str
+    loudness_db: float
+    duration_s: float
+
+
+@dataclass(frozen=True, slots=True)
+class HumanMotionReading:
+    """``{Prob p}``: probability that a human moves in the sensor's view."""
+
+    name: str
+    probability: float
+
+
 Reading = (
     RangeReading
     | RangeScanReading
@@ -179,6 +197,8 @@ Reading = (
     | ImuReading
     | VictimReading
     | RfidReading
+    | SoundReading
+    | HumanMotionReading
 )
 
 

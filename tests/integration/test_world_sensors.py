@@ -38,9 +38,11 @@ objects:
   # lane y = 15: a wall behind the victim... in front of it, so that it is hidden
   - {name: hide, shape: box, center: [1.5, 15.0, -0.6], size: [0.1, 3.0, 1.2], material: wall}
 victims:
-  - {name: Alice, location: [2.5, 10.0, -0.1], rotation: [0.0, 0.0, 1.5708]}
+  - {name: Alice, location: [2.5, 10.0, -0.1], rotation: [0.0, 0.0, 1.5708],
+     sound: {loudness_db: 70.0, period_s: 4.0, duration_s: 2.0}}
   - {name: Bob, location: [2.5, -10.0, -0.1], rotation: [0.0, 0.0, 1.5708], waving: true}
-  - {name: Carol, location: [3.0, 15.0, -0.1], rotation: [0.0, 0.0, 1.5708]}
+  - {name: Carol, location: [3.0, 15.0, -0.1], rotation: [0.0, 0.0, 1.5708],
+     sound: {loudness_db: 70.0, period_s: 3.0, duration_s: 1.0}}
 false_alarms:
   - {name: glove, center: [2.0, -5.0, -0.1], size: [0.2, 0.2, 0.2], part: Hand}
 rfid_tags:
@@ -220,6 +222,49 @@ def test_victim_sensor_conf_and_sen_lines(server_factory, world):
                         for t in away)
 
 
+# --------------------------------------------------------------------------- sound, human motion
+
+
+def test_a_groaning_victim_is_heard_louder_near_and_quieter_behind_a_wall(world, tmp_path):
+    """Alice groans 2 s in 4, Carol 1 s in 3; from the Hidden pose a wall stands between
+    the microphone and Carol (and nothing between it and Alice)."""
+    from usarsim.readings import SoundReading
+
+    robot = probe_robot(tmp_path, "  - {type: Sound, name: Mic, location: [0.0, 0.0, -0.2]}\n")
+    alice, carol = (2.5, 10.78, -0.1), (3.0, 15.78, -0.1)  # their heads
+    for pose, carol_walls in (("Victim", 0), ("Hidden", 1)):
+        sim = settled(world, robot, pose)
+        heard = values(sim, SoundReading, 12.0)
+        assert len(heard) == 120  # every 0.1 s
+        (x, y, z), _ = sim.pose_of(1)
+        mic = (x, y, z - 0.2)
+        level_a = 70.0 - 20.0 * math.log10(math.dist(mic, alice))
+        level_c = 70.0 - 20.0 * math.log10(math.dist(mic, carol)) - 20.0 * carol_walls
+        as_a = [h for h in heard if h.loudness_db == pytest.approx(level_a, abs=0.3)]
+        as_c = [h for h in heard if h.loudness_db == pytest.approx(level_c, abs=0.3)]
+        quiet = [h for h in heard if h.loudness_db == 0.0]
+        assert len(as_a) + len(as_c) + len(quiet) == len(heard)  # nothing else is heard
+        assert 50 <= len(as_a) <= 70  # Alice, the louder one, whenever she groans: half the time
+        assert as_c and quiet
+        assert all(h.duration_s == 2.0 for h in as_a) and all(h.duration_s == 1.0 for h in as_c)
+        assert all(h.duration_s == 0.0 for h in quiet)
+
+
+def test_human_motion_sees_the_waving_victim_only(world, tmp_path):
+    from usarsim.readings import HumanMotionReading
+
+    robot = probe_robot(tmp_path, "  - {type: HumanMotion, name: HM, location: [0.2, 0.0, -0.3]}\n")
+    sim = settled(world, robot, "Waver")
+    probs = np.array([r.probability for r in values(sim, HumanMotionReading, 5.0)])
+    (x, y, _), _ = sim.pose_of(1)
+    d = math.dist((x + 0.2, y), (2.5 + 0.0, -10.0 + 0.24 * 1.0 + 0.38))  # Bob's right shoulder, roughly
+    assert len(probs) == 50
+    assert abs(probs.mean() - (1.0 - d / 10.0)) < 0.05 and 0.02 < probs.std() < 0.08
+    for pose in ("Victim", "Away"):  # Alice does not move; nobody behind
+        still = [r.probability for r in values(settled(world, robot, pose), HumanMotionReading, 1.0)]
+        assert still and all(p == 0.0 for p in still)
+
+
 # --------------------------------------------------------------------------- RFID
 
 
@@ -247,7 +292,9 @@ def test_rfid_occlusion_and_signal_modes(world, tmp_path):
     assert {t.tag_id for t in occl.tags} == {11137}  # 11139 is behind the wall
     _, sig = rfid_reading(world, tmp_path, extra=", SensingMode: 2, ObstacleLoss: 40.0")
     assert {t.tag_id for t in sig.tags} == {11137}  # one wall costs 40 dB: below the threshold
-    _, weak = rfid_reading(world, tmp_path, extra=", SensingMode: 2, ObstacleLoss: 5.0")
+    # 11139 is 1.9 m away: -40 - 20 log10(1.9) = -45.6 dBm; one wall at 20 dB leaves -65.6,
+    # above the -75 dBm threshold (a wall counted twice, entering and leaving, would not)
+    _, weak = rfid_reading(world, tmp_path, extra=", SensingMode: 2, ObstacleLoss: 20.0")
     assert {t.tag_id for t in weak.tags} == {11137, 11139}
 
 
@@ -356,3 +403,102 @@ def test_range_scanner_3d_is_row_major_top_row_first(world, tmp_path):
     # the bottom rows see the floor before the pane? (0.245 m up, 12.5 degrees down: 1.1 m) no:
     # all rows end on the pane at this distance
     assert grid.max() < d / (math.cos(pitch_top) * math.cos(yaw_right)) + 0.02
+
+
+# --------------------------------------------------------------------------- every sensor at once
+
+
+EVERY_SENSOR = """\
+  - {type: Sonar, name: F1, location: [0.145, -0.130, 0.0], orientation: [0, 0, -1.570796]}
+  - {type: Sonar, name: F4, location: [0.240, -0.025, 0.0], orientation: [0, 0, -0.174533]}
+  - {type: IR, name: IR1, location: [0.27, 0.0, -0.1]}
+  - {type: RangeSensor, name: Range1, location: [0.27, 0.0, -0.1]}
+  - {type: RangeScanner, name: Scanner1, location: [0.144, 0.0, -0.092], preset: SICK}
+  - {type: IRScanner, name: IRScanner1, location: [0.2, 0.0, -0.12]}
+  - {type: RangeScanner3D, name: Scanner3D, location: [0.1, 0.0, -0.2]}
+  - {type: Odometry, name: Odometry, left_wheel: LeftFWheel, right_wheel: RightFWheel}
+  - {type: Encoder, name: ECLeft, wheel: LeftFWheel}
+  - {type: Encoder, name: ECRight, wheel: RightFWheel}
+  - {type: Tachometer, name: Tach}
+  - {type: GPS, name: GPS, location: [0.0, 0.0, -0.16]}
+  - {type: INS, name: INS}
+  - {type: IMU, name: IMU}
+  - {type: INU, name: INU}
+  - {type: Touch, name: Bumper, location: [0.28, 0.0, 0.05], Diameter: 0.02}
+  - {type: GroundTruth, name: GroundTruth}
+  - {type: RFID, name: RFID, location: [0.0, 0.0, 0.08]}
+  - {type: RFIDReleaser, name: Gun, location: [-0.2, 0.0, 0.08]}
+  - {type: VictSensor, name: VictSensor, location: [0.2059, 0.0002, -0.1423], MaxRange: 6.0}
+  - {type: Sound, name: Mic, location: [0.0, 0.0, -0.2]}
+  - {type: HumanMotion, name: HM, location: [0.2, 0.0, -0.2]}
+  - {type: Camera, name: Camera, location: [0.2059, 0.0002, -0.1423]}
+  - {type: OmniCam, name: Omni, location: [0.0, 0.0, -0.3]}
+"""
+F = r"-?\d+\.\d{4}"
+V3 = rf"{F},{F},{F}"
+T = r"\{Time \d+\.\d{4}\} "
+SEN_FORMS = {  # the exact shape of each SEN line (protocol.md 6.3)
+    "Sonar": rf"SEN {T}\{{Type Sonar\}} \{{Name F1 Range {F}\}} \{{Name F4 Range {F}\}}",
+    "IR": rf"SEN {T}\{{Type IR\}} \{{Name IR1 Range {F}\}}",
+    "RangeSensor": rf"SEN {T}\{{Type RangeSensor\}} \{{Name Range1 Range {F}\}}",
+    "RangeScanner": rf"SEN {T}\{{Type RangeScanner\}} \{{Name Scanner1\}} \{{Resolution 0\.0174\}} \{{FOV 3\.1415\}} "
+                    rf"\{{Range {F}(,{F}){{180}}\}}",
+    "IRScanner": rf"SEN {T}\{{Type IRScanner\}} \{{Name IRScanner1\}} \{{Resolution 0\.0870\}} \{{FOV 3\.1400\}} "
+                 rf"\{{Range {F}(,{F}){{36}}\}}",
+    "RangeScanner3D": rf"SEN {T}\{{Type RangeScanner3D\}} \{{Name Scanner3D\}} \{{Resolution 0\.0145,0\.0209\}} "
+                      rf"\{{FOV 0\.4363,1\.0472\}} \{{Range {F}(,{F}){{1580}}\}}",
+    "Odometry": rf"SEN {T}\{{Type Odometry\}} \{{Name Odometry\}} \{{Pose {V3}\}}",
+    "Encoder": rf"SEN {T}\{{Type Encoder\}} \{{Name ECLeft Tick -?\d+\}} \{{Name ECRight Tick -?\d+\}}",
+    "Tachometer": rf"SEN {T}\{{Type Tachometer\}} \{{Name Tach\}} \{{Vel {F}(,{F}){{3}}\}} \{{Pos {F}(,{F}){{3}}\}}",
+    "GPS": rf"SEN {T}\{{Type GPS\}} \{{Name GPS\}} \{{Latitude \d+,\d+\.\d{{4}},[NS]\}} "
+           rf"\{{Longitude \d+,\d+\.\d{{4}},[EW]\}} \{{Fix 1\}} \{{Satellites \d+\}}",
+    "INS": rf"SEN {T}\{{Type INS\}} \{{Name INS\}} \{{Location {V3}\}} \{{Orientation {V3}\}}",
+    "IMU": rf"SEN {T}\{{Type IMU\}} \{{Name IMU\}} \{{XYZAcceleration {V3}\}} \{{AngularVel {V3}\}} "
+           rf"\{{AngularAccel {V3}\}} \{{Rotation {V3}\}}",
+    "INU": rf"SEN {T}\{{Type INU\}} \{{Name INU\}} \{{Orientation {V3}\}}",
+    "Touch": rf"SEN {T}\{{Type Touch\}} \{{Name Bumper Touch (True|False)\}}",
+    "GroundTruth": rf"SEN {T}\{{Type GroundTruth\}} \{{Name GroundTruth\}} \{{Location {V3}\}} \{{Orientation {V3}\}}",
+    "RFID": rf"SEN {T}\{{Type RFID\}} \{{Name RFID\}}( \{{ID \d+\}} \{{Location {V3}\}}( \{{Mem [^{{}}]*\}})?)*",
+    "VictSensor": rf"SEN {T}\{{Type VictSensor\}} (\{{Status NoVictims\}}|\{{Name VictSensor\}}"
+                  rf"( \{{PartName (Head|Chest|Pelvis|Arm|Hand|Leg|Foot)\}} \{{Location {V3}\}})+)",
+    "Sound": rf"SEN {T}\{{Type Sound\}} \{{Name Mic\}} \{{Loudness {F}\}} \{{Duration {F}\}}",
+    "HumanMotion": rf"SEN {T}\{{Type HumanMotion\}} \{{Name HM\}} \{{Prob {F}\}}",
+}
+RATES = {"Sonar": 0.2, "IR": 0.2, "RangeSensor": 0.2, "RangeScanner": 0.2, "IRScanner": 0.2, "RangeScanner3D": 0.4,
+         "Odometry": 0.2, "Encoder": 0.1, "Tachometer": 0.2, "GPS": 0.2, "INS": 0.2, "IMU": 0.1, "INU": 0.1,
+         "Touch": 0.1, "GroundTruth": 0.1, "RFID": 0.2, "VictSensor": 0.8, "Sound": 0.1, "HumanMotion": 0.1}
+
+
+def test_a_robot_with_every_sensor_drives_through_the_world(server_factory, world, tmp_path):
+    """Done when of issue 3: every sensor reports in the exact format of the spec, at its
+    rate, while the robot drives past glass, victims, false alarms and RFID tags."""
+    robots = tmp_path / "robots"
+    robots.mkdir()
+    probe_robot(robots, EVERY_SENSOR, name="AllSensors")
+    srv = server_factory(world=world, seed=4, robot_dirs=(str(robots),))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.AllSensors} {Name Full} {Start Tags}")
+    c.step(0.5)
+    lines = []
+    for left, right in ((1.5, 1.5), (-1.0, 1.0), (2.0, 2.0), (1.0, -1.0), (1.5, 1.5)):
+        c.send(f"DRIVE {{Left {left}}} {{Right {right}}}")
+        lines += c.step(2.0)
+    sen = [ln.text for ln in lines if ln.text.startswith("SEN")]
+    by_type: dict[str, list[str]] = {}
+    for text in sen:
+        by_type.setdefault(segments(text)["Type"], []).append(text)
+    assert set(by_type) == set(SEN_FORMS), set(by_type) ^ set(SEN_FORMS)
+    for stype, texts in by_type.items():
+        for text in texts:
+            assert re.fullmatch(SEN_FORMS[stype], text), (stype, text[:300])
+        times = [float(segments(t)["Time"]) for t in texts]
+        gaps = {round(b - a, 4) for a, b in zip(times, times[1:])}
+        assert gaps == {RATES[stype]}, (stype, gaps)
+    assert all(ln.raw.endswith(b"\r\n") for ln in lines)
+    # cameras and the tag dropper answer CONF/GEO; every item type has a GEO line
+    for stype in list(SEN_FORMS) + ["Camera", "OmniCam", "RFIDReleaser"]:
+        geo = c.ask(f"GETGEO {{Type {stype}}}", "GEO").text
+        assert geo.startswith(f"GEO {{Type {stype}}} {{Name ") and "Mount HARD}" in geo, geo
+        conf = c.ask(f"GETCONF {{Type {stype}}}", "CONF").text
+        assert conf.startswith(f"CONF {{Type {stype}}} {{Name "), conf

@@ -202,6 +202,14 @@ GOLDEN = [
         "SEN {Time 3.0000} {Type GPS} {Name GPS} {Fix 0} {Satellites 2}",
     ),
     (
+        m.SensorMessage(time=7.5, reading=r.SoundReading(name="Mic", loudness_db=42.5, duration_s=1.0)),
+        "SEN {Time 7.5000} {Type Sound} {Name Mic} {Loudness 42.5000} {Duration 1.0000}",
+    ),
+    (
+        m.SensorMessage(time=7.5, reading=r.HumanMotionReading(name="HM", probability=0.25)),
+        "SEN {Time 7.5000} {Type HumanMotion} {Name HM} {Prob 0.2500}",
+    ),
+    (
         m.SensorMessage(
             time=3.0,
             reading=r.TachometerReading(
@@ -661,6 +669,8 @@ READINGS = st.one_of(
     ),
     st.builds(r.GpsReading, name=_names, fix=st.just(False), satellites=st.integers(0, 24)),
     st.builds(r.TachometerReading, name=_names, velocities_rad_s=_tuples(_f4, 1), positions_rad=_tuples(_f4, 1)),
+    st.builds(r.SoundReading, name=_names, loudness_db=_f4, duration_s=_f4),
+    st.builds(r.HumanMotionReading, name=_names, probability=_f4),
     st.builds(
         r.ImuReading, name=_names, acceleration=_v4, angular_velocity=_v4,
         angular_acceleration=_v4, orientation=_v4,

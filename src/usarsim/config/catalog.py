@@ -24,8 +24,13 @@ def world_files() -> dict[str, Path]:
     return {p.stem: p for p in sorted(WORLDS_DIR.glob("*.yaml"))}
 
 
-def robot_files() -> dict[str, Path]:
-    return {p.stem: p for p in sorted(ROBOTS_DIR.glob("*.yaml"))}
+def robot_files(extra_dirs=()) -> dict[str, Path]:
+    """Robot files by class name: the shipped ones, then those of ``extra_dirs``
+    (``usarsim serve --robot-dir``), which may add classes or replace shipped ones."""
+    files = {p.stem: p for p in sorted(ROBOTS_DIR.glob("*.yaml"))}
+    for d in extra_dirs:
+        files.update({p.stem: p for p in sorted(Path(d).glob("*.yaml"))})
+    return files
 
 
 def resolve_world(name_or_path: str) -> WorldConfig:
@@ -51,7 +56,7 @@ def robot_class_names() -> list[str]:
     return list(robot_files())
 
 
-def resolve_robot(class_name: str, *, allow_path: bool = False) -> RobotConfig:
+def resolve_robot(class_name: str, *, allow_path: bool = False, extra_dirs=()) -> RobotConfig:
     """A robot class by name (``P2AT``, ``USARBot.P2AT``, any case), or by file path
     when ``allow_path`` (never for names that come from the network)."""
     p = Path(class_name)
@@ -60,10 +65,11 @@ def resolve_robot(class_name: str, *, allow_path: bool = False) -> RobotConfig:
             raise ConfigError("no such robot file", path=str(p))
         return _robot_cached(str(p), p.stat().st_mtime)
     bare = class_name.split(".", 1)[1] if class_name.lower().startswith("usarbot.") else class_name
-    for stem, path in robot_files().items():
+    files = robot_files(extra_dirs)
+    for stem, path in reversed(list(files.items())):
         if stem.lower() == bare.lower():
             return _robot_cached(str(path), path.stat().st_mtime)
-    raise ConfigError(f"unknown robot class '{class_name}'{did_you_mean(bare, robot_files())}")
+    raise ConfigError(f"unknown robot class '{class_name}'{did_you_mean(bare, files)}")
 
 
 def file_kind(path: str | Path) -> str:

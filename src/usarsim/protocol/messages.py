@@ -33,6 +33,7 @@ from usarsim.readings import (
     EncoderItem,
     EncoderReading,
     GpsReading,
+    HumanMotionReading,
     ImuReading,
     OdometryReading,
     OrientationReading,
@@ -44,6 +45,7 @@ from usarsim.readings import (
     Reading,
     RfidReading,
     RfidTag,
+    SoundReading,
     TachometerReading,
     TouchItem,
     TouchReading,
@@ -658,6 +660,14 @@ def _sen_rfid(r: RfidReading) -> str:
     return "{Type RFID} {Name %s} %s" % (r.name, " ".join(map(_rfid_tag, r.tags)))
 
 
+def _sen_sound(r: SoundReading) -> str:
+    return "{Type Sound} {Name %s} {Loudness %s} {Duration %s}" % (r.name, f4(r.loudness_db), f4(r.duration_s))
+
+
+def _sen_human_motion(r: HumanMotionReading) -> str:
+    return "{Type HumanMotion} {Name %s} {Prob %s}" % (r.name, f4(r.probability))
+
+
 _SEN_BODIES: dict[type, Callable[[Any], str]] = {
     RangeReading: _sen_range,
     RangeScanReading: _sen_scan,
@@ -672,6 +682,8 @@ _SEN_BODIES: dict[type, Callable[[Any], str]] = {
     ImuReading: _sen_imu,
     VictimReading: _sen_victim,
     RfidReading: _sen_rfid,
+    SoundReading: _sen_sound,
+    HumanMotionReading: _sen_human_motion,
 }
 
 
@@ -1174,6 +1186,14 @@ def _sen_parse_rfid(r: _Reader, t: str) -> Reading:
     return RfidReading(name=r.text("Name"), tags=tuple(tags))
 
 
+def _sen_parse_sound(r: _Reader, t: str) -> Reading:
+    return SoundReading(name=r.text("Name"), loudness_db=r.req_float("Loudness"), duration_s=r.req_float("Duration"))
+
+
+def _sen_parse_human_motion(r: _Reader, t: str) -> Reading:
+    return HumanMotionReading(name=r.text("Name"), probability=r.req_float("Prob"))
+
+
 _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
     "sonar": _sen_parse_range,
     "ir": _sen_parse_range,
@@ -1193,6 +1213,8 @@ _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
     "imu": _sen_parse_imu,
     "victsensor": _sen_parse_victim,
     "rfid": _sen_parse_rfid,
+    "sound": _sen_parse_sound,
+    "humanmotion": _sen_parse_human_motion,
 }
 
 

@@ -99,20 +99,22 @@ class RFID(Sensor):
         origins = np.repeat(pos[None, :], len(dirs), axis=0)
         left = np.array(lengths, dtype=float) - 0.01  # a tag lying on a surface is not behind it
         active = np.flatnonzero(left > 0)
-        for _ in range(MAX_OBSTACLES):
+        for _ in range(2 * MAX_OBSTACLES):
             if not len(active):
                 break
-            hit, _, _ = view.caster.cast_from(origins[active], dirs[active], float(left[active].max()),
-                                              self.handle.body_id, kind=self.RAY_KIND)
+            hit, nrm, _ = view.caster.cast_from(origins[active], dirs[active], float(left[active].max()),
+                                                self.handle.body_id, normals=True, kind=self.RAY_KIND)
             still = []
             for j, a in enumerate(active.tolist()):
                 h = float(hit[j])
                 if h < left[a]:
-                    counts[a] += 1
+                    # a wall counts where the line enters it (from inside, the next hit is its far face)
+                    if float(nrm[j] @ dirs[a]) < 0:
+                        counts[a] += 1
                     step = h + 0.005
                     origins[a] = origins[a] + dirs[a] * step
                     left[a] -= step
-                    if not stop_at_first and left[a] > 0:
+                    if not (stop_at_first and counts[a]) and left[a] > 0:
                         still.append(a)
             active = np.array(still, dtype=int)
         return counts

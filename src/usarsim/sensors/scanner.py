@@ -15,8 +15,11 @@ from usarsim.sim.view import unit_dirs_yaw_pitch
 
 
 def trunc4(x: float) -> float:
-    """USARSim printed scanner Resolution and FOV truncated to 4 decimals (0.0174, 3.1415)."""
-    return math.trunc(x * 10000.0) / 10000.0
+    """USARSim printed scanner Resolution and FOV truncated to 4 decimals (0.0174, 3.1415);
+    a value already written with 4 decimals (0.087) keeps them despite binary rounding."""
+    scaled = x * 10000.0
+    nearest = round(scaled)
+    return (nearest if abs(scaled - nearest) < 1e-6 else math.trunc(scaled)) / 10000.0
 
 
 @dataclass(frozen=True, kw_only=True)

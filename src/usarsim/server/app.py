@@ -13,11 +13,13 @@ log = logging.getLogger("usarsim")
 
 class Application:
     def __init__(self, world: WorldConfig, *, host: str = "127.0.0.1", port: int = 3000, seed: int = 0,
-                 speed: float | None = 1.0, lockstep: bool = False, max_connections: int = 64):
+                 speed: float | None = 1.0, lockstep: bool = False, max_connections: int = 64,
+                 robot_dirs: tuple[str, ...] = ()):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
-        self.control = ControlServer(self.facade, host=host, port=port, max_connections=max_connections)
+        self.control = ControlServer(self.facade, host=host, port=port, max_connections=max_connections,
+                                     robot_dirs=tuple(robot_dirs))
 
     async def start(self) -> None:
         await self.control.start()

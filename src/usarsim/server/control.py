@@ -132,8 +132,9 @@ class Connection(asyncio.Protocol):
 
 class ControlServer:
     def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3000,
-                 max_connections: int = 64, max_line_bytes: int = 8192):
+                 max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = ()):
         self.facade = facade
+        self.robot_dirs = robot_dirs  # extra folders of robot files (serve --robot-dir)
         self.host = host
         self.port = port
         self.max_connections = max_connections

@@ -109,7 +109,7 @@ class Session:
             self.log_once("init", "INIT without ClassName ignored")
             return
         try:
-            robot = resolve_robot(cmd.class_name)
+            robot = resolve_robot(cmd.class_name, extra_dirs=self.conn.server.robot_dirs)
         except ConfigError as exc:
             self.log_once("init", "INIT ignored: %s", exc)
             return
