@@ -502,3 +502,90 @@ def test_a_robot_with_every_sensor_drives_through_the_world(server_factory, worl
         assert geo.startswith(f"GEO {{Type {stype}}} {{Name ") and "Mount HARD}" in geo, geo
         conf = c.ask(f"GETCONF {{Type {stype}}}", "CONF").text
         assert conf.startswith(f"CONF {{Type {stype}}} {{Name "), conf
+
+
+def test_an_item_mounted_on_a_wheel_turns_with_it(world, tmp_path):
+    """Mount a beam on the left front wheel (its hub, pointing forward): as the wheel rolls
+    the beam sweeps round, down to the floor (0.13 m below the hub) and up into the sky."""
+    robot = probe_robot(tmp_path, "  - {type: RangeSensor, name: Spoke, location: [0.0, 0.0, 0.0], mount: LeftFWheel,"
+                                  " MaxRange: 3.0}\n")
+    from usarsim.sim.simulation import describe_items
+
+    (desc,) = describe_items(robot)
+    assert desc.mount == "LeftFWheel"
+    sim = settled(world, robot, "Victim")
+    sim.drive_skid(1, 0.8, 0.8)  # 0.8 rad/s: a quarter turn in 2 s, readings every 0.2 s
+    ranges = [r.items[0].range_m for r in values(sim, RangeReading, 8.0)]
+    assert len(ranges) == 40
+    assert min(ranges) < 0.2  # pointing (nearly) straight down: the floor right under the hub
+    assert max(ranges) == 3.0  # pointing up: nothing within 3 m
+    assert len({round(v, 2) for v in ranges}) > 10  # it really sweeps
+
+
+CONF_LINES = (  # protocol.md 6.7: all items of a type in one line, repeated-key groups
+    'CONF {Type Sonar} {Name F1} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491} {Name F4} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}',
+    'CONF {Type IR} {Name IR1} {MaxRange 1.5000} {MinRange 0.2000}',
+    'CONF {Type RangeSensor} {Name Range1} {MaxRange 3.0000} {MinRange 0.0000}',
+    'CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} {Fov 3.1415} {Paning True} {Tilting False}',
+    'CONF {Type IRScanner} {Name IRScanner1} {MaxRange 10.0000} {MinRange 0.1000} {Resolution 0.0870} {Fov 3.1400} {Paning True} {Tilting False}',
+    'CONF {Type RangeScanner3D} {Name Scanner3D} {MaxRange 1000.0000} {MinRange 0.1000} {Resolution 0.0145,0.0209} {Fov 0.4363,1.0472} {Paning False} {Tilting True}',
+    'CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099}',
+    'CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}',
+    'CONF {Type Tachometer} {Name Tach} {ScanInterval 0.2000}',
+    'CONF {Type GPS} {Name GPS} {ScanInterval 0.2000}',
+    'CONF {Type INS} {Name INS} {ScanInterval 0.2000}',
+    'CONF {Type IMU} {Name IMU} {ScanInterval 0.1000}',
+    'CONF {Type INU} {Name INU} {ScanInterval 0.1000}',
+    'CONF {Type Touch} {Name Bumper} {ScanInterval 0.1000}',
+    'CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}',
+    'CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000}',
+    'CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}',
+    'CONF {Type Sound} {Name Mic} {ScanInterval 0.1000}',
+    'CONF {Type HumanMotion} {Name HM} {ScanInterval 0.1000}',
+    'CONF {Type OmniCam} {Name Omni} {CameraDefFov 6.2832} {CameraMinFov 6.2832} {CameraMaxFov 6.2832} {CameraFov 6.2832}',
+)
+
+
+def test_conf_lines_of_every_sensor_type(server_factory, world, tmp_path):
+    robots = tmp_path / "robots"
+    robots.mkdir()
+    probe_robot(robots, EVERY_SENSOR, name="AllSensors")
+    srv = server_factory(world=world, seed=4, robot_dirs=(str(robots),))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.AllSensors} {Start Tags}")
+    c.step(0.2)
+    for line in CONF_LINES:
+        stype = segments(line)["Type"]
+        assert c.ask(f"GETCONF {{Type {stype}}}", "CONF").text == line
+    # by name, one item of a packed type
+    assert c.ask("GETCONF {Type Sonar} {Name F4}", "CONF").text == (
+        "CONF {Type Sonar} {Name F4} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}")
+    assert c.ask("GETGEO {Type Sonar} {Name F4}", "GEO").text == (
+        "GEO {Type Sonar} {Name F4 Location 0.2400,-0.0250,0.0000 Orientation 0.0000,0.0000,-0.1745 Mount HARD}")
+
+
+def test_ir_noise_statistics_and_min_range_clamp(world, tmp_path):
+    robot = probe_robot(tmp_path, """\
+  - {type: IR, name: IR1, location: [0.27, 0.0, -0.1]}
+  - {type: RangeSensor, name: Close, location: [0.93, 0.0, -0.1], MinRange: 0.2}
+  - {type: RangeScanner3D, name: Scanner3D, location: [0.27, 0.0, -0.1]}
+""")
+    sim = settled(world, robot, "Glass", seed=21)
+    x = sim.pose_of(1)[0][0]
+    readings = values(sim, RangeReading, 20.0)
+    ir = np.array([r.items[0].range_m for r in readings if r.sensor_type == "IR"])
+    close = [r.items[0].range_m for r in readings if r.sensor_type == "RangeSensor"]
+    true = 1.4 - (x + 0.27)
+    assert len(ir) == 100
+    # relative uniform noise of 0.001 (protocol.md 7.1): bounded, unbiased, spread 0.001 d / sqrt(3)
+    assert np.all(np.abs(ir - true) <= 0.001 * true + 1e-4)
+    assert abs(ir.mean() - true) < 3e-4
+    assert 0.6 < ir.std() / (0.001 * true / math.sqrt(3)) < 1.4
+    assert set(close) == {0.2}  # the pane is 7 cm away: clamped to MinRange
+    # the 3D scanner's noise is the same relative model
+    sim2 = settled(world, robot, "Glass", seed=22)
+    centre = np.array([s.ranges_m[15 * 51 + 25] for s in values(sim2, RangeScan3DReading, 20.0)])
+    d = 1.0 - (sim2.pose_of(1)[0][0] + 0.27)
+    assert len(centre) == 50
+    assert np.all(np.abs(centre - d) <= 0.001 * d + 1e-4) and centre.std() > 0.2 * 0.001 * d / math.sqrt(3)

@@ -199,7 +199,7 @@ class GPS(Sensor):
     def visible_satellites(self, view) -> tuple[int, np.ndarray]:
         """The number of satellites in view and the sensor's world position (MuJoCo frame)."""
         geo = getattr(view, "geo", None) or _DEFAULT_GEO
-        pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs = SKY.directions_mj(view.time, geo.latitude_deg)
         above = dirs[dirs[:, 2] > math.sin(math.radians(ELEVATION_MASK_DEG))]
         if len(above) == 0:

@@ -42,7 +42,7 @@ class RangeSensor(Sensor):
         return np.array([[1.0, 0.0, 0.0]])
 
     def _true_range(self, view) -> float:
-        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs = self._directions() @ rot.T
         dist, _, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
         return float(dist.min())
@@ -117,7 +117,7 @@ class Sonar(RangeSensor):
         return self._dirs
 
     def _true_range(self, view) -> float:
-        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs = self._dirs @ rot.T
         dist, nrm, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True,
                                         kind=self.RAY_KIND)
@@ -140,6 +140,8 @@ class Sonar(RangeSensor):
         sonar's position, with the mount transforms stacked once per robot."""
         first = sensors[0]
         h, d = first.handle, view.data
+        if any(s.item.mount != "HARD" for s in sensors):  # on moving parts: each from its own frame
+            return [s.measure(view) for s in sensors]
         key = tuple(id(s) for s in sensors)
         stack = first._stack
         if stack is None or stack[0] != key:

@@ -71,7 +71,7 @@ class RFID(Sensor):
             return []
         c = self.config
         d = view.data
-        pos, rot = self.handle.sensor_frame(d, self.item.location, self.item.orientation)
+        pos, rot = self.handle.sensor_frame(d, self.item.location, self.item.orientation, self.item.mount)
         ids = list(ents.tags)
         world = np.array([frames.to_mj_vec(ents.tags[i].location) for i in ids])
         delta = world - pos
@@ -183,7 +183,7 @@ class RFIDReleaser(Sensor):
         if self.left <= 0 or view.entities is None:
             return "Failed"
         d = view.data
-        pos, _ = self.handle.sensor_frame(d, self.item.location, self.item.orientation)
+        pos, _ = self.handle.sensor_frame(d, self.item.location, self.item.orientation, self.item.mount)
         down = np.array([[0.0, 0.0, -1.0]])
         dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
         ground = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)

@@ -79,7 +79,7 @@ class RangeScanner(Sensor):
 
     def measure(self, view) -> RangeScanReading:
         cfg = self.config
-        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id,
                                       kind=self.RAY_KIND)
         hit = np.isfinite(dist)
@@ -177,7 +177,7 @@ class RangeScanner3D(Sensor):
 
     def measure(self, view) -> RangeScan3DReading:
         c = self.config
-        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, c.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
         values = np.full(len(dist), c.max_range_m)
         hit = np.isfinite(dist)

@@ -85,7 +85,7 @@ class Sound(Sensor):
         world, ents = view.world, view.entities
         best = (0.0, 0.0)
         if world is not None and ents is not None:
-            pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+            pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
             for v in world.victims:
                 if v.sound_loudness_db <= 0:
                     continue
@@ -130,7 +130,7 @@ class HumanMotion(Sensor):
         best = 0.0
         seen = False
         if world is not None:
-            pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+            pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
             for v in world.victims:
                 if not v.waving:
                     continue

@@ -110,7 +110,7 @@ class Touch(Sensor):
     def touching(self, view) -> bool:
         m, d = view.model, view.data
         h = self.handle
-        centre = d.xpos[h.body_id] + h.rotation_mj(d) @ self._offset_mj
+        centre, _ = h.sensor_frame(d, self.item.location, (0.0, 0.0, 0.0), self.item.mount)
         r = self._radius
         for g in self._planes:
             local = d.geom_xmat[g].reshape(3, 3).T @ (centre - d.geom_xpos[g])

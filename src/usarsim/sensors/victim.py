@@ -82,7 +82,7 @@ class VictSensor(Sensor):
     def measure(self, view) -> VictimReading | None:
         c = self.config
         ents = view.entities
-        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation)
+        pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs_local = self._grids[self._tick % SUBGRIDS]
         dist, _, gid = view.caster.cast(pos, dirs_local @ rot.T, c.max_range_m, self.handle.body_id,
                                         kind=self.RAY_KIND)

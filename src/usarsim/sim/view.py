@@ -154,6 +154,7 @@ class RobotHandle:
         self.joint_qpos: dict[str, int] = {}
         self.joint_qvel: dict[str, int] = {}
         self.actuator: dict[str, int] = {}
+        self.part_body: dict[str, int] = {}  # named parts items can be mounted on (wheels, later links)
 
     def resolve(self, m: mujoco.MjModel, wheels) -> None:
         """Look the chassis, every wheel joint and every driven wheel's actuator up by name."""
@@ -164,7 +165,9 @@ class RobotHandle:
         self.joint_qpos.clear()
         self.joint_qvel.clear()
         self.actuator.clear()
+        self.part_body.clear()
         for w in wheels:
+            self.part_body[w.name] = m.body(f"{self.prefix}/{w.name}").id
             jid = m.joint(f"{self.prefix}/{w.name}").id
             self.joint_qpos[w.name] = int(m.jnt_qposadr[jid])
             self.joint_qvel[w.name] = int(m.jnt_dofadr[jid])
@@ -184,10 +187,14 @@ class RobotHandle:
     def orientation(self, d: mujoco.MjData) -> tuple[float, float, float]:
         return frames.mj_mat_to_usar_euler(d.xmat[self.body_id])
 
-    def sensor_frame(self, d: mujoco.MjData, location, orientation) -> tuple[np.ndarray, np.ndarray]:
-        """World position and rotation (MuJoCo frame) of a mount given in the robot's USARSim frame."""
-        rot = self.rotation_mj(d)
-        pos = d.xpos[self.body_id] + rot @ frames.to_mj_vec(location)
+    def sensor_frame(self, d: mujoco.MjData, location, orientation,
+                     mount: str = "HARD") -> tuple[np.ndarray, np.ndarray]:
+        """World position and rotation (MuJoCo frame) of an item mounted at ``location``
+        / ``orientation`` (USARSim frame) relative to its mount: the chassis (``HARD``)
+        or a named part of the robot, which it then follows (a wheel turns it)."""
+        body = self.body_id if mount == "HARD" else self.part_body.get(mount, self.body_id)
+        rot = d.xmat[body].reshape(3, 3)
+        pos = d.xpos[body] + rot @ frames.to_mj_vec(location)
         return pos, rot @ frames.usar_euler_to_mj_mat(orientation)
 
 
