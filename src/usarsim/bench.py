@@ -125,7 +125,7 @@ def run_bench(args) -> int:
         t_settle = sim.time + 1.0
         while sim.time < t_settle:
             time.sleep(0.01)
-        rays0 = sim.caster.rays_cast
+
         sim_start, wall_start = sim.time, time.perf_counter()
         while sim.time - sim_start < seconds:
             time.sleep(0.005)

@@ -13,8 +13,7 @@ import re
 import numpy as np
 import pytest
 
-from helpers import segments, wait_for
-from usarsim.config.catalog import resolve_robot
+from helpers import segments
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
 from usarsim.readings import (RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading)

@@ -24,7 +24,6 @@ import numpy as np
 
 from usarsim.readings import TouchItem, TouchReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
-from usarsim.sim import frames
 
 _PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
 _SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
@@ -94,7 +93,6 @@ class Touch(Sensor):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._offset_mj = frames.to_mj_vec(self.item.location)
         self._radius = self.config.diameter_m / 2.0
 
     def configure(self, view) -> None:
