@@ -217,6 +217,14 @@ class RobotStatus:
 
 
 @dataclass(frozen=True, slots=True)
+class PackageState:
+    """MISSTA: a mission package's links, (link number, position, torque) each."""
+
+    name: str
+    links: tuple[tuple[int, float, float], ...]
+
+
+@dataclass(frozen=True, slots=True)
 class ZoomResult:
     """The outcome of ``SET {Type Camera} {Opcode Zoom}``: (name, fov, status) per camera."""
 

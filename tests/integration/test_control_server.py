@@ -290,7 +290,7 @@ def test_geo_and_conf_by_name(robot):
     ("GETCONF {Type Gripper}", "CONF {Type Gripper}"),
     ("GETCONF {Type Camera} {Name Camera2}", "CONF {Type Camera} {Name Camera2}"),
     ("GETGEO {Type Sonar} {Name X9}", "GEO {Type Sonar} {Name X9}"),
-    ("GETCONF {Type MisPkg}", "CONF {Type MisPkg}"),
+    ("GETCONF {Type MisPkg} {Name TeleMaxArm}", "CONF {Type MisPkg} {Name TeleMaxArm}"),
 ])
 def test_bare_replies_when_nothing_matches(robot, query, reply):
     line = robot.ask(query, query[3:7])

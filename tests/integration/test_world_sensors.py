@@ -369,7 +369,8 @@ def test_camera_zoom_is_clamped_and_answered(server_factory, world):
         "CONF {Type Camera} {Name Camera} {CameraDefFov 0.8727} {CameraMinFov 0.3491} {CameraMaxFov 1.5708} "
         "{CameraFov 0.8727}")
     assert c.ask("GETGEO {Type Camera}", "GEO").text == (
-        "GEO {Type Camera} {Name Camera Location 0.2059,0.0002,-0.1423 Orientation 0.0000,0.0000,0.0000 Mount HARD}")
+        "GEO {Type Camera} {Name Camera Location 0.0820,0.0002,0.0613 Orientation 0.0000,0.0000,0.0000 "
+        "Mount CameraPanTilt_Link2}")
     cases = [("{Params 0.5}", "0.5000", "OK"), ("{Params 3.0}", "1.5708", "Failed"),
              ("{Params 0.1}", "0.3491", "Failed"), ("{0.6}", "0.6000", "OK"), ("{Params 0}", "0.8727", "Failed")]
     for params, fov, status in cases:

@@ -20,11 +20,58 @@ STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive
 DRIVES = ("skid",)
 
 
+SHAPES = ("box", "sphere", "cylinder", "capsule")
+JOINT_TYPES = ("revolute", "prismatic")
+
+
 @dataclass(frozen=True, kw_only=True)
 class ChassisBox:
+    """A solid piece of a robot body (the chassis or a link): a box by default."""
+
     center: Vec3
-    size: Vec3
+    size: Vec3 = (0.0, 0.0, 0.0)  # box: full extents
     mass_kg: float
+    shape: str = "box"
+    radius_m: float = 0.0  # sphere, cylinder, capsule
+    length_m: float = 0.0  # cylinder, capsule: along the piece's own Z axis
+    rotation: Vec3 = (0.0, 0.0, 0.0)
+    friction: float | None = None  # None: the robot's default (1.0)
+
+
+Shape = ChassisBox
+
+
+@dataclass(frozen=True, kw_only=True)
+class Link:
+    """An articulated part (mission-package link, flipper, arm segment): a body joined
+    to its parent (the chassis or another link) by one revolute or prismatic joint whose
+    axis is given in the link's own frame.  ``min_range > max_range`` marks an unlimited
+    (continuous) joint, as in USARSim's CONF."""
+
+    name: str
+    parent: str  # "chassis" or a link name
+    location: Vec3  # joint origin in the parent's frame
+    orientation: Vec3
+    joint: str
+    axis: Vec3
+    min_range: float
+    max_range: float
+    max_speed: float
+    max_torque: float
+    shapes: tuple[ChassisBox, ...] = ()
+    armature: float = 0.05  # reflected inertia of the geared drive, kg m^2 (or kg)
+
+    @property
+    def limited(self) -> bool:
+        return self.min_range <= self.max_range
+
+
+@dataclass(frozen=True, kw_only=True)
+class MissionPackage:
+    """A named group of links, numbered from 1 in the order given (MISPKG, MISSTA)."""
+
+    name: str
+    links: tuple[str, ...]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -83,6 +130,8 @@ class RobotConfig:
     chassis: tuple[ChassisBox, ...]
     wheels: tuple[Wheel, ...]
     items: tuple[MountedItem, ...]
+    links: tuple[Link, ...] = ()
+    mission_packages: tuple[MissionPackage, ...] = ()
     wheel_friction: float = 1.0
     wheel_gain: float = 20.0
     wheel_torque_nm: float | None = None
@@ -96,7 +145,42 @@ class RobotConfig:
 
     @property
     def total_mass_kg(self) -> float:
-        return sum(c.mass_kg for c in self.chassis) + sum(w.mass_kg for w in self.wheels)
+        return (sum(c.mass_kg for c in self.chassis) + sum(w.mass_kg for w in self.wheels)
+                + sum(sh.mass_kg for ln in self.links for sh in ln.shapes))
+
+    def link(self, name: str) -> Link | None:
+        for ln in self.links:
+            if ln.name == name:
+                return ln
+        return None
+
+    def package(self, name: str) -> MissionPackage | None:
+        low = name.lower()
+        for p in self.mission_packages:
+            if p.name.lower() == low:
+                return p
+        return None
+
+
+def _shape(s: Section) -> ChassisBox:
+    """One solid piece: ``{shape: box, center, size, mass_kg}``, ``{shape: sphere, center,
+    radius, mass_kg}``, ``{shape: cylinder|capsule, center, radius, length, rotation, mass_kg}``."""
+    shape = s.str("shape", "box", choices=SHAPES)
+    center = s.vec("center", 3, (0.0, 0.0, 0.0))
+    mass = s.float("mass_kg", min=0.001)
+    rotation = s.vec("rotation", 3, (0.0, 0.0, 0.0))
+    friction = s.float("friction", None, min=0.0, max=10.0)
+    if shape == "box":
+        piece = ChassisBox(center=center, size=s.vec("size", positive=True), mass_kg=mass, rotation=rotation,
+                           friction=friction)
+    elif shape == "sphere":
+        piece = ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001), mass_kg=mass,
+                           friction=friction)
+    else:
+        piece = ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001),
+                           length_m=s.float("length", min=0.0), mass_kg=mass, rotation=rotation, friction=friction)
+    s.finish()
+    return piece
 
 
 def load_robot(path: str | Path) -> RobotConfig:
@@ -127,11 +211,7 @@ def load_robot(path: str | Path) -> RobotConfig:
         wheel_base_m=g.float("wheel_base", 0.0, min=0.0))
     g.finish()
 
-    chassis = []
-    for i, raw in enumerate(top.list("chassis")):
-        s = Section(raw, path=path, key=f"chassis[{i}]")
-        chassis.append(ChassisBox(center=s.vec("center"), size=s.vec("size", positive=True), mass_kg=s.float("mass_kg", min=0.001)))
-        s.finish()
+    chassis = [_shape(Section(raw, path=path, key=f"chassis[{i}]")) for i, raw in enumerate(top.list("chassis"))]
     if not chassis:
         raise top.error("chassis", "a robot needs at least one chassis box")
 
@@ -150,6 +230,45 @@ def load_robot(path: str | Path) -> RobotConfig:
     if drive == "skid" and not (any(w.side == "left" for w in wheels) and any(w.side == "right" for w in wheels)):
         raise top.error("wheels", "a skid-steered robot needs at least one left and one right wheel")
 
+    links: list[Link] = []
+    lnames: set[str] = set()
+    for i, raw in enumerate(top.list("links", [])):
+        s = Section(raw, path=path, key=f"links[{i}]")
+        lname = s.str("name")
+        if any(c in lname for c in "{} \t/") or lname in lnames or lname in wnames or lname.lower() == "chassis":
+            raise s.error("name", f"link names must be unique, without spaces, braces or '/', got {lname!r}")
+        parent = s.str("parent", "chassis")
+        if parent != "chassis" and parent not in lnames:
+            raise s.error("parent", f"unknown parent '{parent}' (links must come after their parent)"
+                                    f"{did_you_mean(parent, ['chassis', *lnames])}")
+        axis = s.vec("axis", 3, (0.0, 0.0, 1.0))
+        if sum(a * a for a in axis) < 1e-12:
+            raise s.error("axis", "the joint axis must not be zero")
+        shapes = tuple(_shape(Section(r, path=path, key=f"links[{i}].shapes[{k}]"))
+                       for k, r in enumerate(s.list("shapes", [])))
+        links.append(Link(name=lname, parent=parent, location=s.vec("location", 3, (0.0, 0.0, 0.0)),
+                          orientation=s.vec("orientation", 3, (0.0, 0.0, 0.0)),
+                          joint=s.str("joint", "revolute", choices=JOINT_TYPES), axis=axis,
+                          min_range=s.float("min_range", 1.0), max_range=s.float("max_range", 0.0),
+                          max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
+                          max_torque=s.float("max_torque", min=0.0, min_exclusive=True), shapes=shapes,
+                          armature=s.float("armature", 0.05, min=0.0)))
+        lnames.add(lname)
+        s.finish()
+
+    packages: list[MissionPackage] = []
+    for i, raw in enumerate(top.list("mission_packages", [])):
+        s = Section(raw, path=path, key=f"mission_packages[{i}]")
+        pname = s.str("name")
+        plinks = s.list("links")
+        for ln in plinks:
+            if ln not in lnames:
+                raise s.error("links", f"unknown link '{ln}'{did_you_mean(str(ln), lnames)}")
+        if not plinks:
+            raise s.error("links", "a mission package needs at least one link")
+        packages.append(MissionPackage(name=pname, links=tuple(str(x) for x in plinks)))
+        s.finish()
+
     items = []
     inames: set[tuple[str, str]] = set()
     for i, raw in enumerate(top.list("sensors", [])):
@@ -165,21 +284,22 @@ def load_robot(path: str | Path) -> RobotConfig:
         loc = s.vec("location", 3, (0.0, 0.0, 0.0))
         ori = s.vec("orientation", 3, (0.0, 0.0, 0.0))
         mount = s.str("mount", "HARD")
-        if mount != "HARD" and mount not in wnames:
-            raise s.error("mount", f"unknown mount '{mount}'{did_you_mean(mount, ['HARD', *wnames])}")
+        if mount != "HARD" and mount not in wnames and mount not in lnames:
+            raise s.error("mount", f"unknown mount '{mount}'{did_you_mean(mount, ['HARD', *wnames, *lnames])}")
         params = {k: v for k, v in s.data.items() if k not in ("type", "name", "location", "orientation", "mount")}
         items.append(MountedItem(item_type=itype, name=iname, location=loc, orientation=ori, mount=mount,
                                  params=params, key_path=key))
     top.finish()
 
-    total = sum(c.mass_kg for c in chassis) + sum(w.mass_kg for w in wheels)
+    total = (sum(c.mass_kg for c in chassis) + sum(w.mass_kg for w in wheels)
+             + sum(sh.mass_kg for ln in links for sh in ln.shapes))
     if abs(total - mass) > 0.01 * mass + 1e-6:
-        raise ConfigError(f"chassis and wheel masses add up to {total:.3f} kg but mass_kg is {mass}; make them agree",
-                          path=path, key="mass_kg")
+        raise ConfigError(f"chassis, wheel and link masses add up to {total:.3f} kg but mass_kg is {mass}; "
+                          "make them agree", path=path, key="mass_kg")
     return RobotConfig(class_name=class_name, description=desc, path=path, vehicle_type=vehicle_type,
                        steering_type=steering, drive=drive, mass_kg=mass, max_speed_rad_s=max_speed,
                        max_torque_nm=max_torque, max_front_steer_rad=mfs, max_rear_steer_rad=mrs,
                        battery_s=battery, status_interval_s=status_interval, geometry=geometry,
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
-                       wheel_torque_nm=wheel_torque)
+                       wheel_torque_nm=wheel_torque, links=tuple(links), mission_packages=tuple(packages))

@@ -46,6 +46,11 @@ def conf_value(v) -> str:
     return str(v)
 
 
+# SET {Type Joint} opcodes (protocol.md 5.4) -> joint orders (5.3f)
+JOINT_OPCODES = {"angle": 0, "0": 0, "velocity": 1, "1": 1, "torque": 2, "2": 2, "brake": 3, "3": 3,
+                 "relangle": 10, "10": 10, "relvelocity": 11, "11": 11, "reltorque": 12, "12": 12}
+
+
 class Session:
     def __init__(self, conn: "Connection", uid: int):
         self.conn = conn
@@ -62,6 +67,9 @@ class Session:
             C.GetConf: self.on_get_conf,
             C.Set: self.on_set,
             C.Step: self.on_step,
+            C.MultiDrive: self.on_multidrive,
+            C.MisPkg: self.on_mispkg,
+            C.Camera: self.on_camera,
         }
 
     @property
@@ -158,6 +166,57 @@ class Session:
         skid = cmd.left is not None or cmd.right is not None
         if skid or cmd.light is not None:
             self.facade.drive_skid(self.uid, cmd.left, cmd.right, bool(cmd.normalized), cmd.light)
+        joints = [(j.name, j.value, j.order) for j in cmd.joints if j.value is not None]
+        if joints:
+            self.facade.drive_joints(self.uid, joints)
+
+    def _alive(self) -> bool:
+        if self.state not in (SPAWNING, ALIVE):
+            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            return False
+        return True
+
+    def on_multidrive(self, cmd: C.MultiDrive) -> None:
+        """``MULTIDRIVE {Joint angle} ...``: absolute angles (protocol.md 5.3g)."""
+        if self._alive() and cmd.joints:
+            self.facade.drive_joints(self.uid, [(name, value, 0) for name, value in cmd.joints])
+
+    def on_mispkg(self, cmd: C.MisPkg) -> None:
+        """``MISPKG {Name P} {Link n} {Value v} {Order o} ...`` and the older
+        ``{Rotation roll,tilt,pan} {Order 0|1}`` (tilt to link 2, pan to link 1; protocol.md 5.6)."""
+        if not self._alive():
+            return
+        pkg = self.robot.package(cmd.name or "") if self.robot is not None else None
+        if pkg is None:
+            self.log_once(f"mispkg:{cmd.name}", "MISPKG for an unknown mission package %r; ignored", cmd.name,
+                          level=logging.INFO)
+            return
+        commands = []
+        for lc in cmd.links:
+            if not 1 <= lc.link <= len(pkg.links):
+                self.log_once(f"mispkg-link:{lc.link}", "MISPKG %s has no link %d; ignored", pkg.name, lc.link)
+                continue
+            commands.append((pkg.links[lc.link - 1], lc.value, lc.order))
+        if cmd.rotation is not None:
+            order = cmd.order or 0
+            _, tilt, pan = cmd.rotation
+            if len(pkg.links) >= 1:
+                commands.append((pkg.links[0], pan, order))
+            if len(pkg.links) >= 2:
+                commands.append((pkg.links[1], tilt, order))
+        if commands:
+            self.facade.drive_joints(self.uid, commands)
+
+    def on_camera(self, cmd: C.Camera) -> None:
+        """Legacy ``CAMERA {Rotation r,p,y} {Zoom fov}`` (protocol.md 5.7): the pan-tilt and the zoom."""
+        if not self._alive():
+            return
+        pkg = self.robot.package("CameraPanTilt") if self.robot is not None else None
+        if cmd.rotation is not None and pkg is not None and len(pkg.links) >= 2:
+            _, tilt, pan = cmd.rotation
+            self.facade.drive_joints(self.uid, [(pkg.links[0], pan, 0), (pkg.links[1], tilt, 0)])
+        if cmd.zoom is not None:
+            self.facade.operate(self.uid, "Camera", None, "Zoom", repr(cmd.zoom))
 
     def _items(self, item_type: str, name: str | None):
         assert self.robot is not None
@@ -166,6 +225,14 @@ class Session:
         found = [d for d in self.facade.describe(self.robot) if d.item_type.lower() in (t, canonical.lower())
                  and (not name or d.name.lower() == name.lower())]
         return found
+
+    def _packages(self, name: str | None):
+        return [p for p in self.robot.mission_packages if not name or p.name.lower() == name.lower()]
+
+    @staticmethod
+    def _parent_number(pkg, ln) -> int:
+        """ParentLink of a link: its parent's number in the package, -1 for the chassis."""
+        return pkg.links.index(ln.parent) + 1 if ln.parent in pkg.links else -1
 
     def on_get_geo(self, cmd: C.GetGeo) -> None:
         if self.robot is None:
@@ -179,6 +246,16 @@ class Session:
             self.send(M.RobotGeometry(vehicle_type=r.vehicle_type, class_name=r.class_name, dimensions=g.dimensions,
                                       cog=g.cog, wheel_radius=g.wheel_radius_m, wheel_separation=g.wheel_separation_m,
                                       wheel_base=g.wheel_base_m))
+            return
+        if cmd.type.lower() == "mispkg":
+            pkgs = self._packages(cmd.name)
+            if not pkgs:
+                self.send(M.EmptyGeometry(item_type=cmd.type, name=cmd.name))
+                return
+            self.send(M.MisPkgGeometry(packages=tuple(M.PackageGeometry(name=p.name, links=tuple(
+                M.LinkGeometry(link=i + 1, parent_link=self._parent_number(p, ln), location=ln.location,
+                               orientation=ln.orientation)
+                for i, ln in enumerate(self.robot.link(n) for n in p.links))) for p in pkgs)))
             return
         items = self._items(cmd.type, cmd.name)
         if not items:
@@ -201,6 +278,17 @@ class Session:
                                            max_speed=r.max_speed_rad_s, max_torque=r.max_torque_nm,
                                            max_front_steer=r.max_front_steer_rad, max_rear_steer=r.max_rear_steer_rad))
             return
+        if cmd.type.lower() == "mispkg":
+            pkgs = self._packages(cmd.name)
+            if not pkgs:
+                self.send(M.EmptyConfiguration(item_type=cmd.type, name=cmd.name))
+                return
+            self.send(M.MisPkgConfiguration(packages=tuple(M.PackageConfiguration(name=p.name, links=tuple(
+                M.LinkConfiguration(link=i + 1, joint_type="Revolute" if ln.joint == "revolute" else "Prismatic",
+                                    max_speed=ln.max_speed, max_torque=ln.max_torque, min_range=ln.min_range,
+                                    max_range=ln.max_range)
+                for i, ln in enumerate(self.robot.link(n) for n in p.links))) for p in pkgs)))
+            return
         items = self._items(cmd.type, cmd.name)
         if not items:
             self.send(M.EmptyConfiguration(item_type=cmd.type, name=cmd.name))
@@ -216,7 +304,19 @@ class Session:
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
         t = (cmd.type or "").lower()
-        if t in ("viewports", "joint") or (t == "camera" and (cmd.client is not None or cmd.robot is not None)):
+        if t == "joint":
+            order = JOINT_OPCODES.get((cmd.opcode or "0").lower())
+            try:
+                parts = [float(v) for v in (cmd.params or "").replace(",", " ").split()]
+            except ValueError:
+                parts = []
+            if order is None or not parts or not cmd.name:
+                self.log_once("set-joint", "SET {Type Joint} needs a Name, an Opcode (Angle, Velocity, Torque, "
+                                           "RelAngle, RelVelocity, RelTorque or 0/1/2/10/11/12) and a Params value")
+                return
+            self.facade.drive_joints(self.uid, [(cmd.name, parts[0], order)])
+            return
+        if t == "viewports" or (t == "camera" and (cmd.client is not None or cmd.robot is not None)):
             self.log_once(f"set:{t}", "SET {Type %s} is not supported yet; ignored", cmd.type, level=logging.INFO)
             return
         self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, cmd.params)

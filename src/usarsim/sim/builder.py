@@ -30,6 +30,7 @@ ROLL_FRICTION = 0.0001
 def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     s = mujoco.MjSpec()
     s.modelname = world.name
+    s.compiler.degree = False  # joint ranges are in radians, as everywhere in usarsim
     o = s.option
     o.timestep = world.timestep_s
     # implicitfast: explicit Euler goes unstable with stiff wheel velocity servos
@@ -185,16 +186,8 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     body.quat = frames.usar_euler_to_mj_quat(rotation).tolist()
     root = body.add_freejoint()
     root.name = f"{prefix}/root"
-    for i, box in enumerate(robot.chassis):
-        g = body.add_geom()
-        g.name = f"{prefix}/chassis{i}"
-        g.type = mujoco.mjtGeom.mjGEOM_BOX
-        g.size = [box.size[0] / 2.0, box.size[1] / 2.0, box.size[2] / 2.0]
-        g.pos = frames.to_mj_vec(box.center).tolist()
-        g.mass = box.mass_kg
-        g.rgba = [0.75, 0.1, 0.1, 1.0]
-        g.group = GROUP_ROBOT
-        g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+    for i, piece in enumerate(robot.chassis):
+        _add_piece(body, f"{prefix}/chassis{i}", piece, robot)
     # wheel cylinders lie along MuJoCo's Y axis (the axle)
     axle_quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]
     for w in robot.wheels:
@@ -224,13 +217,105 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
             a.set_to_velocity(kv=robot.wheel_gain)
             a.forcelimited = 1
             a.forcerange = [-robot.wheel_torque_limit_nm, robot.wheel_torque_limit_nm]
+    bodies = {"chassis": body}
+    for ln in robot.links:
+        lb = bodies[ln.parent].add_body()
+        lb.name = f"{prefix}/{ln.name}"
+        lb.pos = frames.to_mj_vec(ln.location).tolist()
+        lb.quat = frames.usar_euler_to_mj_quat(ln.orientation).tolist()
+        j = lb.add_joint()
+        j.name = f"{prefix}/{ln.name}"
+        j.type = mujoco.mjtJoint.mjJNT_HINGE if ln.joint == "revolute" else mujoco.mjtJoint.mjJNT_SLIDE
+        j.axis = frames.to_mj_vec(ln.axis).tolist()
+        j.armature = ln.armature
+        if ln.limited:
+            j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            j.range = [ln.min_range, ln.max_range]
+        if ln.shapes:
+            for k, piece in enumerate(ln.shapes):
+                _add_piece(lb, f"{prefix}/{ln.name}/{k}", piece, robot)
+        else:  # a massless link would make the joint singular: a small point mass
+            lb.mass = 0.01
+            lb.inertia = [1e-5, 1e-5, 1e-5]
+            lb.explicitinertial = True
+        a = spec.add_actuator()
+        a.name = f"{prefix}/{ln.name}"
+        a.target = f"{prefix}/{ln.name}"
+        a.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        a.forcelimited = 1
+        a.forcerange = [-ln.max_torque, ln.max_torque]
+        # a position servo that follows a set point moving at the commanded speed: the set
+        # point is the actuator's activation, integrated from ctrl (rad/s or m/s) and held
+        # within actrange, which the simulation narrows to stop it at a target angle
+        kp, kv = joint_servo_gains(ln)
+        a.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+        a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        a.gainprm[0] = kp
+        a.biasprm[0], a.biasprm[1], a.biasprm[2] = 0.0, -kp, -kv
+        a.actlimited = 1
+        a.actrange = joint_travel(ln)
+        bodies[ln.name] = lb
+    # a robot's links do not collide with its chassis or with each other (only parent and
+    # child would be filtered by MuJoCo)
+    names = [prefix] + [f"{prefix}/{ln.name}" for ln in robot.links]
+    for i, a_name in enumerate(names):
+        for b_name in names[i + 1:]:
+            ex = spec.add_exclude()
+            ex.bodyname1, ex.bodyname2 = a_name, b_name
     return body
+
+
+# Joint servo (manual 3.2.3: a joint is driven at its speed towards a target angle, with
+# up to its torque): a stiff position servo follows a set point that moves at the link's
+# MaxSpeed; it reaches full torque POSITION_BAND_RAD away from the set point, and is
+# critically damped on the link's reflected inertia (its armature).
+POSITION_BAND_RAD = 0.02
+UNLIMITED = 1.0e6  # set-point range of a continuous joint
+
+
+def joint_servo_gains(ln) -> tuple[float, float]:
+    """(kp, kv) of a link's position servo."""
+    kp = ln.max_torque / POSITION_BAND_RAD
+    return kp, 2.0 * math.sqrt(kp * max(ln.armature, 1e-3))
+
+
+def joint_travel(ln) -> tuple[float, float]:
+    return (ln.min_range, ln.max_range) if ln.limited else (-UNLIMITED, UNLIMITED)
+
+
+def _add_piece(body, name: str, piece, robot) -> None:
+    g = body.add_geom()
+    g.name = name
+    g.pos = frames.to_mj_vec(piece.center).tolist()
+    if piece.shape == "box":
+        g.type = mujoco.mjtGeom.mjGEOM_BOX
+        g.size = [piece.size[0] / 2.0, piece.size[1] / 2.0, piece.size[2] / 2.0]
+    elif piece.shape == "sphere":
+        g.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        g.size = [piece.radius_m, 0.0, 0.0]
+    elif piece.shape == "cylinder":
+        g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+        g.size = [piece.radius_m, piece.length_m / 2.0, 0.0]
+    else:
+        g.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+        g.size = [piece.radius_m, piece.length_m / 2.0, 0.0]
+    g.quat = frames.usar_euler_to_mj_quat(piece.rotation).tolist()
+    g.mass = piece.mass_kg
+    if piece.friction is not None:
+        g.friction = [piece.friction, SPIN_FRICTION, ROLL_FRICTION]
+    g.rgba = [0.75, 0.1, 0.1, 1.0]
+    g.group = GROUP_ROBOT
+    g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
 
 def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
     for a in list(spec.actuators):
         if a.name.startswith(prefix + "/"):
             spec.delete(a)
+    for ex in list(spec.excludes):
+        if ex.bodyname1 == prefix or ex.bodyname1.startswith(prefix + "/"):
+            spec.delete(ex)
     body = spec.body(prefix)
     if body is not None:
         spec.delete(body)

@@ -7,12 +7,15 @@ come back through callbacks, called on the simulation thread.
 
 from __future__ import annotations
 
+import logging
 from typing import Any, Callable
 
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.sim.runner import Request, SimulationRunner, StepRequest
 from usarsim.sim.simulation import ItemDescription, Output, Simulation, describe_items
+
+log = logging.getLogger("usarsim.sim")
 
 
 class SimFacade:
@@ -75,6 +78,15 @@ class SimFacade:
 
     def drive_skid(self, uid: int, left, right, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_skid(uid, left, right, normalized, light)))
+
+    def drive_joints(self, uid: int, commands: list[tuple[str, float, int]]) -> None:
+        """Joint commands (name, value, order), applied together."""
+        def action(sim: Simulation):
+            for name, value, order in commands:
+                if not sim.drive_joint(uid, name, value, order):
+                    log.info("robot id %d: no joint '%s' for order %d (or no power); ignored", uid, name, order)
+
+        self.runner.submit(Request(action))
 
     def operate(self, uid: int, item_type, name, opcode, params) -> None:
         def action(sim: Simulation):

@@ -21,7 +21,7 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.errors import ConfigError, SimulationError
-from usarsim.readings import CommandResult, RobotStatus
+from usarsim.readings import CommandResult, PackageState, RobotStatus
 from usarsim.sensors import Sensor, make_sensor
 from usarsim.sim import builder
 from usarsim.sim.entities import Entities
@@ -62,6 +62,7 @@ class _Unit:
     t0: float
     key: str
     status: bool = False
+    package: object = None  # a MissionPackage: MISSTA
     k: int = 0
 
     @property
@@ -86,6 +87,9 @@ class SimRobot:
     removed: bool = False
     resets: int = 0
     spawn_qpos: np.ndarray | None = None
+    # link joints: name -> (order, value) with order 0 position, 1 speed, 2 torque
+    joints: dict = field(default_factory=dict)
+    wheel_speed: dict = field(default_factory=dict)  # per-wheel speed set by a joint command
 
     def battery_left(self, now: float) -> float:
         return max(0.0, self.config.battery_s - (now - self.spawn_time))
@@ -159,10 +163,12 @@ class Simulation:
             self._configure(r, view)
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
-        r.handle.resolve(self.model, r.config.wheels)
+        r.handle.resolve(self.model, r.config.wheels, r.config.links)
         for s in r.sensors:
             s.configure(view)
         self._apply_ctrl(r)
+        for ln in r.config.links:
+            self._apply_joint(r, ln)
 
     def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation) -> SimRobot:
         """Add a robot at once, at the current simulated time; others keep their state."""
@@ -222,6 +228,8 @@ class Simulation:
     def _schedule_robot(self, r: SimRobot) -> None:
         now = self.time
         units = [_Unit(r, [], r.config.status_interval_s, now, "STA", status=True)]
+        for pkg in r.config.mission_packages:
+            units.append(_Unit(r, [], r.config.status_interval_s, now, f"MISSTA:{pkg.name}", package=pkg))
         packed: dict[str, _Unit] = {}
         for s in r.sensors:
             if not s.PERIODIC:
@@ -255,7 +263,98 @@ class Simulation:
             r.left = max(-vmax, min(vmax, left * scale))
         if right is not None and math.isfinite(right):
             r.right = max(-vmax, min(vmax, right * scale))
+        if left is not None or right is not None:
+            r.wheel_speed.clear()  # a skid DRIVE takes the wheels back from joint commands
         self._apply_ctrl(r)
+
+    # Joints (links and wheels) --------------------------------------------------------
+    ORDERS = (0, 1, 2, 3, 10, 11, 12)
+
+    def drive_joint(self, uid: int, name: str, value: float, order: int = 0) -> bool:
+        """A joint command (protocol.md 5.3f, 5.6): order 0 angle (m for prismatic), 1 speed,
+        2 torque, 3 brake, 10/11/12 the same relative to the current value.  Targets are
+        limited to the joint's range, speeds to MaxSpeed, torques to MaxTorque.  False when
+        the robot has no such joint or the order is unknown."""
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty or not math.isfinite(value) or order not in self.ORDERS:
+            return False
+        ln = r.config.link(name) or next((x for x in r.config.links if x.name.lower() == name.lower()), None)
+        if ln is None:
+            w = next((x for x in r.config.wheels if x.name.lower() == name.lower() and x.driven), None)
+            if w is None:
+                return False
+            vmax = r.config.max_speed_rad_s
+            if order in (1, 11):
+                base = float(self.data.ctrl[r.handle.actuator[w.name]]) if order == 11 else 0.0
+                r.wheel_speed[w.name] = max(-vmax, min(vmax, base + value))
+            elif order == 3:
+                r.wheel_speed[w.name] = 0.0
+            else:
+                return False  # wheel angle and torque orders are not modelled
+            self._apply_ctrl(r)
+            return True
+        h = r.handle
+        q = float(self.data.qpos[h.joint_qpos[ln.name]])
+        qd = float(self.data.qvel[h.joint_qvel[ln.name]])
+        cur_order, cur_value = r.joints.get(ln.name, (0, 0.0))
+        if order == 10:
+            order, value = 0, q + value
+        elif order == 11:
+            order, value = 1, qd + value
+        elif order == 12:
+            order, value = 2, (cur_value if cur_order == 2 else 0.0) + value
+        elif order == 3:
+            order, value = 1, 0.0
+        if order == 0 and ln.limited:
+            value = min(max(value, ln.min_range), ln.max_range)
+        elif order == 1:
+            value = min(max(value, -ln.max_speed), ln.max_speed)
+        elif order == 2:
+            value = min(max(value, -ln.max_torque), ln.max_torque)
+        r.joints[ln.name] = (order, value)
+        self._apply_joint(r, ln)
+        return True
+
+    def _apply_joint(self, r: SimRobot, ln) -> None:
+        """Set a link's drive for its current order: for an angle, the set point runs at
+        MaxSpeed towards the target and stops there; for a speed, it runs at that speed
+        (within the joint's range); for a torque, the servo is replaced by that torque.
+        The model's per-actuator values are set again after every rebuild."""
+        a = r.handle.actuator[ln.name]
+        m, d = self.model, self.data
+        act = int(m.actuator_actadr[a])
+        q = float(d.qpos[r.handle.joint_qpos[ln.name]])
+        order, value = r.joints.get(ln.name, (0, None))
+        if r.battery_empty:
+            order, value = 2, 0.0
+        kp, kv = builder.joint_servo_gains(ln)
+        lo, hi = builder.joint_travel(ln)
+        if order == 2:
+            m.actuator_gainprm[a, 0] = 1.0
+            m.actuator_biasprm[a, :3] = (0.0, 0.0, 0.0)
+            m.actuator_actrange[a] = (-ln.max_torque, ln.max_torque)
+            d.act[act] = value
+            d.ctrl[a] = 0.0
+            return
+        if float(m.actuator_gainprm[a, 0]) != kp:  # back from a torque order: start from here
+            d.act[act] = q
+        m.actuator_gainprm[a, 0] = kp
+        m.actuator_biasprm[a, :3] = (0.0, -kp, -kv)
+        if order == 1:
+            m.actuator_actrange[a] = (lo, hi)
+            d.ctrl[a] = value
+            return
+        if value is None:  # never commanded: hold where it was built (0)
+            value = 0.0
+        cur = float(d.act[act])
+        m.actuator_actrange[a] = (min(cur, value), max(cur, value))
+        d.ctrl[a] = math.copysign(ln.max_speed, value - cur) if value != cur else 0.0
+
+    def package_state(self, r: SimRobot, pkg) -> "PackageState":
+        d, h = self.data, r.handle
+        return PackageState(pkg.name, tuple(
+            (i + 1, float(d.qpos[h.joint_qpos[n]]), float(d.actuator_force[h.actuator[n]]))
+            for i, n in enumerate(pkg.links)))
 
     def _apply_ctrl(self, r: SimRobot) -> None:
         ctrl = self.data.ctrl
@@ -265,6 +364,8 @@ class Simulation:
             a = r.handle.actuator[w.name]
             if r.battery_empty:
                 ctrl[a] = 0.0
+            elif w.name in r.wheel_speed:
+                ctrl[a] = r.wheel_speed[w.name]
             else:
                 ctrl[a] = r.left if w.side == "left" else r.right
 
@@ -381,7 +482,10 @@ class Simulation:
             if not r.battery_empty and r.battery_left(now) <= 0.0:
                 r.battery_empty = True
                 r.left = r.right = 0.0
+                r.wheel_speed.clear()
                 self._apply_ctrl(r)
+                for ln in r.config.links:
+                    self._apply_joint(r, ln)
                 log.info("robot '%s' (id %d): battery empty at t=%.3f", r.name, r.uid, now)
 
     def _fire_due(self) -> None:
@@ -400,6 +504,9 @@ class Simulation:
             heapq.heappush(heap, (u.due, next(self._seq), u))
             if u.status:
                 self.outbox.append(Output(r.uid, now, self.status_of(r), "STA"))
+            elif u.package is not None:
+                if not r.battery_empty:
+                    self.outbox.append(Output(r.uid, now, self.package_state(r, u.package), u.key))
             elif not r.battery_empty:
                 if view is None:
                     view = self.view()

@@ -156,8 +156,8 @@ class RobotHandle:
         self.actuator: dict[str, int] = {}
         self.part_body: dict[str, int] = {}  # named parts items can be mounted on (wheels, later links)
 
-    def resolve(self, m: mujoco.MjModel, wheels) -> None:
-        """Look the chassis, every wheel joint and every driven wheel's actuator up by name."""
+    def resolve(self, m: mujoco.MjModel, wheels, links=()) -> None:
+        """Look the chassis, every wheel and link joint and their actuators up by name."""
         self.body_id = m.body(self.prefix).id
         j = m.joint(f"{self.prefix}/root")
         self.root_qpos = int(m.jnt_qposadr[j.id])
@@ -173,6 +173,12 @@ class RobotHandle:
             self.joint_qvel[w.name] = int(m.jnt_dofadr[jid])
             if w.driven:
                 self.actuator[w.name] = m.actuator(f"{self.prefix}/{w.name}").id
+        for ln in links:
+            self.part_body[ln.name] = m.body(f"{self.prefix}/{ln.name}").id
+            jid = m.joint(f"{self.prefix}/{ln.name}").id
+            self.joint_qpos[ln.name] = int(m.jnt_qposadr[jid])
+            self.joint_qvel[ln.name] = int(m.jnt_dofadr[jid])
+            self.actuator[ln.name] = m.actuator(f"{self.prefix}/{ln.name}").id
 
     # Pose of the chassis in the USARSim frame ------------------------------------
     def position_mj(self, d: mujoco.MjData) -> np.ndarray:
