@@ -17,7 +17,8 @@ Vec3 = tuple[float, float, float]
 
 VEHICLE_TYPES = ("GroundVehicle", "AerialVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform")
 STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive", "None")
-DRIVES = ("skid",)
+DRIVES = ("skid", "ackermann", "holonomic")
+STEER_GROUPS = ("none", "front", "rear", "free")
 
 
 SHAPES = ("box", "sphere", "cylinder", "capsule")
@@ -83,6 +84,9 @@ class Wheel:
     mass_kg: float
     side: str  # "left" | "right"
     driven: bool = True
+    parent: str = "chassis"  # or a link (a flipper's wheels)
+    steer: str = "none"  # front/rear: Ackermann axles; free: steered alone (holonomic)
+    number: int = -1  # WheelNumber of a holonomic DRIVE (protocol.md 5.3c)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -135,6 +139,7 @@ class RobotConfig:
     wheel_friction: float = 1.0
     wheel_gain: float = 20.0
     wheel_torque_nm: float | None = None
+    steer_torque_nm: float = 50.0  # steering servo torque of each steered wheel
     extra: dict = field(default_factory=dict)
 
     @property
@@ -203,6 +208,7 @@ def load_robot(path: str | Path) -> RobotConfig:
     wheel_friction = top.float("wheel_friction", 1.0, min=0.0, max=10.0)
     wheel_gain = top.float("wheel_gain", 20.0, min=0.0, min_exclusive=True)
     wheel_torque = top.float("wheel_torque_nm", None, min=0.0, min_exclusive=True)
+    steer_torque = top.float("steer_torque_nm", 50.0, min=0.0, min_exclusive=True)
 
     g = top.section("geometry")
     geometry = RobotGeometryConfig(
@@ -221,7 +227,9 @@ def load_robot(path: str | Path) -> RobotConfig:
         s = Section(raw, path=path, key=f"wheels[{i}]")
         w = Wheel(name=s.str("name"), position=s.vec("position"), radius_m=s.float("radius_m", min=0.001),
                   width_m=s.float("width_m", min=0.001), mass_kg=s.float("mass_kg", min=0.001),
-                  side=s.str("side", choices=("left", "right")), driven=s.bool("driven", True))
+                  side=s.str("side", choices=("left", "right")), driven=s.bool("driven", True),
+                  parent=s.str("parent", "chassis"), steer=s.str("steer", "none", choices=STEER_GROUPS),
+                  number=s.int("number", -1, min=-1))
         if w.name in wnames:
             raise s.error("name", f"duplicate wheel name '{w.name}'")
         wnames.add(w.name)
@@ -255,6 +263,25 @@ def load_robot(path: str | Path) -> RobotConfig:
                           armature=s.float("armature", 0.05, min=0.0)))
         lnames.add(lname)
         s.finish()
+
+    for i, w in enumerate(wheels):
+        if w.parent != "chassis" and w.parent not in lnames:
+            raise ConfigError(f"unknown parent '{w.parent}'{did_you_mean(w.parent, ['chassis', *lnames])}",
+                              path=path, key=f"wheels[{i}].parent")
+        if w.steer != "none" and w.parent != "chassis":
+            raise ConfigError("a steered wheel must sit on the chassis", path=path, key=f"wheels[{i}].steer")
+    if drive == "ackermann":
+        if not any(w.steer in ("front", "rear") for w in wheels) or not any(w.driven for w in wheels):
+            raise top.error("wheels", "an Ackermann-steered robot needs steered (steer: front or rear) and "
+                                      "driven wheels")
+        if mfs <= 0 and mrs <= 0:
+            raise top.error("max_front_steer_rad", "an Ackermann-steered robot needs max_front_steer_rad > 0 "
+                                                   "(or max_rear_steer_rad)")
+    if drive == "holonomic":
+        numbers = [w.number for w in wheels if w.steer == "free"]
+        if not numbers or -1 in numbers or len(set(numbers)) != len(numbers):
+            raise top.error("wheels", "a holonomic robot's steered wheels (steer: free) need distinct numbers "
+                                      "(number: 0, 1, ...), the WheelNumber of its DRIVE")
 
     packages: list[MissionPackage] = []
     for i, raw in enumerate(top.list("mission_packages", [])):
@@ -302,4 +329,5 @@ def load_robot(path: str | Path) -> RobotConfig:
                        battery_s=battery, status_interval_s=status_interval, geometry=geometry,
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
-                       wheel_torque_nm=wheel_torque, links=tuple(links), mission_packages=tuple(packages))
+                       wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
+                       mission_packages=tuple(packages))

@@ -164,7 +164,14 @@ class Session:
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
         skid = cmd.left is not None or cmd.right is not None
-        if skid or cmd.light is not None:
+        ackermann = cmd.speed is not None or cmd.front_steer is not None or cmd.rear_steer is not None
+        if ackermann:
+            self.facade.drive_ackermann(self.uid, cmd.speed, cmd.front_steer, cmd.rear_steer, bool(cmd.normalized),
+                                        cmd.light)
+        elif cmd.wheels:
+            self.facade.drive_wheels(self.uid, [(w.number, w.speed, w.steer) for w in cmd.wheels],
+                                     bool(cmd.normalized), cmd.light)
+        elif skid or cmd.light is not None:
             self.facade.drive_skid(self.uid, cmd.left, cmd.right, bool(cmd.normalized), cmd.light)
         joints = [(j.name, j.value, j.order) for j in cmd.joints if j.value is not None]
         if joints:

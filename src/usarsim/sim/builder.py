@@ -188,36 +188,10 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     root.name = f"{prefix}/root"
     for i, piece in enumerate(robot.chassis):
         _add_piece(body, f"{prefix}/chassis{i}", piece, robot)
-    # wheel cylinders lie along MuJoCo's Y axis (the axle)
-    axle_quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]
-    for w in robot.wheels:
-        wb = body.add_body()
-        wb.name = f"{prefix}/{w.name}"
-        wb.pos = frames.to_mj_vec(w.position).tolist()
-        j = wb.add_joint()
-        j.name = f"{prefix}/{w.name}"
-        j.type = mujoco.mjtJoint.mjJNT_HINGE
-        j.axis = [0.0, 1.0, 0.0]  # MuJoCo +Y is the robot's left: positive spin rolls forward
-        j.armature = 0.01
-        g = wb.add_geom()
-        g.name = f"{prefix}/{w.name}"
-        g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
-        g.size = [w.radius_m, w.width_m / 2.0, 0.0]
-        g.quat = axle_quat
-        g.mass = w.mass_kg
-        g.friction = [robot.wheel_friction, SPIN_FRICTION, ROLL_FRICTION]
-        g.rgba = [0.1, 0.1, 0.1, 1.0]
-        g.group = GROUP_WHEEL
-        g.contype, g.conaffinity = WHEEL_CONTYPE, WHEEL_CONAFFINITY
-        if w.driven:
-            a = spec.add_actuator()
-            a.name = f"{prefix}/{w.name}"
-            a.target = f"{prefix}/{w.name}"
-            a.trntype = mujoco.mjtTrn.mjTRN_JOINT
-            a.set_to_velocity(kv=robot.wheel_gain)
-            a.forcelimited = 1
-            a.forcerange = [-robot.wheel_torque_limit_nm, robot.wheel_torque_limit_nm]
     bodies = {"chassis": body}
+    for w in robot.wheels:
+        if w.parent == "chassis":
+            _add_wheel(spec, body, w, robot, prefix)
     for ln in robot.links:
         lb = bodies[ln.parent].add_body()
         lb.name = f"{prefix}/{ln.name}"
@@ -256,11 +230,23 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         a.actlimited = 1
         a.actrange = joint_travel(ln)
         bodies[ln.name] = lb
-    # a robot's links do not collide with its chassis or with each other (only parent and
-    # child would be filtered by MuJoCo)
-    names = [prefix] + [f"{prefix}/{ln.name}" for ln in robot.links]
+    for w in robot.wheels:
+        if w.parent != "chassis":
+            _add_wheel(spec, bodies[w.parent], w, robot, prefix)
+    # a robot's parts do not collide with each other (MuJoCo filters parent and child only)
+    # parent -> child pairs are filtered by MuJoCo already; every other pair of the robot's
+    # jointed bodies (chassis, links, wheels on links) is excluded
+    parent_of = {f"{prefix}/{ln.name}": (prefix if ln.parent == "chassis" else f"{prefix}/{ln.parent}")
+                 for ln in robot.links}
+    parent_of.update({f"{prefix}/{w.name}": (prefix if w.parent == "chassis" else f"{prefix}/{w.parent}")
+                      for w in robot.wheels if w.parent != "chassis"})
+    # a steered wheel hangs on its knuckle: exclude it from the chassis (wheel wells)
+    parent_of.update({f"{prefix}/{w.name}": f"{prefix}/{w.name}/knuckle" for w in robot.wheels if w.steer != "none"})
+    names = [prefix, *parent_of]
     for i, a_name in enumerate(names):
         for b_name in names[i + 1:]:
+            if parent_of.get(b_name) == a_name or parent_of.get(a_name) == b_name:
+                continue
             ex = spec.add_exclude()
             ex.bodyname1, ex.bodyname2 = a_name, b_name
     return body
@@ -284,6 +270,71 @@ def joint_travel(ln) -> tuple[float, float]:
     return (ln.min_range, ln.max_range) if ln.limited else (-UNLIMITED, UNLIMITED)
 
 
+# Steering knuckles: a stiff position servo turns a steered wheel about the vertical
+# (positive = to the right, as yaw) with up to the robot's steer_torque_nm, reached
+# STEER_BAND_RAD away from the commanded angle.
+STEER_BAND_RAD = 0.05
+
+
+def _add_wheel(spec, parent, w, robot, prefix: str) -> None:
+    """A wheel on its parent body, with a steering knuckle in between when it is steered."""
+    # wheel cylinders lie along MuJoCo's Y axis (the axle)
+    axle_quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]
+    holder = parent
+    pos = frames.to_mj_vec(w.position).tolist()
+    if w.steer != "none":
+        knuckle = parent.add_body()
+        knuckle.name = f"{prefix}/{w.name}/knuckle"
+        knuckle.pos = pos
+        knuckle.mass = 0.05
+        knuckle.inertia = [1e-4, 1e-4, 1e-4]
+        knuckle.explicitinertial = True
+        sj = knuckle.add_joint()
+        sj.name = f"{prefix}/{w.name}/steer"
+        sj.type = mujoco.mjtJoint.mjJNT_HINGE
+        sj.axis = [0.0, 0.0, -1.0]  # USARSim Z is down: positive steers right
+        sj.armature = 0.01
+        limit = robot.max_front_steer_rad if w.steer == "front" else robot.max_rear_steer_rad
+        if w.steer in ("front", "rear") and limit > 0:
+            sj.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            sj.range = [-limit - 0.01, limit + 0.01]
+        sa = spec.add_actuator()
+        sa.name = f"{prefix}/{w.name}/steer"
+        sa.target = f"{prefix}/{w.name}/steer"
+        sa.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        kp = robot.steer_torque_nm / STEER_BAND_RAD
+        sa.set_to_position(kp=kp, kv=0.1 * kp)
+        sa.forcelimited = 1
+        sa.forcerange = [-robot.steer_torque_nm, robot.steer_torque_nm]
+        holder, pos = knuckle, [0.0, 0.0, 0.0]
+    wb = holder.add_body()
+    wb.name = f"{prefix}/{w.name}"
+    wb.pos = pos
+    j = wb.add_joint()
+    j.name = f"{prefix}/{w.name}"
+    j.type = mujoco.mjtJoint.mjJNT_HINGE
+    j.axis = [0.0, 1.0, 0.0]  # MuJoCo +Y is the robot's left: positive spin rolls forward
+    j.armature = 0.01
+    g = wb.add_geom()
+    g.name = f"{prefix}/{w.name}"
+    g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+    g.size = [w.radius_m, w.width_m / 2.0, 0.0]
+    g.quat = axle_quat
+    g.mass = w.mass_kg
+    g.friction = [robot.wheel_friction, SPIN_FRICTION, ROLL_FRICTION]
+    g.rgba = [0.1, 0.1, 0.1, 1.0]
+    g.group = GROUP_WHEEL
+    g.contype, g.conaffinity = WHEEL_CONTYPE, WHEEL_CONAFFINITY
+    if w.driven:
+        a = spec.add_actuator()
+        a.name = f"{prefix}/{w.name}"
+        a.target = f"{prefix}/{w.name}"
+        a.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        a.set_to_velocity(kv=robot.wheel_gain)
+        a.forcelimited = 1
+        a.forcerange = [-robot.wheel_torque_limit_nm, robot.wheel_torque_limit_nm]
+
+
 def _add_piece(body, name: str, piece, robot) -> None:
     g = body.add_geom()
     g.name = name
@@ -303,7 +354,10 @@ def _add_piece(body, name: str, piece, robot) -> None:
     g.quat = frames.usar_euler_to_mj_quat(piece.rotation).tolist()
     g.mass = piece.mass_kg
     if piece.friction is not None:
+        # its own friction wins over the surface's (MuJoCo otherwise takes the larger one):
+        # a caster ball stays slippery on any floor
         g.friction = [piece.friction, SPIN_FRICTION, ROLL_FRICTION]
+        g.priority = 1
     g.rgba = [0.75, 0.1, 0.1, 1.0]
     g.group = GROUP_ROBOT
     g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY

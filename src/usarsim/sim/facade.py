@@ -79,6 +79,12 @@ class SimFacade:
     def drive_skid(self, uid: int, left, right, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_skid(uid, left, right, normalized, light)))
 
+    def drive_ackermann(self, uid: int, speed, front, rear, normalized: bool, light) -> None:
+        self.runner.submit(Request(lambda sim: sim.drive_ackermann(uid, speed, front, rear, normalized, light)))
+
+    def drive_wheels(self, uid: int, wheels, normalized: bool, light) -> None:
+        self.runner.submit(Request(lambda sim: sim.drive_wheels(uid, wheels, normalized, light)))
+
     def drive_joints(self, uid: int, commands: list[tuple[str, float, int]]) -> None:
         """Joint commands (name, value, order), applied together."""
         def action(sim: Simulation):

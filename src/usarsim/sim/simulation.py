@@ -90,6 +90,10 @@ class SimRobot:
     # link joints: name -> (order, value) with order 0 position, 1 speed, 2 torque
     joints: dict = field(default_factory=dict)
     wheel_speed: dict = field(default_factory=dict)  # per-wheel speed set by a joint command
+    speed: float = 0.0  # Ackermann: driven wheels' spin speed, rad/s
+    front_steer: float = 0.0  # Ackermann: commanded axle angles, rad (positive: right)
+    rear_steer: float = 0.0
+    wheel_steer: dict = field(default_factory=dict)  # holonomic: wheel name -> angle
 
     def battery_left(self, now: float) -> float:
         return max(0.0, self.config.battery_s - (now - self.spawn_time))
@@ -267,6 +271,51 @@ class Simulation:
             r.wheel_speed.clear()  # a skid DRIVE takes the wheels back from joint commands
         self._apply_ctrl(r)
 
+    def drive_ackermann(self, uid: int, speed: float | None, front: float | None, rear: float | None,
+                        normalized: bool = False, light: bool | None = None) -> None:
+        """``DRIVE {Speed} {FrontSteer} {RearSteer}`` (protocol.md 5.3b): what is not sent keeps
+        its value; speeds within MaxSpeed, angles within MaxFrontSteer/MaxRearSteer."""
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty:
+            return
+        if light is not None:
+            r.light = bool(light)
+        if r.config.drive != "ackermann":
+            return
+        c = r.config
+        vmax, fmax, rmax = c.max_speed_rad_s, c.max_front_steer_rad, c.max_rear_steer_rad
+        if speed is not None and math.isfinite(speed):
+            r.speed = max(-vmax, min(vmax, speed * (vmax / 100.0 if normalized else 1.0)))
+        if front is not None and math.isfinite(front):
+            r.front_steer = max(-fmax, min(fmax, front * (fmax / 100.0 if normalized else 1.0)))
+        if rear is not None and math.isfinite(rear):
+            r.rear_steer = max(-rmax, min(rmax, rear * (rmax / 100.0 if normalized else 1.0)))
+        r.wheel_speed.clear()
+        self._apply_ctrl(r)
+
+    def drive_wheels(self, uid: int, wheels: list[tuple[int, float | None, float | None]],
+                     normalized: bool = False, light: bool | None = None) -> None:
+        """Holonomic ``DRIVE {WheelNumber n} {WheelSpeed v} {WheelSteer a} ...`` (protocol.md 5.3c):
+        each numbered steered wheel's spin speed (rad/s) and angle (rad, 0 straight ahead)."""
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty:
+            return
+        if light is not None:
+            r.light = bool(light)
+        if r.config.drive != "holonomic":
+            return
+        vmax = r.config.max_speed_rad_s
+        by_number = {w.number: w for w in r.config.wheels if w.number >= 0}
+        for number, speed, steer in wheels:
+            w = by_number.get(number)
+            if w is None:
+                continue
+            if speed is not None and math.isfinite(speed) and w.driven:
+                r.wheel_speed[w.name] = max(-vmax, min(vmax, speed * (vmax / 100.0 if normalized else 1.0)))
+            if steer is not None and math.isfinite(steer) and w.steer == "free":
+                r.wheel_steer[w.name] = math.remainder(steer, 2 * math.pi)
+        self._apply_ctrl(r)
+
     # Joints (links and wheels) --------------------------------------------------------
     ORDERS = (0, 1, 2, 3, 10, 11, 12)
 
@@ -358,7 +407,10 @@ class Simulation:
 
     def _apply_ctrl(self, r: SimRobot) -> None:
         ctrl = self.data.ctrl
+        drive = r.config.drive
         for w in r.config.wheels:
+            if w.steer != "none":
+                ctrl[r.handle.steer_actuator[w.name]] = self._steer_angle(r, w)
             if not w.driven:
                 continue
             a = r.handle.actuator[w.name]
@@ -366,8 +418,32 @@ class Simulation:
                 ctrl[a] = 0.0
             elif w.name in r.wheel_speed:
                 ctrl[a] = r.wheel_speed[w.name]
+            elif drive == "ackermann":
+                ctrl[a] = r.speed
+            elif drive == "holonomic":
+                ctrl[a] = 0.0
             else:
                 ctrl[a] = r.left if w.side == "left" else r.right
+
+    def _steer_angle(self, r: SimRobot, w) -> float:
+        """A steered wheel's angle: holonomic wheels their own; Ackermann axles with the
+        Ackermann correction (each wheel on a circle about the same centre) when only
+        one axle steers, else both wheels of an axle alike."""
+        if w.steer == "free":
+            return r.wheel_steer.get(w.name, 0.0)
+        delta = r.front_steer if w.steer == "front" else r.rear_steer
+        other = r.rear_steer if w.steer == "front" else r.front_steer
+        if delta == 0.0 or other != 0.0:
+            return delta
+        fixed = [x.position[0] for x in r.config.wheels if x.steer == "none"]
+        base = w.position[0] - (sum(fixed) / len(fixed) if fixed else 0.0)
+        if abs(base) < 1e-6:
+            return delta
+        t = math.tan(delta)
+        y = w.position[1]
+        if base > 0:  # a front axle: the turning centre is on the rear axle's line
+            return math.atan2(base * t, base - y * t)
+        return math.atan2(-base * t, -base + y * t)  # a rear axle: on the front axle's line
 
     def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
                 params: str | None) -> CommandResult | None:
@@ -527,8 +603,16 @@ class Simulation:
 
     def status_of(self, r: SimRobot) -> RobotStatus:
         left = r.battery_left(self.time)
+        front = rear = 0.0
+        if r.config.drive == "ackermann":  # the current angles of the axles (mean of their wheels)
+            q = self.data.qpos
+            fa = [float(q[r.handle.steer_qpos[w.name]]) for w in r.config.wheels if w.steer == "front"]
+            ra = [float(q[r.handle.steer_qpos[w.name]]) for w in r.config.wheels if w.steer == "rear"]
+            front = sum(fa) / len(fa) if fa else 0.0
+            rear = sum(ra) / len(ra) if ra else 0.0
         return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
-                           light_toggle=r.light, light_intensity=100 if r.light else 0, view=-1)
+                           front_steer=front, rear_steer=rear, light_toggle=r.light,
+                           light_intensity=100 if r.light else 0, view=-1)
 
     def take_outputs(self) -> list[Output]:
         out, self.outbox = self.outbox, []

@@ -154,7 +154,9 @@ class RobotHandle:
         self.joint_qpos: dict[str, int] = {}
         self.joint_qvel: dict[str, int] = {}
         self.actuator: dict[str, int] = {}
-        self.part_body: dict[str, int] = {}  # named parts items can be mounted on (wheels, later links)
+        self.part_body: dict[str, int] = {}  # named parts items can be mounted on (wheels, links)
+        self.steer_qpos: dict[str, int] = {}  # steered wheels: steering joint position
+        self.steer_actuator: dict[str, int] = {}
 
     def resolve(self, m: mujoco.MjModel, wheels, links=()) -> None:
         """Look the chassis, every wheel and link joint and their actuators up by name."""
@@ -166,8 +168,14 @@ class RobotHandle:
         self.joint_qvel.clear()
         self.actuator.clear()
         self.part_body.clear()
+        self.steer_qpos.clear()
+        self.steer_actuator.clear()
         for w in wheels:
             self.part_body[w.name] = m.body(f"{self.prefix}/{w.name}").id
+            if w.steer != "none":
+                sj = m.joint(f"{self.prefix}/{w.name}/steer").id
+                self.steer_qpos[w.name] = int(m.jnt_qposadr[sj])
+                self.steer_actuator[w.name] = m.actuator(f"{self.prefix}/{w.name}/steer").id
             jid = m.joint(f"{self.prefix}/{w.name}").id
             self.joint_qpos[w.name] = int(m.jnt_qposadr[jid])
             self.joint_qvel[w.name] = int(m.jnt_dofadr[jid])

@@ -1,0 +1,141 @@
+"""Drive types through the protocol (protocol.md 5.3): Ackermann steering (Speed, FrontSteer,
+RearSteer; partial commands keep the other values; STA reports the current angles) and
+holonomic steered wheels (WheelNumber/WheelSpeed/WheelSteer groups), on small test robots
+served with --robot-dir, in a lock-step server."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+from helpers import ground_truth, segments
+
+TEST_CAR = """\
+class_name: TestCar
+description: test car
+vehicle_type: GroundVehicle
+steering_type: AckermanSteered
+drive: ackermann
+mass_kg: 1000.0
+max_speed_rad_s: 40.0
+max_torque_nm: 500.0
+wheel_torque_nm: 400.0
+max_front_steer_rad: 0.6
+wheel_gain: 200.0
+steer_torque_nm: 1500.0
+geometry: {dimensions: [4.0, 1.7, 1.4], wheel_radius: 0.3, wheel_separation: 1.5, wheel_base: 2.6}
+chassis:
+  - {center: [0.0, 0.0, 0.1], size: [4.0, 1.6, 0.8], mass_kg: 920.0}
+wheels:
+  - {name: FL, position: [1.3, -0.75, 0.4], radius_m: 0.3, width_m: 0.2, mass_kg: 20, side: left, steer: front, driven: false}
+  - {name: FR, position: [1.3, 0.75, 0.4], radius_m: 0.3, width_m: 0.2, mass_kg: 20, side: right, steer: front, driven: false}
+  - {name: RL, position: [-1.3, -0.75, 0.4], radius_m: 0.3, width_m: 0.2, mass_kg: 20, side: left}
+  - {name: RR, position: [-1.3, 0.75, 0.4], radius_m: 0.3, width_m: 0.2, mass_kg: 20, side: right}
+sensors:
+  - {type: GroundTruth, name: GroundTruth}
+"""
+
+TEST_OMNI = """\
+class_name: TestOmni
+description: test holonomic robot
+vehicle_type: GroundVehicle
+steering_type: HolonomSteered
+drive: holonomic
+mass_kg: 20.0
+max_speed_rad_s: 10.0
+max_torque_nm: 60.0
+wheel_torque_nm: 10.0
+wheel_gain: 10.0
+steer_torque_nm: 20.0
+geometry: {dimensions: [0.5, 0.5, 0.4], wheel_radius: 0.08, wheel_separation: 0.4, wheel_base: 0.0}
+chassis:
+  - {center: [0.0, 0.0, -0.05], size: [0.5, 0.3, 0.2], mass_kg: 18.0}
+  - {shape: sphere, center: [0.2, 0.0, 0.13], radius: 0.07, mass_kg: 0.2, friction: 0.02}
+  - {shape: sphere, center: [-0.2, 0.0, 0.13], radius: 0.07, mass_kg: 0.2, friction: 0.02}
+wheels:
+  - {name: W0, position: [0.0, -0.2, 0.12], radius_m: 0.08, width_m: 0.04, mass_kg: 0.8, side: left, steer: free, number: 0}
+  - {name: W1, position: [0.0, 0.2, 0.12], radius_m: 0.08, width_m: 0.04, mass_kg: 0.8, side: right, steer: free, number: 1}
+sensors:
+  - {type: GroundTruth, name: GroundTruth}
+"""
+
+
+@pytest.fixture
+def robots_dir(tmp_path):
+    d = tmp_path / "robots"
+    d.mkdir()
+    (d / "TestCar.yaml").write_text(TEST_CAR)
+    (d / "TestOmni.yaml").write_text(TEST_OMNI)
+    return d
+
+
+def spawn(server_factory, test_world, robots_dir, cls, x, y, yaw):
+    srv = server_factory(world=test_world, seed=3, robot_dirs=(str(robots_dir),))
+    c = srv.connect()
+    c.nfo()
+    c.send(f"INIT {{ClassName USARBot.{cls}}} {{Name R1}} {{Location {x},{y},-0.8}} {{Rotation 0,0,{yaw}}}")
+    c.step(1.0)
+    return c
+
+
+def motion(c, seconds):
+    """(speed m/s, yaw rate rad/s, last STA) over ``seconds`` of stepping."""
+    lines = c.step(seconds)
+    gts = ground_truth(lines)
+    (t0, p0, o0), (t1, p1, o1) = gts[0], gts[-1]
+    dt = t1 - t0
+    speed = math.hypot(p1[0] - p0[0], p1[1] - p0[1]) / dt
+    rate = math.remainder(o1[2] - o0[2], 2 * math.pi) / dt
+    sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
+    return speed, rate, sta, (p0, p1)
+
+
+def test_ackermann_speed_steering_and_sta(server_factory, test_world, robots_dir):
+    c = spawn(server_factory, test_world, robots_dir, "TestCar", -8.0, -8.0, 1.5708)
+    assert c.ask("GETCONF {Type Robot}", "CONF").text == (
+        "CONF {Type GroundVehicle} {Name TestCar} {SteeringType AckermanSteered} {Mass 1000.0000} "
+        "{MaxSpeed 40.0000} {MaxTorque 500.0000} {MaxFrontSteer 0.6000} {MaxRearSteer 0.0000}")
+    c.send("DRIVE {Speed 10} {FrontSteer 0} {RearSteer 0}")
+    c.step(2.0)
+    speed, rate, sta, _ = motion(c, 1.0)
+    assert speed == pytest.approx(0.3 * 10, rel=0.05) and abs(rate) < 0.01  # wheel radius 0.3 m
+    assert re.fullmatch(r"STA \{Type GroundVehicle\} \{Time \d+\.\d{2}\} \{FrontSteer -?0\.0\d{3}\} "
+                        r"\{RearSteer 0\.0000\} \{LightToggle False\} \{LightIntensity 0\} \{Battery \d+\} "
+                        r"\{View -1\}", sta), sta
+    c.send("DRIVE {Speed 5} {FrontSteer 0.3}")  # no RearSteer: it keeps its value
+    c.step(2.0)
+    speed, rate, sta, _ = motion(c, 1.0)
+    # bicycle model: yaw rate = v tan(delta) / wheel base, to the right (clockwise: yaw grows)
+    assert rate == pytest.approx(1.5 * math.tan(0.3) / 2.6, rel=0.1)
+    assert float(segments(sta)["FrontSteer"]) == pytest.approx(0.3, abs=0.01)
+    c.send("DRIVE {FrontSteer -2.0}")  # beyond MaxFrontSteer: limited to -0.6; speed kept
+    c.step(1.5)
+    speed, rate, sta, _ = motion(c, 0.5)
+    assert float(segments(sta)["FrontSteer"]) == pytest.approx(-0.6, abs=0.02)
+    assert rate < -0.2 and speed == pytest.approx(1.5, rel=0.1)
+    c.send("DRIVE {Speed 0}")
+    c.step(2.0)
+    speed, _, _, _ = motion(c, 1.0)
+    assert speed < 0.02
+    c.send("DRIVE {Speed 25} {FrontSteer 0} {Normalized True}")  # 25 % of 40 rad/s
+    c.step(3.0)
+    speed, _, _, _ = motion(c, 0.5)
+    assert speed == pytest.approx(0.3 * 10, rel=0.05)
+
+
+def test_holonomic_wheel_groups(server_factory, test_world, robots_dir):
+    c = spawn(server_factory, test_world, robots_dir, "TestOmni", -6.0, -6.0, 0.0)
+    c.send("DRIVE {WheelNumber 0} {WheelSpeed 5} {WheelSteer 0} {WheelNumber 1} {WheelSpeed 5} {WheelSteer 0}")
+    c.step(1.0)
+    speed, rate, _, (p0, p1) = motion(c, 1.0)
+    assert speed == pytest.approx(0.08 * 5, rel=0.05) and p1[0] > p0[0] and abs(rate) < 0.02  # forward
+    c.send("DRIVE {WheelNumber 0} {WheelSteer 1.5708} {WheelNumber 1} {WheelSteer 1.5708}")  # speeds kept
+    c.step(1.0)
+    speed, rate, _, (p0, p1) = motion(c, 1.0)
+    assert speed == pytest.approx(0.4, rel=0.05) and p1[1] - p0[1] > 0.35 and abs(rate) < 0.05  # sideways, right
+    c.send("DRIVE {WheelNumber 0} {WheelSpeed 5} {WheelSteer 0} {WheelNumber 1} {WheelSpeed -5} {WheelSteer 0}")
+    c.step(1.0)
+    _, rate, _, _ = motion(c, 1.0)
+    assert rate == pytest.approx(0.4 / 0.2, rel=0.1)  # turning on the spot, to the right
