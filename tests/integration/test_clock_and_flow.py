@@ -117,3 +117,30 @@ def test_when_the_battery_runs_out_the_robot_stops(test_world):
     sim.drive_skid(1, 3.0, 3.0)  # ignored: no power
     sim.advance(2.0)
     assert abs(sim.pose_of(1)[0][0] - x_dead) < 0.02
+
+
+def test_the_battery_drains_faster_under_load_and_then_only_sta_flows(test_world):
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.simulation import Simulation
+
+    robot = resolve_robot("P2AT")
+    sim = Simulation(test_world, seed=1)
+    for uid, pose in ((1, "Open"), (2, "Far")):
+        p = test_world.start_pose(pose)
+        sim.spawn(uid, robot, f"R{uid}", p.location, p.rotation)
+    sim.advance(1.0)
+    idle0, busy0 = sim.robots[1].battery_used_s, sim.robots[2].battery_used_s
+    sim.drive_skid(2, 5.0, -5.0)  # spinning on the spot at full speed: hard work for the motors
+    sim.advance(10.0)
+    idle = sim.robots[1].battery_used_s - idle0
+    busy = sim.robots[2].battery_used_s - busy0
+    assert idle == pytest.approx(10.0, rel=0.02)  # one second per second at rest
+    assert 11.0 < busy <= 20.0  # faster under load, at most twice as fast
+    # run robot 2 flat: then STA only (no SEN, no MISSTA), and its pan-tilt goes limp
+    sim.robots[2].battery_used_s = robot.battery_s - 0.5
+    sim.take_outputs()
+    sim.advance(2.0)
+    outs = [o for o in sim.take_outputs() if o.uid == 2]
+    late = [o for o in outs if o.time is not None and o.time > sim.time - 1.0]
+    assert late and {o.key for o in late} == {"STA"}
+    assert all(o.value.battery_s == 0 for o in late)

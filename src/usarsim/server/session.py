@@ -163,6 +163,8 @@ class Session:
         if self.state not in (SPAWNING, ALIVE):
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
+        if cmd.flip:
+            self.facade.flip(self.uid)
         skid = cmd.left is not None or cmd.right is not None
         ackermann = cmd.speed is not None or cmd.front_steer is not None or cmd.rear_steer is not None
         if ackermann:

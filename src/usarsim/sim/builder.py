@@ -188,6 +188,17 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     root.name = f"{prefix}/root"
     for i, piece in enumerate(robot.chassis):
         _add_piece(body, f"{prefix}/chassis{i}", piece, robot)
+    # the headlight (every robot has one, protocol.md 8): a spotlight at the front of the
+    # body, looking forward, off until DRIVE {Light True}
+    lamp = body.add_light()
+    lamp.name = f"{prefix}/headlight"
+    lamp.pos = frames.to_mj_vec((robot.geometry.dimensions[0] / 2.0, 0.0, 0.0)).tolist()
+    lamp.dir = [1.0, 0.0, 0.0]
+    lamp.cutoff = 35.0
+    lamp.exponent = 10.0
+    lamp.diffuse = [0.9, 0.9, 0.8]
+    lamp.castshadow = False
+    lamp.active = False
     bodies = {"chassis": body}
     for w in robot.wheels:
         if w.parent == "chassis":

@@ -79,6 +79,9 @@ class SimFacade:
     def drive_skid(self, uid: int, left, right, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_skid(uid, left, right, normalized, light)))
 
+    def flip(self, uid: int) -> None:
+        self.runner.submit(Request(lambda sim: sim.flip(uid)))
+
     def drive_ackermann(self, uid: int, speed, front, rear, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_ackermann(uid, speed, front, rear, normalized, light)))
 

@@ -33,6 +33,16 @@ EPS = 1e-9
 # No joint of a robot moves faster than this (m/s or rad/s): a robot beyond it has
 # blown up numerically (wheels top out near 5 rad/s, a fall from 10 m reaches 14 m/s).
 MAX_SANE_VELOCITY = 100.0
+# At the rated mechanical power of all its motors a battery drains this much faster than
+# at rest (one extra second per second): our model of UT2004's faster drain under load.
+BATTERY_LOAD_FACTOR = 1.0
+# Self-righting (DRIVE {Flip True}, protocol.md 8): UT2004's KRobot applied FlipTorque for
+# FlipTime = 3 s to an overturned robot.  The torque here rolls the robot about the axis
+# that brings its top up, sized to lift its weight at half its width or height, 2.5 times
+# over (UT's FlipTorque 350 was in engine units).
+FLIP_TIME_S = 3.0
+FLIP_MARGIN = 2.5
+OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
 # What a physics step changes: kept before each stretch of steps to replay it on a blow-up.
 STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
@@ -86,6 +96,7 @@ class SimRobot:
     battery_empty: bool = False
     removed: bool = False
     resets: int = 0
+    owner_index: int = 0
     spawn_qpos: np.ndarray | None = None
     # link joints: name -> (order, value) with order 0 position, 1 speed, 2 torque
     joints: dict = field(default_factory=dict)
@@ -95,8 +106,13 @@ class SimRobot:
     rear_steer: float = 0.0
     wheel_steer: dict = field(default_factory=dict)  # holonomic: wheel name -> angle
 
-    def battery_left(self, now: float) -> float:
-        return max(0.0, self.config.battery_s - (now - self.spawn_time))
+    battery_used_s: float = 0.0
+    rated_power_w: float = 1.0
+    flip_until: float = -1.0  # self-righting torque applied until this simulated time
+    flip_sign: float = 0.0
+
+    def battery_left(self, now: float | None = None) -> float:
+        return max(0.0, self.config.battery_s - self.battery_used_s)
 
 
 @dataclass(frozen=True)
@@ -141,6 +157,8 @@ class Simulation:
         self.physics_steps = 0
         self.resets = 0
         self._good_qpos: np.ndarray | None = None
+        self._actuator_owner: np.ndarray | None = None
+        self._owner_count = 1
         # CONF fields that changed at run time (a camera's zoom), by (robot id, type, name);
         # read by the server thread (plain dict reads and replacements are atomic)
         self.live_conf: dict[tuple[int, str, str], tuple] = {}
@@ -165,6 +183,26 @@ class Simulation:
         view = self.view()
         for r in self.robots.values():
             self._configure(r, view)
+        self._index_actuators()
+
+    def _index_actuators(self) -> None:
+        """Which robot each actuator belongs to (for the batteries' load), and each
+        robot's rated mechanical power."""
+        m = self.model
+        owners = np.zeros(m.nu, dtype=np.intp)
+        for i, r in enumerate(self.robots.values(), start=1):
+            r.owner_index = i
+            rated = 0.0
+            for name, a in r.handle.actuator.items():
+                owners[a] = i
+                ln = r.config.link(name)
+                if ln is not None:
+                    rated += ln.max_torque * ln.max_speed
+                else:
+                    rated += r.config.wheel_torque_limit_nm * r.config.max_speed_rad_s
+            r.rated_power_w = max(rated, 1e-6)
+        self._actuator_owner = owners
+        self._owner_count = len(self.robots) + 1
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
         r.handle.resolve(self.model, r.config.wheels, r.config.links)
@@ -270,6 +308,37 @@ class Simulation:
         if left is not None or right is not None:
             r.wheel_speed.clear()  # a skid DRIVE takes the wheels back from joint commands
         self._apply_ctrl(r)
+
+    def flip(self, uid: int) -> bool:
+        """Start righting an overturned robot; False (ignored) when it is upright."""
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty:
+            return False
+        up_z = float(self.data.xmat[r.handle.body_id][8])  # world z of the body's up axis
+        if up_z > OVERTURNED_COS:
+            return False
+        r.flip_until = self.time + FLIP_TIME_S
+        log.info("robot '%s' (id %d): self-righting for %.0f s", r.name, r.uid, FLIP_TIME_S)
+        return True
+
+    def _apply_flips(self) -> None:
+        d = self.data
+        for r in self.robots.values():
+            if r.flip_until < 0:
+                continue
+            b = r.handle.body_id
+            up = d.xmat[b].reshape(3, 3)[:, 2]
+            if self.time >= r.flip_until or up[2] > 0.95:
+                r.flip_until = -1.0
+                d.xfrc_applied[b, 3:] = 0.0
+                continue
+            axis = np.cross(up, np.array([0.0, 0.0, 1.0]))
+            n = float(np.linalg.norm(axis))
+            if n < 1e-6:  # upside down exactly: roll about the forward axis
+                axis, n = d.xmat[b].reshape(3, 3)[:, 0].copy(), 1.0
+            dims = r.config.geometry.dimensions
+            torque = FLIP_MARGIN * r.config.mass_kg * self.world.gravity_m_s2 * max(dims[1], dims[2]) / 2.0
+            d.xfrc_applied[b, 3:] = axis / n * torque
 
     def drive_ackermann(self, uid: int, speed: float | None, front: float | None, rear: float | None,
                         normalized: bool = False, light: bool | None = None) -> None:
@@ -406,6 +475,8 @@ class Simulation:
             for i, n in enumerate(pkg.links)))
 
     def _apply_ctrl(self, r: SimRobot) -> None:
+        if r.handle.light >= 0:
+            self.model.light_active[r.handle.light] = bool(r.light) and not r.battery_empty
         ctrl = self.data.ctrl
         drive = r.config.drive
         for w in r.config.wheels:
@@ -493,6 +564,8 @@ class Simulation:
         m, d = self.model, self.data
         if self.entities.has_motion:
             self.entities.update(d, self.time)
+        if any(r.flip_until >= 0 for r in self.robots.values()):
+            self._apply_flips()
         if self._snapshot is None or self._snapshot.size != mujoco.mj_stateSize(m, STATE):
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
         mujoco.mj_getState(m, d, self._snapshot, STATE)
@@ -510,7 +583,7 @@ class Simulation:
                     self._repair()
         self.step_count += n
         self.physics_steps += n
-        self._check_batteries()
+        self._check_batteries(n * self.dt)
 
     def _healthy(self) -> bool:
         """No velocity beyond :data:`MAX_SANE_VELOCITY` and nothing non-finite (a NaN
@@ -552,8 +625,22 @@ class Simulation:
                 arr[bad] = 0.0
         mujoco.mj_forward(self.model, d)
 
-    def _check_batteries(self) -> None:
+    def _check_batteries(self, seconds: float = 0.0) -> None:
+        """Drain every battery by ``seconds`` of use: one second per second at rest, up to
+        twice as fast at the rated mechanical power of all the robot's motors (the
+        battery ran down "faster under load" in UT2004, protocol.md 6.2)."""
         now = self.time
+        if seconds > 0 and self.robots:
+            d = self.data
+            owners = self._actuator_owner
+            if owners is not None and len(owners) == self.model.nu and self.model.nu:
+                power = np.bincount(owners, weights=np.abs(d.actuator_force * d.actuator_velocity),
+                                    minlength=self._owner_count)
+            else:
+                power = None
+            for r in self.robots.values():
+                load = float(power[r.owner_index]) / r.rated_power_w if power is not None else 0.0
+                r.battery_used_s += seconds * (1.0 + min(load, 1.0) * BATTERY_LOAD_FACTOR)
         for r in self.robots.values():
             if not r.battery_empty and r.battery_left(now) <= 0.0:
                 r.battery_empty = True

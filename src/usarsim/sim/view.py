@@ -155,6 +155,7 @@ class RobotHandle:
         self.joint_qvel: dict[str, int] = {}
         self.actuator: dict[str, int] = {}
         self.part_body: dict[str, int] = {}  # named parts items can be mounted on (wheels, links)
+        self.light = -1  # the headlight
         self.steer_qpos: dict[str, int] = {}  # steered wheels: steering joint position
         self.steer_actuator: dict[str, int] = {}
 
@@ -168,6 +169,7 @@ class RobotHandle:
         self.joint_qvel.clear()
         self.actuator.clear()
         self.part_body.clear()
+        self.light = m.light(f"{self.prefix}/headlight").id
         self.steer_qpos.clear()
         self.steer_actuator.clear()
         for w in wheels:
