@@ -41,7 +41,8 @@ def test_robot_file_validates_and_compiles(path: Path):
     assert r.class_name == path.stem  # INIT {ClassName USARBot.<stem>} finds it
     assert resolve_robot(f"USARBot.{r.class_name}").path == resolve_robot(r.class_name).path
     summary = robot_model_summary(r)
-    assert f"{sum(w.driven for w in r.wheels) + len(r.links)} actuators" in summary
+    steered = sum(w.steer != "none" for w in r.wheels)
+    assert f"{sum(w.driven for w in r.wheels) + len(r.links) + steered} actuators" in summary
     for item in r.items:
         assert item.item_type in SENSORS, f"{path.name}: {item.item_type} is not a registered sensor type"
     described = describe_items(r)

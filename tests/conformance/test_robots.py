@@ -1,0 +1,165 @@
+"""Every robot file of the catalogue (issue: robot catalogue): it lands at every start pose
+of DM-USAR_yellow on its wheels without jitter; its drive command moves it the right way at
+the speed its file promises (within 15 %); its CONF and GEO lines say what its file says."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from usarsim.config.catalog import ROBOTS_DIR, resolve_world
+from usarsim.config.robot import load_robot
+from usarsim.config.world import load_world
+from usarsim.protocol import messages as M
+from usarsim.sim.simulation import Simulation
+
+ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
+YELLOW = resolve_world("DM-USAR_yellow")
+OPEN_WORLD = """\
+name: OpenField
+description: an empty 80 x 80 m floor (tests only)
+floor: {center: [0.0, 0.0], size: [80.0, 80.0]}
+start_poses:
+  - {name: Centre, location: [-30.0, 0.0, -1.0], rotation: [0.0, 0.0, 0.0]}
+"""
+
+
+def rest_z(robot) -> float:
+    """Where the chassis origin rests: its lowest wheel or ball touches the floor (Z down)."""
+    low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
+    low += [p.center[2] + p.radius_m for p in robot.chassis if p.shape == "sphere"]
+    return -max(low)
+
+
+@pytest.fixture(scope="module")
+def open_world(tmp_path_factory):
+    p = tmp_path_factory.mktemp("open") / "OpenField.yaml"
+    p.write_text(OPEN_WORLD)
+    return load_world(p)
+
+
+def clearance(world, x: float, y: float) -> float:
+    """Horizontal distance from (x, y) to the nearest static object of the world."""
+    import numpy as np
+
+    from usarsim.sim.frames import euler_to_mat
+
+    best = math.inf
+    for o in world.objects:
+        if o.shape == "box":
+            half = np.abs(euler_to_mat(*o.rotation)) @ (np.array(o.size) / 2.0)
+        else:
+            half = np.abs(euler_to_mat(*o.rotation)) @ np.array([o.radius_m, o.radius_m, o.length_m / 2.0])
+        if o.center[2] - half[2] > -0.05:  # low plates do not block a robot's body
+            continue
+        dx = max(abs(x - o.center[0]) - half[0], 0.0)
+        dy = max(abs(y - o.center[1]) - half[1], 0.0)
+        best = min(best, math.hypot(dx, dy))
+    return best
+
+
+def footprint_radius(robot) -> float:
+    length, width, _ = robot.geometry.dimensions
+    return math.hypot(length, width) / 2.0
+
+
+def _cases():
+    return [pytest.param(path, pose.name, id=f"{path.stem}:{pose.name}")
+            for path in ROBOT_FILES for pose in YELLOW.start_poses]
+
+
+@pytest.mark.parametrize("path, pose_name", _cases())
+def test_robot_lands_on_its_wheels_at_every_start_pose(path: Path, pose_name: str):
+    robot = load_robot(path)
+    pose = YELLOW.start_pose(pose_name)
+    room = clearance(YELLOW, pose.location[0], pose.location[1])
+    if footprint_radius(robot) > room:
+        pytest.skip(f"{robot.class_name} ({footprint_radius(robot):.2f} m from its centre to a corner) does not fit "
+                    f"at {pose_name}, {room:.2f} m from the nearest wall; it lands in the open-field test")
+    sim = Simulation(YELLOW, seed=0)
+    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    sim.advance(2.0)
+    (x0, y0, z0), (roll, pitch, yaw) = sim.pose_of(1)
+    sim.advance(0.5)
+    (x1, y1, z1), _ = sim.pose_of(1)
+    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
+    assert z0 == pytest.approx(rest_z(robot), abs=0.03)
+    assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005  # at rest: no jitter, no creep
+    assert sim.resets == 0
+
+
+@pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
+def test_robot_lands_on_its_wheels_in_the_open(path: Path, open_world):
+    robot = load_robot(path)
+    sim = Simulation(open_world, seed=0)
+    pose = open_world.start_poses[0]
+    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    sim.advance(3.0)
+    (x0, y0, z0), (roll, pitch, _) = sim.pose_of(1)
+    sim.advance(0.5)
+    (x1, y1, z1), _ = sim.pose_of(1)
+    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
+    assert z0 == pytest.approx(rest_z(robot), abs=0.03)
+    assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005
+
+
+@pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
+def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world):
+    robot = load_robot(path)
+    sim = Simulation(open_world, seed=0)
+    pose = open_world.start_poses[0]
+    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    sim.advance(2.0)
+    spin = 0.5 * robot.max_speed_rad_s
+    radius = robot.geometry.wheel_radius_m
+    if robot.drive == "skid":
+        sim.drive_skid(1, spin, spin)
+    elif robot.drive == "ackermann":
+        sim.drive_ackermann(1, spin, 0.0, 0.0)
+    else:
+        drive = [(w.number, spin, 0.0) for w in robot.wheels if w.number >= 0]
+        sim.drive_wheels(1, drive)
+    sim.advance(3.0)
+    (x0, y0, _), _ = sim.pose_of(1)
+    sim.advance(1.0)
+    (x1, y1, _), (_, _, yaw) = sim.pose_of(1)
+    assert x1 - x0 == pytest.approx(spin * radius, rel=0.15), "forward speed"
+    assert abs(y1 - y0) < 0.1 * spin * radius + 0.01 and abs(math.remainder(yaw, 2 * math.pi)) < 0.15
+    # turning left: yaw decreases (protocol.md 3)
+    if robot.drive == "skid":
+        sim.drive_skid(1, -0.3 * robot.max_speed_rad_s, 0.3 * robot.max_speed_rad_s)
+    elif robot.drive == "ackermann":
+        sim.drive_ackermann(1, None, -0.5 * robot.max_front_steer_rad, None)
+    else:
+        sim.drive_wheels(1, [(w.number, (-spin if w.side == "left" else spin), 0.0)
+                             for w in robot.wheels if w.number >= 0])
+    sim.advance(1.0)
+    _, (_, _, y_a) = sim.pose_of(1)
+    sim.advance(1.0)
+    _, (_, _, y_b) = sim.pose_of(1)
+    assert math.remainder(y_b - y_a, 2 * math.pi) < -0.05, "a left turn decreases yaw"
+    assert sim.resets == 0
+
+
+@pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
+def test_robot_conf_and_geo_lines_match_its_file(path: Path, server_factory):
+    robot = load_robot(path)
+    robots_dir = path.parent
+    srv = server_factory(robot_dirs=(str(robots_dir),))
+    c = srv.connect()
+    c.nfo()
+    c.send(f"INIT {{ClassName USARBot.{robot.class_name}}} {{Name R1}} {{Start PlayerStart1}}")
+    c.step(0.2)
+    g = robot.geometry
+    geo = M.format_message(M.RobotGeometry(vehicle_type=robot.vehicle_type, class_name=robot.class_name,
+                                           dimensions=g.dimensions, cog=g.cog, wheel_radius=g.wheel_radius_m,
+                                           wheel_separation=g.wheel_separation_m, wheel_base=g.wheel_base_m))
+    conf = M.format_message(M.RobotConfiguration(
+        vehicle_type=robot.vehicle_type, class_name=robot.class_name, steering_type=robot.steering_type,
+        mass_kg=robot.mass_kg, max_speed=robot.max_speed_rad_s, max_torque=robot.max_torque_nm,
+        max_front_steer=robot.max_front_steer_rad, max_rear_steer=robot.max_rear_steer_rad))
+    assert c.ask("GETGEO {Type Robot}", "GEO").raw.decode() == geo
+    assert c.ask("GETCONF {Type Robot}", "CONF").raw.decode() == conf
+    assert f"{{SteeringType {robot.steering_type}}}" in conf and f"{{Name {robot.class_name}}}" in conf
