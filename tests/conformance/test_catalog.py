@@ -42,7 +42,8 @@ def test_robot_file_validates_and_compiles(path: Path):
     assert resolve_robot(f"USARBot.{r.class_name}").path == resolve_robot(r.class_name).path
     summary = robot_model_summary(r)
     steered = sum(w.steer != "none" for w in r.wheels)
-    assert f"{sum(w.driven for w in r.wheels) + len(r.links) + steered} actuators" in summary
+    rotors = 6 if r.drive == "aerial" else 0
+    assert f"{sum(w.driven for w in r.wheels) + len(r.links) + steered + rotors} actuators" in summary
     for item in r.items:
         assert item.item_type in SENSORS, f"{path.name}: {item.item_type} is not a registered sensor type"
     described = describe_items(r)

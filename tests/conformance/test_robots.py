@@ -26,10 +26,15 @@ start_poses:
 """
 
 
-def rest_z(robot) -> float:
-    """Where the chassis origin rests: its lowest wheel or ball touches the floor (Z down)."""
+def rest_z(robot, spawn_z: float) -> float:
+    """Where the chassis origin rests: its lowest wheel, ball or box touches the floor (Z
+    down); an aerial robot hovers where it was put."""
+    if robot.drive == "aerial":
+        return spawn_z
     low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
     low += [p.center[2] + p.radius_m for p in robot.chassis if p.shape == "sphere"]
+    if robot.drive == "static" or not low:
+        low += [p.center[2] + p.size[2] / 2.0 for p in robot.chassis if p.shape == "box"]
     return -max(low)
 
 
@@ -85,7 +90,7 @@ def test_robot_lands_on_its_wheels_at_every_start_pose(path: Path, pose_name: st
     sim.advance(0.5)
     (x1, y1, z1), _ = sim.pose_of(1)
     assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
-    assert z0 == pytest.approx(rest_z(robot), abs=0.03)
+    assert z0 == pytest.approx(rest_z(robot, pose.location[2]), abs=0.03)
     assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005  # at rest: no jitter, no creep
     assert sim.resets == 0
 
@@ -101,7 +106,7 @@ def test_robot_lands_on_its_wheels_in_the_open(path: Path, open_world):
     sim.advance(0.5)
     (x1, y1, z1), _ = sim.pose_of(1)
     assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
-    assert z0 == pytest.approx(rest_z(robot), abs=0.03)
+    assert z0 == pytest.approx(rest_z(robot, pose.location[2]), abs=0.03)
     assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005
 
 
@@ -112,9 +117,14 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     pose = open_world.start_poses[0]
     sim.spawn(1, robot, "R1", pose.location, pose.rotation)
     sim.advance(2.0)
+    if robot.drive == "static":
+        pytest.skip(f"{robot.class_name} has no drive")
     spin = 0.5 * robot.max_speed_rad_s
     radius = robot.geometry.wheel_radius_m
-    if robot.drive == "skid":
+    if robot.drive == "aerial":  # m/s: "spin" x "radius" is the linear speed
+        spin, radius = 0.5 * robot.aerial.max_linear_m_s, 1.0
+        sim.drive_aerial(1, None, spin, None, None)
+    elif robot.drive == "skid":
         sim.drive_skid(1, spin, spin)
     elif robot.drive == "ackermann":
         sim.drive_ackermann(1, spin, 0.0, 0.0)
@@ -130,6 +140,8 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     # turning left: yaw decreases (protocol.md 3)
     if robot.drive == "skid":
         sim.drive_skid(1, -0.3 * robot.max_speed_rad_s, 0.3 * robot.max_speed_rad_s)
+    elif robot.drive == "aerial":
+        sim.drive_aerial(1, None, None, None, -0.5 * robot.aerial.max_yaw_rate_rad_s)
     elif robot.drive == "ackermann":
         sim.drive_ackermann(1, None, -0.5 * robot.max_front_steer_rad, None)
     else:

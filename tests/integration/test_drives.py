@@ -139,3 +139,33 @@ def test_holonomic_wheel_groups(server_factory, test_world, robots_dir):
     c.step(1.0)
     _, rate, _, _ = motion(c, 1.0)
     assert rate == pytest.approx(0.4 / 0.2, rel=0.1)  # turning on the spot, to the right
+
+
+def test_aerial_drive_hovers_climbs_flies_and_turns(server_factory, test_world):
+    srv = server_factory(world=test_world, seed=3)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.AirRobot} {Name Air} {Location -6,0,-1.0} {Rotation 0,0,0}")
+    lines = c.step(1.0)
+    sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
+    assert re.fullmatch(r"STA \{Type AerialVehicle\} \{Time \d+\.\d{2}\} \{LightToggle False\} \{LightIntensity 0\} "
+                        r"\{Battery \d+\} \{View -1\}", sta), sta
+    gts = ground_truth(lines)
+    assert gts[-1][1][2] == pytest.approx(-1.0, abs=0.01)  # it hovers where it was put
+    c.send("DRIVE {AltitudeVelocity 0.5}")
+    c.step(1.0)
+    lines = c.step(1.0)
+    (_, p0, _), (_, p1, _) = ground_truth(lines)[0], ground_truth(lines)[-1]
+    assert (p0[2] - p1[2]) == pytest.approx(0.5 * 0.9, rel=0.05)  # up is -Z
+    c.send("DRIVE {AltitudeVelocity 0} {LinearVelocity 1.0}")  # the others keep their value
+    c.step(1.0)
+    speed, rate, _, (p0, p1) = motion(c, 1.0)
+    assert speed == pytest.approx(1.0, rel=0.05) and p1[0] > p0[0] and abs(rate) < 0.01
+    c.send("DRIVE {LinearVelocity 0} {RotationalVelocity 50} {Normalized True}")  # 50 % of 100 deg/s
+    c.step(1.0)
+    speed, rate, _, _ = motion(c, 1.0)
+    assert rate == pytest.approx(0.5 * 1.7453, rel=0.05) and speed < 0.05  # clockwise: yaw grows
+    c.send("DRIVE {RotationalVelocity 0}")
+    c.step(1.0)
+    speed, rate, _, _ = motion(c, 1.0)
+    assert speed < 0.01 and abs(rate) < 0.01  # hovering again

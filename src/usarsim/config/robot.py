@@ -17,7 +17,7 @@ Vec3 = tuple[float, float, float]
 
 VEHICLE_TYPES = ("GroundVehicle", "AerialVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform")
 STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive", "None")
-DRIVES = ("skid", "ackermann", "holonomic")
+DRIVES = ("skid", "ackermann", "holonomic", "aerial", "static")
 STEER_GROUPS = ("none", "front", "rear", "free")
 
 
@@ -90,6 +90,18 @@ class Wheel:
 
 
 @dataclass(frozen=True, kw_only=True)
+class AerialLimits:
+    """Speed limits of an aerial robot (protocol.md 5.3d; UDK AirRobot: 2 m/s linear, lateral
+    and vertical, 100 degrees/s of yaw) and how hard its rotors can push."""
+
+    max_linear_m_s: float = 2.0
+    max_lateral_m_s: float = 2.0
+    max_vertical_m_s: float = 2.0
+    max_yaw_rate_rad_s: float = 1.7453
+    max_accel_m_s2: float = 4.0
+
+
+@dataclass(frozen=True, kw_only=True)
 class MountedItem:
     """A sensor (or effecter) entry: its type, name, pose and raw configuration keys.
 
@@ -140,6 +152,7 @@ class RobotConfig:
     wheel_gain: float = 20.0
     wheel_torque_nm: float | None = None
     steer_torque_nm: float = 50.0  # steering servo torque of each steered wheel
+    aerial: AerialLimits = field(default_factory=AerialLimits)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -209,6 +222,15 @@ def load_robot(path: str | Path) -> RobotConfig:
     wheel_gain = top.float("wheel_gain", 20.0, min=0.0, min_exclusive=True)
     wheel_torque = top.float("wheel_torque_nm", None, min=0.0, min_exclusive=True)
     steer_torque = top.float("steer_torque_nm", 50.0, min=0.0, min_exclusive=True)
+    a = top.section("aerial", {})
+    aerial = AerialLimits(max_linear_m_s=a.float("max_linear_m_s", 2.0, min=0.0, min_exclusive=True),
+                          max_lateral_m_s=a.float("max_lateral_m_s", 2.0, min=0.0, min_exclusive=True),
+                          max_vertical_m_s=a.float("max_vertical_m_s", 2.0, min=0.0, min_exclusive=True),
+                          max_yaw_rate_rad_s=a.float("max_yaw_rate_rad_s", 1.7453, min=0.0, min_exclusive=True),
+                          max_accel_m_s2=a.float("max_accel_m_s2", 4.0, min=0.0, min_exclusive=True))
+    a.finish()
+    if top.has("aerial") and drive != "aerial":
+        raise top.error("aerial", "only an aerial robot (drive: aerial) has aerial limits")
 
     g = top.section("geometry")
     geometry = RobotGeometryConfig(
@@ -330,4 +352,4 @@ def load_robot(path: str | Path) -> RobotConfig:
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
-                       mission_packages=tuple(packages))
+                       mission_packages=tuple(packages), aerial=aerial)

@@ -170,6 +170,10 @@ class Session:
         if ackermann:
             self.facade.drive_ackermann(self.uid, cmd.speed, cmd.front_steer, cmd.rear_steer, bool(cmd.normalized),
                                         cmd.light)
+        elif any(v is not None for v in (cmd.altitude_velocity, cmd.linear_velocity, cmd.lateral_velocity,
+                                         cmd.rotational_velocity)):
+            self.facade.drive_aerial(self.uid, cmd.altitude_velocity, cmd.linear_velocity, cmd.lateral_velocity,
+                                     cmd.rotational_velocity, bool(cmd.normalized), cmd.light)
         elif cmd.wheels:
             self.facade.drive_wheels(self.uid, [(w.number, w.speed, w.steer) for w in cmd.wheels],
                                      bool(cmd.normalized), cmd.light)

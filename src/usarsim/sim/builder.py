@@ -188,6 +188,8 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     root.name = f"{prefix}/root"
     for i, piece in enumerate(robot.chassis):
         _add_piece(body, f"{prefix}/chassis{i}", piece, robot)
+    if robot.drive == "aerial":
+        _add_rotors(spec, body, robot, prefix)
     # the headlight (every robot has one, protocol.md 8): a spotlight at the front of the
     # body, looking forward, off until DRIVE {Light True}
     lamp = body.add_light()
@@ -208,6 +210,8 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         lb.name = f"{prefix}/{ln.name}"
         lb.pos = frames.to_mj_vec(ln.location).tolist()
         lb.quat = frames.usar_euler_to_mj_quat(ln.orientation).tolist()
+        if robot.drive == "aerial":
+            lb.gravcomp = 1.0
         j = lb.add_joint()
         j.name = f"{prefix}/{ln.name}"
         j.type = mujoco.mjtJoint.mjJNT_HINGE if ln.joint == "revolute" else mujoco.mjtJoint.mjJNT_SLIDE
@@ -261,6 +265,37 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
             ex = spec.add_exclude()
             ex.bodyname1, ex.bodyname2 = a_name, b_name
     return body
+
+
+# Aerial robots hover: gravity is compensated on their bodies, and velocity servos on a
+# site at the chassis origin push along and turn about its axes (forward, left, up in
+# MuJoCo's frame) with up to max_accel_m_s2 x mass; roll and pitch are damped.
+AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
+
+
+def _add_rotors(spec, body, robot, prefix: str) -> None:
+    body.gravcomp = 1.0
+    site = body.add_site()
+    site.name = f"{prefix}/rotors"
+    force = robot.aerial.max_accel_m_s2 * robot.mass_kg
+    dims = robot.geometry.dimensions
+    inertia = robot.mass_kg * (dims[0] ** 2 + dims[1] ** 2) / 12.0
+    for i, axis in enumerate(AERIAL_AXES):
+        a = spec.add_actuator()
+        a.name = f"{prefix}/{axis}"
+        a.target = f"{prefix}/rotors"
+        a.trntype = mujoco.mjtTrn.mjTRN_SITE
+        gear = [0.0] * 6
+        gear[i] = 1.0
+        a.gear = gear
+        limit = force if i < 3 else 4.0 * inertia * robot.aerial.max_yaw_rate_rad_s / 0.25
+        kv = limit / (0.25 * (robot.aerial.max_linear_m_s if i < 3 else robot.aerial.max_yaw_rate_rad_s))
+        a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        a.gainprm[0] = kv
+        a.biasprm[0], a.biasprm[1], a.biasprm[2] = 0.0, 0.0, -kv
+        a.forcelimited = 1
+        a.forcerange = [-limit, limit]
 
 
 # Joint servo (manual 3.2.3: a joint is driven at its speed towards a target angle, with

@@ -85,6 +85,10 @@ class SimFacade:
     def drive_ackermann(self, uid: int, speed, front, rear, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_ackermann(uid, speed, front, rear, normalized, light)))
 
+    def drive_aerial(self, uid: int, altitude, linear, lateral, rotational, normalized: bool, light) -> None:
+        self.runner.submit(Request(
+            lambda sim: sim.drive_aerial(uid, altitude, linear, lateral, rotational, normalized, light)))
+
     def drive_wheels(self, uid: int, wheels, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_wheels(uid, wheels, normalized, light)))
 

@@ -43,6 +43,7 @@ BATTERY_LOAD_FACTOR = 1.0
 FLIP_TIME_S = 3.0
 FLIP_MARGIN = 2.5
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
+AERIAL_LEVEL_STIFFNESS = 20.0  # N m per rad of tilt per kg: hovering robots right themselves
 # What a physics step changes: kept before each stretch of steps to replay it on a blow-up.
 STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
@@ -105,6 +106,7 @@ class SimRobot:
     front_steer: float = 0.0  # Ackermann: commanded axle angles, rad (positive: right)
     rear_steer: float = 0.0
     wheel_steer: dict = field(default_factory=dict)  # holonomic: wheel name -> angle
+    fly: dict = field(default_factory=lambda: {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0})
 
     battery_used_s: float = 0.0
     rated_power_w: float = 1.0
@@ -159,6 +161,7 @@ class Simulation:
         self._good_qpos: np.ndarray | None = None
         self._actuator_owner: np.ndarray | None = None
         self._owner_count = 1
+        self._aerial = False
         # CONF fields that changed at run time (a camera's zoom), by (robot id, type, name);
         # read by the server thread (plain dict reads and replacements are atomic)
         self.live_conf: dict[tuple[int, str, str], tuple] = {}
@@ -200,9 +203,15 @@ class Simulation:
                     rated += ln.max_torque * ln.max_speed
                 else:
                     rated += r.config.wheel_torque_limit_nm * r.config.max_speed_rad_s
+            lim = r.config.aerial
+            for axis, a in r.handle.rotor.items():
+                owners[a] = i
+                if axis in ("linear", "lateral", "vertical"):
+                    rated += lim.max_accel_m_s2 * r.config.mass_kg * lim.max_linear_m_s
             r.rated_power_w = max(rated, 1e-6)
         self._actuator_owner = owners
         self._owner_count = len(self.robots) + 1
+        self._aerial = any(r.config.drive == "aerial" for r in self.robots.values())
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
         r.handle.resolve(self.model, r.config.wheels, r.config.links)
@@ -339,6 +348,40 @@ class Simulation:
             dims = r.config.geometry.dimensions
             torque = FLIP_MARGIN * r.config.mass_kg * self.world.gravity_m_s2 * max(dims[1], dims[2]) / 2.0
             d.xfrc_applied[b, 3:] = axis / n * torque
+
+    def drive_aerial(self, uid: int, altitude: float | None, linear: float | None, lateral: float | None,
+                     rotational: float | None, normalized: bool = False, light: bool | None = None) -> None:
+        """``DRIVE {AltitudeVelocity} {LinearVelocity} {LateralVelocity} {RotationalVelocity}``
+        (protocol.md 5.3d): m/s up, forward, right and rad/s clockwise; unsent ones keep
+        their value; limited to the robot's maxima (percentages of them when Normalized);
+        all zero: hover."""
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty:
+            return
+        if light is not None:
+            r.light = bool(light)
+        if r.config.drive != "aerial":
+            return
+        lim = r.config.aerial
+        for key, value, top in (("altitude", altitude, lim.max_vertical_m_s), ("linear", linear, lim.max_linear_m_s),
+                                ("lateral", lateral, lim.max_lateral_m_s),
+                                ("rotational", rotational, lim.max_yaw_rate_rad_s)):
+            if value is not None and math.isfinite(value):
+                v = value * top / 100.0 if normalized else value
+                r.fly[key] = max(-top, min(top, v))
+        self._apply_ctrl(r)
+
+    def _level_aerial(self) -> None:
+        """Keep hovering robots level: a restoring torque towards upright (their roll and
+        pitch rates are damped by their servos)."""
+        d = self.data
+        for r in self.robots.values():
+            if not r.handle.rotor:
+                continue
+            b = r.handle.body_id
+            up = d.xmat[b].reshape(3, 3)[:, 2]
+            torque = np.cross(up, np.array([0.0, 0.0, 1.0])) * (AERIAL_LEVEL_STIFFNESS * r.config.mass_kg)
+            d.xfrc_applied[b, 3:] = torque
 
     def drive_ackermann(self, uid: int, speed: float | None, front: float | None, rear: float | None,
                         normalized: bool = False, light: bool | None = None) -> None:
@@ -478,6 +521,16 @@ class Simulation:
         if r.handle.light >= 0:
             self.model.light_active[r.handle.light] = bool(r.light) and not r.battery_empty
         ctrl = self.data.ctrl
+        if r.handle.rotor:
+            f = r.fly if not r.battery_empty else dict.fromkeys(r.fly, 0.0)
+            rot = r.handle.rotor
+            # MuJoCo's site axes: x forward, y left, z up; USARSim's lateral is to the right and
+            # its yaw clockwise seen from above
+            ctrl[rot["linear"]] = f["linear"]
+            ctrl[rot["lateral"]] = -f["lateral"]
+            ctrl[rot["vertical"]] = f["altitude"]
+            ctrl[rot["yaw"]] = -f["rotational"]
+            ctrl[rot["roll"]] = ctrl[rot["pitch"]] = 0.0
         drive = r.config.drive
         for w in r.config.wheels:
             if w.steer != "none":
@@ -566,6 +619,8 @@ class Simulation:
             self.entities.update(d, self.time)
         if any(r.flip_until >= 0 for r in self.robots.values()):
             self._apply_flips()
+        if self._aerial:
+            self._level_aerial()
         if self._snapshot is None or self._snapshot.size != mujoco.mj_stateSize(m, STATE):
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
         mujoco.mj_getState(m, d, self._snapshot, STATE)

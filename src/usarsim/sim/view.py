@@ -156,6 +156,7 @@ class RobotHandle:
         self.actuator: dict[str, int] = {}
         self.part_body: dict[str, int] = {}  # named parts items can be mounted on (wheels, links)
         self.light = -1  # the headlight
+        self.rotor: dict[str, int] = {}  # aerial robots: actuator per axis
         self.steer_qpos: dict[str, int] = {}  # steered wheels: steering joint position
         self.steer_actuator: dict[str, int] = {}
 
@@ -170,6 +171,12 @@ class RobotHandle:
         self.actuator.clear()
         self.part_body.clear()
         self.light = m.light(f"{self.prefix}/headlight").id
+        self.rotor.clear()
+        if _has_site(m, f"{self.prefix}/rotors"):
+            from usarsim.sim.builder import AERIAL_AXES
+
+            for axis in AERIAL_AXES:
+                self.rotor[axis] = m.actuator(f"{self.prefix}/{axis}").id
         self.steer_qpos.clear()
         self.steer_actuator.clear()
         for w in wheels:
@@ -212,6 +219,10 @@ class RobotHandle:
         rot = d.xmat[body].reshape(3, 3)
         pos = d.xpos[body] + rot @ frames.to_mj_vec(location)
         return pos, rot @ frames.usar_euler_to_mj_mat(orientation)
+
+
+def _has_site(m: mujoco.MjModel, name: str) -> bool:
+    return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, name) >= 0
 
 
 def unit_dirs_yaw_pitch(yaws: np.ndarray, pitches: np.ndarray) -> np.ndarray:
