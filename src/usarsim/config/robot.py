@@ -153,6 +153,7 @@ class RobotConfig:
     wheel_torque_nm: float | None = None
     steer_torque_nm: float = 50.0  # steering servo torque of each steered wheel
     aerial: AerialLimits = field(default_factory=AerialLimits)
+    status_joints: tuple[str, ...] = ()  # links whose angles STA reports (TeleMax flippers, protocol.md 6.2)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -305,6 +306,11 @@ def load_robot(path: str | Path) -> RobotConfig:
             raise top.error("wheels", "a holonomic robot's steered wheels (steer: free) need distinct numbers "
                                       "(number: 0, 1, ...), the WheelNumber of its DRIVE")
 
+    status_joints = tuple(str(x) for x in top.list("status_joints", []))
+    for j in status_joints:
+        if j not in lnames:
+            raise top.error("status_joints", f"unknown link '{j}'{did_you_mean(j, lnames)}")
+
     packages: list[MissionPackage] = []
     for i, raw in enumerate(top.list("mission_packages", [])):
         s = Section(raw, path=path, key=f"mission_packages[{i}]")
@@ -352,4 +358,4 @@ def load_robot(path: str | Path) -> RobotConfig:
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
-                       mission_packages=tuple(packages), aerial=aerial)
+                       mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints)

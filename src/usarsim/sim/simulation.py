@@ -752,8 +752,9 @@ class Simulation:
             ra = [float(q[r.handle.steer_qpos[w.name]]) for w in r.config.wheels if w.steer == "rear"]
             front = sum(fa) / len(fa) if fa else 0.0
             rear = sum(ra) / len(ra) if ra else 0.0
+        joints = tuple((n, float(self.data.qpos[r.handle.joint_qpos[n]])) for n in r.config.status_joints)
         return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
-                           front_steer=front, rear_steer=rear, light_toggle=r.light,
+                           front_steer=front, rear_steer=rear, joints=joints, light_toggle=r.light,
                            light_intensity=100 if r.light else 0, view=-1)
 
     def take_outputs(self) -> list[Output]:
