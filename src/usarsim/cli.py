@@ -192,7 +192,7 @@ def cmd_robots(args) -> int:
     for name, path in robot_files().items():
         r = load_robot(path)
         kit = ", ".join(sorted({i.item_type for i in r.items}))
-        print(f"{r.class_name}  {r.steering_type}  {kit}")
+        print(f"{r.class_name}  {r.drive} ({r.steering_type})  {kit}")
     return 0
 
 

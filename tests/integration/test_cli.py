@@ -117,7 +117,7 @@ def test_worlds_and_robots_list_the_shipped_files():
     robots = usarsim("robots")
     assert worlds.returncode == 0 and robots.returncode == 0
     assert worlds.stdout.startswith("DM-USAR_yellow ")
-    assert re.search(r"^P2AT\s+SkidSteered\s+.*RangeScanner", robots.stdout, re.M)
+    assert re.search(r"^P2AT\s+skid \(SkidSteered\)\s+.*RangeScanner", robots.stdout, re.M)
 
 
 def test_no_command_prints_help_and_exits_2():
