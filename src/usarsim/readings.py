@@ -225,6 +225,15 @@ class PackageState:
 
 
 @dataclass(frozen=True, slots=True)
+class EffecterState:
+    """EFF: an effecter's state (``OPEN``/``CLOSED`` for a gripper, protocol.md 6.6)."""
+
+    effecter_type: str
+    name: str
+    status: str
+
+
+@dataclass(frozen=True, slots=True)
 class ZoomResult:
     """The outcome of ``SET {Type Camera} {Opcode Zoom}``: (name, fov, status) per camera."""
 

@@ -107,7 +107,8 @@ def test_p2at_lands_on_its_wheels_at_every_start_pose(worlds, path, pose_name):
 def _probe_run(tmp_path, sensor_type: str, seed: int, seconds: float):
     p2at = (ROBOTS_DIR / "P2AT.yaml").read_text()
     head = p2at.split("\nsensors:")[0].replace("class_name: P2AT", "class_name: Probe")
-    text = head + f"\nsensors:\n  - {{type: {sensor_type}, name: Probe1, location: [0.1, 0.0, -0.1]}}\n"
+    extra = ", fingers: [CameraPanTilt_Link2]" if sensor_type == "Gripper" else ""  # a gripper needs finger links
+    text = head + f"\nsensors:\n  - {{type: {sensor_type}, name: Probe1, location: [0.1, 0.0, -0.1]{extra}}}\n"
     path = tmp_path / f"Probe{seed}.yaml"
     path.write_text(text)
     robot = load_robot(path)

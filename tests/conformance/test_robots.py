@@ -19,8 +19,8 @@ ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
 YELLOW = resolve_world("DM-USAR_yellow")
 OPEN_WORLD = """\
 name: OpenField
-description: an empty 80 x 80 m floor (tests only)
-floor: {center: [0.0, 0.0], size: [80.0, 80.0]}
+description: an empty 2 x 2 km floor, room for a car at speed (tests only)
+floor: {center: [0.0, 0.0], size: [2000.0, 2000.0]}
 start_poses:
   - {name: Centre, location: [-30.0, 0.0, -1.0], rotation: [0.0, 0.0, 0.0]}
 """
@@ -131,7 +131,8 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     else:
         drive = [(w.number, spin, 0.0) for w in robot.wheels if w.number >= 0]
         sim.drive_wheels(1, drive)
-    sim.advance(3.0)
+    # time to reach the speed: at least 3 s, more for a fast car accelerating at 0.3 g
+    sim.advance(max(3.0, spin * radius / (0.3 * 9.81) + 1.0))
     (x0, y0, _), _ = sim.pose_of(1)
     sim.advance(1.0)
     (x1, y1, _), (_, _, yaw) = sim.pose_of(1)

@@ -58,3 +58,88 @@ def test_flip_rights_an_overturned_robot_and_is_ignored_when_upright(server):
     c.step(2.0)
     after = server.on_sim(lambda sim: sim.pose_of(1))
     assert math.dist(before[0], after[0]) < 0.01
+
+
+
+TEST_GRIPPER = """\
+class_name: TestGripper
+description: a small robot with a lift and a two-finger gripper (tests only)
+vehicle_type: GroundVehicle
+steering_type: SkidSteered
+drive: skid
+mass_kg: 12.6
+max_speed_rad_s: 5.0
+max_torque_nm: 60.0
+wheel_torque_nm: 6.0
+geometry: {dimensions: [0.5, 0.4, 0.3], wheel_radius: 0.1, wheel_separation: 0.4, wheel_base: 0.3}
+chassis:
+  - {center: [0.0, 0.0, 0.0], size: [0.5, 0.3, 0.15], mass_kg: 10.0}
+wheels:
+  - {name: LF, position: [0.15, -0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: left}
+  - {name: RF, position: [0.15, 0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}
+  - {name: LR, position: [-0.15, -0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: left}
+  - {name: RR, position: [-0.15, 0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}
+links:
+  - {name: Lift, location: [0.33, 0.0, 0.0], joint: prismatic, axis: [0, 0, -1], min_range: 0.0, max_range: 0.2,
+     max_speed: 0.1, max_torque: 100.0, armature: 0.5, shapes: [{center: [-0.05, 0.0, 0.0], size: [0.04, 0.2, 0.04], mass_kg: 0.3}]}
+  - {name: LeftFinger, parent: Lift, location: [0.15, -0.06, 0.08], joint: prismatic, axis: [0, -1, 0], min_range: -0.05,
+     max_range: 0.05, max_speed: 0.1, max_torque: 30.0, armature: 0.2,
+     shapes: [{center: [0.0, 0.0, 0.0], size: [0.1, 0.01, 0.08], mass_kg: 0.1, friction: 2.0}]}
+  - {name: RightFinger, parent: Lift, location: [0.15, 0.06, 0.08], joint: prismatic, axis: [0, 1, 0], min_range: -0.05,
+     max_range: 0.05, max_speed: 0.1, max_torque: 30.0, armature: 0.2,
+     shapes: [{center: [0.0, 0.0, 0.0], size: [0.1, 0.01, 0.08], mass_kg: 0.1, friction: 2.0}]}
+mission_packages:
+  - {name: Lifter, links: [Lift]}
+sensors:
+  - {type: Gripper, name: Gripper1, fingers: [LeftFinger, RightFinger], open_value: 0.02, closed_value: -0.04}
+  - {type: GroundTruth, name: GroundTruth}
+"""
+GRIP_WORLD = """\
+name: GripArena
+description: a brick in front of a robot with a gripper (tests only)
+floor: {center: [0, 0], size: [10, 10]}
+materials: {brick: {rgba: [0.8, 0.3, 0.2, 1], friction: 1.0}}
+objects:
+  - {name: brick, shape: box, center: [0.48, 0.0, -0.03], size: [0.1, 0.06, 0.06], mass_kg: 0.2, material: brick}
+start_poses:
+  - {name: Here, location: [0.0, 0.0, -0.2], rotation: [0, 0, 0]}
+"""
+
+
+def test_the_gripper_grasps_and_lifts_a_brick(server_factory, tmp_path):
+    import re
+
+    from usarsim.config.world import load_world
+
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "robots" / "TestGripper.yaml").write_text(TEST_GRIPPER)
+    (tmp_path / "GripArena.yaml").write_text(GRIP_WORLD)
+    srv = server_factory(world=load_world(tmp_path / "GripArena.yaml"), robot_dirs=(str(tmp_path / "robots"),))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.TestGripper} {Name R1} {Location 0,0,-0.15} {Rotation 0,0,0}")
+    c.step(2.0)
+
+    def brick_z():
+        return srv.on_sim(lambda sim: float(sim.data.xpos[sim.model.body("movable/brick").id][2]))
+
+    def set_and_step(line, seconds):
+        c.send(line)
+        return [ln.text for ln in c.step(seconds) if ln.text.startswith(("RES", "EFF"))]
+
+    got = set_and_step("SET {Type Gripper} {Name Gripper1} {Opcode Open}", 1.0)
+    assert re.fullmatch(r"RES \{Time \d+\.\d{2}\} \{Type Gripper\} \{Name Gripper1\} \{Status OK\}", got[0]), got
+    assert re.fullmatch(r"EFF \{Time \d+\.\d+\} \{Type Gripper\} \{Name Gripper1\} \{Status OPEN\}", got[1]), got
+    z0 = brick_z()
+    got = set_and_step("SET {Type Gripper} {Name Gripper1} {Opcode Close}", 1.5)
+    assert got[1].endswith("{Status CLOSED}")
+    c.send("MISPKG {Name Lifter} {Link 1} {Value 0.15}")
+    c.step(2.5)
+    assert brick_z() - z0 > 0.10  # lifted by more than 10 cm
+    c.step(1.0)
+    assert brick_z() - z0 > 0.10  # and held
+    got = set_and_step("SET {Type Gripper} {Name Gripper1} {Opcode Grip} {Params 0}", 1.5)  # Grip 0 opens
+    assert got[1].endswith("{Status OPEN}")
+    assert brick_z() - z0 < 0.02  # dropped back onto the floor
+    assert set_and_step("SET {Type Gripper} {Name Gripper1} {Opcode Squeeze}", 0.1)[0].endswith("{Status Failed}")
+    assert c.ask("GETCONF {Type Gripper}", "CONF").text == "CONF {Type Gripper} {Name Gripper1}"

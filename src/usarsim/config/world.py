@@ -40,6 +40,7 @@ class StaticObject:
     length_m: float = 0.0  # cylinder, along its own Z axis
     rotation: Vec3 = (0.0, 0.0, 0.0)
     material: str = "default"
+    mass_kg: float = 0.0  # > 0: a movable object (a brick, a pipe) that robots can push and lift
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -186,12 +187,14 @@ def load_world(path: str | Path) -> WorldConfig:
         rotation = s.vec("rotation", 3, (0.0, 0.0, 0.0))
         material = s.str("material", "default")
         check_material(s, "material", material)
+        mass = s.float("mass_kg", 0.0, min=0.0)
         if shape == "box":
             obj = StaticObject(name=oname, shape=shape, center=center, size=s.vec("size", 3, positive=True),
-                               rotation=rotation, material=material)
+                               rotation=rotation, material=material, mass_kg=mass)
         else:
             obj = StaticObject(name=oname, shape=shape, center=center, radius_m=s.float("radius", min=0.001),
-                               length_m=s.float("length", min=0.001), rotation=rotation, material=material)
+                               length_m=s.float("length", min=0.001), rotation=rotation, material=material,
+                               mass_kg=mass)
         s.finish()
         objects.append(obj)
 

@@ -16,7 +16,7 @@ from typing import Any
 
 from usarsim.protocol import messages as M
 from usarsim.protocol.framing import LineBuffer
-from usarsim.readings import CommandResult, PackageState, RobotStatus, ZoomResult
+from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus, ZoomResult
 from usarsim.server.session import CLOSED, Session
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.simulation import Output
@@ -35,6 +35,8 @@ def output_to_message(o: Output) -> Any:
         return M.GroundVehicleStatus(time=o.time, front_steer=v.front_steer, rear_steer=v.rear_steer, joints=v.joints,
                                      light_toggle=v.light_toggle, light_intensity=v.light_intensity,
                                      battery_s=v.battery_s, view=v.view, vehicle_type=v.vehicle_type)
+    if isinstance(v, EffecterState):
+        return M.EffecterStatus(time=o.time, effecter_type=v.effecter_type, name=v.name, status=v.status)
     if isinstance(v, PackageState):
         return M.MisPkgStatus(time=o.time, name=v.name,
                               links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))

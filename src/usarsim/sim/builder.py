@@ -12,7 +12,7 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.sim import frames
-from usarsim.sim.view import GROUP_ROBOT, GROUP_STATIC, GROUP_WHEEL
+from usarsim.sim.view import GROUP_MOVABLE, GROUP_ROBOT, GROUP_STATIC, GROUP_WHEEL
 
 # Collision classes (MuJoCo contype/conaffinity bits): world geometry and chassis
 # collide with everything; wheels collide with world geometry and chassis but not
@@ -59,10 +59,22 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
 
     for obj in world.objects:
         mat = world.materials[obj.material]
-        g = s.worldbody.add_geom()
+        if obj.mass_kg > 0:  # a movable object: a free body of its own
+            holder = s.worldbody.add_body()
+            holder.name = f"movable/{obj.name}"
+            holder.pos = frames.to_mj_vec(obj.center).tolist()
+            holder.quat = frames.usar_euler_to_mj_quat(obj.rotation).tolist()
+            fj = holder.add_freejoint()
+            fj.name = f"movable/{obj.name}"
+            g = holder.add_geom()
+            g.mass = obj.mass_kg
+            g.group = GROUP_MOVABLE
+        else:
+            g = s.worldbody.add_geom()
+            g.pos = frames.to_mj_vec(obj.center).tolist()
+            g.quat = frames.usar_euler_to_mj_quat(obj.rotation).tolist()
+            g.group = GROUP_STATIC
         g.name = f"world/{obj.name}"
-        g.pos = frames.to_mj_vec(obj.center).tolist()
-        g.quat = frames.usar_euler_to_mj_quat(obj.rotation).tolist()
         if obj.shape == "box":
             g.type = mujoco.mjtGeom.mjGEOM_BOX
             g.size = [obj.size[0] / 2.0, obj.size[1] / 2.0, obj.size[2] / 2.0]
@@ -71,7 +83,6 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
             g.size = [obj.radius_m, obj.length_m / 2.0, 0.0]
         g.rgba = list(mat.rgba)
         g.friction = [mat.friction, SPIN_FRICTION, ROLL_FRICTION]
-        g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
     for v in world.victims:

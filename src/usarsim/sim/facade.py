@@ -103,9 +103,10 @@ class SimFacade:
 
     def operate(self, uid: int, item_type, name, opcode, params) -> None:
         def action(sim: Simulation):
+            before = len(sim.outbox)
             res = sim.operate(uid, item_type, name, opcode, params)
-            if res is not None:
-                sim.outbox.append(Output(uid, sim.time, res, "RES", periodic=False))
+            if res is not None:  # the RES first, then whatever the operation reported (EFF)
+                sim.outbox.insert(before, Output(uid, sim.time, res, "RES", periodic=False))
 
         self.runner.submit(Request(action))
 

@@ -8,6 +8,7 @@ This object is used from one thread only (the simulation thread, see
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import itertools
 import logging
@@ -21,7 +22,7 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.errors import ConfigError, SimulationError
-from usarsim.readings import CommandResult, PackageState, RobotStatus
+from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus
 from usarsim.sensors import Sensor, make_sensor
 from usarsim.sim import builder
 from usarsim.sim.entities import Entities
@@ -44,6 +45,12 @@ FLIP_TIME_S = 3.0
 FLIP_MARGIN = 2.5
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
 AERIAL_LEVEL_STIFFNESS = 20.0  # N m per rad of tilt per kg: hovering robots right themselves
+def sane_velocity(robot: RobotConfig) -> float:
+    """Above this speed (m/s or rad/s) a joint of ``robot`` has blown up: MAX_SANE_VELOCITY, or
+    three times its top wheel speed for fast vehicles (a car's wheels spin at 180 rad/s)."""
+    return max(MAX_SANE_VELOCITY, 3.0 * robot.max_speed_rad_s)
+
+
 # What a physics step changes: kept before each stretch of steps to replay it on a blow-up.
 STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
@@ -162,6 +169,7 @@ class Simulation:
         self._actuator_owner: np.ndarray | None = None
         self._owner_count = 1
         self._aerial = False
+        self._sane = MAX_SANE_VELOCITY
         # CONF fields that changed at run time (a camera's zoom), by (robot id, type, name);
         # read by the server thread (plain dict reads and replacements are atomic)
         self.live_conf: dict[tuple[int, str, str], tuple] = {}
@@ -212,6 +220,7 @@ class Simulation:
         self._actuator_owner = owners
         self._owner_count = len(self.robots) + 1
         self._aerial = any(r.config.drive == "aerial" for r in self.robots.values())
+        self._sane = max([MAX_SANE_VELOCITY] + [sane_velocity(r.config) for r in self.robots.values()])
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
         r.handle.resolve(self.model, r.config.wheels, r.config.links)
@@ -580,7 +589,12 @@ class Simulation:
             return None
         for s in r.sensors:
             if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
-                status = s.operate(self.view(), opcode or "", params) if opcode else None
+                view = dataclasses.replace(self.view(), drive_joint=lambda n, v, o: self.drive_joint(uid, n, v, o))
+                status = s.operate(view, opcode or "", params) if opcode else None
+                state = getattr(s, "effecter_state", None)
+                if status is not None and state is not None:
+                    self.outbox.append(Output(uid, self.time, EffecterState(s.TYPE, s.name, state()),
+                                              f"EFF:{s.name}", periodic=False))
                 if s.LIVE_CONF:
                     self.live_conf[(uid, s.TYPE, s.name)] = s.conf_fields()
                 if status is None:
@@ -646,7 +660,7 @@ class Simulation:
         d = self.data
         if d.qvel.size == 0:
             return True
-        return float(np.abs(d.qvel).max()) < MAX_SANE_VELOCITY and math.isfinite(float(d.qpos.sum()))
+        return float(np.abs(d.qvel).max()) < self._sane and math.isfinite(float(d.qpos.sum()))
 
     def _repair(self) -> None:
         """Put every robot whose state is not finite, or whose joints move faster than
@@ -659,7 +673,7 @@ class Simulation:
             nq, nv = 7 + len(h.joint_qpos), 6 + len(h.joint_qvel)
             qs, vs = slice(h.root_qpos, h.root_qpos + nq), slice(h.root_qvel, h.root_qvel + nv)
             v = d.qvel[vs]
-            if np.isfinite(v).all() and np.isfinite(d.qpos[qs]).all() and float(np.abs(v).max()) < MAX_SANE_VELOCITY:
+            if np.isfinite(v).all() and np.isfinite(d.qpos[qs]).all() and float(np.abs(v).max()) < sane_velocity(r.config):
                 continue
             self.resets += 1
             r.resets += 1

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import mujoco
 import numpy as np
@@ -135,6 +135,8 @@ class WorldView:
     caster: RayCaster
     world: "WorldConfig | None" = None
     entities: "Entities | None" = None
+    # for effecters: drive_joint(name, value, order) on the operating robot's joints
+    drive_joint: "Callable[[str, float, int], bool] | None" = None
 
     @property
     def geo(self) -> "GeoReference":
