@@ -143,9 +143,15 @@ def answer(client: Client, data: bytes) -> list[bytes]:
     return [ln.raw for ln in got[:-1]]
 
 
+WORLDS = Path(__file__).parent / "worlds"
+
+
 def world_of(t: Transcript):
+    """A shipped world by name, or a world file of tests/golden/worlds."""
     from usarsim.config.catalog import resolve_world
 
+    if (WORLDS / f"{t.world}.yaml").exists():
+        return resolve_world(str(WORLDS / f"{t.world}.yaml"))
     return resolve_world(t.world)
 
 
