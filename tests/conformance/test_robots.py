@@ -29,8 +29,8 @@ start_poses:
 def rest_z(robot, spawn_z: float) -> float:
     """Where the chassis origin rests: its lowest wheel, ball or box touches the floor (Z
     down); an aerial robot hovers where it was put."""
-    if robot.drive == "aerial":
-        return spawn_z
+    if robot.drive == "aerial":  # put no lower than it stands (the simulation lifts it)
+        return min(spawn_z, -robot.lowest_point_m - 0.005)
     low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
     low += [p.center[2] + p.radius_m for p in robot.chassis if p.shape == "sphere"]
     if robot.drive == "static" or not low:

@@ -167,6 +167,26 @@ class RobotConfig:
         return (sum(c.mass_kg for c in self.chassis) + sum(w.mass_kg for w in self.wheels)
                 + sum(sh.mass_kg for ln in self.links for sh in ln.shapes))
 
+    @property
+    def lowest_point_m(self) -> float:
+        """How far below its origin the robot reaches when level (its wheels, balls, boxes
+        and capsules on the chassis): where it stands on a floor (Z down, positive)."""
+        low = [w.position[2] + w.radius_m for w in self.wheels if w.parent == "chassis"]
+        for p in self.chassis:
+            if p.shape == "box":
+                low.append(p.center[2] + p.size[2] / 2.0)
+            elif p.shape == "sphere":
+                low.append(p.center[2] + p.radius_m)
+            else:  # cylinders and capsules along their own (rotated) Z axis
+                import math
+
+                r, pch, _ = p.rotation
+                axis_z = abs(math.cos(r) * math.cos(pch))  # how vertical the axis is
+                lean = math.sqrt(max(0.0, 1.0 - axis_z ** 2))
+                extra = p.radius_m if p.shape == "capsule" else p.radius_m * lean
+                low.append(p.center[2] + p.length_m / 2.0 * axis_z + extra)
+        return max(low) if low else 0.0
+
     def link(self, name: str) -> Link | None:
         for ln in self.links:
             if ln.name == name:

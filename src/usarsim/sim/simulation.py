@@ -246,6 +246,9 @@ class Simulation:
                 f"y within {fl.center[1] - fl.size[1] / 2:.2f}..{fl.center[1] + fl.size[1] / 2:.2f})")
         if not (-100.0 <= loc[2] <= 100.0):
             raise SimulationError(f"location z {loc[2]:.2f} is too far from the floor (allowed -100..100 m)")
+        # a level robot put lower than it stands (its wheels in the floor) is lifted onto it
+        if abs(rot[0]) < 1e-6 and abs(rot[1]) < 1e-6 and loc[2] > -robot.lowest_point_m:
+            loc = (loc[0], loc[1], -robot.lowest_point_m - 0.005)
         prefix = f"robot{uid}"
         try:
             sensors = [make_sensor(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
