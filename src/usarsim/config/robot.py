@@ -61,6 +61,7 @@ class Link:
     max_torque: float
     shapes: tuple[ChassisBox, ...] = ()
     armature: float = 0.05  # reflected inertia of the geared drive, kg m^2 (or kg)
+    collide: bool = True  # False: its shapes touch nothing (a small pan-tilt on top of a robot)
 
     @property
     def limited(self) -> bool:
@@ -303,7 +304,7 @@ def load_robot(path: str | Path) -> RobotConfig:
                           min_range=s.float("min_range", 1.0), max_range=s.float("max_range", 0.0),
                           max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
                           max_torque=s.float("max_torque", min=0.0, min_exclusive=True), shapes=shapes,
-                          armature=s.float("armature", 0.05, min=0.0)))
+                          armature=s.float("armature", 0.05, min=0.0), collide=s.bool("collide", True)))
         lnames.add(lname)
         s.finish()
 

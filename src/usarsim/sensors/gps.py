@@ -149,6 +149,8 @@ class Constellation:
         ])
         self.directions0 = lattice @ rot.T
         self.period_s = float(period_s)
+        self._cache_key: tuple[float, float] | None = None
+        self._cache = np.empty((0, 3))
 
     def directions_enu(self, time_s: float, latitude_deg: float) -> np.ndarray:
         """Unit vectors (n x 3: east, north, up) towards every satellite at ``time_s``
@@ -162,9 +164,14 @@ class Constellation:
     def directions_mj(self, time_s: float, latitude_deg: float) -> np.ndarray:
         """The same directions in the MuJoCo world frame: east-north-up (e, n, u) is
         (n, e, -u) in the USARSim frame (X north, Y east, Z down), which is (n, -e, u)
-        in MuJoCo's (frames.py)."""
-        enu = self.directions_enu(time_s, latitude_deg)
-        return np.stack([enu[:, 1], -enu[:, 0], enu[:, 2]], axis=-1)
+        in MuJoCo's (frames.py).  The sky is taken at whole simulated seconds (it turns
+        by 0.15 mrad a second) and kept for the next calls."""
+        key = (math.floor(time_s), latitude_deg)
+        if self._cache_key != key:
+            enu = self.directions_enu(float(key[0]), latitude_deg)
+            self._cache = np.stack([enu[:, 1], -enu[:, 0], enu[:, 2]], axis=-1)
+            self._cache_key = key
+        return self._cache
 
 
 SKY = Constellation()

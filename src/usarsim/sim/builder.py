@@ -233,7 +233,9 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
             j.range = [ln.min_range, ln.max_range]
         if ln.shapes:
             for k, piece in enumerate(ln.shapes):
-                _add_piece(lb, f"{prefix}/{ln.name}/{k}", piece, robot)
+                g = _add_piece(lb, f"{prefix}/{ln.name}/{k}", piece, robot)
+                if not ln.collide:
+                    g.contype = g.conaffinity = 0
         else:  # a massless link would make the joint singular: a small point mass
             lb.mass = 0.01
             lb.inertia = [1e-5, 1e-5, 1e-5]
@@ -418,6 +420,7 @@ def _add_piece(body, name: str, piece, robot) -> None:
     g.rgba = [0.75, 0.1, 0.1, 1.0]
     g.group = GROUP_ROBOT
     g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+    return g
 
 
 def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:

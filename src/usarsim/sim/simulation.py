@@ -39,11 +39,12 @@ MAX_SANE_VELOCITY = 100.0
 BATTERY_LOAD_FACTOR = 1.0
 # Self-righting (DRIVE {Flip True}, protocol.md 8): UT2004's KRobot applied FlipTorque for
 # FlipTime = 3 s to an overturned robot.  The torque here rolls the robot about the axis
-# that brings its top up, sized to lift its weight at half its width or height, 2.5 times
-# over (UT's FlipTorque 350 was in engine units).
+# that brings its top up, sized to lift its weight at half its width or height, twice
+# over (UT's FlipTorque 350 was in engine units), until it is within 25 degrees of upright.
 FLIP_TIME_S = 3.0
-FLIP_MARGIN = 2.5
+FLIP_MARGIN = 2.0
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
+FLIP_DONE_COS = math.cos(math.radians(25.0))
 AERIAL_LEVEL_STIFFNESS = 20.0  # N m per rad of tilt per kg: hovering robots right themselves
 def sane_velocity(robot: RobotConfig) -> float:
     """Above this speed (m/s or rad/s) a joint of ``robot`` has blown up: MAX_SANE_VELOCITY, or
@@ -349,17 +350,18 @@ class Simulation:
                 continue
             b = r.handle.body_id
             up = d.xmat[b].reshape(3, 3)[:, 2]
-            if self.time >= r.flip_until or up[2] > 0.95:
+            if self.time >= r.flip_until or up[2] > FLIP_DONE_COS:
                 r.flip_until = -1.0
                 d.xfrc_applied[b, 3:] = 0.0
                 continue
-            axis = np.cross(up, np.array([0.0, 0.0, 1.0]))
-            n = float(np.linalg.norm(axis))
-            if n < 1e-6:  # upside down exactly: roll about the forward axis
-                axis, n = d.xmat[b].reshape(3, 3)[:, 0].copy(), 1.0
+            # roll about the robot's own forward axis (sideways is the easy way over), in
+            # the sense that brings its top up; exactly upside down: to the right
+            forward = d.xmat[b].reshape(3, 3)[:, 0]
+            sense = float(np.cross(up, np.array([0.0, 0.0, 1.0])) @ forward)
+            sign = 1.0 if sense >= -1e-3 else -1.0
             dims = r.config.geometry.dimensions
             torque = FLIP_MARGIN * r.config.mass_kg * self.world.gravity_m_s2 * max(dims[1], dims[2]) / 2.0
-            d.xfrc_applied[b, 3:] = axis / n * torque
+            d.xfrc_applied[b, 3:] = forward * (sign * torque)
 
     def drive_aerial(self, uid: int, altitude: float | None, linear: float | None, lateral: float | None,
                      rotational: float | None, normalized: bool = False, light: bool | None = None) -> None:
