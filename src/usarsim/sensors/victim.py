@@ -84,8 +84,11 @@ class VictSensor(Sensor):
         ents = view.entities
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs_local = self._grids[self._tick % SUBGRIDS]
-        dist, _, gid = view.caster.cast(pos, dirs_local @ rot.T, c.max_range_m, self.handle.body_id,
-                                        kind=self.RAY_KIND)
+        if ents is not None and ents.parts and ents.parts_within(view.data, pos, c.max_range_m):
+            dist, _, gid = view.caster.cast(pos, dirs_local @ rot.T, c.max_range_m, self.handle.body_id,
+                                            kind=self.RAY_KIND)
+        else:  # no victim or false alarm within reach: nothing to trace
+            dist = np.empty(0)
         if ents is not None:
             for i in np.flatnonzero(np.isfinite(dist)).tolist():
                 hit = ents.parts.get(int(gid[i]))

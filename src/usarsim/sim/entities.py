@@ -43,6 +43,8 @@ class Entities:
         self.tags: dict[int, Tag] = {t.tag_id: Tag(t.tag_id, tuple(t.location), t.memory) for t in world.rfid_tags}
         self._next_id = max([RELEASED_TAG_FIRST_ID - 1, *self.tags]) + 1
         self.parts: dict[int, PartHit] = {}
+        self._part_ids: np.ndarray | None = None
+        self._part_rbound = np.empty(0)
         self.see_through: dict[str, np.ndarray] = {}
         self._wavers: list[tuple[int, object]] = []
         self._victims = {v.name: v for v in world.victims}
@@ -50,6 +52,7 @@ class Entities:
     # After each build ---------------------------------------------------------------
     def resolve(self, m: mujoco.MjModel) -> None:
         self.parts.clear()
+        self._part_ids = None
         mats = {f"world/{o.name}": self.world.materials[o.material] for o in self.world.objects}
         mats["floor"] = self.world.materials[self.world.floor.material]
         for a in self.world.false_alarms:
@@ -68,11 +71,22 @@ class Entities:
                 for k in mat.see_through:
                     see[k][g] = True
         self.see_through = see
+        self._part_ids = np.array(sorted(self.parts), dtype=np.intp)
+        self._part_rbound = m.geom_rbound[self._part_ids] if len(self._part_ids) else np.empty(0)
         self._wavers = []
         for v in self.world.victims:
             if v.waving:
                 b = m.body(f"victim/{v.name}/shoulder")
                 self._wavers.append((int(m.body_mocapid[b.id]), v))
+
+    def parts_within(self, d: mujoco.MjData, pos: np.ndarray, reach: float) -> bool:
+        """Whether any victim or false-alarm part is within ``reach`` of ``pos`` (MuJoCo frame)."""
+        if self._part_ids is None or len(self._part_ids) != len(self.parts):
+            self._part_ids = np.array(sorted(self.parts), dtype=np.intp)
+        if not len(self._part_ids):
+            return False
+        gap = np.linalg.norm(d.geom_xpos[self._part_ids] - pos, axis=1) - self._part_rbound
+        return bool((gap <= reach).any())
 
     # Each stretch of physics steps ------------------------------------------------------
     def update(self, d: mujoco.MjData, time: float) -> None:
