@@ -119,6 +119,8 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     sim.advance(2.0)
     if robot.drive == "static":
         pytest.skip(f"{robot.class_name} has no drive")
+    if robot.drive == "nautical":
+        pytest.skip(f"{robot.class_name} moves in water only (tests/integration/test_drives.py)")
     spin = 0.5 * robot.max_speed_rad_s
     radius = robot.geometry.wheel_radius_m
     if robot.drive == "aerial":  # m/s: "spin" x "radius" is the linear speed

@@ -169,3 +169,56 @@ def test_aerial_drive_hovers_climbs_flies_and_turns(server_factory, test_world):
     c.step(1.0)
     speed, rate, _, _ = motion(c, 1.0)
     assert speed < 0.01 and abs(rate) < 0.01  # hovering again
+
+
+POOL = """\
+name: Pool
+description: a 5 m deep pool (tests only)
+floor: {center: [0, 0], size: [60, 60]}
+water:
+  - {name: pool, center: [0.0, 0.0, -2.5], size: [50.0, 50.0, 5.0]}
+start_poses:
+  - {name: Deep, location: [-15.0, 0.0, -2.0], rotation: [0, 0, 0]}
+  - {name: Edge, location: [0.0, 28.0, -0.5], rotation: [0, 0, -1.5708]}
+"""
+
+
+def test_a_submarine_floats_drives_turns_and_dives(server_factory, tmp_path):
+    from usarsim.config.world import load_world
+
+    (tmp_path / "Pool.yaml").write_text(POOL)
+    srv = server_factory(world=load_world(tmp_path / "Pool.yaml"), seed=3)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.Submarine} {Name Sub} {Start Deep}")
+    lines = c.step(2.0)
+    sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
+    assert sta.startswith("STA {Type NauticalVehicle} {Time ")
+    gts = ground_truth(lines)
+    assert abs(gts[-1][1][2] - gts[0][1][2]) < 0.2  # neutral within 1 %: it neither sinks nor shoots up
+    c.send("DRIVE {Propeller 1} {Rudder 0} {SternPlane 0}")
+    c.step(5.0)
+    speed, rate, _, (p0, p1) = motion(c, 1.0)
+    assert speed == pytest.approx(60.0 / 40.0, rel=0.05) and p1[0] > p0[0] and abs(rate) < 0.01  # thrust / drag
+    c.send("DRIVE {Rudder 0.3}")  # propeller kept: turns right
+    c.step(1.0)
+    _, rate, _, _ = motion(c, 1.0)
+    assert rate > 0.2
+    c.send("DRIVE {Rudder 0} {SternPlane -0.3}")  # planes down: it dives (Z grows towards the floor)
+    c.step(1.0)
+    _, _, _, (p0, p1) = motion(c, 1.0)
+    assert p1[2] - p0[2] > 0.3
+
+
+def test_a_land_robot_loses_its_battery_in_water(server_factory, tmp_path):
+    from usarsim.config.world import load_world
+
+    (tmp_path / "Pool.yaml").write_text(POOL)
+    srv = server_factory(world=load_world(tmp_path / "Pool.yaml"), seed=3)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name Diver} {Location -20,0,-6} {Rotation 0,0,0}")  # above the pool
+    lines = c.step(3.0)
+    sta = [segments(ln.text) for ln in lines if ln.text.startswith("STA")]
+    assert sta[0]["Battery"] != "0" and sta[-1]["Battery"] == "0"
+    assert not [ln for ln in c.step(1.0) if ln.text.startswith(("SEN", "MISSTA"))]

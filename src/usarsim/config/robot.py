@@ -17,7 +17,7 @@ Vec3 = tuple[float, float, float]
 
 VEHICLE_TYPES = ("GroundVehicle", "AerialVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform")
 STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive", "None")
-DRIVES = ("skid", "ackermann", "holonomic", "aerial", "static")
+DRIVES = ("skid", "ackermann", "holonomic", "aerial", "static", "nautical")
 STEER_GROUPS = ("none", "front", "rear", "free")
 
 
@@ -103,6 +103,21 @@ class AerialLimits:
 
 
 @dataclass(frozen=True, kw_only=True)
+class NauticalSpec:
+    """A vessel (protocol.md 5.3e): its displaced volume (buoyancy), its propeller's thrust,
+    and how its rudder and stern planes turn it."""
+
+    volume_m3: float = 0.0
+    max_thrust_n: float = 50.0
+    max_rudder_rad: float = 0.5
+    max_stern_plane_rad: float = 0.5
+    rudder_gain: float = 20.0  # N m of yaw torque per rad of rudder per m/s of speed
+    stern_plane_gain: float = 20.0  # N m of pitch torque per rad of plane per m/s
+    drag_n_per_m_s: float = 40.0  # linear drag in water
+    angular_drag: float = 20.0  # N m per rad/s
+
+
+@dataclass(frozen=True, kw_only=True)
 class MountedItem:
     """A sensor (or effecter) entry: its type, name, pose and raw configuration keys.
 
@@ -155,6 +170,7 @@ class RobotConfig:
     steer_torque_nm: float = 50.0  # steering servo torque of each steered wheel
     aerial: AerialLimits = field(default_factory=AerialLimits)
     status_joints: tuple[str, ...] = ()  # links whose angles STA reports (TeleMax flippers, protocol.md 6.2)
+    nautical: NauticalSpec | None = None
     extra: dict = field(default_factory=dict)
 
     @property
@@ -251,6 +267,20 @@ def load_robot(path: str | Path) -> RobotConfig:
                           max_yaw_rate_rad_s=a.float("max_yaw_rate_rad_s", 1.7453, min=0.0, min_exclusive=True),
                           max_accel_m_s2=a.float("max_accel_m_s2", 4.0, min=0.0, min_exclusive=True))
     a.finish()
+    nautical = None
+    if drive == "nautical" or top.has("nautical"):
+        if drive != "nautical":
+            raise top.error("nautical", "only a vessel (drive: nautical) has nautical settings")
+        n = top.section("nautical")
+        nautical = NauticalSpec(volume_m3=n.float("volume_m3", min=0.0, min_exclusive=True),
+                                max_thrust_n=n.float("max_thrust_n", 50.0, min=0.0, min_exclusive=True),
+                                max_rudder_rad=n.float("max_rudder_rad", 0.5, min=0.0, max=1.6),
+                                max_stern_plane_rad=n.float("max_stern_plane_rad", 0.5, min=0.0, max=1.6),
+                                rudder_gain=n.float("rudder_gain", 20.0, min=0.0),
+                                stern_plane_gain=n.float("stern_plane_gain", 20.0, min=0.0),
+                                drag_n_per_m_s=n.float("drag_n_per_m_s", 40.0, min=0.0),
+                                angular_drag=n.float("angular_drag", 20.0, min=0.0))
+        n.finish()
     if top.has("aerial") and drive != "aerial":
         raise top.error("aerial", "only an aerial robot (drive: aerial) has aerial limits")
 
@@ -379,4 +409,5 @@ def load_robot(path: str | Path) -> RobotConfig:
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
-                       mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints)
+                       mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints,
+                       nautical=nautical)

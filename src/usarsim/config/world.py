@@ -6,6 +6,7 @@ metres and radians; the floor's top surface is the plane z = 0.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -98,6 +99,27 @@ class FalseAlarm:
 
 
 @dataclass(frozen=True, kw_only=True)
+class WaterVolume:
+    """A box of water (axis-aligned): robots in it float and are slowed down; robots not
+    built for water lose their battery in it, as in UT2004 (protocol.md 5.3e)."""
+
+    name: str
+    center: Vec3
+    size: Vec3
+    density_kg_m3: float = 1000.0  # fresh water
+
+    def depth_of(self, point) -> float:
+        """How far below the surface ``point`` (USARSim frame, Z down) is; negative above
+        it, -inf outside the box horizontally or below its bottom."""
+        x, y, z = point
+        cx, cy, cz = self.center
+        sx, sy, sz = self.size
+        if abs(x - cx) > sx / 2 or abs(y - cy) > sy / 2 or z > cz + sz / 2:
+            return -math.inf
+        return z - (cz - sz / 2)
+
+
+@dataclass(frozen=True, kw_only=True)
 class RfidTagConfig:
     tag_id: int
     location: Vec3
@@ -120,6 +142,7 @@ class WorldConfig:
     victims: tuple[Victim, ...] = ()
     false_alarms: tuple[FalseAlarm, ...] = ()
     rfid_tags: tuple[RfidTagConfig, ...] = ()
+    water: tuple[WaterVolume, ...] = ()
     extra: dict = field(default_factory=dict)
 
     def start_pose(self, name: str) -> StartPose | None:
@@ -263,11 +286,22 @@ def load_world(path: str | Path) -> WorldConfig:
         tags.append(RfidTagConfig(tag_id=tid, location=s.vec("location"), memory=mem))
         s.finish()
 
+    water: list[WaterVolume] = []
+    for i, raw in enumerate(top.list("water", [])):
+        s = Section(raw, path=path, key=f"water[{i}]")
+        wname = s.str("name")
+        if wname in names:
+            raise s.error("name", f"duplicate name '{wname}'")
+        names.add(wname)
+        water.append(WaterVolume(name=wname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
+                                 density_kg_m3=s.float("density_kg_m3", 1000.0, min=1.0, max=20000.0)))
+        s.finish()
+
     top.finish()
     return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
                        objects=tuple(objects), start_poses=tuple(poses), time_limit_min=time_limit,
                        timestep_s=timestep, gravity_m_s2=gravity, geo=geo, victims=tuple(victims),
-                       false_alarms=tuple(alarms), rfid_tags=tuple(tags))
+                       false_alarms=tuple(alarms), rfid_tags=tuple(tags), water=tuple(water))
 
 
 def check_world_file(path: str | Path) -> WorldConfig:

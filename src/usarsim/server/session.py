@@ -174,6 +174,9 @@ class Session:
                                          cmd.rotational_velocity)):
             self.facade.drive_aerial(self.uid, cmd.altitude_velocity, cmd.linear_velocity, cmd.lateral_velocity,
                                      cmd.rotational_velocity, bool(cmd.normalized), cmd.light)
+        elif any(v is not None for v in (cmd.propeller, cmd.rudder, cmd.stern_plane)):
+            self.facade.drive_nautical(self.uid, cmd.propeller, cmd.rudder, cmd.stern_plane, bool(cmd.normalized),
+                                       cmd.light)
         elif cmd.wheels:
             self.facade.drive_wheels(self.uid, [(w.number, w.speed, w.steer) for w in cmd.wheels],
                                      bool(cmd.normalized), cmd.light)

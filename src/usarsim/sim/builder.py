@@ -99,6 +99,16 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
+    for wv in world.water:  # seen by cameras only: it neither collides nor stops a ray
+        g = s.worldbody.add_geom()
+        g.name = f"water/{wv.name}"
+        g.type = mujoco.mjtGeom.mjGEOM_BOX
+        g.size = [wv.size[0] / 2.0, wv.size[1] / 2.0, wv.size[2] / 2.0]
+        g.pos = frames.to_mj_vec(wv.center).tolist()
+        g.rgba = [0.2, 0.4, 0.8, 0.35]
+        g.group = 4
+        g.contype = g.conaffinity = 0
+
     light = s.worldbody.add_light()
     light.name = "sun"
     light.pos = [fl.center[0], -fl.center[1], 10.0]

@@ -89,6 +89,10 @@ class SimFacade:
         self.runner.submit(Request(
             lambda sim: sim.drive_aerial(uid, altitude, linear, lateral, rotational, normalized, light)))
 
+    def drive_nautical(self, uid: int, propeller, rudder, stern_plane, normalized: bool, light) -> None:
+        self.runner.submit(Request(
+            lambda sim: sim.drive_nautical(uid, propeller, rudder, stern_plane, normalized, light)))
+
     def drive_wheels(self, uid: int, wheels, normalized: bool, light) -> None:
         self.runner.submit(Request(lambda sim: sim.drive_wheels(uid, wheels, normalized, light)))
 

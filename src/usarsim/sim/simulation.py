@@ -24,7 +24,7 @@ from usarsim.config.world import WorldConfig
 from usarsim.errors import ConfigError, SimulationError
 from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus
 from usarsim.sensors import Sensor, make_sensor
-from usarsim.sim import builder
+from usarsim.sim import builder, frames
 from usarsim.sim.entities import Entities
 from usarsim.sim.view import RayCaster, RobotHandle, WorldView
 
@@ -46,6 +46,11 @@ FLIP_MARGIN = 2.0
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
 FLIP_DONE_COS = math.cos(math.radians(25.0))
 AERIAL_LEVEL_STIFFNESS = 20.0  # N m per rad of tilt per kg: hovering robots right themselves
+# Forces the simulation sets by hand (self-righting, levelling, water) are renewed at least
+# every 10 physics steps (40 ms).
+EXTERNAL_FORCE_STEPS = 10
+HULL_CROSS_DRAG = 10.0  # a vessel's drag across its hull, relative to along it
+HULL_PITCH_RIGHTING = 0.05  # its pitch righting, relative to its roll righting
 def sane_velocity(robot: RobotConfig) -> float:
     """Above this speed (m/s or rad/s) a joint of ``robot`` has blown up: MAX_SANE_VELOCITY, or
     three times its top wheel speed for fast vehicles (a car's wheels spin at 180 rad/s)."""
@@ -115,6 +120,8 @@ class SimRobot:
     rear_steer: float = 0.0
     wheel_steer: dict = field(default_factory=dict)  # holonomic: wheel name -> angle
     fly: dict = field(default_factory=lambda: {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0})
+    sail: dict = field(default_factory=lambda: {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0})
+    in_water: bool = False
 
     battery_used_s: float = 0.0
     rated_power_w: float = 1.0
@@ -397,6 +404,82 @@ class Simulation:
             torque = np.cross(up, np.array([0.0, 0.0, 1.0])) * (AERIAL_LEVEL_STIFFNESS * r.config.mass_kg)
             d.xfrc_applied[b, 3:] = torque
 
+    def _external_forces(self) -> bool:
+        return self._aerial or bool(self.world.water and self.robots) or \
+            any(r.flip_until >= 0 for r in self.robots.values())
+
+    def drive_nautical(self, uid: int, propeller: float | None, rudder: float | None, stern_plane: float | None,
+                       normalized: bool = False, light: bool | None = None) -> None:
+        """``DRIVE {Propeller} {Rudder} {SternPlane}`` (protocol.md 5.3e): the propeller as a
+        fraction of full thrust, -1..1 (percent when Normalized); rudder and stern planes
+        in radians (positive: turn right, rise), within the vessel's limits.  Unsent values
+        are kept."""
+        r = self.robots.get(uid)
+        if r is None or r.battery_empty:
+            return
+        if light is not None:
+            r.light = bool(light)
+        n = r.config.nautical
+        if n is None:
+            return
+        for key, value, top, scale in (("propeller", propeller, 1.0, 0.01),
+                                       ("rudder", rudder, n.max_rudder_rad, n.max_rudder_rad / 100.0),
+                                       ("stern_plane", stern_plane, n.max_stern_plane_rad, n.max_stern_plane_rad / 100.0)):
+            if value is not None and math.isfinite(value):
+                v = value * scale if normalized else value
+                r.sail[key] = max(-top, min(top, v))
+
+    def _apply_water(self) -> None:
+        """Buoyancy, drag and the vessel's own propulsion for every robot in water;
+        robots not built for water lose their battery there (as in UT2004)."""
+        d = self.data
+        g = self.world.gravity_m_s2
+        for r in self.robots.values():
+            b = r.handle.body_id
+            loc = frames.from_mj_vec(d.xipos[b])  # centre of mass, USARSim frame
+            depth = max((wv.depth_of(loc), wv) for wv in self.world.water)
+            height = r.config.geometry.dimensions[2]
+            frac = min(max((depth[0] + height / 2.0) / height, 0.0), 1.0)
+            was = r.in_water
+            r.in_water = frac > 0.0
+            if not r.in_water:
+                if was:
+                    d.xfrc_applied[b] = 0.0
+                continue
+            n = r.config.nautical
+            if n is None:
+                if depth[0] > 0.0 and not r.battery_empty:
+                    r.battery_used_s = r.config.battery_s
+                    log.info("robot '%s' (id %d) went under water: its battery is gone", r.name, r.uid)
+                continue
+            rot = d.xmat[b].reshape(3, 3)
+            vel = np.empty(6)
+            mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)  # world frame
+            ang, lin = vel[:3], vel[3:]
+            force = np.array([0.0, 0.0, depth[1].density_kg_m3 * g * n.volume_m3 * frac])
+            # a hull slips through the water lengthwise and hardly at all sideways or
+            # up and down (its fins): drag ten times larger across than along it
+            v_body = rot.T @ lin
+            force -= rot @ (v_body * np.array([1.0, HULL_CROSS_DRAG, HULL_CROSS_DRAG])) * (n.drag_n_per_m_s * frac)
+            torque = -n.angular_drag * ang * frac
+            if not r.battery_empty:
+                forward = rot[:, 0]
+                speed = float(forward @ lin)
+                force += forward * (r.sail["propeller"] * n.max_thrust_n * frac)
+                # rudder: turn right = clockwise seen from above = about -z (MuJoCo);
+                # stern planes: rise = nose up = about the body's right axis (-y, +y is its left)
+                torque += np.array([0.0, 0.0, -1.0]) * (n.rudder_gain * r.sail["rudder"] * speed)
+                torque += rot[:, 1] * (-n.stern_plane_gain * r.sail["stern_plane"] * speed)
+            # the hull rights itself (its weight hangs below its buoyancy): firmly in roll,
+            # gently in pitch, which the stern planes overcome
+            up = rot[:, 2]
+            tilt = np.cross(up, np.array([0.0, 0.0, 1.0]))
+            righting = AERIAL_LEVEL_STIFFNESS * r.config.mass_kg
+            torque += rot[:, 0] * (float(tilt @ rot[:, 0]) * righting)
+            torque += rot[:, 1] * (float(tilt @ rot[:, 1]) * righting * HULL_PITCH_RIGHTING)
+            d.xfrc_applied[b, :3] = force
+            d.xfrc_applied[b, 3:] = torque
+
     def drive_ackermann(self, uid: int, speed: float | None, front: float | None, rear: float | None,
                         normalized: bool = False, light: bool | None = None) -> None:
         """``DRIVE {Speed} {FrontSteer} {RearSteer}`` (protocol.md 5.3b): what is not sent keeps
@@ -627,6 +710,8 @@ class Simulation:
             if self._heap:
                 due = self._heap[0][0]
                 n = max(1, min(n, int(math.ceil(due / self.dt - EPS)) - self.step_count))
+            if self._external_forces():  # forces we set by hand are renewed often enough
+                n = min(n, EXTERNAL_FORCE_STEPS)
             self._step(n)
 
     def _step(self, n: int) -> None:
@@ -640,6 +725,8 @@ class Simulation:
             self._apply_flips()
         if self._aerial:
             self._level_aerial()
+        if self.world.water:
+            self._apply_water()
         if self._snapshot is None or self._snapshot.size != mujoco.mj_stateSize(m, STATE):
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
         mujoco.mj_getState(m, d, self._snapshot, STATE)
