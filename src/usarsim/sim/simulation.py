@@ -44,7 +44,6 @@ BATTERY_LOAD_FACTOR = 1.0
 FLIP_TIME_S = 3.0
 FLIP_MARGIN = 2.0
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
-FLIP_DONE_COS = math.cos(math.radians(25.0))
 AERIAL_LEVEL_STIFFNESS = 20.0  # N m per rad of tilt per kg: hovering robots right themselves
 # Forces the simulation sets by hand (self-righting, levelling, water) are renewed at least
 # every 10 physics steps (40 ms).
@@ -351,24 +350,31 @@ class Simulation:
         return True
 
     def _apply_flips(self) -> None:
+        """Roll each robot being righted about its own forward axis (sideways is the easy way
+        over) towards upright: a torque growing with its tilt, damped by its roll rate so
+        that it does not roll on past upright; exactly upside down it rolls to its right."""
         d = self.data
         for r in self.robots.values():
             if r.flip_until < 0:
                 continue
             b = r.handle.body_id
-            up = d.xmat[b].reshape(3, 3)[:, 2]
-            if self.time >= r.flip_until or up[2] > FLIP_DONE_COS:
+            rot = d.xmat[b].reshape(3, 3)
+            up, forward = rot[:, 2], rot[:, 0]
+            sense = float(np.cross(up, np.array([0.0, 0.0, 1.0])) @ forward)
+            tilt = math.atan2(abs(sense), float(up[2]))  # angle from upright, 0..pi
+            roll_rate = float(d.cvel[b][:3] @ forward)
+            if self.time >= r.flip_until or (tilt < math.radians(25.0) and abs(roll_rate) < 0.5):
                 r.flip_until = -1.0
                 d.xfrc_applied[b, 3:] = 0.0
                 continue
-            # roll about the robot's own forward axis (sideways is the easy way over), in
-            # the sense that brings its top up; exactly upside down: to the right
-            forward = d.xmat[b].reshape(3, 3)[:, 0]
-            sense = float(np.cross(up, np.array([0.0, 0.0, 1.0])) @ forward)
             sign = 1.0 if sense >= -1e-3 else -1.0
             dims = r.config.geometry.dimensions
-            torque = FLIP_MARGIN * r.config.mass_kg * self.world.gravity_m_s2 * max(dims[1], dims[2]) / 2.0
-            d.xfrc_applied[b, 3:] = forward * (sign * torque)
+            limit = FLIP_MARGIN * r.config.mass_kg * self.world.gravity_m_s2 * max(dims[1], dims[2]) / 2.0
+            inertia = r.config.mass_kg * (dims[1] ** 2 + dims[2] ** 2) / 12.0
+            k = limit / (math.pi / 2.0)
+            damping = 2.0 * math.sqrt(k * inertia)
+            torque = max(-limit, min(limit, sign * k * tilt - damping * roll_rate))
+            d.xfrc_applied[b, 3:] = forward * torque
 
     def drive_aerial(self, uid: int, altitude: float | None, linear: float | None, lateral: float | None,
                      rotational: float | None, normalized: bool = False, light: bool | None = None) -> None:
