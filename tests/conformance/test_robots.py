@@ -31,6 +31,8 @@ def rest_z(robot, spawn_z: float) -> float:
     down); an aerial robot hovers where it was put."""
     if robot.drive == "aerial":  # put no lower than it stands (the simulation lifts it)
         return min(spawn_z, -robot.lowest_point_m - 0.005)
+    if robot.drive == "legged":
+        return -robot.lowest_point_m
     low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
     low += [p.center[2] + p.radius_m for p in robot.chassis if p.shape == "sphere"]
     if robot.drive == "static" or not low:
@@ -126,6 +128,9 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     if robot.drive == "aerial":  # m/s: "spin" x "radius" is the linear speed
         spin, radius = 0.5 * robot.aerial.max_linear_m_s, 1.0
         sim.drive_aerial(1, None, spin, None, None)
+    elif robot.drive == "legged":
+        spin, radius = 0.5 * robot.gait.max_linear_m_s, 1.0
+        sim.drive_aerial(1, None, spin, None, None)
     elif robot.drive == "skid":
         sim.drive_skid(1, spin, spin)
     elif robot.drive == "ackermann":
@@ -145,6 +150,8 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
         sim.drive_skid(1, -0.3 * robot.max_speed_rad_s, 0.3 * robot.max_speed_rad_s)
     elif robot.drive == "aerial":
         sim.drive_aerial(1, None, None, None, -0.5 * robot.aerial.max_yaw_rate_rad_s)
+    elif robot.drive == "legged":
+        sim.drive_aerial(1, None, 0.0, None, -0.5 * robot.gait.max_yaw_rate_rad_s)
     elif robot.drive == "ackermann":
         sim.drive_ackermann(1, None, -0.5 * robot.max_front_steer_rad, None)
     else:

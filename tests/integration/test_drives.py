@@ -222,3 +222,29 @@ def test_a_land_robot_loses_its_battery_in_water(server_factory, tmp_path):
     sta = [segments(ln.text) for ln in lines if ln.text.startswith("STA")]
     assert sta[0]["Battery"] != "0" and sta[-1]["Battery"] == "0"
     assert not [ln for ln in c.step(1.0) if ln.text.startswith(("SEN", "MISSTA"))]
+
+
+def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factory, test_world):
+    srv = server_factory(world=test_world, seed=3)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.ERS} {Name Dog} {Location -6,0,-0.3} {Rotation 0,0,0}")
+    lines = c.step(1.0)
+    sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
+    assert sta.startswith("STA {Type LeggedRobot} {Time ")
+    assert ground_truth(lines)[-1][1][2] == pytest.approx(-0.157, abs=0.01)  # standing on its legs
+    c.send("DRIVE {LinearVelocity 0.1}")
+    c.step(2.0)
+    speed, rate, _, (p0, p1) = motion(c, 2.0)
+    assert speed == pytest.approx(0.1, rel=0.15) and p1[0] > p0[0] and abs(rate) < 0.05
+    c.send("DRIVE {LinearVelocity 0} {RotationalVelocity -0.4}")  # turn left on the spot
+    c.step(1.0)
+    _, rate, _, _ = motion(c, 2.0)
+    assert rate == pytest.approx(-0.4, rel=0.2)
+    c.send("DRIVE {RotationalVelocity 0}")
+    c.step(1.0)
+    # standing still, its joints obey joint commands: lift the left front paw
+    c.send("MULTIDRIVE {LF_J1 1.2}")
+    c.step(1.0)
+    angle = srv.on_sim(lambda sim: float(sim.data.qpos[sim.robots[1].handle.joint_qpos["LF_J1"]]))
+    assert angle == pytest.approx(1.2, abs=0.05)

@@ -17,7 +17,7 @@ Vec3 = tuple[float, float, float]
 
 VEHICLE_TYPES = ("GroundVehicle", "AerialVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform")
 STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive", "None")
-DRIVES = ("skid", "ackermann", "holonomic", "aerial", "static", "nautical")
+DRIVES = ("skid", "ackermann", "holonomic", "aerial", "static", "nautical", "legged")
 STEER_GROUPS = ("none", "front", "rear", "free")
 
 
@@ -118,6 +118,32 @@ class NauticalSpec:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Leg:
+    """One leg of a walking robot: its hip pitch, hip roll and knee links, the lengths of
+    its upper and lower segments, and its phase in the gait (0..1)."""
+
+    hip_pitch: str
+    hip_roll: str
+    knee: str
+    upper_m: float
+    lower_m: float
+    phase: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class Gait:
+    """A walking robot's gait (DRIVE {LinearVelocity} {LateralVelocity} {RotationalVelocity})."""
+
+    legs: tuple[Leg, ...]
+    stand_height_m: float  # hip to foot, standing
+    step_height_m: float = 0.02
+    period_s: float = 0.5
+    max_linear_m_s: float = 0.2
+    max_lateral_m_s: float = 0.1
+    max_yaw_rate_rad_s: float = 0.8
+
+
+@dataclass(frozen=True, kw_only=True)
 class MountedItem:
     """A sensor (or effecter) entry: its type, name, pose and raw configuration keys.
 
@@ -171,6 +197,7 @@ class RobotConfig:
     aerial: AerialLimits = field(default_factory=AerialLimits)
     status_joints: tuple[str, ...] = ()  # links whose angles STA reports (TeleMax flippers, protocol.md 6.2)
     nautical: NauticalSpec | None = None
+    gait: Gait | None = None
     extra: dict = field(default_factory=dict)
 
     @property
@@ -202,6 +229,11 @@ class RobotConfig:
                 lean = math.sqrt(max(0.0, 1.0 - axis_z ** 2))
                 extra = p.radius_m if p.shape == "capsule" else p.radius_m * lean
                 low.append(p.center[2] + p.length_m / 2.0 * axis_z + extra)
+        if self.gait is not None:  # standing on its legs: hip, leg, foot
+            for leg in self.gait.legs:
+                hip, knee = self.link(leg.hip_pitch), self.link(leg.knee)
+                foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
+                low.append(hip.location[2] + self.gait.stand_height_m + foot)
         return max(low) if low else 0.0
 
     def link(self, name: str) -> Link | None:
@@ -281,6 +313,25 @@ def load_robot(path: str | Path) -> RobotConfig:
                                 drag_n_per_m_s=n.float("drag_n_per_m_s", 40.0, min=0.0),
                                 angular_drag=n.float("angular_drag", 20.0, min=0.0))
         n.finish()
+    gait = None
+    if drive == "legged" or top.has("gait"):
+        if drive != "legged":
+            raise top.error("gait", "only a walking robot (drive: legged) has a gait")
+        gs = top.section("gait")
+        legs = []
+        for i, raw in enumerate(gs.list("legs")):
+            ls = Section(raw, path=path, key=f"gait.legs[{i}]")
+            legs.append(Leg(hip_pitch=ls.str("hip_pitch"), hip_roll=ls.str("hip_roll"), knee=ls.str("knee"),
+                            upper_m=ls.float("upper_m", min=0.001), lower_m=ls.float("lower_m", min=0.001),
+                            phase=ls.float("phase", 0.0, min=0.0, max=1.0)))
+            ls.finish()
+        gait = Gait(legs=tuple(legs), stand_height_m=gs.float("stand_height_m", min=0.001),
+                    step_height_m=gs.float("step_height_m", 0.02, min=0.0),
+                    period_s=gs.float("period_s", 0.5, min=0.05),
+                    max_linear_m_s=gs.float("max_linear_m_s", 0.2, min=0.0, min_exclusive=True),
+                    max_lateral_m_s=gs.float("max_lateral_m_s", 0.1, min=0.0, min_exclusive=True),
+                    max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", 0.8, min=0.0, min_exclusive=True))
+        gs.finish()
     if top.has("aerial") and drive != "aerial":
         raise top.error("aerial", "only an aerial robot (drive: aerial) has aerial limits")
 
@@ -357,6 +408,11 @@ def load_robot(path: str | Path) -> RobotConfig:
             raise top.error("wheels", "a holonomic robot's steered wheels (steer: free) need distinct numbers "
                                       "(number: 0, 1, ...), the WheelNumber of its DRIVE")
 
+    if gait is not None:
+        for leg in gait.legs:
+            for j in (leg.hip_pitch, leg.hip_roll, leg.knee):
+                if j not in lnames:
+                    raise top.error("gait", f"unknown leg joint '{j}'{did_you_mean(j, lnames)}")
     status_joints = tuple(str(x) for x in top.list("status_joints", []))
     for j in status_joints:
         if j not in lnames:
@@ -410,4 +466,4 @@ def load_robot(path: str | Path) -> RobotConfig:
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
                        mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints,
-                       nautical=nautical)
+                       nautical=nautical, gait=gait)

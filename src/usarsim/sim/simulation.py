@@ -48,8 +48,24 @@ AERIAL_LEVEL_STIFFNESS = 20.0  # N m per rad of tilt per kg: hovering robots rig
 # Forces the simulation sets by hand (self-righting, levelling, water) are renewed at least
 # every 10 physics steps (40 ms).
 EXTERNAL_FORCE_STEPS = 10
+GAIT_STEPS = 5  # a walking robot's joint targets are renewed every 5 physics steps (20 ms)
 HULL_CROSS_DRAG = 10.0  # a vessel's drag across its hull, relative to along it
 HULL_PITCH_RIGHTING = 0.05  # its pitch righting, relative to its roll righting
+def leg_ik(fx: float, fy: float, fz: float, upper: float, lower: float) -> tuple[float, float, float]:
+    """Hip pitch, hip roll and knee angles that put a foot at (fx, fy, fz) from its hip
+    (USARSim frame: forward, right, down), for a leg of two segments whose knee bends
+    backwards.  Positive pitch swings the leg forward, positive roll swings it left, a
+    positive knee folds the lower leg forward."""
+    roll = -math.atan2(fy, fz)
+    down = math.hypot(fy, fz)
+    d = min(max(math.hypot(fx, down), abs(upper - lower) + 1e-6), (upper + lower) * 0.999)
+    inner = math.acos(max(-1.0, min(1.0, (upper ** 2 + lower ** 2 - d ** 2) / (2 * upper * lower))))
+    knee = math.pi - inner
+    beta = math.acos(max(-1.0, min(1.0, (upper ** 2 + d ** 2 - lower ** 2) / (2 * upper * d))))
+    pitch = math.atan2(fx, down) - beta
+    return pitch, roll, knee
+
+
 def sane_velocity(robot: RobotConfig) -> float:
     """Above this speed (m/s or rad/s) a joint of ``robot`` has blown up: MAX_SANE_VELOCITY, or
     three times its top wheel speed for fast vehicles (a car's wheels spin at 180 rad/s)."""
@@ -120,6 +136,8 @@ class SimRobot:
     wheel_steer: dict = field(default_factory=dict)  # holonomic: wheel name -> angle
     fly: dict = field(default_factory=lambda: {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0})
     sail: dict = field(default_factory=lambda: {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0})
+    walk: dict = field(default_factory=lambda: {"linear": 0.0, "lateral": 0.0, "rotational": 0.0})
+    walking: bool = True  # stand up once after the spawn
     in_water: bool = False
 
     battery_used_s: float = 0.0
@@ -177,6 +195,7 @@ class Simulation:
         self._owner_count = 1
         self._aerial = False
         self._sane = MAX_SANE_VELOCITY
+        self._legged = False
         # CONF fields that changed at run time (a camera's zoom), by (robot id, type, name);
         # read by the server thread (plain dict reads and replacements are atomic)
         self.live_conf: dict[tuple[int, str, str], tuple] = {}
@@ -228,6 +247,7 @@ class Simulation:
         self._owner_count = len(self.robots) + 1
         self._aerial = any(r.config.drive == "aerial" for r in self.robots.values())
         self._sane = max([MAX_SANE_VELOCITY] + [sane_velocity(r.config) for r in self.robots.values()])
+        self._legged = any(r.config.gait is not None for r in self.robots.values())
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
         r.handle.resolve(self.model, r.config.wheels, r.config.links)
@@ -387,6 +407,14 @@ class Simulation:
             return
         if light is not None:
             r.light = bool(light)
+        if r.config.gait is not None:  # a walking robot: the same keys set its gait
+            g = r.config.gait
+            for key, value, top in (("linear", linear, g.max_linear_m_s), ("lateral", lateral, g.max_lateral_m_s),
+                                    ("rotational", rotational, g.max_yaw_rate_rad_s)):
+                if value is not None and math.isfinite(value):
+                    v = value * top / 100.0 if normalized else value
+                    r.walk[key] = max(-top, min(top, v))
+            return
         if r.config.drive != "aerial":
             return
         lim = r.config.aerial
@@ -409,6 +437,41 @@ class Simulation:
             up = d.xmat[b].reshape(3, 3)[:, 2]
             torque = np.cross(up, np.array([0.0, 0.0, 1.0])) * (AERIAL_LEVEL_STIFFNESS * r.config.mass_kg)
             d.xfrc_applied[b, 3:] = torque
+
+    def _walk(self, r: SimRobot) -> None:
+        """Set the leg joints of a walking robot for this instant of its trot: diagonal legs
+        together, each foot sweeping back under the body while it stands (as far as the
+        commanded speed, side speed and turn rate move the ground past it in half a
+        period) and swinging forward, lifted, while the other pair stands.  When it stops
+        its feet go back under its hips, and its joints are then left to joint commands."""
+        g = r.config.gait
+        if r.battery_empty:
+            return
+        v, lat, w = r.walk["linear"], r.walk["lateral"], r.walk["rotational"]
+        moving = abs(v) > 1e-6 or abs(lat) > 1e-6 or abs(w) > 1e-6
+        if not moving and not r.walking:
+            return  # standing: its joints are the client's (DRIVE Name groups, MULTIDRIVE)
+        r.walking = moving  # just stopped: one last time, back to standing
+        t = self.time
+        for leg in g.legs:
+            hip = r.config.link(leg.hip_pitch).location
+            fx = fy = 0.0
+            fz = g.stand_height_m
+            if moving:
+                p = (t / g.period_s + leg.phase) % 1.0
+                dx = (v - w * hip[1]) * g.period_s / 2.0
+                dy = (lat + w * hip[0]) * g.period_s / 2.0
+                if p < 0.5:  # stance: from the front of the stride to its back
+                    k = 0.5 - p / 0.5
+                else:  # swing: back to the front, lifted
+                    s = (p - 0.5) / 0.5
+                    k = s - 0.5
+                    fz -= g.step_height_m * math.sin(math.pi * s)
+                fx, fy = dx * k, dy * k
+            pitch, roll, knee = leg_ik(fx, fy, fz, leg.upper_m, leg.lower_m)
+            for name, value in ((leg.hip_pitch, pitch), (leg.hip_roll, roll), (leg.knee, knee)):
+                r.joints[name] = (0, value)
+                self._apply_joint(r, r.config.link(name))
 
     def _external_forces(self) -> bool:
         return self._aerial or bool(self.world.water and self.robots) or \
@@ -718,6 +781,8 @@ class Simulation:
                 n = max(1, min(n, int(math.ceil(due / self.dt - EPS)) - self.step_count))
             if self._external_forces():  # forces we set by hand are renewed often enough
                 n = min(n, EXTERNAL_FORCE_STEPS)
+            if self._legged:  # gaits are updated every GAIT_STEPS
+                n = min(n, GAIT_STEPS)
             self._step(n)
 
     def _step(self, n: int) -> None:
@@ -733,6 +798,10 @@ class Simulation:
             self._level_aerial()
         if self.world.water:
             self._apply_water()
+        if self._legged:
+            for r in self.robots.values():
+                if r.config.gait is not None:
+                    self._walk(r)
         if self._snapshot is None or self._snapshot.size != mujoco.mj_stateSize(m, STATE):
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
         mujoco.mj_getState(m, d, self._snapshot, STATE)
