@@ -143,3 +143,67 @@ def test_the_gripper_grasps_and_lifts_a_brick(server_factory, tmp_path):
     assert brick_z() - z0 < 0.02  # dropped back onto the floor
     assert set_and_step("SET {Type Gripper} {Name Gripper1} {Opcode Squeeze}", 0.1)[0].endswith("{Status Failed}")
     assert c.ask("GETCONF {Type Gripper}", "CONF").text == "CONF {Type Gripper} {Name Gripper1}"
+
+
+TEST_ROLLER = """\
+class_name: TestRoller
+description: a small robot with a roller table on its back (tests only)
+vehicle_type: GroundVehicle
+steering_type: SkidSteered
+drive: skid
+mass_kg: 12.5
+max_speed_rad_s: 5.0
+max_torque_nm: 60.0
+wheel_torque_nm: 6.0
+geometry: {dimensions: [0.6, 0.4, 0.3], wheel_radius: 0.1, wheel_separation: 0.4, wheel_base: 0.3}
+chassis:
+  - {center: [0.0, 0.0, 0.0], size: [0.5, 0.3, 0.15], mass_kg: 10.0}
+  - {center: [0.0, 0.0, -0.085], size: [0.6, 0.3, 0.02], mass_kg: 0.5}
+wheels:
+  - {name: LF, position: [0.15, -0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: left}
+  - {name: RF, position: [0.15, 0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}
+  - {name: LR, position: [-0.15, -0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: left}
+  - {name: RR, position: [-0.15, 0.2, 0.05], radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}
+sensors:
+  - {type: RollerTable, name: Roller, surface: 1}
+  - {type: GroundTruth, name: GroundTruth}
+"""
+ROLLER_WORLD = """\
+name: RollerArena
+description: a box on a robot's roller table (tests only)
+floor: {center: [0, 0], size: [10, 10]}
+objects:
+  - {name: parcel, shape: box, center: [-0.1, 0.0, -0.35], size: [0.12, 0.12, 0.1], mass_kg: 0.5}
+start_poses:
+  - {name: Here, location: [0.0, 0.0, -0.2], rotation: [0, 0, 0]}
+"""
+
+
+def test_the_roller_table_carries_its_load_off_the_front(server_factory, tmp_path):
+    from usarsim.config.world import load_world
+
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "robots" / "TestRoller.yaml").write_text(TEST_ROLLER)
+    (tmp_path / "RollerArena.yaml").write_text(ROLLER_WORLD)
+    srv = server_factory(world=load_world(tmp_path / "RollerArena.yaml"), robot_dirs=(str(tmp_path / "robots"),))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.TestRoller} {Name R1} {Location 0,0,-0.2} {Rotation 0,0,0}")
+    c.step(1.5)
+
+    def parcel():
+        return srv.on_sim(lambda sim: tuple(float(v) for v in sim.data.xpos[sim.model.body("movable/parcel").id]))
+
+    x0, _, z0 = parcel()
+    assert z0 > 0.25  # it lies on the table, 0.3 m up (MuJoCo z is up)
+    c.step(1.0)
+    assert abs(parcel()[0] - x0) < 0.01  # rollers still: it stays
+    c.send("SET {Type RollerTable} {Name Roller} {Opcode Roll} {Params 0.2}")
+    res = [ln.text for ln in c.step(1.0) if ln.text.startswith("RES")]
+    assert res and res[0].endswith("{Type RollerTable} {Name Roller} {Status OK}")
+    x1, _, _ = parcel()
+    assert x1 - x0 == pytest.approx(0.2 * 1.0, abs=0.06)  # carried forward at the rollers' speed
+    c.step(2.0)
+    assert parcel()[2] < 0.1  # off the front, on the floor
+    c.send("SET {Type RollerTable} {Name Roller} {Opcode Stop}")
+    assert [ln.text for ln in c.step(0.1) if ln.text.startswith("RES")][0].endswith("{Status OK}")

@@ -196,6 +196,8 @@ class Simulation:
         self._aerial = False
         self._sane = MAX_SANE_VELOCITY
         self._legged = False
+        self._rollers: list = []
+        self._roller_pushed: set[int] = set()
         # CONF fields that changed at run time (a camera's zoom), by (robot id, type, name);
         # read by the server thread (plain dict reads and replacements are atomic)
         self.live_conf: dict[tuple[int, str, str], tuple] = {}
@@ -248,6 +250,7 @@ class Simulation:
         self._aerial = any(r.config.drive == "aerial" for r in self.robots.values())
         self._sane = max([MAX_SANE_VELOCITY] + [sane_velocity(r.config) for r in self.robots.values()])
         self._legged = any(r.config.gait is not None for r in self.robots.values())
+        self._rollers = [s for r in self.robots.values() for s in r.sensors if s.TYPE == "RollerTable"]
 
     def _configure(self, r: SimRobot, view: WorldView) -> None:
         r.handle.resolve(self.model, r.config.wheels, r.config.links)
@@ -473,8 +476,41 @@ class Simulation:
                 r.joints[name] = (0, value)
                 self._apply_joint(r, r.config.link(name))
 
+    def _apply_rollers(self) -> None:
+        """Roller tables carry their loads: every body touching a table's top (other than
+        the robot) is pushed along the robot's X towards the rollers' speed relative to
+        the robot, with up to grip x its weight."""
+        m, d = self.model, self.data
+        pushed: set[int] = set()
+        tables = {t.geom: t for t in self._rollers}  # stopped rollers hold their load
+        if tables:
+            g = self.world.gravity_m_s2
+            for i in range(d.ncon):
+                c = d.contact[i]
+                t = tables.get(c.geom1) or tables.get(c.geom2)
+                if t is None:
+                    continue
+                other = c.geom2 if t.geom == c.geom1 else c.geom1
+                b = int(m.geom_bodyid[other])
+                if b in pushed or m.body_rootid[b] == t.handle.body_id or m.body_weldid[b] == 0:
+                    continue
+                pushed.add(b)
+                rot = d.xmat[t.handle.body_id].reshape(3, 3)
+                axis = rot[:, 0]
+                vel = np.empty(6)
+                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
+                robot_vel = np.empty(6)
+                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, t.handle.body_id, robot_vel, 0)
+                slip = t.speed - float(axis @ (vel[3:] - robot_vel[3:]))
+                mass = float(m.body_subtreemass[b])
+                push = max(-1.0, min(1.0, slip / 0.05)) * t.config.grip * mass * g
+                d.xfrc_applied[b, :3] = axis * push
+        for b in self._roller_pushed - pushed:
+            d.xfrc_applied[b, :3] = 0.0
+        self._roller_pushed = pushed
+
     def _external_forces(self) -> bool:
-        return self._aerial or bool(self.world.water and self.robots) or \
+        return self._aerial or bool(self.world.water and self.robots) or bool(self._rollers) or \
             any(r.flip_until >= 0 for r in self.robots.values())
 
     def drive_nautical(self, uid: int, propeller: float | None, rudder: float | None, stern_plane: float | None,
@@ -798,6 +834,8 @@ class Simulation:
             self._level_aerial()
         if self.world.water:
             self._apply_water()
+        if self._rollers:
+            self._apply_rollers()
         if self._legged:
             for r in self.robots.values():
                 if r.config.gait is not None:
