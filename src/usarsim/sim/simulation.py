@@ -319,10 +319,19 @@ class Simulation:
         log.info("removed robot '%s' (id %d) at t=%.3f", r.name, uid, self.time)
 
     def _schedule_robot(self, r: SimRobot) -> None:
-        now = self.time
-        units = [_Unit(r, [], r.config.status_interval_s, now, "STA", status=True)]
+        """Every report of the robot on its own period, on the world's grid of that period
+        (multiples of it in simulated time, from the first one at or after the spawn): the
+        reports of all robots fall on the same instants, so the physics runs in long
+        stretches between them."""
+        t = self.time
+
+        def on_grid(interval: float) -> float:
+            return math.ceil(t / interval - 1e-6) * interval
+
+        units = [_Unit(r, [], r.config.status_interval_s, on_grid(r.config.status_interval_s), "STA", status=True)]
         for pkg in r.config.mission_packages:
-            units.append(_Unit(r, [], r.config.status_interval_s, now, f"MISSTA:{pkg.name}", package=pkg))
+            units.append(_Unit(r, [], r.config.status_interval_s, on_grid(r.config.status_interval_s),
+                               f"MISSTA:{pkg.name}", package=pkg))
         packed: dict[str, _Unit] = {}
         for s in r.sensors:
             if not s.PERIODIC:
@@ -330,12 +339,13 @@ class Simulation:
             if s.PACKED:
                 u = packed.get(s.TYPE)
                 if u is None:
-                    u = _Unit(r, [], s.config.scan_interval_s, now, f"SEN:{s.TYPE}")
+                    u = _Unit(r, [], s.config.scan_interval_s, on_grid(s.config.scan_interval_s), f"SEN:{s.TYPE}")
                     packed[s.TYPE] = u
                     units.append(u)
                 u.sensors.append(s)
             else:
-                units.append(_Unit(r, [s], s.config.scan_interval_s, now, f"SEN:{s.TYPE}:{s.name}"))
+                units.append(_Unit(r, [s], s.config.scan_interval_s, on_grid(s.config.scan_interval_s),
+                                   f"SEN:{s.TYPE}:{s.name}"))
         r.units = units
         for u in units:
             heapq.heappush(self._heap, (u.due, next(self._seq), u))
