@@ -125,3 +125,17 @@ def test_a_wheel_speed_joint_command_and_bad_joint_commands(robot):
         lines = robot.step(0.2)
         assert not [ln for ln in lines if ln.text.startswith(("RES", "GEO", "CONF"))], line
     assert segments(robot.ask("GETGEO {Type Robot}", "GEO").text)["Type"] == "GroundVehicle"  # still served
+
+
+def test_a_locked_link_stays_put_and_says_so_in_conf(server_factory, test_world):
+    """MinRange == MaxRange locks a link: the AirRobot's camera only tilts."""
+    srv = server_factory(world=test_world)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.AirRobot} {Name A} {Location -6,0,-1} {Rotation 0,0,0}")
+    c.step(0.4)
+    conf = c.ask("GETCONF {Type MisPkg}", "CONF").text
+    assert "{Link 1} {JointType Revolute} {MaxSpeed 0.1700} {MaxTorque 20.0000} {MinRange 0.0000} {MaxRange 0.0000}" in conf
+    c.send("MISPKG {Name CameraPanTilt} {Link 1} {Value 1.0} {Link 2} {Value -0.5}")
+    pan, tilt = pantilt(c.step(4.0))[-1]
+    assert abs(pan) < 1e-3 and tilt == pytest.approx(-0.5, abs=0.01)

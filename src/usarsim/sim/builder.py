@@ -240,7 +240,8 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         j.armature = ln.armature
         if ln.limited:
             j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
-            j.range = [ln.min_range, ln.max_range]
+            # MinRange == MaxRange locks the joint; MuJoCo wants a range of some width
+            j.range = [ln.min_range, max(ln.max_range, ln.min_range + LOCKED_WIDTH)]
         if ln.shapes:
             for k, piece in enumerate(ln.shapes):
                 g = _add_piece(lb, f"{prefix}/{ln.name}/{k}", piece, robot)
@@ -327,6 +328,7 @@ def _add_rotors(spec, body, robot, prefix: str) -> None:
 # critically damped on the link's reflected inertia (its armature).
 POSITION_BAND_RAD = 0.02
 UNLIMITED = 1.0e6  # set-point range of a continuous joint
+LOCKED_WIDTH = 1.0e-6  # the width given to the range of a locked joint (MinRange == MaxRange)
 
 
 def joint_servo_gains(ln) -> tuple[float, float]:
@@ -336,7 +338,9 @@ def joint_servo_gains(ln) -> tuple[float, float]:
 
 
 def joint_travel(ln) -> tuple[float, float]:
-    return (ln.min_range, ln.max_range) if ln.limited else (-UNLIMITED, UNLIMITED)
+    if not ln.limited:
+        return -UNLIMITED, UNLIMITED
+    return ln.min_range, max(ln.max_range, ln.min_range + LOCKED_WIDTH)
 
 
 # Steering knuckles: a stiff position servo turns a steered wheel about the vertical
