@@ -253,7 +253,7 @@ class ServerThread:
         from usarsim.server.app import Application
 
         self.app = Application(world, host="127.0.0.1", port=0, seed=seed, speed=speed, lockstep=lockstep,
-                               max_connections=max_connections, robot_dirs=robot_dirs)
+                               max_connections=max_connections, robot_dirs=robot_dirs, truth_port=0)
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._serve, name="test-server-loop", daemon=True)
         self.clients: list[Client] = []

@@ -96,7 +96,8 @@ def run_bench(args) -> int:
         print("usarsim bench: --robots must be >= 1 and --seconds > 0", file=sys.stderr)
         return 2
     poses = free_spots(world, n)
-    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n))
+    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n),
+                      truth_port=None)
     loop = asyncio.new_event_loop()
     ready = threading.Event()
 

@@ -64,6 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "advances that much simulated time and replies STEPPED {Time t}")
     s.add_argument("--max-connections", type=int, default=64, help="control connections (robots) at most "
                    "(default: %(default)s)")
+    s.add_argument("--truth-port", type=_port, default=3989,
+                   help="ground-truth service port (default: %(default)s; 0 picks a free port): "
+                        "'{Class c} {Name n}' -> where every matching robot, victim, tag... is")
     s.add_argument("--robot-dir", action="append", default=[], metavar="DIR",
                    help="a folder of robot files of your own (one YAML file per class, named after the class); "
                         "clients INIT them by class name like the shipped robots; may be repeated")
@@ -119,7 +122,7 @@ def cmd_serve(args) -> int:
         return 1
     app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
-                      robot_dirs=tuple(args.robot_dir))
+                      robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port)
 
     async def main() -> None:
         loop = asyncio.get_running_loop()

@@ -77,7 +77,7 @@ def serve(tmp_path):
     started: list[Serve] = []
 
     def start(*args: str) -> Serve:
-        s = Serve(*args, stderr_path=tmp_path / f"serve{len(started)}.err")
+        s = Serve(*args, "--truth-port", "0", stderr_path=tmp_path / f"serve{len(started)}.err")
         started.append(s)
         return s
 

@@ -986,6 +986,36 @@ class Simulation:
                            front_steer=front, rear_steer=rear, joints=joints, light_toggle=r.light,
                            light_intensity=100 if r.light else 0, view=-1)
 
+    def truth(self, class_name: str | None = None, name: str | None = None) -> list[tuple]:
+        """Everything the ground-truth service knows, now: (name, class, time, location,
+        rotation) of every robot (its class and INIT name), victim (``Victim``), RFID tag
+        (``RFIDTag``, named by its id), false alarm (``FalseAlarm``) and movable object
+        (``MovableObject``); world frame, rotations in [0, 2 pi).  Filtered by class and
+        name (any case) when given."""
+        now = self.time
+        m, d = self.model, self.data
+        rows = []
+        for r in self.robots.values():
+            loc, rot = r.handle.location(d), r.handle.orientation(d)
+            rows.append((r.name, r.config.class_name, loc, rot))
+        for v in self.world.victims:
+            b = m.body(f"victim/{v.name}").id
+            rows.append((v.name, "Victim", frames.from_mj_vec(d.xpos[b]), frames.mj_mat_to_usar_euler(d.xmat[b])))
+        for tag in self.entities.tags.values():
+            rows.append((str(tag.tag_id), "RFIDTag", tuple(tag.location), (0.0, 0.0, 0.0)))
+        for a in self.world.false_alarms:
+            rows.append((a.name, "FalseAlarm", tuple(a.center), tuple(a.rotation)))
+        for o in self.world.objects:
+            if o.mass_kg > 0:
+                b = m.body(f"movable/{o.name}").id
+                rows.append((o.name, "MovableObject", frames.from_mj_vec(d.xpos[b]),
+                             frames.mj_mat_to_usar_euler(d.xmat[b])))
+        out = []
+        for n, c, loc, rot in rows:
+            if (class_name is None or c.lower() == class_name.lower()) and (name is None or n.lower() == name.lower()):
+                out.append((n, c, now, tuple(float(x) for x in loc), tuple(frames.wrap_2pi(float(a)) for a in rot)))
+        return out
+
     def take_outputs(self) -> list[Output]:
         out, self.outbox = self.outbox, []
         return out

@@ -1,0 +1,100 @@
+"""The ground-truth service (TCP 3989 by default, ``--truth-port``; protocol.md 12.4, the
+UDK's USARTruth): scoring and test tools ask where things are.
+
+asyncio glue only: lines (protocol.framing) -> request (protocol.truth) -> a snapshot
+taken on the simulation thread -> one line per object, then ``{End}``.  The connection
+stays open for further requests.  An unparseable line is logged once per connection and
+answered with a bare ``{End}``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+from usarsim.errors import ProtocolError
+from usarsim.protocol.framing import LineBuffer
+from usarsim.protocol.truth import END, TruthObject, format_truth_object, parse_truth_request
+from usarsim.sim.facade import SimFacade
+
+log = logging.getLogger("usarsim.server")
+
+
+class TruthConnection(asyncio.Protocol):
+    def __init__(self, server: "TruthServer"):
+        self.server = server
+        self.transport: asyncio.Transport | None = None
+        self.buffer = LineBuffer(max_line_bytes=4096)
+        self.peer = "?"
+        self._warned = False
+
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        peer = transport.get_extra_info("peername")
+        self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
+        if len(self.server.connections) >= self.server.max_connections:
+            log.warning("truth %s: refused: %d connections already", self.peer, len(self.server.connections))
+            transport.close()
+            return
+        self.server.connections.add(self)
+        log.info("truth %s: connected", self.peer)
+
+    def connection_lost(self, exc) -> None:
+        self.server.connections.discard(self)
+
+    def data_received(self, data: bytes) -> None:
+        for line in self.buffer.feed(data):
+            if not line.strip():
+                continue
+            try:
+                request = parse_truth_request(line)
+            except ProtocolError as exc:
+                if not self._warned:
+                    log.warning("truth %s: %s", self.peer, exc)
+                    self._warned = True
+                self._write(END)
+                continue
+            self.server.facade.call(lambda sim, rq=request: sim.truth(rq.class_name, rq.name),
+                                    on_done=self._answer_threadsafe)
+
+    def _answer_threadsafe(self, rows, error) -> None:
+        loop = self.server.loop
+        if loop is not None and not loop.is_closed():
+            loop.call_soon_threadsafe(self._answer, rows or [], error)
+
+    def _answer(self, rows, error) -> None:
+        if error is not None:
+            log.error("truth %s: %s", self.peer, error)
+        text = "".join(format_truth_object(TruthObject(*row)) for row in rows) + END
+        self._write(text)
+
+    def _write(self, text: str) -> None:
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.write(text.encode("ascii", "replace"))
+
+
+class TruthServer:
+    def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3989, max_connections: int = 16):
+        self.facade = facade
+        self.host = host
+        self.port = port
+        self.max_connections = max_connections
+        self.connections: set[TruthConnection] = set()
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self._server: asyncio.base_events.Server | None = None
+
+    async def start(self) -> int:
+        self.loop = asyncio.get_running_loop()
+        self._server = await self.loop.create_server(lambda: TruthConnection(self), self.host, self.port,
+                                                     reuse_address=True)
+        self.port = self._server.sockets[0].getsockname()[1]
+        return self.port
+
+    async def stop(self) -> None:
+        if self._server is not None:
+            self._server.close()
+        for conn in list(self.connections):
+            if conn.transport is not None:
+                conn.transport.close()
+        if self._server is not None:
+            await self._server.wait_closed()
