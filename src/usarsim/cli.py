@@ -132,7 +132,10 @@ def cmd_serve(args) -> int:
         try:
             await app.start()
         except OSError as exc:
-            print(f"usarsim: error: cannot listen on {args.host}:{args.port}: {exc.strerror}", file=sys.stderr)
+            control_up = app.control.port not in (None, args.port) or app.control._server is not None
+            which = (f"the ground-truth port {args.truth_port} (--truth-port)" if control_up and app.truth is not None
+                     else f"the control port {args.port} (--port)")
+            print(f"usarsim: error: cannot listen on {args.host}, {which}: {exc.strerror}", file=sys.stderr)
             raise SystemExit(1) from exc
         for service, host, port in app.listeners():
             print(f"usarsim: {service} listening on {host}:{port}", flush=True)

@@ -197,9 +197,12 @@ def test_port_in_use_exits_1(tmp_path):
         busy.bind(("127.0.0.1", 0))
         busy.listen(1)
         port = busy.getsockname()[1]
-        out = usarsim("serve", "--port", str(port))
-    assert out.returncode == 1
-    assert f"cannot listen on 127.0.0.1:{port}" in out.stderr
+        out = usarsim("serve", "--port", str(port), "--truth-port", "0")
+        assert out.returncode == 1
+        assert f"cannot listen on 127.0.0.1, the control port {port} (--port)" in out.stderr
+        truth = usarsim("serve", "--port", "0", "--truth-port", str(port))
+        assert truth.returncode == 1
+        assert f"cannot listen on 127.0.0.1, the ground-truth port {port} (--truth-port)" in truth.stderr
 
 
 @pytest.mark.parametrize("args, message", [
