@@ -86,15 +86,23 @@ def test_it_follows_the_world_and_survives_bad_lines(served):
     assert len(ask(truth, "{Class Victim}")) == 1  # still serving
 
 
-def test_the_yellow_arena_service_lists_robots(server_factory):
+def test_the_service_lists_the_victims_of_the_yellow_arena(server_factory):
     srv = server_factory()
     c = srv.connect()
     c.nfo()
     c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}")
     c.step(0.5)
-    with socket.create_connection(("127.0.0.1", srv.app.truth.port), timeout=10) as s:
-        s.sendall(b"{Class P2AT}\r\n")
-        data = b""
-        while b"{End}\r\n" not in data:
-            data += s.recv(4096)
-    assert data.startswith(b"{Name R1} {Class P2AT} {Time ")
+
+    def request(line: bytes) -> list[bytes]:
+        with socket.create_connection(("127.0.0.1", srv.app.truth.port), timeout=10) as s:
+            s.sendall(line)
+            data = b""
+            while b"{End}\r\n" not in data:
+                data += s.recv(4096)
+        return data.split(b"\r\n")[:-1]
+
+    assert request(b"{Class P2AT}\r\n")[0].startswith(b"{Name R1} {Class P2AT} {Time ")
+    victims = request(b"{Class Victim}\r\n")
+    assert victims[-1] == b"{End}"
+    names = sorted(re.match(rb"\{Name (\S+)\} \{Class Victim\}", v).group(1) for v in victims[:-1])
+    assert names == [b"Anna", b"Ben", b"Carl"]
