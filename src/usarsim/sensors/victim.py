@@ -84,7 +84,9 @@ class VictSensor(Sensor):
         ents = view.entities
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs_local = self._grids[self._tick % SUBGRIDS]
-        if ents is not None and ents.parts and ents.parts_within(view.data, pos, c.max_range_m):
+        # the grid's corners are the widest its rays go from the sensor's axis
+        half = math.atan(math.hypot(math.tan(c.horizontal_fov_rad / 2.0), math.tan(c.vertical_fov_rad / 2.0)))
+        if ents is not None and ents.parts and ents.parts_within(view.data, pos, c.max_range_m, rot[:, 0], half):
             dist, _, gid = view.caster.cast(pos, dirs_local @ rot.T, c.max_range_m, self.handle.body_id,
                                             kind=self.RAY_KIND)
         else:  # no victim or false alarm within reach: nothing to trace

@@ -79,14 +79,23 @@ class Entities:
                 b = m.body(f"victim/{v.name}/shoulder")
                 self._wavers.append((int(m.body_mocapid[b.id]), v))
 
-    def parts_within(self, d: mujoco.MjData, pos: np.ndarray, reach: float) -> bool:
-        """Whether any victim or false-alarm part is within ``reach`` of ``pos`` (MuJoCo frame)."""
+    def parts_within(self, d: mujoco.MjData, pos: np.ndarray, reach: float, forward: np.ndarray | None = None,
+                     half_angle: float = math.pi) -> bool:
+        """Whether any victim or false-alarm part is within ``reach`` of ``pos`` (MuJoCo
+        frame) and, with ``forward`` (a unit vector), inside the cone of ``half_angle``
+        about it (a part counts if any of its bounding sphere is)."""
         if self._part_ids is None or len(self._part_ids) != len(self.parts):
             self._part_ids = np.array(sorted(self.parts), dtype=np.intp)
         if not len(self._part_ids):
             return False
-        gap = np.linalg.norm(d.geom_xpos[self._part_ids] - pos, axis=1) - self._part_rbound
-        return bool((gap <= reach).any())
+        delta = d.geom_xpos[self._part_ids] - pos
+        dist = np.linalg.norm(delta, axis=1)
+        near = dist - self._part_rbound <= reach
+        if forward is None or half_angle >= math.pi or not near.any():
+            return bool(near.any())
+        cos_to = (delta[near] @ forward) / np.maximum(dist[near], 1e-9)
+        spread = np.arcsin(np.clip(self._part_rbound[near] / np.maximum(dist[near], 1e-9), 0.0, 1.0))
+        return bool((np.arccos(np.clip(cos_to, -1.0, 1.0)) <= half_angle + spread).any())
 
     # Each stretch of physics steps ------------------------------------------------------
     def update(self, d: mujoco.MjData, time: float) -> None:
