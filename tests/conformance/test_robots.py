@@ -72,6 +72,21 @@ def footprint_radius(robot) -> float:
     return math.hypot(length, width) / 2.0
 
 
+def assert_lands(world, robot, pose, settle_s: float) -> None:
+    """Dropped at ``pose``, after ``settle_s`` the robot is level, resting at its height,
+    and still (no jitter, no creep), with no physics reset."""
+    sim = Simulation(world, seed=0)
+    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    sim.advance(settle_s)
+    (x0, y0, z0), (roll, pitch, _) = sim.pose_of(1)
+    sim.advance(0.5)
+    (x1, y1, z1), _ = sim.pose_of(1)
+    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
+    assert z0 == pytest.approx(rest_z(robot, pose.location[2]), abs=0.03)
+    assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005
+    assert sim.resets == 0
+
+
 def _cases():
     return [pytest.param(path, pose.name, id=f"{path.stem}:{pose.name}")
             for path in ROBOT_FILES for pose in YELLOW.start_poses]
@@ -85,31 +100,12 @@ def test_robot_lands_on_its_wheels_at_every_start_pose(path: Path, pose_name: st
     if footprint_radius(robot) > room:
         pytest.skip(f"{robot.class_name} ({footprint_radius(robot):.2f} m from its centre to a corner) does not fit "
                     f"at {pose_name}, {room:.2f} m from the nearest wall; it lands in the open-field test")
-    sim = Simulation(YELLOW, seed=0)
-    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
-    sim.advance(2.0)
-    (x0, y0, z0), (roll, pitch, yaw) = sim.pose_of(1)
-    sim.advance(0.5)
-    (x1, y1, z1), _ = sim.pose_of(1)
-    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
-    assert z0 == pytest.approx(rest_z(robot, pose.location[2]), abs=0.03)
-    assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005  # at rest: no jitter, no creep
-    assert sim.resets == 0
+    assert_lands(YELLOW, robot, pose, settle_s=2.0)
 
 
 @pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
 def test_robot_lands_on_its_wheels_in_the_open(path: Path, open_world):
-    robot = load_robot(path)
-    sim = Simulation(open_world, seed=0)
-    pose = open_world.start_poses[0]
-    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
-    sim.advance(3.0)
-    (x0, y0, z0), (roll, pitch, _) = sim.pose_of(1)
-    sim.advance(0.5)
-    (x1, y1, z1), _ = sim.pose_of(1)
-    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
-    assert z0 == pytest.approx(rest_z(robot, pose.location[2]), abs=0.03)
-    assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005
+    assert_lands(open_world, load_robot(path), open_world.start_poses[0], settle_s=3.0)
 
 
 @pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)

@@ -40,6 +40,12 @@ class SensorConfig:
             raise ValueError(f"noise must be within [0, 1), got {self.noise}")
 
 
+def check_range(min_range_m: float, max_range_m: float) -> None:
+    """The MinRange/MaxRange pair of a range sensor: 0 <= min < max."""
+    if not (0.0 <= min_range_m < max_range_m):
+        raise ValueError(f"need 0 <= min_range_m < max_range_m, got {min_range_m}, {max_range_m}")
+
+
 NOISE_BLOCK = 1024  # uniform draws a sensor takes from its generator at a time
 
 COMMON_ALIASES = {

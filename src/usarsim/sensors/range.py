@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from usarsim.readings import RangeItem, RangeReading
-from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sim import frames
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
@@ -25,8 +25,7 @@ class RangeSensorConfig(SensorConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not (0.0 <= self.min_range_m < self.max_range_m):
-            raise ValueError(f"need 0 <= min_range_m < max_range_m, got {self.min_range_m} and {self.max_range_m}")
+        check_range(self.min_range_m, self.max_range_m)
 
 
 @SENSORS.register("RangeSensor")

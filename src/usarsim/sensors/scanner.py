@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from usarsim.readings import RangeScan3DReading, RangeScanReading
-from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
 
@@ -36,8 +36,7 @@ class RangeScannerConfig(SensorConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not (0.0 <= self.min_range_m < self.max_range_m):
-            raise ValueError(f"need 0 <= min_range_m < max_range_m, got {self.min_range_m}, {self.max_range_m}")
+        check_range(self.min_range_m, self.max_range_m)
         if not (0.0 < self.resolution_rad <= self.fov_rad <= 2 * math.pi):
             raise ValueError(f"need 0 < resolution_rad <= fov_rad <= 2 pi, got {self.resolution_rad}, {self.fov_rad}")
 
@@ -136,8 +135,7 @@ class RangeScanner3DConfig(SensorConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not (0.0 <= self.min_range_m < self.max_range_m):
-            raise ValueError(f"need 0 <= min_range_m < max_range_m, got {self.min_range_m}, {self.max_range_m}")
+        check_range(self.min_range_m, self.max_range_m)
         for res, fov, what in ((self.horizontal_resolution_rad, self.horizontal_fov_rad, "horizontal"),
                                (self.vertical_resolution_rad, self.vertical_fov_rad, "vertical")):
             if not (0.0 < res <= fov <= 2 * math.pi):
