@@ -248,3 +248,62 @@ def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factor
     c.step(1.0)
     angle = srv.on_sim(lambda sim: float(sim.data.qpos[sim.robots[1].handle.joint_qpos["LF_J1"]]))
     assert angle == pytest.approx(1.2, abs=0.05)
+
+
+def test_the_humanoid_stands_walks_turns_side_steps_and_takes_joint_commands(server_factory, test_world):
+    srv = server_factory(world=test_world, seed=3)
+    c = srv.connect()
+    c.nfo()
+    # a start pose 1 m up: a walking robot is set down on its feet, not dropped
+    c.send("INIT {ClassName USARBot.QRIO} {Name Q} {Location -6,0,-1.0} {Rotation 0,0,0}")
+    lines = c.step(1.0)
+    sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
+    assert sta.startswith("STA {Type LeggedRobot} {Time ")
+    assert ground_truth(lines)[-1][1][2] == pytest.approx(-0.365, abs=0.01)  # trunk 0.36 m up
+    c.send("DRIVE {LinearVelocity 0.1}")
+    c.step(3.0)
+    speed, rate, _, (p0, p1) = motion(c, 4.0)
+    assert speed == pytest.approx(0.1, rel=0.15) and p1[0] > p0[0] and abs(rate) < 0.05
+    c.send("DRIVE {LinearVelocity 0} {RotationalVelocity -0.4}")  # turn left on the spot
+    c.step(2.0)
+    speed, rate, _, _ = motion(c, 4.0)
+    assert rate == pytest.approx(-0.4, rel=0.15) and speed < 0.02
+    c.send("DRIVE {RotationalVelocity 0} {LateralVelocity 0.02}")  # step to the right
+    c.step(2.0)
+    t0, q0, o0 = ground_truth(c.step(0.2))[-1]
+    t1, q1, _ = ground_truth(c.step(4.0))[-1]  # two whole periods: the sway cancels out
+    right = ((q1[0] - q0[0]) * -math.sin(o0[2]) + (q1[1] - q0[1]) * math.cos(o0[2])) / (t1 - t0)
+    assert right == pytest.approx(0.02, rel=0.15)
+    c.send("DRIVE {LateralVelocity 0}")
+    lines = c.step(4.0)
+    _, p, o = ground_truth(lines)[-1]
+    assert abs(o[0]) < 0.05 and abs(o[1]) < 0.05 and p[2] == pytest.approx(-0.365, abs=0.01)  # upright
+    # at rest, its joints obey joint commands: turn the left foot out
+    c.send("MULTIDRIVE {LHipYaw -0.3}")
+    c.step(1.0)
+    angle = srv.on_sim(lambda sim: float(sim.data.qpos[sim.robots[1].handle.joint_qpos["LHipYaw"]]))
+    assert angle == pytest.approx(-0.3, abs=0.03)
+
+
+def test_the_humanoid_keeps_its_feet_under_changing_commands(test_world):
+    """Commands that change mid-step (speed, side step, turn, stop, in any mix) never
+    topple the walking humanoid: the speed follows the command over half a period and
+    each foot stays where it was put until it swings."""
+    import random
+
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.simulation import Simulation
+
+    robot = resolve_robot("QRIO")
+    sim = Simulation(test_world, seed=0)
+    sim.spawn(1, robot, "Q", (-6.0, 0.0, -0.4), (0.0, 0.0, 0.0))
+    rng = random.Random(7)
+    worst = 0.0
+    for _ in range(12):
+        sim.drive_aerial(1, None, rng.uniform(-0.1, 0.1), rng.choice([0.0, rng.uniform(-0.02, 0.02)]),
+                         rng.choice([0.0, rng.uniform(-0.4, 0.4)]))
+        for _ in range(rng.choice([2, 7, 15])):
+            sim.advance(0.2)
+            _, (roll, pitch, _) = sim.pose_of(1)
+            worst = max(worst, abs(math.remainder(roll, 2 * math.pi)), abs(math.remainder(pitch, 2 * math.pi)))
+    assert worst < 0.15 and sim.resets == 0

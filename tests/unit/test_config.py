@@ -367,3 +367,31 @@ def test_validate_unrecognised_file_exits_1(tmp_path, capsys):
     _, err = capsys.readouterr()
     assert code == 1
     assert str(p) in err and "class_name" in err
+
+
+@pytest.mark.parametrize("knee_forward", [False, True])
+@pytest.mark.parametrize("foot", [(0.0, 0.0, 0.2), (0.05, 0.0, 0.18), (-0.04, 0.03, 0.19), (0.02, -0.05, 0.15)])
+def test_leg_ik_puts_the_foot_where_asked(knee_forward, foot):
+    """Forward kinematics of the angles leg_ik returns (roll about X, then pitch and knee
+    about the rolled Y; USARSim frame, Z down) reach the foot, the knee on its side."""
+    import math
+
+    from usarsim.sim.simulation import leg_ik
+
+    upper, lower = 0.11, 0.11
+    pitch, roll, knee = leg_ik(*foot, upper, lower, knee_forward)
+    # in the leg's plane: forward x, down d; positive pitch swings the leg forward
+    kx, kd = upper * math.sin(pitch), upper * math.cos(pitch)
+    fx, fd = kx + lower * math.sin(pitch + knee), kd + lower * math.cos(pitch + knee)
+    got = (fx, -fd * math.sin(roll), fd * math.cos(roll))
+    assert got == pytest.approx(foot, abs=1e-6)
+    assert (knee < 0) == knee_forward  # a person's knee: forward of the hip-foot line
+    assert (kx * fd - kd * fx > 0) == knee_forward
+
+
+def test_robot_only_a_biped_sways(tmp_path):
+    text = (ROBOTS_DIR / "QRIO.yaml").read_text().replace("phase: 0.5}", "phase: 0.25}")
+    f = tmp_path / "Q.yaml"
+    f.write_text(text)
+    with pytest.raises(ConfigError, match=r"gait\.sway_m: only a biped sways"):
+        load_robot(f)

@@ -120,7 +120,10 @@ class NauticalSpec:
 @dataclass(frozen=True, kw_only=True)
 class Leg:
     """One leg of a walking robot: its hip pitch, hip roll and knee links, the lengths of
-    its upper and lower segments, and its phase in the gait (0..1)."""
+    its upper and lower segments, and its phase in the gait (0..1).  A biped's leg also
+    has a hip yaw (it turns the foot) and ankle pitch and roll links (they keep the sole
+    flat); its chain then runs yaw, roll, pitch, knee, ankle pitch, ankle roll, and
+    ``knee_forward`` bends its knee forward, as a person's does."""
 
     hip_pitch: str
     hip_roll: str
@@ -128,6 +131,15 @@ class Leg:
     upper_m: float
     lower_m: float
     phase: float
+    hip_yaw: str | None = None
+    ankle_pitch: str | None = None
+    ankle_roll: str | None = None
+    knee_forward: bool = False
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        return tuple(j for j in (self.hip_yaw, self.hip_roll, self.hip_pitch, self.knee, self.ankle_pitch,
+                                 self.ankle_roll) if j is not None)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -141,6 +153,10 @@ class Gait:
     max_linear_m_s: float = 0.2
     max_lateral_m_s: float = 0.1
     max_yaw_rate_rad_s: float = 0.8
+    # fraction of a period each foot stands: 0.5 trots; above it every step begins and
+    # ends with both feet down (a biped's double support)
+    duty: float = 0.5
+    sway_m: float = 0.0  # how far the body shifts sideways over the standing foot
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -229,11 +245,16 @@ class RobotConfig:
                 lean = math.sqrt(max(0.0, 1.0 - axis_z ** 2))
                 extra = p.radius_m if p.shape == "capsule" else p.radius_m * lean
                 low.append(p.center[2] + p.length_m / 2.0 * axis_z + extra)
-        if self.gait is not None:  # standing on its legs: hip, leg, foot
+        if self.gait is not None:  # standing on its legs: hip, leg, foot (a ball or a sole)
             for leg in self.gait.legs:
-                hip, knee = self.link(leg.hip_pitch), self.link(leg.knee)
-                foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
-                low.append(hip.location[2] + self.gait.stand_height_m + foot)
+                if leg.ankle_pitch is None:
+                    knee = self.link(leg.knee)
+                    foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
+                else:
+                    sole = self.link(leg.ankle_roll or leg.ankle_pitch)
+                    foot = max((p.center[2] + p.size[2] / 2.0 for p in sole.shapes if p.shape == "box"),
+                               default=0.0)
+                low.append(self.link_origin(leg.hip_pitch)[2] + self.gait.stand_height_m + foot)
         return max(low) if low else 0.0
 
     def link(self, name: str) -> Link | None:
@@ -241,6 +262,16 @@ class RobotConfig:
             if ln.name == name:
                 return ln
         return None
+
+    def link_origin(self, name: str) -> Vec3:
+        """Where the joint of link ``name`` sits in the chassis frame, at rest (the sum of
+        the locations along its chain; links are assumed not to be turned)."""
+        x = y = z = 0.0
+        ln = self.link(name)
+        while ln is not None:
+            x, y, z = x + ln.location[0], y + ln.location[1], z + ln.location[2]
+            ln = self.link(ln.parent)
+        return (x, y, z)
 
     def package(self, name: str) -> MissionPackage | None:
         low = name.lower()
@@ -323,14 +354,17 @@ def load_robot(path: str | Path) -> RobotConfig:
             ls = Section(raw, path=path, key=f"gait.legs[{i}]")
             legs.append(Leg(hip_pitch=ls.str("hip_pitch"), hip_roll=ls.str("hip_roll"), knee=ls.str("knee"),
                             upper_m=ls.float("upper_m", min=0.001), lower_m=ls.float("lower_m", min=0.001),
-                            phase=ls.float("phase", 0.0, min=0.0, max=1.0)))
+                            phase=ls.float("phase", 0.0, min=0.0, max=1.0),
+                            hip_yaw=ls.str("hip_yaw", None), ankle_pitch=ls.str("ankle_pitch", None),
+                            ankle_roll=ls.str("ankle_roll", None), knee_forward=ls.bool("knee_forward", False)))
             ls.finish()
         gait = Gait(legs=tuple(legs), stand_height_m=gs.float("stand_height_m", min=0.001),
                     step_height_m=gs.float("step_height_m", 0.02, min=0.0),
                     period_s=gs.float("period_s", 0.5, min=0.05),
                     max_linear_m_s=gs.float("max_linear_m_s", 0.2, min=0.0, min_exclusive=True),
                     max_lateral_m_s=gs.float("max_lateral_m_s", 0.1, min=0.0, min_exclusive=True),
-                    max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", 0.8, min=0.0, min_exclusive=True))
+                    max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", 0.8, min=0.0, min_exclusive=True),
+                    duty=gs.float("duty", 0.5, min=0.5, max=0.95), sway_m=gs.float("sway_m", 0.0, min=0.0))
         gs.finish()
     if top.has("aerial") and drive != "aerial":
         raise top.error("aerial", "only an aerial robot (drive: aerial) has aerial limits")
@@ -409,8 +443,10 @@ def load_robot(path: str | Path) -> RobotConfig:
                                       "(number: 0, 1, ...), the WheelNumber of its DRIVE")
 
     if gait is not None:
+        if gait.sway_m > 0.0 and (len(gait.legs) != 2 or abs(abs(gait.legs[0].phase - gait.legs[1].phase) - 0.5) > 1e-6):
+            raise top.error("gait.sway_m", "only a biped sways: two legs half a period apart (phase 0 and 0.5)")
         for leg in gait.legs:
-            for j in (leg.hip_pitch, leg.hip_roll, leg.knee):
+            for j in leg.joints:
                 if j not in lnames:
                     raise top.error("gait", f"unknown leg joint '{j}'{did_you_mean(j, lnames)}")
     status_joints = tuple(str(x) for x in top.list("status_joints", []))

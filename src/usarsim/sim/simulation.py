@@ -51,19 +51,26 @@ EXTERNAL_FORCE_STEPS = 10
 GAIT_STEPS = 5  # a walking robot's joint targets are renewed every 5 physics steps (20 ms)
 HULL_CROSS_DRAG = 10.0  # a vessel's drag across its hull, relative to along it
 HULL_PITCH_RIGHTING = 0.05  # its pitch righting, relative to its roll righting
-def leg_ik(fx: float, fy: float, fz: float, upper: float, lower: float) -> tuple[float, float, float]:
+def leg_ik(fx: float, fy: float, fz: float, upper: float, lower: float,
+           knee_forward: bool = False) -> tuple[float, float, float]:
     """Hip pitch, hip roll and knee angles that put a foot at (fx, fy, fz) from its hip
     (USARSim frame: forward, right, down), for a leg of two segments whose knee bends
-    backwards.  Positive pitch swings the leg forward, positive roll swings it left, a
-    positive knee folds the lower leg forward."""
+    backwards (or forwards, as a person's, with ``knee_forward``).  Positive pitch swings
+    the leg forward, positive roll swings it left, a positive knee folds the lower leg
+    forward.  The roll turns the plane in which pitch and knee move."""
     roll = -math.atan2(fy, fz)
     down = math.hypot(fy, fz)
     d = min(max(math.hypot(fx, down), abs(upper - lower) + 1e-6), (upper + lower) * 0.999)
     inner = math.acos(max(-1.0, min(1.0, (upper ** 2 + lower ** 2 - d ** 2) / (2 * upper * lower))))
-    knee = math.pi - inner
     beta = math.acos(max(-1.0, min(1.0, (upper ** 2 + d ** 2 - lower ** 2) / (2 * upper * d))))
-    pitch = math.atan2(fx, down) - beta
-    return pitch, roll, knee
+    if knee_forward:
+        return math.atan2(fx, down) + beta, roll, inner - math.pi
+    return math.atan2(fx, down) - beta, roll, math.pi - inner
+
+
+def _smooth(x: float) -> float:
+    """0 to 1 over x in [0, 1], with zero slope at both ends."""
+    return 0.5 - 0.5 * math.cos(math.pi * min(1.0, max(0.0, x)))
 
 
 def sane_velocity(robot: RobotConfig) -> float:
@@ -137,7 +144,16 @@ class SimRobot:
     fly: dict = field(default_factory=lambda: {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0})
     sail: dict = field(default_factory=lambda: {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0})
     walk: dict = field(default_factory=lambda: {"linear": 0.0, "lateral": 0.0, "rotational": 0.0})
-    walking: bool = True  # stand up once after the spawn
+    # a walking robot's gait: its clock; how far it has set off (0 standing, 1 walking;
+    # it fades in and out over half a period); the velocities it walks at (they follow
+    # the command within half a period); each foot's place (forward, right, yaw) from
+    # under its hip and where its swing began; the time the gait was last set
+    gait_clock: float = 0.0
+    gait_amp: float = 0.0
+    gait_vel: tuple = (0.0, 0.0, 0.0)
+    gait_last: float = 0.0
+    feet: list = field(default_factory=list)
+    swing_from: list = field(default_factory=list)
     in_water: bool = False
 
     battery_used_s: float = 0.0
@@ -276,9 +292,16 @@ class Simulation:
                 f"y within {fl.center[1] - fl.size[1] / 2:.2f}..{fl.center[1] + fl.size[1] / 2:.2f})")
         if not (-100.0 <= loc[2] <= 100.0):
             raise SimulationError(f"location z {loc[2]:.2f} is too far from the floor (allowed -100..100 m)")
+        level = abs(rot[0]) < 1e-6 and abs(rot[1]) < 1e-6
         # a level robot put lower than it stands (its wheels in the floor) is lifted onto it
-        if abs(rot[0]) < 1e-6 and abs(rot[1]) < 1e-6 and loc[2] > -robot.lowest_point_m:
+        if level and loc[2] > -robot.lowest_point_m:
             loc = (loc[0], loc[1], -robot.lowest_point_m - 0.005)
+        # a walking robot is set down on its feet on what lies below the start pose: a
+        # standing biped would not survive the drop the others take
+        if level and robot.gait is not None:
+            ground = self._ground_below(loc)
+            if ground is not None:
+                loc = (loc[0], loc[1], ground - robot.lowest_point_m - 0.005)
         prefix = f"robot{uid}"
         try:
             sensors = [make_sensor(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
@@ -297,6 +320,8 @@ class Simulation:
             builder.remove_robot(self.spec, prefix)
             self._rebuild()
             raise
+        if robot.gait is not None:
+            self._stand_up(r)
         view = self.view()
         for s in sensors:
             s.reset(view)
@@ -306,6 +331,13 @@ class Simulation:
         self._schedule_robot(r)
         log.info("spawned %s '%s' (id %d) at %.2f,%.2f,%.2f at t=%.3f", robot.class_name, name, uid, *loc, self.time)
         return r
+
+    def _ground_below(self, loc) -> float | None:
+        """The USARSim z of the first surface straight below ``loc`` (None: nothing)."""
+        start = frames.to_mj_vec(loc)
+        geom = np.array([-1], dtype=np.int32)
+        dist = mujoco.mj_ray(self.model, self.data, start, np.array([0.0, 0.0, -1.0]), None, 1, -1, geom)
+        return None if dist < 0 else loc[2] + dist
 
     def remove(self, uid: int) -> None:
         r = self.robots.pop(uid, None)
@@ -452,39 +484,123 @@ class Simulation:
             d.xfrc_applied[b, 3:] = torque
 
     def _walk(self, r: SimRobot) -> None:
-        """Set the leg joints of a walking robot for this instant of its trot: diagonal legs
-        together, each foot sweeping back under the body while it stands (as far as the
-        commanded speed, side speed and turn rate move the ground past it in half a
-        period) and swinging forward, lifted, while the other pair stands.  When it stops
-        its feet go back under its hips, and its joints are then left to joint commands."""
+        """Set the leg joints of a walking robot for this instant of its gait.  Each foot
+        stands for ``duty`` of a period, staying where it was put while the body moves
+        over it (the commanded speed, side speed and turn rate carry the body), then swings
+        forward, lifted, to where it will stand evenly about its hip at the current speed:
+        a trot for four legs at duty 0.5 (diagonal legs together), a walk for two legs
+        above it, with both feet down at the start and end of every step while the body
+        sways over the foot that will stand alone.  Hip yaw joints turn the feet with the
+        ground, ankles keep the soles flat.  The gait sets off (swaying first) and comes to
+        rest over half a period each; the walking speed follows the command within half a
+        period.  At rest its feet are back under its hips and its joints are left to joint
+        commands."""
         g = r.config.gait
         if r.battery_empty:
             return
-        v, lat, w = r.walk["linear"], r.walk["lateral"], r.walk["rotational"]
-        moving = abs(v) > 1e-6 or abs(lat) > 1e-6 or abs(w) > 1e-6
-        if not moving and not r.walking:
+        cmd = (r.walk["linear"], r.walk["lateral"], r.walk["rotational"])
+        moving = any(abs(c) > 1e-6 for c in cmd)
+        if not moving and r.gait_amp <= 0.0:
             return  # standing: its joints are the client's (DRIVE Name groups, MULTIDRIVE)
-        r.walking = moving  # just stopped: one last time, back to standing
-        t = self.time
-        for leg in g.legs:
-            hip = r.config.link(leg.hip_pitch).location
-            fx = fy = 0.0
+        n = len(g.legs)
+        dt = max(0.0, self.time - r.gait_last)
+        r.gait_last = self.time
+        if r.gait_amp <= 0.0:  # setting off: both feet down, the body between them
+            r.gait_clock = (g.duty - 0.5) / 2.0 * g.period_s
+            r.gait_amp, dt = 1e-9, 0.0
+            r.gait_vel = (0.0, 0.0, 0.0)
+            r.feet = [[0.0, 0.0, 0.0] for _ in range(n)]
+            r.swing_from = [None] * n
+        else:
+            r.gait_clock += dt
+        half = 0.5 * g.period_s
+        tops = (g.max_linear_m_s, g.max_lateral_m_s, g.max_yaw_rate_rad_s)
+        if r.gait_amp >= 1.0:  # under way: the walking speed follows the command
+            r.gait_vel = tuple(cur + max(-top * dt / half, min(top * dt / half, c - cur))
+                               for cur, c, top in zip(r.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops))
+        at_rest = not any(r.gait_vel) and all(abs(x) < 1e-4 for f in r.feet for x in f)
+        if moving:
+            r.gait_amp = min(1.0, r.gait_amp + dt / half)
+        elif at_rest:
+            r.gait_amp = max(0.0, r.gait_amp - dt / half)
+        # the feet: standing ones stay on the ground as the body moves, swinging ones go
+        # to where they will stand
+        stance_t = g.duty * g.period_s
+        v, lat, w = r.gait_vel
+        reach = 0.4 * (g.legs[0].upper_m + g.legs[0].lower_m)
+        for i, leg in enumerate(g.legs):
+            hip = r.config.link_origin(leg.hip_pitch)
+            ground = (v - w * hip[1], lat + w * hip[0], w)  # how the ground moves past the hip
+            p = (r.gait_clock / g.period_s + leg.phase) % 1.0
+            f = r.feet[i]
+            if p < g.duty or r.gait_amp < 1.0:
+                if r.swing_from[i] is not None and r.gait_amp >= 1.0:  # it landed p x period ago
+                    for j in range(3):
+                        f[j] = ground[j] * (stance_t / 2.0 - p * g.period_s)
+                else:
+                    for j in range(3):
+                        f[j] -= ground[j] * dt
+                r.swing_from[i] = None
+            else:
+                if r.swing_from[i] is None:  # it stood until (p - duty) x period ago
+                    stood = max(0.0, dt - (p - g.duty) * g.period_s)
+                    r.swing_from[i] = [x - gx * stood for x, gx in zip(f, ground)]
+                s_ = _smooth((p - g.duty) / (1.0 - g.duty))
+                for j in range(3):
+                    f[j] = r.swing_from[i][j] + (ground[j] * stance_t / 2.0 - r.swing_from[i][j]) * s_
+            f[0] = max(-reach, min(reach, f[0]))
+            f[1] = max(-reach, min(reach, f[1]))
+            f[2] = max(-0.8, min(0.8, f[2]))
+        if r.gait_amp <= 0.0:
+            r.feet = [[0.0, 0.0, 0.0] for _ in range(n)]
+        for name, value in self._leg_targets(r, r.gait_clock, r.gait_amp):
+            r.joints[name] = (0, value)
+            self._apply_joint(r, r.config.link(name))
+
+    def _leg_targets(self, r: SimRobot, t: float, amp: float) -> list[tuple[str, float]]:
+        """The angle of every leg joint of a walking robot at time ``t`` of its gait, its
+        feet where ``r.feet`` puts them, its sway and steps scaled by ``amp`` (0: standing,
+        every foot under its hip)."""
+        g = r.config.gait
+        # a swaying robot sways first and steps once it sways fully
+        step_amp = max(0.0, 2.0 * amp - 1.0) if g.sway_m > 0.0 else amp
+        phases = [(t / g.period_s + leg.phase) % 1.0 for leg in g.legs]
+        # a biped's body sways sideways (right positive) as a sine of the gait, furthest
+        # over the standing foot in the middle of the other foot's swing: the smooth sway
+        # keeps the point where the feet carry the weight inside the standing sole
+        shift = 0.0
+        if amp > 0.0 and g.sway_m > 0.0:
+            side = r.config.link_origin(g.legs[0].hip_pitch)[1]
+            shift = -math.copysign(g.sway_m * min(1.0, 2.0 * amp), side) * math.cos(
+                2.0 * math.pi * (phases[0] - (g.duty + 1.0) / 2.0))
+        targets = []
+        for i, (leg, p) in enumerate(zip(g.legs, phases)):
+            fx, fy, yaw = r.feet[i] if amp > 0.0 and r.feet else (0.0, 0.0, 0.0)
+            fy -= shift
             fz = g.stand_height_m
-            if moving:
-                p = (t / g.period_s + leg.phase) % 1.0
-                dx = (v - w * hip[1]) * g.period_s / 2.0
-                dy = (lat + w * hip[0]) * g.period_s / 2.0
-                if p < 0.5:  # stance: from the front of the stride to its back
-                    k = 0.5 - p / 0.5
-                else:  # swing: back to the front, lifted
-                    s = (p - 0.5) / 0.5
-                    k = s - 0.5
-                    fz -= g.step_height_m * math.sin(math.pi * s)
-                fx, fy = dx * k, dy * k
-            pitch, roll, knee = leg_ik(fx, fy, fz, leg.upper_m, leg.lower_m)
-            for name, value in ((leg.hip_pitch, pitch), (leg.hip_roll, roll), (leg.knee, knee)):
-                r.joints[name] = (0, value)
-                self._apply_joint(r, r.config.link(name))
+            if amp > 0.0 and p >= g.duty:  # swinging: lifted
+                fz -= g.step_height_m * step_amp * math.sin(math.pi * (p - g.duty) / (1.0 - g.duty))
+            if leg.hip_yaw is not None:
+                fx, fy = math.cos(yaw) * fx + math.sin(yaw) * fy, -math.sin(yaw) * fx + math.cos(yaw) * fy
+            pitch, roll, knee = leg_ik(fx, fy, fz, leg.upper_m, leg.lower_m, leg.knee_forward)
+            targets += [(leg.hip_pitch, pitch), (leg.hip_roll, roll), (leg.knee, knee)]
+            if leg.hip_yaw is not None:
+                targets.append((leg.hip_yaw, yaw))
+            if leg.ankle_pitch is not None:
+                targets.append((leg.ankle_pitch, -(pitch + knee)))
+            if leg.ankle_roll is not None:
+                targets.append((leg.ankle_roll, -roll))
+        return targets
+
+    def _stand_up(self, r: SimRobot) -> None:
+        """A walking robot is built standing: its leg joints start at their standing angles."""
+        m, d = self.model, self.data
+        for name, value in self._leg_targets(r, 0.0, 0.0):
+            r.joints[name] = (0, value)
+            d.qpos[r.handle.joint_qpos[name]] = value
+            d.act[int(m.actuator_actadr[r.handle.actuator[name]])] = value
+            self._apply_joint(r, r.config.link(name))
+        mujoco.mj_forward(m, d)
 
     def _apply_rollers(self) -> None:
         """Roller tables carry their loads: every body touching a table's top (other than
