@@ -150,3 +150,44 @@ def test_every_registered_sensor_mounts_reports_on_time_and_formats(tmp_path, se
         assert "nan" not in line.lower() and "inf" not in line.lower()
         back = parse_message(line[:-2])  # a client can read it back
         assert format_message(back) == line
+
+
+CAMERA_ROBOTS = [p for p in ROBOT_FILES if any(i.item_type in ("Camera", "OmniCam") for i in load_robot(p).items)]
+
+
+@pytest.mark.parametrize("path", CAMERA_ROBOTS, ids=lambda p: p.stem)
+def test_every_camera_robot_pans_and_tilts_its_camera(path: Path, test_world):
+    """A robot with a camera has the mission package CameraPanTilt (link 1 pans, link 2
+    tilts, protocol.md 5.6) and its first camera rides on it: panning turns the camera's
+    view to the right, tilting raises it, each as far as its link's range allows (a
+    drone's camera only tilts)."""
+    from usarsim.sim import frames
+
+    robot = load_robot(path)
+    pkg = robot.package("CameraPanTilt")
+    assert pkg is not None and len(pkg.links) == 2, "no CameraPanTilt of two links"
+    pan, tilt = pkg.links
+    cam = next(i for i in robot.items if i.item_type in ("Camera", "OmniCam"))
+    sim = Simulation(test_world, seed=0)
+    sim.spawn(1, robot, "R1", (-6.0, 0.0, -2.0), (0.0, 0.0, 0.0))
+    sim.advance(0.5)
+    r = sim.robots[1]
+
+    def view():
+        _, rot = r.handle.sensor_frame(sim.data, cam.location, cam.orientation, cam.mount)
+        ahead = frames.from_mj_vec(rot[:, 0])  # the camera's forward axis, USARSim frame
+        _, _, yaw = frames.mj_mat_to_usar_euler(r.handle.rotation_mj(sim.data))
+        heading = math.atan2(ahead[1], ahead[0])
+        return math.remainder(heading - yaw, 2 * math.pi), -math.asin(max(-1.0, min(1.0, ahead[2])))
+
+    yaw0, pitch0 = view()
+    reach = {}
+    for name, value in ((pan, 0.3), (tilt, 0.2)):
+        ln = robot.link(name)
+        reach[name] = max(min(value, ln.max_range), ln.min_range) if ln.limited else value
+        assert sim.drive_joint(1, name, value)
+    sim.advance(0.3 / min(robot.link(pan).max_speed, robot.link(tilt).max_speed) + 1.0)
+    yaw1, pitch1 = view()
+    assert reach[tilt] > 0.1, "the camera tilts"
+    assert yaw1 - yaw0 == pytest.approx(reach[pan], abs=0.05), "panning turns the camera right"
+    assert pitch1 - pitch0 == pytest.approx(reach[tilt], abs=0.05), "tilting raises the camera"
