@@ -1,5 +1,5 @@
 """Every robot file of the catalogue (issue: robot catalogue): it lands at every start pose
-of DM-USAR_yellow on its wheels without jitter; its drive command moves it the right way at
+of every shipped world on its wheels, tracks or legs without jitter; its drive command moves it the right way at
 the speed its file promises (within 15 %); its CONF and GEO lines say what its file says."""
 
 from __future__ import annotations
@@ -9,14 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from usarsim.config.catalog import ROBOTS_DIR, resolve_world
+from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
 from usarsim.protocol import messages as M
 from usarsim.sim.simulation import Simulation
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
-YELLOW = resolve_world("DM-USAR_yellow")
+WORLD_FILES = sorted(WORLDS_DIR.glob("*.yaml"))
 OPEN_WORLD = """\
 name: OpenField
 description: an empty 2 x 2 km floor, room for a car at speed (tests only)
@@ -26,18 +26,18 @@ start_poses:
 """
 
 
-def rest_z(robot, spawn_z: float) -> float:
-    """Where the chassis origin rests: its lowest wheel, ball or box touches the floor (Z
-    down); an aerial robot hovers where it was put."""
+def rest_z(robot, spawn_z: float, ground_z: float = 0.0) -> float:
+    """Where the chassis origin rests: its lowest wheel, ball or box touches the surface at
+    ``ground_z`` (Z down); an aerial robot hovers where it was put."""
     if robot.drive == "aerial":  # put no lower than it stands (the simulation lifts it)
-        return min(spawn_z, -robot.lowest_point_m - 0.005)
+        return min(spawn_z, ground_z - robot.lowest_point_m - 0.005)
     if robot.drive == "legged":
-        return -robot.lowest_point_m
+        return ground_z - robot.lowest_point_m
     low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
     low += [p.center[2] + p.radius_m for p in robot.chassis if p.shape == "sphere"]
     if robot.drive == "static" or not low:
         low += [p.center[2] + p.size[2] / 2.0 for p in robot.chassis if p.shape == "box"]
-    return -max(low)
+    return ground_z - max(low)
 
 
 @pytest.fixture(scope="module")
@@ -47,19 +47,28 @@ def open_world(tmp_path_factory):
     return load_world(p)
 
 
-def clearance(world, x: float, y: float) -> float:
-    """Horizontal distance from (x, y) to the nearest static object of the world."""
+def clearance(world, x: float, y: float, ground_z: float = 0.0) -> float:
+    """Horizontal distance from (x, y) to the nearest static object of the world that stands
+    on the level of ``ground_z`` (Z down): more than 5 cm above it and starting less than
+    2.5 m above it (a deck above a room does not block the room, nor the room's walls the
+    deck)."""
     import numpy as np
 
     from usarsim.sim.frames import euler_to_mat
 
     best = math.inf
     for o in world.objects:
+        if o.mass_kg > 0:
+            continue  # movable obstacles are pushed aside
         if o.shape == "box":
             half = np.abs(euler_to_mat(*o.rotation)) @ (np.array(o.size) / 2.0)
+        elif o.shape in ("cylinder", "capsule", "sphere"):
+            half = np.abs(euler_to_mat(*o.rotation)) @ np.array([o.radius_m, o.radius_m, o.length_m / 2.0 + (
+                o.radius_m if o.shape != "cylinder" else 0.0)])
         else:
-            half = np.abs(euler_to_mat(*o.rotation)) @ np.array([o.radius_m, o.radius_m, o.length_m / 2.0])
-        if o.center[2] - half[2] > -0.05:  # low plates do not block a robot's body
+            continue
+        top, bottom = o.center[2] - half[2], o.center[2] + half[2]
+        if top > ground_z - 0.05 or bottom < ground_z - 2.5:
             continue
         dx = max(abs(x - o.center[0]) - half[0], 0.0)
         dy = max(abs(y - o.center[1]) - half[1], 0.0)
@@ -72,40 +81,50 @@ def footprint_radius(robot) -> float:
     return math.hypot(length, width) / 2.0
 
 
-def assert_lands(world, robot, pose, settle_s: float) -> None:
-    """Dropped at ``pose``, after ``settle_s`` the robot is level, resting at its height,
-    and still (no jitter, no creep), with no physics reset."""
+def assert_lands(world, robot, poses, settle_s: float) -> None:
+    """Dropped at each of ``poses`` (one robot at each, all at once: start poses leave
+    room between them), after ``settle_s`` every robot is level, resting at its height on
+    the surface below its pose, and still (no jitter, no creep), with no physics reset."""
     sim = Simulation(world, seed=0)
-    sim.spawn(1, robot, "R1", pose.location, pose.rotation)
+    grounds = [sim._ground_below(p.location) for p in poses]
+    for uid, pose in enumerate(poses, start=1):
+        sim.spawn(uid, robot, f"R{uid}", pose.location, pose.rotation)
     sim.advance(settle_s)
-    (x0, y0, z0), (roll, pitch, _) = sim.pose_of(1)
+    before = {uid: sim.pose_of(uid) for uid in range(1, len(poses) + 1)}
     sim.advance(0.5)
-    (x1, y1, z1), _ = sim.pose_of(1)
-    assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1
-    assert z0 == pytest.approx(rest_z(robot, pose.location[2]), abs=0.03)
-    assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005
+    for uid, (pose, ground) in enumerate(zip(poses, grounds), start=1):
+        (x0, y0, z0), (roll, pitch, _) = before[uid]
+        (x1, y1, z1), _ = sim.pose_of(uid)
+        where = f"{robot.class_name} at {pose.name}"
+        assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1, where
+        assert z0 == pytest.approx(rest_z(robot, pose.location[2], ground), abs=0.03), where
+        assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005, where
     assert sim.resets == 0
 
 
-def _cases():
-    return [pytest.param(path, pose.name, id=f"{path.stem}:{pose.name}")
-            for path in ROBOT_FILES for pose in YELLOW.start_poses]
+@pytest.mark.parametrize("world_path", WORLD_FILES, ids=lambda p: p.stem)
+def test_every_start_pose_has_room_for_every_robot(world_path: Path):
+    """Start poses are set in the open: the largest robot of the catalogue fits at each."""
+    world = load_world(world_path)
+    sim = Simulation(world, seed=0)
+    largest = max((load_robot(p) for p in ROBOT_FILES), key=footprint_radius)
+    assert len(world.start_poses) >= 6
+    for pose in world.start_poses:
+        room = clearance(world, pose.location[0], pose.location[1], sim._ground_below(pose.location))
+        assert room >= footprint_radius(largest), (
+            f"{pose.name}: {room:.2f} m to the nearest obstacle, {largest.class_name} needs {footprint_radius(largest):.2f}")
 
 
-@pytest.mark.parametrize("path, pose_name", _cases())
-def test_robot_lands_on_its_wheels_at_every_start_pose(path: Path, pose_name: str):
-    robot = load_robot(path)
-    pose = YELLOW.start_pose(pose_name)
-    room = clearance(YELLOW, pose.location[0], pose.location[1])
-    if footprint_radius(robot) > room:
-        pytest.skip(f"{robot.class_name} ({footprint_radius(robot):.2f} m from its centre to a corner) does not fit "
-                    f"at {pose_name}, {room:.2f} m from the nearest wall; it lands in the open-field test")
-    assert_lands(YELLOW, robot, pose, settle_s=2.0)
+@pytest.mark.parametrize("world_path", WORLD_FILES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
+def test_robot_lands_on_its_wheels_at_every_start_pose(path: Path, world_path: Path):
+    world = load_world(world_path)
+    assert_lands(world, load_robot(path), world.start_poses, settle_s=2.0)
 
 
 @pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
 def test_robot_lands_on_its_wheels_in_the_open(path: Path, open_world):
-    assert_lands(open_world, load_robot(path), open_world.start_poses[0], settle_s=3.0)
+    assert_lands(open_world, load_robot(path), open_world.start_poses[:1], settle_s=3.0)
 
 
 @pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)

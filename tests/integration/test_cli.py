@@ -159,7 +159,7 @@ def test_serve_listens_serves_and_exits_cleanly_on_signal(serve, sig):
     assert 0 < port < 65536
     with Client(port) as c:
         assert c.next_line().raw == NFO_ON_CONNECT
-        assert c.ask("GETSTARTPOSES", "NFO").text.startswith("NFO {StartPoses 12} {PlayerStart1 ")
+        assert c.ask("GETSTARTPOSES", "NFO").text.startswith("NFO {StartPoses 8} {PlayerStart1 ")
         c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}")
         # real-time mode: data flows without STEP
         c.wait_line(lambda ln: ln.text.startswith("SEN") and "{Type GroundTruth}" in ln.text)

@@ -332,7 +332,7 @@ def test_every_sensor_line_arrives_crlf_terminated_with_a_name(robot):
 
     gt = segments(by_type["GroundTruth"][-1].text)
     assert gt["Name"] == "GroundTruth"
-    assert vec(gt["Location"])[:2] == pytest.approx((-5.2, 0.0), abs=0.01)
+    assert vec(gt["Location"])[:2] == pytest.approx((-9.5, 0.0), abs=0.01)
     ins = segments(by_type["INS"][-1].text)
     assert ins["Name"] == "INS" and len(vec(ins["Location"])) == 3 and len(vec(ins["Orientation"])) == 3
 

@@ -329,7 +329,7 @@ def test_validate_shipped_world_prints_one_line(capsys):
     assert err == ""
     lines = out.splitlines()
     assert len(lines) == 1
-    assert re.match(r"ok: world DM-USAR_yellow: \d+ objects, 12 start poses", lines[0]), lines[0]
+    assert re.match(r"ok: world DM-USAR_yellow: \d+ objects, 8 start poses", lines[0]), lines[0]
 
 
 def test_validate_shipped_robot_prints_one_line(capsys):
