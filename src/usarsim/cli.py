@@ -71,10 +71,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a folder of robot files of your own (one YAML file per class, named after the class); "
                         "clients INIT them by class name like the shipped robots; may be repeated")
 
-    v = sub.add_parser("validate", help="check a world or robot file",
+    v = sub.add_parser("validate", help="check a world, robot, RNDF or MDF file",
                        description="Load a world or robot file, build its MuJoCo model and print a one-line "
-                                   "summary, or the error with the file, the key and what is allowed.")
-    v.add_argument("path", help="path of a .yaml world or robot file")
+                                   "summary, or the error with the file, the key and what is allowed. A DARPA "
+                                   "route network (.rndf) or mission (.mdf) file is checked the same way (an MDF "
+                                   "against the RNDF beside it); its errors name the line.")
+    v.add_argument("path", help="path of a .yaml world or robot file, or of a .rndf or .mdf file")
 
     sub.add_parser("worlds", help="list the worlds that come with usarsim")
     sub.add_parser("robots", help="list the robot classes that come with usarsim")
@@ -158,7 +160,11 @@ def cmd_validate(args) -> int:
 
     try:
         kind = file_kind(args.path)
-        if kind == "world":
+        if kind in ("rndf", "mdf"):
+            from usarsim.config.rndf import describe_route_file
+
+            print(describe_route_file(args.path))
+        elif kind == "world":
             from usarsim.config.world import check_world_file
             from usarsim.sim.simulation import Simulation
 

@@ -116,7 +116,9 @@ def test_worlds_and_robots_list_the_shipped_files():
     worlds = usarsim("worlds")
     robots = usarsim("robots")
     assert worlds.returncode == 0 and robots.returncode == 0
-    assert worlds.stdout.startswith("DM-USAR_yellow ")
+    names = [ln.split()[0] for ln in worlds.stdout.splitlines()]
+    assert "DM-USAR_yellow" in names and names == sorted(names)
+    assert re.search(r"^DM-USAR_yellow\s+NIST yellow arena", worlds.stdout, re.M)
     assert re.search(r"^P2AT\s+skid \(SkidSteered\)\s+.*RangeScanner", robots.stdout, re.M)
 
 

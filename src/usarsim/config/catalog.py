@@ -10,6 +10,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from usarsim.config.reader import did_you_mean, load_yaml
+from usarsim.config.rndf import route_file_kind
 from usarsim.config.robot import RobotConfig, load_robot
 from usarsim.config.world import WorldConfig, load_world
 from usarsim.errors import ConfigError
@@ -73,7 +74,11 @@ def resolve_robot(class_name: str, *, allow_path: bool = False, extra_dirs=()) -
 
 
 def file_kind(path: str | Path) -> str:
-    """'robot' or 'world', decided by the keys the file holds."""
+    """'robot' or 'world', decided by the keys the file holds; 'rndf' or 'mdf' for a DARPA
+    route network or mission file (config/rndf.py)."""
+    route = route_file_kind(path)
+    if route is not None:
+        return route
     data = load_yaml(path)
     if "class_name" in data:
         return "robot"
