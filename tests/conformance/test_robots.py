@@ -29,8 +29,8 @@ start_poses:
 def rest_z(robot, spawn_z: float, ground_z: float = 0.0) -> float:
     """Where the chassis origin rests: its lowest wheel, ball or box touches the surface at
     ``ground_z`` (Z down); an aerial robot hovers where it was put."""
-    if robot.drive == "aerial":  # put no lower than it stands (the simulation lifts it)
-        return min(spawn_z, ground_z - robot.lowest_point_m - 0.005)
+    if robot.drive == "aerial":  # set down at a start pose, it hovers there
+        return ground_z - robot.lowest_point_m - robot.spawn_clearance_m
     if robot.drive == "legged":
         return ground_z - robot.lowest_point_m
     low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
@@ -88,7 +88,7 @@ def assert_lands(world, robot, poses, settle_s: float) -> None:
     sim = Simulation(world, seed=0)
     grounds = [sim._ground_below(p.location) for p in poses]
     for uid, pose in enumerate(poses, start=1):
-        sim.spawn(uid, robot, f"R{uid}", pose.location, pose.rotation)
+        sim.spawn(uid, robot, f"R{uid}", pose.location, pose.rotation, set_down=True)
     sim.advance(settle_s)
     before = {uid: sim.pose_of(uid) for uid in range(1, len(poses) + 1)}
     sim.advance(0.5)

@@ -214,6 +214,9 @@ class RobotConfig:
     status_joints: tuple[str, ...] = ()  # links whose angles STA reports (TeleMax flippers, protocol.md 6.2)
     nautical: NauticalSpec | None = None
     gait: Gait | None = None
+    # how far above the surface below a start pose the robot's lowest point is set (the
+    # per-robot Z of USARSim's start poses; manual section 5.3)
+    spawn_clearance_m: float = 0.02
     extra: dict = field(default_factory=dict)
 
     @property
@@ -319,6 +322,7 @@ def load_robot(path: str | Path) -> RobotConfig:
     mrs = top.float("max_rear_steer_rad", 0.0, min=0.0)
     battery = top.float("battery_s", 1200.0, min=0.0, min_exclusive=True)
     status_interval = top.float("status_interval_s", 0.2, min=0.01, max=10.0)
+    spawn_clearance = top.float("spawn_clearance_m", 0.02, min=0.0, max=2.0)
     wheel_friction = top.float("wheel_friction", 1.0, min=0.0, max=10.0)
     wheel_gain = top.float("wheel_gain", 20.0, min=0.0, min_exclusive=True)
     wheel_torque = top.float("wheel_torque_nm", None, min=0.0, min_exclusive=True)
@@ -497,7 +501,8 @@ def load_robot(path: str | Path) -> RobotConfig:
     return RobotConfig(class_name=class_name, description=desc, path=path, vehicle_type=vehicle_type,
                        steering_type=steering, drive=drive, mass_kg=mass, max_speed_rad_s=max_speed,
                        max_torque_nm=max_torque, max_front_steer_rad=mfs, max_rear_steer_rad=mrs,
-                       battery_s=battery, status_interval_s=status_interval, geometry=geometry,
+                       battery_s=battery, status_interval_s=status_interval, spawn_clearance_m=spawn_clearance,
+                       geometry=geometry,
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
                        wheel_friction=wheel_friction, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),

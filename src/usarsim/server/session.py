@@ -129,9 +129,13 @@ class Session:
                 return
             location = tuple(_r2(v) for v in pose.location)
             rotation = tuple(_r2(v) for v in pose.rotation)
+            set_down = True
         elif cmd.location is not None:
             location = cmd.location
             rotation = cmd.rotation or (0.0, 0.0, 0.0)
+            # a location copied from GETSTARTPOSES is that start pose (MOAST spawns this way)
+            set_down = any(all(abs(a - _r2(b)) < 0.006 for a, b in zip(location, p.location))
+                           for p in self.facade.start_poses)
         else:
             poses = self.facade.start_poses
             if not poses:
@@ -139,6 +143,7 @@ class Session:
                 return
             location = tuple(_r2(v) for v in poses[0].location)
             rotation = tuple(_r2(v) for v in poses[0].rotation)
+            set_down = True
             log.info("%s: INIT without Location or Start: using start pose %s", self.conn.peer, poses[0].name)
         if not all(math.isfinite(v) for v in (*location, *rotation)):
             self.log_once("init", "INIT ignored: location and rotation must be finite")
@@ -146,7 +151,8 @@ class Session:
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
         self.state = SPAWNING
-        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self.conn.spawn_done_threadsafe)
+        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self.conn.spawn_done_threadsafe,
+                          set_down=set_down)
 
     def spawn_done(self, result, error) -> None:
         if self.state == CLOSED:

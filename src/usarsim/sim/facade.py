@@ -69,8 +69,8 @@ class SimFacade:
 
     # Requests ----------------------------------------------------------------------
     def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation,
-              on_done: Callable[[Any, BaseException | None], None]) -> None:
-        self.runner.submit(Request(lambda sim: sim.spawn(uid, robot, name, location, rotation),
+              on_done: Callable[[Any, BaseException | None], None], set_down: bool = False) -> None:
+        self.runner.submit(Request(lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down),
                                    immediate=True, on_done=on_done))
 
     def remove(self, uid: int) -> None:

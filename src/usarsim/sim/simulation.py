@@ -276,8 +276,11 @@ class Simulation:
         for ln in r.config.links:
             self._apply_joint(r, ln)
 
-    def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation) -> SimRobot:
-        """Add a robot at once, at the current simulated time; others keep their state."""
+    def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation, set_down: bool = False) -> SimRobot:
+        """Add a robot at once, at the current simulated time; others keep their state.
+        ``set_down`` (a start pose): a level robot is put with its lowest point its own
+        ``spawn_clearance_m`` above the surface below the pose, so that it lands on its
+        wheels, tracks or legs wherever the pose is; walking robots are always set down."""
         if uid in self.robots:
             raise SimulationError(f"robot id {uid} already exists")
         loc = tuple(float(v) for v in location)
@@ -296,12 +299,13 @@ class Simulation:
         # a level robot put lower than it stands (its wheels in the floor) is lifted onto it
         if level and loc[2] > -robot.lowest_point_m:
             loc = (loc[0], loc[1], -robot.lowest_point_m - 0.005)
-        # a walking robot is set down on its feet on what lies below the start pose: a
-        # standing biped would not survive the drop the others take
-        if level and robot.gait is not None:
+        # a robot at a start pose is set down on what lies below it (a vessel starts where
+        # the pose is: in water), and a walking robot wherever it is put (a standing biped
+        # would not survive a drop)
+        if level and ((set_down and robot.drive != "nautical") or robot.gait is not None):
             ground = self._ground_below(loc)
             if ground is not None:
-                loc = (loc[0], loc[1], ground - robot.lowest_point_m - 0.005)
+                loc = (loc[0], loc[1], ground - robot.lowest_point_m - robot.spawn_clearance_m)
         prefix = f"robot{uid}"
         try:
             sensors = [make_sensor(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
