@@ -15,9 +15,21 @@ from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
 
-SHAPES = ("box", "cylinder")
+# Shapes of the objects a world holds (a ramp and stairs are expanded into boxes at load time).
+SHAPES = ("box", "cylinder", "mesh")
+OBJECT_SHAPES = (*SHAPES, "ramp", "stairs")
+# Mesh files MuJoCo reads: Wavefront OBJ and binary STL.
+MESH_SUFFIXES = (".obj", ".stl")
 # Sensor kinds a material can let rays through (glass: IR and cameras, manual 3.2.1).
 SEE_THROUGH_KINDS = ("ir", "camera", "laser", "sonar")
+# Light types of the world's ``lights`` (MuJoCo's mjtLightType without image lights).
+LIGHT_TYPES = ("point", "spot", "directional")
+# The steepest ramp or flight of stairs a world may hold (degrees): steeper than this is a
+# wall, not something a ground robot is expected to climb.
+MAX_SLOPE_DEG = 60.0
+# A ramp's plate reaches this far below the surface at its foot (metres), so that a wheel
+# rolls onto it without meeting an edge.
+RAMP_FOOT_SINK_M = 0.005
 # Body parts a victim is made of (protocol.md 7.9: the UT2004 victim model's collision boxes).
 VICTIM_PARTS = ("Head", "Chest", "Pelvis", "Arm", "Hand", "Leg", "Foot")
 VICTIM_POSTURES = ("lying", "sitting")
@@ -29,6 +41,10 @@ class Material:
     rgba: tuple[float, float, float, float] = (0.7, 0.7, 0.7, 1.0)
     friction: float = 1.0
     see_through: tuple[str, ...] = ()  # sensor kinds whose rays pass through (SEE_THROUGH_KINDS)
+    # special effects (manual 3.2.1): a mirror reflects laser and IR rays; a grid fender lets
+    # the fraction ``porosity`` of laser, IR and camera rays through
+    mirror: bool = False
+    porosity: float = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -42,6 +58,37 @@ class StaticObject:
     rotation: Vec3 = (0.0, 0.0, 0.0)
     material: str = "default"
     mass_kg: float = 0.0  # > 0: a movable object (a brick, a pipe) that robots can push and lift
+    mesh_file: str = ""  # mesh: absolute path of the OBJ or STL file
+    scale: Vec3 = (1.0, 1.0, 1.0)  # mesh: factors applied to its vertices (object frame)
+    part_of: str = ""  # the ramp or stairs this box was expanded from
+
+
+@dataclass(frozen=True, kw_only=True)
+class Light:
+    """A light of the world (USARSim frame): cameras render the scene with it."""
+
+    name: str
+    type: str = "spot"  # LIGHT_TYPES
+    position: Vec3 = (0.0, 0.0, -3.0)
+    direction: Vec3 = (0.0, 0.0, 1.0)  # unit vector (straight down by default); spot, directional
+    color: tuple[float, float, float] = (0.7, 0.7, 0.7)  # diffuse colour at intensity 1
+    intensity: float = 1.0  # multiplies the colour
+    ambient: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    specular: tuple[float, float, float] = (0.3, 0.3, 0.3)
+    attenuation: Vec3 = (1.0, 0.0, 0.0)  # constant, linear, quadratic (OpenGL)
+    cutoff_deg: float = 45.0  # spot: half-angle of the cone
+    exponent: float = 10.0  # spot: how fast the light falls off from the axis
+    cast_shadows: bool = True
+
+
+@dataclass(frozen=True, kw_only=True)
+class UtmCoordinate:
+    """A point in Universal Transverse Mercator coordinates (WGS84)."""
+
+    easting_m: float
+    northing_m: float
+    zone: int  # 1..60
+    letter: str  # latitude band, C..X without I and O; N and above is the northern hemisphere
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -69,6 +116,7 @@ class GeoReference:
     longitude_deg: float = -(77.0 + 12.998 / 60.0)
     scale_latitude_m: float = 111200.0
     scale_longitude_m: float = 71670.0
+    utm: UtmCoordinate | None = None  # the origin as the world file gave it, when in UTM
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -143,6 +191,8 @@ class WorldConfig:
     false_alarms: tuple[FalseAlarm, ...] = ()
     rfid_tags: tuple[RfidTagConfig, ...] = ()
     water: tuple[WaterVolume, ...] = ()
+    lights: tuple[Light, ...] = ()  # none: the default lighting (builder.world_spec)
+    ambient_light: tuple[float, float, float] | None = None  # None: MuJoCo's default (0.1 grey)
     extra: dict = field(default_factory=dict)
 
     def start_pose(self, name: str) -> StartPose | None:
@@ -152,6 +202,99 @@ class WorldConfig:
             if p.name.lower() == low:
                 return p
         return None
+
+
+# --------------------------------------------------------------------------- UTM
+# Universal Transverse Mercator on the WGS84 ellipsoid, with the series of J. P. Snyder,
+# "Map Projections - A Working Manual", U.S. Geological Survey Professional Paper 1395,
+# 1987, pp. 57-64 (transverse Mercator, ellipsoid: forward equations 8-9, 8-10, 3-21;
+# inverse equations 8-17 to 8-25, 3-24 to 3-26, 7-19).  Within a UTM zone they agree with
+# the exact projection to about a millimetre.  WGS84: semi-major axis 6378137 m, flattening
+# 1/298.257223563 (NIMA TR8350.2, 2000, table 3.1); UTM scale factor 0.9996 on the central
+# meridian, false easting 500 km, false northing 10000 km south of the equator
+# (DMA TM 8358.2, 1989, section 2-6).
+WGS84_A_M = 6378137.0
+WGS84_F = 1.0 / 298.257223563
+UTM_K0 = 0.9996
+UTM_FALSE_EASTING_M = 500000.0
+UTM_FALSE_NORTHING_SOUTH_M = 10000000.0
+# Latitude bands, 8 degrees each from 80 S (X, the last, spans 72 N to 84 N); I and O are
+# not used (DMA TM 8358.2, section 2-7).
+UTM_LETTERS = "CDEFGHJKLMNPQRSTUVWX"
+
+_E2 = WGS84_F * (2.0 - WGS84_F)  # first eccentricity squared
+_EP2 = _E2 / (1.0 - _E2)  # second eccentricity squared
+
+
+def utm_central_meridian_deg(zone: int) -> float:
+    return zone * 6.0 - 183.0
+
+
+def utm_band_limits_deg(letter: str) -> tuple[float, float]:
+    """Southern and northern latitude of a UTM latitude band."""
+    i = UTM_LETTERS.index(letter)
+    south = -80.0 + 8.0 * i
+    return south, (84.0 if letter == "X" else south + 8.0)
+
+
+def _meridian_arc_m(phi: float) -> float:
+    """Distance along the meridian from the equator to latitude ``phi`` (Snyder 3-21)."""
+    e2, e4, e6 = _E2, _E2 * _E2, _E2 ** 3
+    return WGS84_A_M * ((1 - e2 / 4 - 3 * e4 / 64 - 5 * e6 / 256) * phi
+                        - (3 * e2 / 8 + 3 * e4 / 32 + 45 * e6 / 1024) * math.sin(2 * phi)
+                        + (15 * e4 / 256 + 45 * e6 / 1024) * math.sin(4 * phi)
+                        - (35 * e6 / 3072) * math.sin(6 * phi))
+
+
+def latlon_to_utm(latitude_deg: float, longitude_deg: float, zone: int | None = None) -> UtmCoordinate:
+    """WGS84 latitude/longitude -> UTM (Snyder 1987, equations 8-9, 8-10, 3-21), in the
+    point's own zone unless ``zone`` is given."""
+    if zone is None:
+        zone = int((longitude_deg + 180.0) // 6.0) % 60 + 1
+    phi = math.radians(latitude_deg)
+    dlam = math.radians((longitude_deg - utm_central_meridian_deg(zone) + 180.0) % 360.0 - 180.0)
+    sin_p, cos_p, tan_p = math.sin(phi), math.cos(phi), math.tan(phi)
+    n = WGS84_A_M / math.sqrt(1.0 - _E2 * sin_p * sin_p)
+    t = tan_p * tan_p
+    c = _EP2 * cos_p * cos_p
+    a = dlam * cos_p
+    x = UTM_K0 * n * (a + (1 - t + c) * a ** 3 / 6 + (5 - 18 * t + t * t + 72 * c - 58 * _EP2) * a ** 5 / 120)
+    y = UTM_K0 * (_meridian_arc_m(phi) + n * tan_p * (a * a / 2 + (5 - t + 9 * c + 4 * c * c) * a ** 4 / 24
+                                                      + (61 - 58 * t + t * t + 600 * c - 330 * _EP2) * a ** 6 / 720))
+    band = min(max(int((latitude_deg + 80.0) // 8.0), 0), len(UTM_LETTERS) - 1)
+    return UtmCoordinate(easting_m=x + UTM_FALSE_EASTING_M,
+                         northing_m=y + (UTM_FALSE_NORTHING_SOUTH_M if latitude_deg < 0 else 0.0),
+                         zone=zone, letter=UTM_LETTERS[band])
+
+
+def utm_to_latlon(utm: UtmCoordinate) -> tuple[float, float]:
+    """UTM (WGS84) -> latitude and longitude in degrees, north and east positive (Snyder
+    1987, equations 8-17 to 8-25 with the footpoint latitude of 3-24 to 3-26 and 7-19)."""
+    x = utm.easting_m - UTM_FALSE_EASTING_M
+    y = utm.northing_m - (UTM_FALSE_NORTHING_SOUTH_M if utm.letter < "N" else 0.0)
+    e2 = _E2
+    mu = (y / UTM_K0) / (WGS84_A_M * (1 - e2 / 4 - 3 * e2 * e2 / 64 - 5 * e2 ** 3 / 256))
+    r = math.sqrt(1.0 - e2)
+    e1 = (1.0 - r) / (1.0 + r)
+    phi1 = (mu + (3 * e1 / 2 - 27 * e1 ** 3 / 32) * math.sin(2 * mu)
+            + (21 * e1 ** 2 / 16 - 55 * e1 ** 4 / 32) * math.sin(4 * mu)
+            + (151 * e1 ** 3 / 96) * math.sin(6 * mu)
+            + (1097 * e1 ** 4 / 512) * math.sin(8 * mu))
+    sin1, cos1, tan1 = math.sin(phi1), math.cos(phi1), math.tan(phi1)
+    c1 = _EP2 * cos1 * cos1
+    t1 = tan1 * tan1
+    w = 1.0 - e2 * sin1 * sin1
+    n1 = WGS84_A_M / math.sqrt(w)
+    r1 = WGS84_A_M * (1.0 - e2) / w ** 1.5
+    d = x / (n1 * UTM_K0)
+    phi = phi1 - (n1 * tan1 / r1) * (d * d / 2
+                                      - (5 + 3 * t1 + 10 * c1 - 4 * c1 * c1 - 9 * _EP2) * d ** 4 / 24
+                                      + (61 + 90 * t1 + 298 * c1 + 45 * t1 * t1 - 252 * _EP2 - 3 * c1 * c1)
+                                      * d ** 6 / 720)
+    lam = (d - (1 + 2 * t1 + c1) * d ** 3 / 6
+           + (5 - 2 * c1 + 28 * t1 - 3 * c1 * c1 + 8 * _EP2 + 24 * t1 * t1) * d ** 5 / 120) / cos1
+    lon = utm_central_meridian_deg(utm.zone) + math.degrees(lam)
+    return math.degrees(phi), (lon + 180.0) % 360.0 - 180.0
 
 
 def load_world(path: str | Path) -> WorldConfig:
@@ -181,8 +324,12 @@ def load_world(path: str | Path) -> WorldConfig:
 
                 raise ms.error("see_through", f"unknown sensor kind {k!r}{did_you_mean(str(k), SEE_THROUGH_KINDS)}; "
                                               f"allowed: {', '.join(SEE_THROUGH_KINDS)}")
+        mirror = ms.bool("mirror", False)
+        porosity = ms.float("porosity", 0.0, min=0.0, max=1.0)
+        if mirror and porosity > 0:
+            raise ms.error("porosity", "a mirror cannot be porous: give either mirror: true or a porosity")
         materials[str(mname)] = Material(name=str(mname), rgba=rgba, friction=ms.float("friction", 1.0, min=0.0, max=10.0),
-                                         see_through=tuple(see))
+                                         see_through=tuple(see), mirror=mirror, porosity=porosity)
         ms.finish()
 
     def check_material(sec: Section, key: str, value: str) -> None:
@@ -191,33 +338,55 @@ def load_world(path: str | Path) -> WorldConfig:
 
             raise sec.error(key, f"unknown material '{value}'{did_you_mean(value, materials)}")
 
+    def check_flat(sec: Section, key: str, value: str, shape: str) -> None:
+        # a mirror reflects about the face it is hit on: only boxes have flat faces here
+        if materials[value].mirror and shape != "box":
+            raise sec.error(key, f"material '{value}' is a mirror, which only box objects (and ramps and "
+                                 f"stairs) may use; this object is a {shape}")
+
     fl = top.section("floor")
     floor = Floor(center=fl.vec("center", 2), size=fl.vec("size", 2, positive=True), material=fl.str("material", "floor"))
     if floor.material not in materials:
         materials[floor.material] = Material(name=floor.material)
+    check_flat(fl, "material", floor.material, "plane")
     fl.finish()
 
     objects: list[StaticObject] = []
     names: set[str] = set()
+    world_dir = Path(path).resolve().parent
     for i, raw in enumerate(top.list("objects", [])):
         s = Section(raw, path=path, key=f"objects[{i}]")
         oname = s.str("name")
         if oname in names:
             raise s.error("name", f"duplicate object name '{oname}'")
         names.add(oname)
-        shape = s.str("shape", choices=SHAPES)
-        center = s.vec("center")
-        rotation = s.vec("rotation", 3, (0.0, 0.0, 0.0))
+        shape = s.str("shape", choices=OBJECT_SHAPES)
         material = s.str("material", "default")
         check_material(s, "material", material)
+        if shape in ("ramp", "stairs"):
+            parts = _ramp(s, oname, material) if shape == "ramp" else _stairs(s, oname, material)
+            s.finish()
+            for part in parts:
+                if part.name != oname and part.name in names:
+                    raise s.error("name", f"object '{part.name}' (a part of '{oname}') has the name of another object")
+                names.add(part.name)
+            objects.extend(parts)
+            continue
+        check_flat(s, "material", material, shape)
+        center = s.vec("center")
+        rotation = s.vec("rotation", 3, (0.0, 0.0, 0.0))
         mass = s.float("mass_kg", 0.0, min=0.0)
         if shape == "box":
             obj = StaticObject(name=oname, shape=shape, center=center, size=s.vec("size", 3, positive=True),
                                rotation=rotation, material=material, mass_kg=mass)
-        else:
+        elif shape == "cylinder":
             obj = StaticObject(name=oname, shape=shape, center=center, radius_m=s.float("radius", min=0.001),
                                length_m=s.float("length", min=0.001), rotation=rotation, material=material,
                                mass_kg=mass)
+        else:
+            obj = StaticObject(name=oname, shape=shape, center=center, rotation=rotation, material=material,
+                               mass_kg=mass, mesh_file=_mesh_file(s, world_dir),
+                               scale=s.vec("scale", 3, (1.0, 1.0, 1.0), positive=True))
         s.finish()
         objects.append(obj)
 
@@ -235,10 +404,26 @@ def load_world(path: str | Path) -> WorldConfig:
         s.finish()
 
     g = top.section("geo_reference", {})
-    geo = GeoReference(latitude_deg=g.float("latitude_deg", GeoReference.latitude_deg, min=-89.0, max=89.0),
-                       longitude_deg=g.float("longitude_deg", GeoReference.longitude_deg, min=-180.0, max=180.0),
+    utm = None
+    if g.has("utm"):
+        both = [k for k in ("latitude_deg", "longitude_deg") if g.has(k)]
+        if both:
+            raise g.error(both[0], "give the origin either as latitude_deg/longitude_deg or as utm, not both")
+        utm = _utm(g.section("utm"))
+        lat, lon = utm_to_latlon(utm)
+        south, north = utm_band_limits_deg(utm.letter)
+        if not south - 1e-6 <= lat <= north + 1e-6:
+            raise g.error("utm", f"northing {utm.northing_m:g} m in zone {utm.zone}{utm.letter} is latitude "
+                                 f"{lat:.4f} degrees, outside band {utm.letter} ({south:g} to {north:g} degrees); "
+                                 f"check the northing and the letter")
+        if not -89.0 <= lat <= 89.0:
+            raise g.error("utm", f"the origin must lie within 89 degrees of the equator, got latitude {lat:.4f}")
+    else:
+        lat = g.float("latitude_deg", GeoReference.latitude_deg, min=-89.0, max=89.0)
+        lon = g.float("longitude_deg", GeoReference.longitude_deg, min=-180.0, max=180.0)
+    geo = GeoReference(latitude_deg=lat, longitude_deg=lon,
                        scale_latitude_m=g.float("scale_latitude_m", 111200.0, min=1.0),
-                       scale_longitude_m=g.float("scale_longitude_m", 71670.0, min=1.0))
+                       scale_longitude_m=g.float("scale_longitude_m", 71670.0, min=1.0), utm=utm)
     g.finish()
 
     victims: list[Victim] = []
@@ -297,11 +482,144 @@ def load_world(path: str | Path) -> WorldConfig:
                                  density_kg_m3=s.float("density_kg_m3", 1000.0, min=1.0, max=20000.0)))
         s.finish()
 
+    lights: list[Light] = []
+    lnames: set[str] = set()
+    for i, raw in enumerate(top.list("lights", [])):
+        s = Section(raw, path=path, key=f"lights[{i}]")
+        lname = s.str("name")
+        if lname in lnames:
+            raise s.error("name", f"duplicate light name '{lname}'")
+        lnames.add(lname)
+        lights.append(_light(s, lname))
+        s.finish()
+    ambient = top.vec("ambient_light", 3, None)
+    if ambient is not None and any(c < 0 or c > 1 for c in ambient):
+        raise top.error("ambient_light", f"each colour component must be within [0, 1], got {list(ambient)}")
+
     top.finish()
     return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
                        objects=tuple(objects), start_poses=tuple(poses), time_limit_min=time_limit,
                        timestep_s=timestep, gravity_m_s2=gravity, geo=geo, victims=tuple(victims),
-                       false_alarms=tuple(alarms), rfid_tags=tuple(tags), water=tuple(water))
+                       false_alarms=tuple(alarms), rfid_tags=tuple(tags), water=tuple(water), lights=tuple(lights),
+                       ambient_light=ambient)
+
+
+def _slope_check(s: Section, key: str, rise: float, run: float, what: str) -> None:
+    slope = math.degrees(math.atan2(rise, run))
+    if slope >= MAX_SLOPE_DEG:
+        raise s.error(key, f"{what} is {slope:.1f} degrees steep; allowed: below {MAX_SLOPE_DEG:g} degrees "
+                           f"(rise < {math.tan(math.radians(MAX_SLOPE_DEG)):.3f} x run)")
+
+
+def _ramp(s: Section, name: str, material: str) -> list[StaticObject]:
+    """A ramp: one plate (a box) whose top face runs from the foot (the middle of its bottom
+    edge, on the surface it stands on) up ``length`` m of run and ``rise`` m of height along
+    ``heading``, reaching RAMP_FOOT_SINK_M below the surface at its foot."""
+    foot = s.vec("foot")
+    heading = s.float("heading", 0.0)
+    length = s.float("length", min=0.0, min_exclusive=True)
+    width = s.float("width", min=0.0, min_exclusive=True)
+    rise = s.float("rise", min=0.0, min_exclusive=True)
+    thickness = s.float("thickness", 0.05, min=0.0, min_exclusive=True)
+    _slope_check(s, "rise", rise, length, f"the ramp (rise {rise:g} m over a run of {length:g} m)")
+    theta = math.atan2(rise, length)
+    # the top face's line, extended past the foot until it is RAMP_FOOT_SINK_M below the surface
+    ext = RAMP_FOOT_SINK_M / math.sin(theta)
+    slope_len = math.hypot(length, rise) + ext
+    ux, uy = math.cos(heading), math.sin(heading)
+    su, sz = math.cos(theta), -math.sin(theta)  # along the slope, upwards (Z down)
+    top_mid = (math.hypot(length, rise) - ext) / 2.0  # the top face's middle, from the foot along the slope
+    # the plate's centre is half its thickness below the top face (normal up: (-sin u, -cos))
+    nu, nz = -math.sin(theta), -math.cos(theta)
+    center = (foot[0] + ux * (top_mid * su - thickness / 2.0 * nu),
+              foot[1] + uy * (top_mid * su - thickness / 2.0 * nu),
+              foot[2] + top_mid * sz - thickness / 2.0 * nz)
+    # the box's own X along the slope: pitch up by theta (positive pitch raises X), then yaw
+    return [StaticObject(name=name, shape="box", center=center, size=(slope_len, width, thickness),
+                         rotation=(0.0, theta, heading), material=material, part_of=name)]
+
+
+def _stairs(s: Section, name: str, material: str) -> list[StaticObject]:
+    """A flight of stairs: ``steps`` boxes along ``heading`` from the foot (the middle of the
+    bottom step's front edge, on the surface it stands on); step k (1 = the lowest) is
+    ``k * step_rise`` high and solid down to that surface."""
+    foot = s.vec("foot")
+    heading = s.float("heading", 0.0)
+    width = s.float("width", min=0.0, min_exclusive=True)
+    steps = s.int("steps", min=1)
+    if steps > 200:
+        raise s.error("steps", f"at most 200 steps, got {steps}")
+    rise = s.float("step_rise", min=0.0, min_exclusive=True)
+    run = s.float("step_run", min=0.0, min_exclusive=True)
+    _slope_check(s, "step_rise", rise, run, f"the flight (step rise {rise:g} m over a run of {run:g} m)")
+    ux, uy = math.cos(heading), math.sin(heading)
+    out = []
+    for k in range(1, steps + 1):
+        along = (k - 0.5) * run
+        out.append(StaticObject(name=f"{name}/step{k}", shape="box",
+                                center=(foot[0] + ux * along, foot[1] + uy * along, foot[2] - k * rise / 2.0),
+                                size=(run, width, k * rise), rotation=(0.0, 0.0, heading), material=material,
+                                part_of=name))
+    return out
+
+
+def _mesh_file(s: Section, world_dir: Path) -> str:
+    rel = s.str("file")
+    p = Path(rel)
+    p = p if p.is_absolute() else world_dir / p
+    if p.suffix.lower() not in MESH_SUFFIXES:
+        raise s.error("file", f"'{rel}' is not a mesh file MuJoCo reads; allowed: {', '.join(MESH_SUFFIXES)} files")
+    if not p.is_file():
+        raise s.error("file", f"mesh file '{rel}' not found (looked for {p}; paths are relative to the world file)")
+    if p.suffix.lower() == ".stl":
+        size = p.stat().st_size
+        with p.open("rb") as f:
+            head = f.read(84)
+        count = int.from_bytes(head[80:84], "little") if len(head) == 84 else -1
+        if count < 0 or size != 84 + 50 * count:
+            raise s.error("file", f"'{rel}' is not a binary STL file (MuJoCo reads binary STL only); "
+                                  f"convert it or use an OBJ file")
+    return str(p.resolve())
+
+
+def _light(s: Section, name: str) -> Light:
+    ltype = s.str("type", "spot", choices=LIGHT_TYPES)
+
+    def rgb(key: str, default):
+        v = s.vec(key, 3, default)
+        if any(c < 0 or c > 1 for c in v):
+            raise s.error(key, f"each colour component must be within [0, 1], got {list(v)}")
+        return v
+
+    direction = s.vec("direction", 3, (0.0, 0.0, 1.0))
+    norm = math.sqrt(sum(c * c for c in direction))
+    if norm < 1e-9:
+        raise s.error("direction", f"the direction must not be zero, got {list(direction)}")
+    position = s.vec("position", 3, (0.0, 0.0, -3.0))
+    attenuation = s.vec("attenuation", 3, (1.0, 0.0, 0.0))
+    if any(c < 0 for c in attenuation) or not any(c > 0 for c in attenuation):
+        raise s.error("attenuation", f"[constant, linear, quadratic] must be >= 0 and not all 0, "
+                                     f"got {list(attenuation)}")
+    return Light(name=name, type=ltype, position=position, direction=tuple(c / norm for c in direction),
+                 color=rgb("color", (0.7, 0.7, 0.7)), intensity=s.float("intensity", 1.0, min=0.0, max=100.0),
+                 ambient=rgb("ambient", (0.0, 0.0, 0.0)), specular=rgb("specular", (0.3, 0.3, 0.3)),
+                 attenuation=attenuation, cutoff_deg=s.float("cutoff_deg", 45.0, min=0.0, max=90.0, min_exclusive=True),
+                 exponent=s.float("exponent", 10.0, min=0.0, max=128.0),
+                 cast_shadows=s.bool("cast_shadows", ltype != "point"))
+
+
+def _utm(u: Section) -> UtmCoordinate:
+    zone = u.int("zone", min=1)
+    if zone > 60:
+        raise u.error("zone", f"UTM zones are 1 to 60, got {zone}")
+    letter = u.str("letter")
+    if len(letter) != 1 or letter.upper() not in UTM_LETTERS:
+        raise u.error("letter", f"'{letter}' is not a UTM latitude band; allowed: one of {' '.join(UTM_LETTERS)} "
+                                f"(N and after: northern hemisphere)")
+    out = UtmCoordinate(easting_m=u.float("easting", min=100000.0, max=900000.0),
+                        northing_m=u.float("northing", min=0.0, max=10000000.0), zone=zone, letter=letter.upper())
+    u.finish()
+    return out
 
 
 def check_world_file(path: str | Path) -> WorldConfig:

@@ -78,6 +78,20 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         if obj.shape == "box":
             g.type = mujoco.mjtGeom.mjGEOM_BOX
             g.size = [obj.size[0] / 2.0, obj.size[1] / 2.0, obj.size[2] / 2.0]
+        elif obj.shape == "mesh":
+            mesh = s.add_mesh()
+            mesh.name = f"world/{obj.name}"
+            mesh.file = obj.mesh_file
+            mesh.scale = list(obj.scale)
+            g.type = mujoco.mjtGeom.mjGEOM_MESH
+            g.meshname = mesh.name
+            # the file's vertices are in the object's USARSim frame (X forward, Y right, Z
+            # down): a half turn about X turns them into MuJoCo's axes
+            # (a movable mesh's body carries the object's rotation; a static one, the geom)
+            own = np.array([1.0, 0.0, 0.0, 0.0]) if obj.mass_kg > 0 else frames.usar_euler_to_mj_quat(obj.rotation)
+            turned = np.zeros(4)
+            mujoco.mju_mulQuat(turned, own, MESH_FRAME_QUAT)
+            g.quat = turned.tolist()
         else:
             g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
             g.size = [obj.radius_m, obj.length_m / 2.0, 0.0]
@@ -109,11 +123,44 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         g.group = 4
         g.contype = g.conaffinity = 0
 
-    light = s.worldbody.add_light()
-    light.name = "sun"
-    light.pos = [fl.center[0], -fl.center[1], 10.0]
-    light.dir = [0.0, 0.0, -1.0]
+    if world.ambient_light is not None:
+        s.visual.headlight.ambient = list(world.ambient_light)
+    if not world.lights:
+        # the default lighting: a spotlight 10 m above the floor's centre, looking down, and
+        # MuJoCo's headlight (ambient 0.1, diffuse 0.4, which follows the rendering camera)
+        light = s.worldbody.add_light()
+        light.name = "sun"
+        light.pos = [fl.center[0], -fl.center[1], 10.0]
+        light.dir = [0.0, 0.0, -1.0]
+    for lt in world.lights:
+        add_world_light(s, lt)
     return s
+
+
+# MuJoCo light types of the world file's light types.
+LIGHT_TYPES = {"point": mujoco.mjtLightType.mjLIGHT_POINT, "spot": mujoco.mjtLightType.mjLIGHT_SPOT,
+               "directional": mujoco.mjtLightType.mjLIGHT_DIRECTIONAL}
+# A half turn about X: a mesh's vertices (USARSim axes) into the geom's own (MuJoCo) axes.
+MESH_FRAME_QUAT = np.array([0.0, 1.0, 0.0, 0.0])
+
+
+def add_world_light(spec: mujoco.MjSpec, lt) -> mujoco.MjsLight:
+    """A light of the world file (config.world.Light) in the MuJoCo model, named
+    ``light/<name>``; the diffuse colour is its colour times its intensity."""
+    light = spec.worldbody.add_light()
+    light.name = f"light/{lt.name}"
+    light.type = LIGHT_TYPES[lt.type]
+    light.pos = frames.to_mj_vec(lt.position).tolist()
+    light.dir = frames.to_mj_vec(lt.direction).tolist()
+    light.diffuse = [c * lt.intensity for c in lt.color]
+    light.ambient = list(lt.ambient)
+    light.specular = list(lt.specular)
+    light.attenuation = list(lt.attenuation)
+    # a point light shines all around: OpenGL's special cut-off angle of 180 degrees
+    light.cutoff = 180.0 if lt.type == "point" else lt.cutoff_deg
+    light.exponent = 0.0 if lt.type == "point" else lt.exponent
+    light.castshadow = bool(lt.cast_shadows)
+    return light
 
 
 # A victim's body, lying on its back along its own +X axis (head forward), in its own

@@ -1,6 +1,7 @@
 """Things in a world that sensors look for, beyond plain geometry: victims and their
 body parts, false alarms, RFID tags (with writable memory, shared by every robot),
-and which geoms each kind of sensor sees through (glass).
+which geoms each kind of sensor sees through (glass), and the special effects of
+materials on rays: mirrors and grid fenders (porosity).
 
 Geoms are found by the names the builder gives them (``victim/<name>/<Part>/<i>``,
 ``falsealarm/<name>/<Part>``, ``world/<object>``), again after every model build.
@@ -45,6 +46,8 @@ class Entities:
         self.parts: dict[int, PartHit] = {}
         self._part_ids: np.ndarray | None = None
         self._part_rbound = np.empty(0)
+        # per sensor kind: the geoms its rays pass through; plus "mirror" (bool per geom) and
+        # "porosity" (fraction of rays let through, per geom) when the world has such materials
         self.see_through: dict[str, np.ndarray] = {}
         self._wavers: list[tuple[int, object]] = []
         self._victims = {v.name: v for v in world.victims}
@@ -58,6 +61,8 @@ class Entities:
         for a in self.world.false_alarms:
             mats[f"falsealarm/{a.name}/{a.part}"] = self.world.materials[a.material]
         see = {k: np.zeros(m.ngeom, dtype=bool) for k in SEE_THROUGH_KINDS}
+        mirror = np.zeros(m.ngeom, dtype=bool)
+        porosity = np.zeros(m.ngeom)
         for g in range(m.ngeom):
             name = m.geom(g).name
             if name.startswith("victim/"):
@@ -70,6 +75,14 @@ class Entities:
             if mat is not None:
                 for k in mat.see_through:
                     see[k][g] = True
+                mirror[g] = mat.mirror
+                porosity[g] = mat.porosity
+        # the ray caster takes the effects along with the see-through masks (RayCaster's
+        # reserved entries "mirror" and "porosity"), present only when a material has them
+        if mirror.any():
+            see["mirror"] = mirror
+        if porosity.any():
+            see["porosity"] = porosity
         self.see_through = see
         self._part_ids = np.array(sorted(self.parts), dtype=np.intp)
         self._part_rbound = m.geom_rbound[self._part_ids] if len(self._part_ids) else np.empty(0)
