@@ -1,0 +1,53 @@
+"""The shipped worlds as a robot meets them (issue: worlds): a P2AT climbs the orange arena's
+ramp to its upper level, a P2AT driving into the yellow arena pushes the brick in its way,
+and the ground-truth service follows the brick."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from usarsim.config.catalog import resolve_robot, resolve_world
+from usarsim.sim.simulation import Simulation
+
+
+def test_a_p2at_climbs_the_orange_ramp_to_the_upper_level():
+    """The orange arena's ramp (14 degrees, x -1.8 .. 2.6 at y -10.8 .. -9.2) leads from the
+    floor to the deck 1.1 m up: a P2AT driven straight up it at 3 rad/s (0.39 m/s) ends
+    on the deck, level, its wheels 1.1 m above the floor."""
+    world = resolve_world("DM-USAR_orange")
+    sim = Simulation(world, seed=0)
+    sim.spawn(1, resolve_robot("P2AT"), "R1", (-3.2, -10.0, -0.25), (0.0, 0.0, 0.0))
+    sim.advance(1.0)
+    (_, _, z_floor), _ = sim.pose_of(1)
+    sim.drive_skid(1, 3.0, 3.0)
+    steepest = 0.0
+    for _ in range(20):
+        sim.advance(1.0)
+        _, (_, pitch, _) = sim.pose_of(1)
+        steepest = max(steepest, pitch)
+    (x, _, z), (roll, pitch, _) = sim.pose_of(1)
+    assert steepest == pytest.approx(math.radians(14.0), abs=0.03)  # nose up on the slope
+    assert x > 2.8 and z - z_floor == pytest.approx(-1.1, abs=0.02)  # on the deck
+    assert abs(roll) < 0.05 and abs(pitch) < 0.05 and sim.resets == 0
+
+
+def test_a_robot_pushes_the_brick_in_its_way():
+    """From PlayerStart1 a P2AT drives north through the yellow arena's entrance into the
+    brick standing on its edge in the foyer: the brick (a movable object of 2.3 kg) is
+    shoved ahead and tumbles, the robot gets past it, and the ground-truth service reports
+    where the brick went."""
+    world = resolve_world("DM-USAR_yellow")
+    sim = Simulation(world, seed=0)
+    pose = world.start_pose("PlayerStart1")
+    sim.spawn(1, resolve_robot("P2AT"), "R1", pose.location, pose.rotation, set_down=True)
+    sim.advance(1.0)
+    (before,) = sim.truth("MovableObject", "brick_foyer")
+    sim.drive_skid(1, 3.0, 3.0)
+    sim.advance(22.0)
+    (after,) = sim.truth("MovableObject", "brick_foyer")
+    (x, y, _), _ = sim.pose_of(1)
+    assert after[3][0] > before[3][0] + 0.1 and abs(after[3][1] - before[3][1]) < 0.1  # shoved north
+    assert after[4] != pytest.approx(before[4], abs=0.1)  # it tumbled
+    assert x > after[3][0] + 1.0 and sim.resets == 0  # the robot went on over it
