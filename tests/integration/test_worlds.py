@@ -51,3 +51,23 @@ def test_a_robot_pushes_the_brick_in_its_way():
     assert after[3][0] > before[3][0] + 0.1 and abs(after[3][1] - before[3][1]) < 0.1  # shoved north
     assert after[4] != pytest.approx(before[4], abs=0.1)  # it tumbled
     assert x > after[3][0] + 1.0 and sim.resets == 0  # the robot went on over it
+
+
+def test_paper_on_the_orange_floor_is_slippery():
+    """A sheet of paper (friction 0.3) decides the grip of the wheels on it: a P2AT spinning
+    on the spot turns faster there than on the bare floor, its wheels sliding more easily
+    sideways."""
+    world = resolve_world("DM-USAR_orange")
+    sheet = next(o for o in world.objects if o.material == "paper" and min(o.size[:2]) >= 0.75)
+    rates = {}
+    for label, (x, y) in (("paper", sheet.center[:2]), ("floor", (sheet.center[0], sheet.center[1] + sheet.size[1] / 2 + 1.0))):
+        sim = Simulation(world, seed=0)
+        sim.spawn(1, resolve_robot("P2AT"), "R", (x, y, -0.3), (0.0, 0.0, 0.0))
+        sim.advance(1.0)
+        sim.drive_skid(1, -3.0, 3.0)
+        sim.advance(1.0)
+        _, (_, _, a0) = sim.pose_of(1)
+        sim.advance(1.0)
+        _, (_, _, a1) = sim.pose_of(1)
+        rates[label] = abs(math.remainder(a1 - a0, 2 * math.pi))
+    assert rates["paper"] > 1.2 * rates["floor"]

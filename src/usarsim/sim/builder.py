@@ -23,6 +23,11 @@ WHEEL_CONTYPE, WHEEL_CONAFFINITY = 2, 0
 
 # Wheel rolling friction and torsional friction: MuJoCo's defaults for the
 # second and third friction coefficients.
+# A surface more slippery than the default 1.0 (paper, polished metal, ice) decides the
+# friction of whatever touches it: MuJoCo otherwise takes the larger of the two
+# coefficients, and a wheel's 1.0 would grip paper as well as concrete.  A robot part with
+# a friction of its own (priority 1) still wins on ordinary surfaces.
+SLIPPERY_PRIORITY = 2
 SPIN_FRICTION = 0.005
 ROLL_FRICTION = 0.0001
 
@@ -54,6 +59,8 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     g.pos = [fl.center[0], -fl.center[1], 0.0]
     g.rgba = list(floor_mat.rgba)
     g.friction = [floor_mat.friction, SPIN_FRICTION, ROLL_FRICTION]
+    if floor_mat.friction < 1.0:
+        g.priority = SLIPPERY_PRIORITY
     g.group = GROUP_STATIC
     g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
@@ -97,6 +104,8 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
             g.size = [obj.radius_m, obj.length_m / 2.0, 0.0]
         g.rgba = list(mat.rgba)
         g.friction = [mat.friction, SPIN_FRICTION, ROLL_FRICTION]
+        if mat.friction < 1.0:
+            g.priority = SLIPPERY_PRIORITY
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
     for v in world.victims:
