@@ -249,11 +249,12 @@ class ServerThread:
     """An :class:`usarsim.server.app.Application` served by its own asyncio loop in a thread."""
 
     def __init__(self, world, *, seed: int = 1, lockstep: bool = True, speed: float | None = None,
-                 max_connections: int = 64, robot_dirs: tuple[str, ...] = ()):
+                 max_connections: int = 64, robot_dirs: tuple[str, ...] = (), image=None):
         from usarsim.server.app import Application
 
         self.app = Application(world, host="127.0.0.1", port=0, seed=seed, speed=speed, lockstep=lockstep,
-                               max_connections=max_connections, robot_dirs=robot_dirs, truth_port=0)
+                               max_connections=max_connections, robot_dirs=robot_dirs, truth_port=0, image_port=0,
+                               image=image)
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._serve, name="test-server-loop", daemon=True)
         self.clients: list[Client] = []

@@ -37,6 +37,16 @@ def _port(text: str) -> int:
     return v
 
 
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 320x240, got {text!r}") from None
+    if not (1 <= w <= 1920 and 1 <= h <= 1080):
+        raise argparse.ArgumentTypeError(f"a picture from 1x1 to 1920x1080, got {text!r}")
+    return w, h
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="usarsim",
@@ -67,6 +77,26 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--truth-port", type=_port, default=3989,
                    help="ground-truth service port (default: %(default)s; 0 picks a free port): "
                         "'{Class c} {Name n}' -> where every matching robot, victim, tag... is")
+    s.add_argument("--image-port", type=_port, default=5003,
+                   help="image server port (default: %(default)s; 0 picks a free port): clients send 'OK' for a "
+                        "picture of the MultiView or of the robot camera bound to them")
+    s.add_argument("--no-image", action="store_true", help="do not serve pictures (no image server, no rendering)")
+    s.add_argument("--image-type", default="normal", choices=["raw", "superb", "good", "normal", "fair", "bad"],
+                   help="picture encoding: raw BGR or JPEG of that quality (UPIS ImageType; default: %(default)s)")
+    s.add_argument("--image-size", type=_size, default=(640, 480), metavar="WxH",
+                   help="size of a bound robot camera's picture (default: 640x480)")
+    s.add_argument("--multiview-cameras", type=int, default=4, metavar="N",
+                   help="MultiView CameraNum: robot cameras shown at most (default: %(default)s)")
+    s.add_argument("--multiview-columns", type=int, default=0, metavar="N",
+                   help="MultiView WideMode: 0 lays the tiles in a box, N > 0 puts N in a row (default: %(default)s)")
+    s.add_argument("--multiview-tile", type=_size, default=(320, 240), metavar="WxH",
+                   help="MultiView CameraXres x CameraYres, the size of each tile (default: 320x240)")
+    s.add_argument("--frame-skip", type=int, default=0, metavar="N",
+                   help="UPIS FrameSkip: render a new picture for every (N+1)-th request, repeat the last one "
+                        "otherwise (default: %(default)s)")
+    s.add_argument("--max-fps", type=float, default=30.0,
+                   help="frame budget: new pictures per second, all image clients together, so that cameras do "
+                        "not slow the physics (default: %(default)s)")
     s.add_argument("--robot-dir", action="append", default=[], metavar="DIR",
                    help="a folder of robot files of your own (one YAML file per class, named after the class); "
                         "clients INIT them by class name like the shipped robots; may be repeated")
@@ -122,9 +152,17 @@ def cmd_serve(args) -> int:
     except UsarsimError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
+    from usarsim.server.image import IMAGE_TYPES, ImageSettings
+
+    image = ImageSettings(image_type=IMAGE_TYPES[args.image_type], width=args.image_size[0],
+                          height=args.image_size[1], camera_num=max(1, args.multiview_cameras),
+                          wide_mode=max(0, args.multiview_columns), tile_width=args.multiview_tile[0],
+                          tile_height=args.multiview_tile[1], frame_skip=max(0, args.frame_skip),
+                          max_fps=args.max_fps)
     app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
-                      robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port)
+                      robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port,
+                      image_port=None if args.no_image else args.image_port, image=image)
 
     async def main() -> None:
         loop = asyncio.get_running_loop()
@@ -134,9 +172,7 @@ def cmd_serve(args) -> int:
         try:
             await app.start()
         except OSError as exc:
-            control_up = app.control.port not in (None, args.port) or app.control._server is not None
-            which = (f"the ground-truth port {args.truth_port} (--truth-port)" if control_up and app.truth is not None
-                     else f"the control port {args.port} (--port)")
+            which = getattr(exc, "usarsim_listener", f"the control port {args.port} (--port)")
             print(f"usarsim: error: cannot listen on {args.host}, {which}: {exc.strerror}", file=sys.stderr)
             raise SystemExit(1) from exc
         for service, host, port in app.listeners():

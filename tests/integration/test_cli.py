@@ -77,7 +77,7 @@ def serve(tmp_path):
     started: list[Serve] = []
 
     def start(*args: str) -> Serve:
-        s = Serve(*args, "--truth-port", "0", stderr_path=tmp_path / f"serve{len(started)}.err")
+        s = Serve(*args, "--truth-port", "0", "--image-port", "0", stderr_path=tmp_path / f"serve{len(started)}.err")
         started.append(s)
         return s
 
@@ -199,12 +199,15 @@ def test_port_in_use_exits_1(tmp_path):
         busy.bind(("127.0.0.1", 0))
         busy.listen(1)
         port = busy.getsockname()[1]
-        out = usarsim("serve", "--port", str(port), "--truth-port", "0")
+        out = usarsim("serve", "--port", str(port), "--truth-port", "0", "--image-port", "0")
         assert out.returncode == 1
         assert f"cannot listen on 127.0.0.1, the control port {port} (--port)" in out.stderr
-        truth = usarsim("serve", "--port", "0", "--truth-port", str(port))
+        truth = usarsim("serve", "--port", "0", "--truth-port", str(port), "--image-port", "0")
         assert truth.returncode == 1
         assert f"cannot listen on 127.0.0.1, the ground-truth port {port} (--truth-port)" in truth.stderr
+        image = usarsim("serve", "--port", "0", "--truth-port", "0", "--image-port", str(port))
+        assert image.returncode == 1
+        assert f"cannot listen on 127.0.0.1, the image port {port} (--image-port)" in image.stderr
 
 
 @pytest.mark.parametrize("args, message", [

@@ -357,7 +357,7 @@ def test_sta_battery_counts_down_from_1200(robot):
     lines = robot.step(0.2) + robot.step(5.0)
     sta = [ln for ln in lines if ln.text.startswith("STA ")]
     assert sta[0].text == ("STA {Type GroundVehicle} {Time 0.00} {FrontSteer 0.0000} {RearSteer 0.0000} "
-                           "{LightToggle False} {LightIntensity 0} {Battery 1200} {View -1}")
+                           "{LightToggle False} {LightIntensity 0} {Battery 1200} {View 0}")  # its camera: MultiView tile 0
     battery = [int(segments(ln.text)["Battery"]) for ln in sta]
     assert battery == sorted(battery, reverse=True)
     assert battery[0] == 1200

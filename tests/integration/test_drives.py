@@ -149,7 +149,7 @@ def test_aerial_drive_hovers_climbs_flies_and_turns(server_factory, test_world):
     lines = c.step(1.0)
     sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
     assert re.fullmatch(r"STA \{Type AerialVehicle\} \{Time \d+\.\d{2}\} \{LightToggle False\} \{LightIntensity 0\} "
-                        r"\{Battery \d+\} \{View -1\}", sta), sta
+                        r"\{Battery \d+\} \{View 0\}", sta), sta
     gts = ground_truth(lines)
     assert gts[-1][1][2] == pytest.approx(-1.0, abs=0.01)  # it hovers where it was put
     c.send("DRIVE {AltitudeVelocity 0.5}")

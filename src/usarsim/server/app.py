@@ -6,8 +6,10 @@ import logging
 
 from usarsim.config.world import WorldConfig
 from usarsim.server.control import ControlServer
+from usarsim.server.image import CameraBindings, ImageServer, ImageSettings
 from usarsim.server.truth import TruthServer
 from usarsim.sim.facade import SimFacade
+from usarsim.sim.render import RenderService
 
 log = logging.getLogger("usarsim")
 
@@ -15,32 +17,62 @@ log = logging.getLogger("usarsim")
 class Application:
     def __init__(self, world: WorldConfig, *, host: str = "127.0.0.1", port: int = 3000, seed: int = 0,
                  speed: float | None = 1.0, lockstep: bool = False, max_connections: int = 64,
-                 robot_dirs: tuple[str, ...] = (), truth_port: int | None = 3989):
+                 robot_dirs: tuple[str, ...] = (), truth_port: int | None = 3989, image_port: int | None = 5003,
+                 image: ImageSettings | None = None):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
+        self.camera_bindings = CameraBindings()
         self.control = ControlServer(self.facade, host=host, port=port, max_connections=max_connections,
                                      robot_dirs=tuple(robot_dirs))
+        self.control.camera_bindings = self.camera_bindings
         # the ground-truth service (protocol.md 12.4); None: not served
         self.truth = TruthServer(self.facade, host=host, port=truth_port) if truth_port is not None else None
+        # the image server (protocol.md 10) and its render thread; None: not served
+        self.image_settings = image or ImageSettings()
+        self.image = None
+        if image_port is not None:
+            facade = self.facade
+            renderer = RenderService(
+                lambda reuse, done: facade.call(lambda sim: sim.render_snapshot(reuse), on_done=done),
+                max_fps=self.image_settings.max_fps)
+            self.image = ImageServer(renderer, self.camera_bindings, self.image_settings, host=host, port=image_port)
+        self.facade.sim.multiview_cameras = self.image_settings.camera_num  # before its thread starts
 
     async def start(self) -> None:
-        await self.control.start()
-        if self.truth is not None:
+        """Open every listener, then start the simulation.  An OSError (a port taken) names
+        the listener in its ``usarsim_listener`` attribute."""
+        try:
+            await self.control.start()
+        except OSError as exc:
+            exc.usarsim_listener = f"the control port {self.control.port} (--port)"
+            raise
+        started = [self.control]
+        for extra, what in ((self.truth, "the ground-truth port %s (--truth-port)"),
+                            (self.image, "the image port %s (--image-port)")):
+            if extra is None:
+                continue
             try:
-                await self.truth.start()
-            except OSError:
-                await self.control.stop()
+                await extra.start()
+            except OSError as exc:
+                exc.usarsim_listener = what % extra.port
+                for srv in started:
+                    await srv.stop()
                 raise
+            started.append(extra)
         self.facade.start()
 
     def listeners(self) -> list[tuple[str, str, int]]:
         out = [("control", self.host, self.control.port)]
         if self.truth is not None:
             out.append(("truth", self.host, self.truth.port))
+        if self.image is not None:
+            out.append(("image", self.host, self.image.port))
         return out
 
     async def stop(self) -> None:
+        if self.image is not None:
+            await self.image.stop()
         if self.truth is not None:
             await self.truth.stop()
         await self.control.stop()

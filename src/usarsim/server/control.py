@@ -131,6 +131,10 @@ class Connection(asyncio.Protocol):
         if self.session is not None:
             self.session.spawn_done(result, error)
 
+    def send_reply_threadsafe(self, msg) -> None:
+        """``send_reply`` from another thread (the simulation's)."""
+        self.server.loop.call_soon_threadsafe(self.send_reply, msg)
+
     def stepped_threadsafe(self, sim_time: float) -> None:
         self.server.loop.call_soon_threadsafe(self.send_reply, M.Stepped(time=sim_time))
 
@@ -140,6 +144,9 @@ class ControlServer:
                  max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = ()):
         self.facade = facade
         self.robot_dirs = robot_dirs  # extra folders of robot files (serve --robot-dir)
+        from usarsim.server.image import CameraBindings
+
+        self.camera_bindings = CameraBindings()  # SET {Type Camera} {Client ip}; shared with the image server
         self.host = host
         self.port = port
         self.max_connections = max_connections

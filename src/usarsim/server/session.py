@@ -338,10 +338,53 @@ class Session:
                 return
             self.facade.drive_joints(self.uid, [(cmd.name, parts[0], order)])
             return
-        if t == "viewports" or (t == "camera" and (cmd.client is not None or cmd.robot is not None)):
-            self.log_once(f"set:{t}", "SET {Type %s} is not supported yet; ignored", cmd.type, level=logging.INFO)
+        if t == "camera" and (cmd.client is not None or cmd.robot is not None):
+            self.on_bind_camera(cmd)
+            return
+        if t == "viewports":
+            self.on_viewports(cmd)
             return
         self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, cmd.params)
+
+    def on_bind_camera(self, cmd: C.Set) -> None:
+        """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that
+        robot camera to viewers at ``ip`` (or ``ip:port``); without Robot, releases them.
+        No reply (protocol.md 5.4)."""
+        bindings = self.conn.server.camera_bindings
+        client = (cmd.client or "").strip()
+        if not client:
+            self.log_once("bind", "SET {Type Camera} {Robot r} {Name cam} needs a {Client ip}; ignored")
+            return
+        if not cmd.robot:
+            bindings.release(client)
+            log.info("%s: image viewers at %s see the MultiView again", self.conn.peer, client)
+            return
+        camera = cmd.name or "Camera"
+        bindings.bind(client, cmd.robot, camera)
+        log.info("%s: image viewers at %s see camera %s of robot %s", self.conn.peer, client, camera, cmd.robot)
+
+    def on_viewports(self, cmd: C.Set) -> None:
+        """``SET {Type Viewports} {Config SingleView|QuadView} {Viewport1 cam} ...``: which of
+        this robot's cameras are shown (the first in the MultiView); RES per viewport."""
+        config = cmd.config or "SingleView"
+        known = {"singleview": "SingleView", "0": "SingleView", "quadview": "QuadView", "1": "QuadView"}
+        cfg = known.get(config.lower())
+        count = 4 if cfg == "QuadView" else 1
+        names: list[str | None] = [None] * max(count, max((i for i, _ in cmd.viewports), default=0))
+        for index, cam in cmd.viewports:
+            if 1 <= index <= len(names):
+                names[index - 1] = cam
+        def done(result, error):
+            if error is not None:
+                log.error("%s: SET Viewports: %s", self.conn.peer, error)
+                return
+            time_s, states = result
+            self.conn.send_reply_threadsafe(M.ViewportsResult(
+                time=time_s, config=cfg or config, config_status="OK" if cfg else "Failed",
+                viewports=tuple(M.ViewportState(index=i + 1, camera=c, status=st) for i, (c, st) in enumerate(states))))
+
+        uid = self.uid
+        self.facade.call(lambda sim: (sim.time, sim.set_viewports(uid, names)), on_done=done)
 
     MAX_STEP_S = 3600.0
 

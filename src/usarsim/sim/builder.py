@@ -32,6 +32,10 @@ SPIN_FRICTION = 0.005
 ROLL_FRICTION = 0.0001
 
 
+# The largest picture the image server renders (the offscreen buffer the model reserves).
+MAX_PICTURE_WIDTH, MAX_PICTURE_HEIGHT = 1920, 1080
+
+
 def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     s = mujoco.MjSpec()
     s.modelname = world.name
@@ -45,8 +49,8 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     # A blow-up must not reset the whole world: the simulation resets only the robot
     # concerned (Simulation._check_health).
     o.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
-    s.visual.global_.offwidth = 640
-    s.visual.global_.offheight = 480
+    s.visual.global_.offwidth = MAX_PICTURE_WIDTH
+    s.visual.global_.offheight = MAX_PICTURE_HEIGHT
 
     fl = world.floor
     floor_mat = world.materials[fl.material]
@@ -344,7 +348,36 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
                 continue
             ex = spec.add_exclude()
             ex.bodyname1, ex.bodyname2 = a_name, b_name
+    for item in robot.items:
+        if item.item_type in CAMERA_TYPES:
+            _add_camera(spec, body, item, prefix)
     return body
+
+
+# Items the image server renders, and the MuJoCo camera each becomes: it looks along the
+# item's X axis with its Z axis (down in USARSim's frame) at the bottom of the picture.
+CAMERA_TYPES = ("Camera", "OmniCam", "OmniCamera")
+# a MuJoCo camera looks along its -Z with +Y up and +X to the right; in an item's own
+# MuJoCo-frame axes (forward, left, up) those are: right = -left, up, -forward
+_CAMERA_AXES = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+def camera_name(prefix: str, item_name: str) -> str:
+    return f"{prefix}/camera/{item_name}"
+
+
+def camera_fovy_deg(hfov_rad: float, width: int, height: int) -> float:
+    """MuJoCo's vertical field of view for a horizontal one at a picture's aspect."""
+    return math.degrees(2.0 * math.atan(math.tan(min(hfov_rad, math.radians(179.0)) / 2.0) * height / width))
+
+
+def _add_camera(spec, chassis, item, prefix: str) -> None:
+    parent = chassis if item.mount == "HARD" else (spec.body(f"{prefix}/{item.mount}") or chassis)
+    cam = parent.add_camera()
+    cam.name = camera_name(prefix, item.name)
+    cam.pos = frames.to_mj_vec(item.location).tolist()
+    cam.quat = frames.mat_to_quat(frames.usar_euler_to_mj_mat(item.orientation) @ _CAMERA_AXES).tolist()
+    cam.fovy = camera_fovy_deg(math.radians(50.0), 4, 3)  # set from the camera's zoom at each picture
 
 
 # Aerial robots hover: gravity is compensated on their bodies, and velocity servos on a

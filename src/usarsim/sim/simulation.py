@@ -144,6 +144,9 @@ class SimRobot:
     fly: dict = field(default_factory=lambda: {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0})
     sail: dict = field(default_factory=lambda: {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0})
     walk: dict = field(default_factory=lambda: {"linear": 0.0, "lateral": 0.0, "rotational": 0.0})
+    # the cameras chosen by SET {Type Viewports} (protocol.md 5.4): the first is the one the
+    # MultiView shows; empty: the robot's first camera
+    viewports: tuple[str, ...] = ()
     # a walking robot's gait: its clock; how far it has set off (0 standing, 1 walking;
     # it fades in and out over half a period); the velocities it walks at (they follow
     # the command within half a period); each foot's place (forward, right, yaw) from
@@ -218,6 +221,10 @@ class Simulation:
         # read by the server thread (plain dict reads and replacements are atomic)
         self.live_conf: dict[tuple[int, str, str], tuple] = {}
         self._snapshot: np.ndarray | None = None
+        # the MultiView (manual 3.2.6): how many robot cameras it shows at most
+        self._multiview_cameras = 4
+        self._multiview: list[tuple[int, str]] | None = None
+        self._multiview_robots: set[int] = set()
 
     # Clock -------------------------------------------------------------------
     @property
@@ -1104,7 +1111,89 @@ class Simulation:
         joints = tuple((n, float(self.data.qpos[r.handle.joint_qpos[n]])) for n in r.config.status_joints)
         return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
                            front_steer=front, rear_steer=rear, joints=joints, light_toggle=r.light,
-                           light_intensity=100 if r.light else 0, view=-1)
+                           light_intensity=100 if r.light else 0, view=self.view_index(r.uid))
+
+    # Cameras and the MultiView (protocol.md 10, 11) -----------------------------------
+    def cameras_of(self, r: SimRobot) -> list[Sensor]:
+        return [s for s in r.sensors if s.item.item_type in builder.CAMERA_TYPES]
+
+    @property
+    def multiview_cameras(self) -> int:
+        return self._multiview_cameras
+
+    @multiview_cameras.setter
+    def multiview_cameras(self, n: int) -> None:
+        self._multiview_cameras = max(1, int(n))
+        self._multiview = None
+
+    def multiview(self) -> list[tuple[int, str]]:
+        """The robot cameras the MultiView shows, tile by tile: the first camera chosen by
+        each robot's viewports (else its first camera), robots in the order they were
+        spawned, at most ``multiview_cameras`` of them."""
+        if self._multiview is not None and self._multiview_robots == self.robots.keys():
+            return self._multiview
+        out = []
+        for uid in sorted(self.robots):
+            r = self.robots[uid]
+            cams = [s.name for s in self.cameras_of(r)]
+            shown = [v for v in r.viewports if v.lower() in (c.lower() for c in cams)]
+            if shown or cams:
+                out.append((uid, (shown or cams)[0]))
+            if len(out) >= self.multiview_cameras:
+                break
+        self._multiview, self._multiview_robots = out, set(self.robots)
+        return out
+
+    def view_index(self, uid: int) -> int:
+        """A robot's tile in the MultiView (STA ``View``), -1 when it is not shown."""
+        for i, (u, _) in enumerate(self.multiview()):
+            if u == uid:
+                return i
+        return -1
+
+    def set_viewports(self, uid: int, names: list[str | None]) -> list[tuple[str, str]]:
+        """SET {Type Viewports}: viewport n shows the robot's camera ``names[n]`` (None or
+        ``Disable``: off).  Returns (what viewport n shows: the camera, ``Disabled`` or
+        ``None`` for an unknown camera; ``OK``/``Failed``) for each."""
+        r = self.robots.get(uid)
+        cams = {s.name.lower(): s.name for s in self.cameras_of(r)} if r is not None else {}
+        shown, result = [], []
+        for name in names:
+            if name is None or name.lower() in ("disable", "disabled"):
+                result.append(("Disabled", "OK"))
+            elif name.lower() in cams:
+                shown.append(cams[name.lower()])
+                result.append((cams[name.lower()], "OK"))
+            else:
+                result.append(("None", "Failed"))
+        if r is not None:
+            r.viewports = tuple(shown)
+            self._multiview = None
+        return result
+
+    def render_snapshot(self, reuse=None):
+        """A copy of the state for the render thread (taken between steps): ``reuse``, the
+        previous snapshot, is refilled when the model is still the same."""
+        from usarsim.sim.render import CameraState, Snapshot
+
+        m = self.model
+        if reuse is not None and reuse.model is m:
+            snap = reuse
+            snap.cameras = {}
+        else:
+            snap = Snapshot(model=m, data=mujoco.MjData(m), time=0.0)
+        mujoco.mj_copyData(snap.data, m, self.data)
+        snap.time = self.time
+        snap.robots = {r.name.lower(): r.uid for r in self.robots.values()}
+        snap.multiview = list(self.multiview())
+        for r in self.robots.values():
+            for cam in self.cameras_of(r):
+                cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, builder.camera_name(r.prefix, cam.name))
+                if cid >= 0:
+                    snap.cameras[(r.uid, cam.name.lower())] = CameraState(
+                        cam_id=cid, fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
+                        omni=cam.item.item_type != "Camera")
+        return snap
 
     def truth(self, class_name: str | None = None, name: str | None = None) -> list[tuple]:
         """Everything the ground-truth service knows, now: (name, class, time, location,

@@ -1,0 +1,225 @@
+"""The image server (UPIS, protocol.md 10; TCP 5003 by default, ``--image-port``).
+
+A client sends ``OK`` for one whole picture or ``U`` and four 32-bit big-endian numbers
+(x, y, width, height) for a sub-rectangle of it; any other byte is ignored.  Each picture
+goes back as a type byte (0 raw, 1..5 JPEG from "superb" to "bad"), a 4-byte big-endian
+length and the payload: a JPEG file, or for raw pictures the width and height (16-bit
+big-endian) and the pixels as B, G, R, rows top to bottom.
+
+What a connection sees: the robot camera its address is bound to by ``SET {Type Camera}
+{Robot r} {Name cam} {Client ip}`` on a control connection (``ip`` or ``ip:port``, the
+latter for several viewers on one machine), else the MultiView of several robots'
+cameras (protocol.md 11).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import logging
+import struct
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from usarsim.sim.render import RenderService, Tile, grid_tiles
+
+log = logging.getLogger("usarsim.server")
+
+# UPIS image types (protocol.md 10): 0 raw, then JPEG quality levels from best to worst
+IMAGE_TYPES = {"raw": 0, "superb": 1, "super": 1, "good": 2, "normal": 3, "fair": 4, "average": 4, "bad": 5}
+# JPEG quality (libjpeg's 1..100 scale) of each UPIS level: our own choice of five steps
+JPEG_QUALITY = {1: 95, 2: 85, 3: 75, 4: 60, 5: 40}
+MAX_PENDING = 8  # requests a connection may have waiting; more are dropped (and logged once)
+
+
+@dataclass
+class ImageSettings:
+    """How pictures are made (UPIS ini ``ImageType``, ``FrameSkip``; MultiView's
+    ``CameraNum``, ``WideMode``, ``CameraXres``/``CameraYres``, manual 3.2.5.2, 3.2.6)."""
+
+    image_type: int = 3
+    width: int = 640  # a bound camera's picture
+    height: int = 480
+    camera_num: int = 4
+    wide_mode: int = 0
+    tile_width: int = 320
+    tile_height: int = 240
+    frame_skip: int = 0  # a new picture for every (frame_skip + 1)-th request; the others repeat it
+    max_fps: float = 30.0  # frame budget: new pictures per second, all clients together
+
+
+class CameraBindings:
+    """Which robot camera each viewer address sees (``SET {Type Camera} ... {Client ip}``)."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._by_client: dict[str, tuple[str, str]] = {}
+
+    def bind(self, client: str, robot: str, camera: str) -> None:
+        with self._lock:
+            self._by_client[client.strip().lower()] = (robot, camera)
+
+    def release(self, client: str) -> None:
+        with self._lock:
+            self._by_client.pop(client.strip().lower(), None)
+
+    def lookup(self, ip: str, port: int) -> tuple[str, str] | None:
+        with self._lock:
+            return self._by_client.get(f"{ip}:{port}".lower()) or self._by_client.get(ip.lower())
+
+
+def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
+    """One UPIS frame: type byte, 4-byte big-endian length, payload."""
+    h, w = rgb.shape[:2]
+    if image_type == 0:
+        payload = struct.pack(">HH", w, h) + np.ascontiguousarray(rgb[:, :, ::-1]).tobytes()
+    else:
+        from PIL import Image
+
+        buf = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(rgb)).save(buf, "JPEG", quality=JPEG_QUALITY[image_type])
+        payload = buf.getvalue()
+    return struct.pack(">BI", image_type, len(payload)) + payload
+
+
+class ImageConnection(asyncio.Protocol):
+    def __init__(self, server: "ImageServer"):
+        self.server = server
+        self.transport: asyncio.Transport | None = None
+        self.peer = ("?", 0)
+        self.buffer = bytearray()
+        self.pending: list[tuple[int, int, int, int] | None] = []
+        self.busy = False
+        self.requests = 0
+        self.last: np.ndarray | None = None
+        self._warned: set[str] = set()
+
+    def warn_once(self, key: str, msg: str, *args) -> None:
+        if key not in self._warned:
+            self._warned.add(key)
+            log.warning("image %s:%d: " + msg, *self.peer, *args)
+
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        peer = transport.get_extra_info("peername")
+        self.peer = (peer[0], peer[1]) if peer else ("?", 0)
+        if len(self.server.connections) >= self.server.max_connections:
+            log.warning("image %s:%d: refused: %d connections already", *self.peer, len(self.server.connections))
+            transport.close()
+            return
+        self.server.connections.add(self)
+        log.info("image %s:%d: connected", *self.peer)
+
+    def connection_lost(self, exc) -> None:
+        self.server.connections.discard(self)
+        self.transport = None
+
+    def data_received(self, data: bytes) -> None:
+        self.buffer += data
+        b = self.buffer
+        while b:
+            if b[0] == ord("O"):
+                if len(b) < 2:
+                    break
+                if b[1] == ord("K"):
+                    self._queue(None)
+                    del b[:2]
+                else:
+                    del b[:1]
+            elif b[0] == ord("U"):
+                if len(b) < 17:
+                    break
+                self._queue(struct.unpack(">IIII", bytes(b[1:17])))
+                del b[:17]
+            else:
+                del b[:1]  # CR, LF and anything else: ignored
+        self._next()
+
+    def _queue(self, rect) -> None:
+        if len(self.pending) >= MAX_PENDING:
+            self.warn_once("pending", "more than %d pictures asked for at once: the extra requests are dropped",
+                           MAX_PENDING)
+            return
+        self.pending.append(rect)
+
+    def _next(self) -> None:
+        if self.busy or not self.pending or self.transport is None:
+            return
+        rect = self.pending.pop(0)
+        settings = self.server.settings
+        self.requests += 1
+        if self.last is not None and settings.frame_skip > 0 and (self.requests - 1) % (settings.frame_skip + 1):
+            self._send(self.last, rect)  # FrameSkip: the last picture again
+            self._next()
+            return
+        self.busy = True
+        binding = self.server.bindings.lookup(*self.peer)
+        fut = self.server.renderer.render_layout(lambda snap: self.server.layout(snap, binding))
+        loop = self.server.loop
+        fut.add_done_callback(lambda f: loop.call_soon_threadsafe(self._done, f, rect))
+
+    def _done(self, fut, rect) -> None:
+        self.busy = False
+        if fut.exception() is not None:
+            self.warn_once("render", "no picture: %s", fut.exception())
+            if self.transport is not None:
+                self.transport.close()
+            return
+        self.last = fut.result()
+        self._send(self.last, rect)
+        self._next()
+
+    def _send(self, picture: np.ndarray, rect) -> None:
+        if self.transport is None or self.transport.is_closing():
+            return
+        if rect is not None:  # the asked sub-rectangle, cut to the picture
+            x, y, w, h = rect
+            ph, pw = picture.shape[:2]
+            x0, y0 = min(x, pw), min(y, ph)
+            picture = picture[y0:min(y0 + h, ph), x0:min(x0 + w, pw)]
+        self.transport.write(encode_picture(picture, self.server.settings.image_type))
+
+
+class ImageServer:
+    def __init__(self, renderer: RenderService, bindings: CameraBindings, settings: ImageSettings | None = None, *,
+                 host: str = "127.0.0.1", port: int = 5003, max_connections: int = 16):
+        self.renderer = renderer
+        self.bindings = bindings
+        self.settings = settings or ImageSettings()
+        self.host = host
+        self.port = port
+        self.max_connections = max_connections
+        self.connections: set[ImageConnection] = set()
+        self._server: asyncio.base_events.Server | None = None
+        self.loop: asyncio.AbstractEventLoop | None = None
+
+    def layout(self, snap, binding) -> tuple[int, int, list[Tile]]:
+        """What a picture shows: the bound robot camera over the whole picture, or the
+        MultiView (black where a robot or camera is missing)."""
+        s = self.settings
+        if binding is not None:
+            robot, camera = binding
+            uid = snap.robots.get(robot.lower())
+            tiles = [Tile(uid, camera, 0, 0, s.width, s.height)] if uid is not None else []
+            return s.width, s.height, tiles
+        tiles, width, height = grid_tiles(snap.multiview, s.camera_num, s.wide_mode, s.tile_width, s.tile_height)
+        return width, height, tiles
+
+    async def start(self) -> int:
+        self.loop = asyncio.get_running_loop()
+        self._server = await self.loop.create_server(lambda: ImageConnection(self), self.host, self.port,
+                                                     reuse_address=True)
+        self.port = self._server.sockets[0].getsockname()[1]
+        return self.port
+
+    async def stop(self) -> None:
+        if self._server is not None:
+            self._server.close()
+            for c in list(self.connections):
+                if c.transport is not None:
+                    c.transport.close()
+            await self._server.wait_closed()
+            self._server = None
+        self.renderer.stop()

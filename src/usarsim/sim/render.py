@@ -1,0 +1,241 @@
+"""Pictures of the robots' cameras (protocol.md 7.11, 10, 11), rendered with MuJoCo's
+offscreen renderer on one dedicated thread that owns the GL context (Mesa EGL on a machine
+without a GPU, the GPU's driver where there is one).
+
+A picture is rendered only when a client asks for one.  The render thread asks the
+simulation thread for a snapshot (a copy of the physics state, taken between two steps: a
+memory copy) and renders from the copy while the physics runs on; a frame budget (pictures
+per second of wall-clock time, all clients together) keeps rendering from taking the
+machine away from the physics.
+
+Layouts: a picture is a grid of tiles, each showing one robot camera (or nothing, black).
+A camera bound to a client fills the whole picture; the MultiView (manual 3.2.6) tiles
+several robots' cameras.  An omnidirectional camera renders a panorama: four 90-degree
+views side by side, from 135 degrees left to 135 degrees right of its heading.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import queue
+import threading
+import time
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from usarsim.sim.builder import MAX_PICTURE_HEIGHT as MAX_HEIGHT
+from usarsim.sim.builder import MAX_PICTURE_WIDTH as MAX_WIDTH
+from usarsim.sim.builder import camera_fovy_deg
+
+log = logging.getLogger("usarsim.render")
+
+
+@dataclass(frozen=True)
+class Tile:
+    """One camera's place in a picture: its robot, its name, and the rectangle it fills."""
+
+    uid: int
+    camera: str
+    x: int
+    y: int
+    width: int
+    height: int
+
+
+@dataclass
+class CameraState:
+    cam_id: int  # the MuJoCo camera
+    fov_rad: float  # horizontal field of view (zoom)
+    omni: bool
+
+
+@dataclass
+class Snapshot:
+    """What the render thread draws from: the model, a private copy of the state, the
+    simulated time and every robot camera, by (robot id, camera name in lower case)."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    time: float
+    cameras: dict[tuple[int, str], CameraState] = field(default_factory=dict)
+    robots: dict[str, int] = field(default_factory=dict)  # robot id by its name, in lower case
+    multiview: list[tuple[int, str]] = field(default_factory=list)  # what the MultiView shows
+
+
+@dataclass
+class _Job:
+    layout: object  # snapshot -> (width, height, tiles)
+    future: Future
+
+
+class RenderService:
+    """The render thread.  ``take_snapshot(reuse, on_done)`` must run a snapshot on the
+    simulation thread and call ``on_done(snapshot, error)``; ``render`` returns a Future
+    of an RGB picture (height x width x 3, uint8, rows top to bottom)."""
+
+    def __init__(self, take_snapshot, max_fps: float = 30.0):
+        self._take_snapshot = take_snapshot
+        self.max_fps = max_fps
+        self._queue: queue.Queue[_Job | None] = queue.Queue()
+        self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._model: mujoco.MjModel | None = None
+        self._snapshot: Snapshot | None = None
+        self._next_frame = 0.0
+        self.frames = 0
+        self.available: bool | None = None  # None: not tried yet; False: no GL context here
+        self.error = ""
+
+    def render(self, width: int, height: int, tiles) -> Future:
+        """A picture of ``width`` x ``height`` made of ``tiles``."""
+        tiles = tuple(tiles)
+        return self.render_layout(lambda snap: (width, height, tiles))
+
+    def render_layout(self, layout) -> Future:
+        """A picture laid out from the snapshot: ``layout(snapshot)`` returns its width,
+        height and tiles (so that robot names and the MultiView are read at the same
+        instant as the picture)."""
+        fut: Future = Future()
+        with self._lock:
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="usarsim-render", daemon=True)
+                self._thread.start()
+        self._queue.put(_Job(layout, fut))
+        return fut
+
+    def stop(self) -> None:
+        with self._lock:
+            thread, self._thread = self._thread, None
+        if thread is not None:
+            self._queue.put(None)
+            thread.join(timeout=5.0)
+
+    # the render thread -------------------------------------------------------------
+    def _run(self) -> None:
+        try:
+            while True:
+                job = self._queue.get()
+                if job is None:
+                    return
+                try:
+                    self._pace()
+                    snap = self._snapshot_now()
+                    job.future.set_result(self._draw(snap, job))
+                    self.frames += 1
+                except BaseException as exc:  # the thread must live on: the error goes to the client
+                    if not job.future.done():
+                        job.future.set_exception(exc)
+        finally:
+            for r in self._renderers.values():
+                try:
+                    r.close()
+                except Exception:  # a context that failed to open cannot close either
+                    pass
+            self._renderers.clear()
+
+    def _pace(self) -> None:
+        """The frame budget: at most ``max_fps`` pictures per second, all clients together."""
+        if self.max_fps <= 0:
+            return
+        now = time.monotonic()
+        if now < self._next_frame:
+            time.sleep(self._next_frame - now)
+            now = self._next_frame
+        self._next_frame = now + 1.0 / self.max_fps
+
+    def _snapshot_now(self) -> Snapshot:
+        done = threading.Event()
+        box: dict = {}
+
+        def on_done(result, error):
+            box["result"], box["error"] = result, error
+            done.set()
+
+        self._take_snapshot(self._snapshot, on_done)
+        if not done.wait(30.0):
+            raise TimeoutError("the simulation did not answer a snapshot request within 30 s")
+        if box["error"] is not None:
+            raise box["error"]
+        self._snapshot = box["result"]
+        return self._snapshot
+
+    def _renderer(self, model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+        if model is not self._model:  # robots came or went: the model was rebuilt
+            for r in self._renderers.values():
+                r.close()
+            self._renderers.clear()
+            self._model = model
+        r = self._renderers.get((width, height))
+        if r is None:
+            try:
+                r = mujoco.Renderer(model, height, width)
+            except Exception as exc:
+                self.available = False
+                self.error = f"no OpenGL context for rendering ({exc}); set MUJOCO_GL=egl or osmesa"
+                raise RuntimeError(self.error) from exc
+            self.available = True
+            # shadows and reflections cost more than they tell an operator
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+            self._renderers[(width, height)] = r
+        return r
+
+    def _draw(self, snap: Snapshot, job: _Job) -> np.ndarray:
+        width, height, tiles = job.layout(snap)
+        if not (1 <= width <= MAX_WIDTH and 1 <= height <= MAX_HEIGHT):
+            raise ValueError(f"picture {width}x{height} is outside 1x1..{MAX_WIDTH}x{MAX_HEIGHT}")
+        picture = np.zeros((height, width, 3), dtype=np.uint8)
+        for t in tiles:
+            cam = snap.cameras.get((t.uid, t.camera.lower()))
+            w = min(t.width, width - t.x)
+            h = min(t.height, height - t.y)
+            if cam is None or w <= 0 or h <= 0:
+                continue
+            picture[t.y:t.y + h, t.x:t.x + w] = self._view(snap, cam, t.width, t.height)[:h, :w]
+        return picture
+
+    def _view(self, snap: Snapshot, cam: CameraState, width: int, height: int) -> np.ndarray:
+        model, data = snap.model, snap.data
+        if not cam.omni:
+            model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, width, height)
+            r = self._renderer(model, width, height)
+            r.update_scene(data, camera=cam.cam_id)
+            return r.render()
+        # a panorama: four quarter views, each turned about the camera's own up axis
+        edges = [round(k * width / 4) for k in range(5)]
+        base = data.cam_xmat[cam.cam_id].reshape(3, 3).copy()
+        out = np.empty((height, width, 3), dtype=np.uint8)
+        try:
+            for k in range(4):
+                w = edges[k + 1] - edges[k]
+                turn = math.radians(-135.0 + 90.0 * k)  # right of the heading is positive
+                c, s = math.cos(-turn), math.sin(-turn)
+                about_up = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+                data.cam_xmat[cam.cam_id] = (base @ about_up).ravel()
+                model.cam_fovy[cam.cam_id] = camera_fovy_deg(math.pi / 2, w, height)
+                r = self._renderer(model, w, height)
+                r.update_scene(data, camera=cam.cam_id)
+                out[:, edges[k]:edges[k + 1]] = r.render()
+        finally:
+            data.cam_xmat[cam.cam_id] = base.ravel()
+        return out
+
+
+def grid_tiles(cameras, count: int, wide_mode: int, tile_w: int, tile_h: int) -> tuple[list[Tile], int, int]:
+    """The MultiView layout (manual 3.2.6): ``count`` tiles of ``tile_w`` x ``tile_h``;
+    ``wide_mode`` 0 lays them in a box (as many columns as rows, or one more), n > 0 puts
+    n in a row before starting the next; tiles fill rows left to right, top to bottom.
+    ``cameras`` lists (robot id, camera name) for the first tiles.  Returns the tiles and
+    the picture's width and height."""
+    count = max(1, count)
+    cols = wide_mode if wide_mode > 0 else math.ceil(math.sqrt(count))
+    cols = max(1, min(cols, count))
+    rows = math.ceil(count / cols)
+    tiles = [Tile(uid, name, (i % cols) * tile_w, (i // cols) * tile_h, tile_w, tile_h)
+             for i, (uid, name) in enumerate(list(cameras)[:count])]
+    return tiles, cols * tile_w, rows * tile_h
