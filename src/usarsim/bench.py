@@ -14,6 +14,8 @@ import asyncio
 import json
 import math
 import os
+import queue
+import statistics
 import subprocess
 import sys
 import threading
@@ -97,7 +99,7 @@ def run_bench(args) -> int:
         return 2
     poses = free_spots(world, n)
     app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n),
-                      truth_port=None)
+                      truth_port=None, image_port=None)
     loop = asyncio.new_event_loop()
     ready = threading.Event()
 
@@ -159,6 +161,130 @@ def run_bench(args) -> int:
     else:
         print(f"robots {n}: {sim_s:.1f} simulated s in {wall_s:.2f} s wall -> real-time factor {rtf:.2f}; "
               f"bare mj_step {raw:.2f}; ratio {rtf / raw:.2f}")
+    return 0
+
+
+ROUNDS = 5  # the camera bench alternates this many served and bare runs and takes the medians
+
+
+def run_camera_bench(args) -> int:
+    """Frames per second a client gets through the image server (a P2AT's camera bound to
+    it, physics running in real time beside it) against bare MuJoCo rendering plus JPEG
+    encoding of the same view in the same process, at each picture size."""
+    import socket
+    import struct
+
+    from usarsim.config.catalog import resolve_world
+    from usarsim.server.app import Application
+    from usarsim.server.image import ImageSettings, encode_picture
+
+    logging_quiet()
+    world = resolve_world(args.world)
+    frames = max(5, int(args.frames))
+    results = []
+    for size in args.sizes:
+        w, h = size
+        app = Application(world, host="127.0.0.1", port=0, seed=0, speed=1.0, lockstep=False, truth_port=None,
+                          image_port=0, image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0))
+        loop = asyncio.new_event_loop()
+        ready = threading.Event()
+
+        def serve(loop=loop, app=app, ready=ready):
+            asyncio.set_event_loop(loop)
+            loop.run_until_complete(app.start())
+            ready.set()
+            loop.run_forever()
+
+        th = threading.Thread(target=serve, name="bench-server", daemon=True)
+        th.start()
+        ready.wait(30)
+        try:
+            ctl = socket.create_connection(("127.0.0.1", app.control.port), timeout=30)
+            pose = world.start_poses[0]
+            ctl.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
+                        "DRIVE {Left 1} {Right 1}\r\n"
+                        "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode())
+            sim = app.facade.sim
+            deadline = time.monotonic() + 30
+            while not sim.robots and time.monotonic() < deadline:
+                time.sleep(0.01)
+            time.sleep(0.5)
+            viewer = socket.create_connection(("127.0.0.1", app.image.port), timeout=60)
+
+            def frame():
+                viewer.sendall(b"OK")
+                head = b""
+                while len(head) < 5:
+                    head += viewer.recv(5 - len(head))
+                n = struct.unpack(">I", head[1:5])[0]
+                got = 0
+                while got < n:
+                    got += len(viewer.recv(min(1 << 20, n - got)))
+
+            frame()  # the first picture opens the GL context
+            # the same view, rendered and encoded directly on a thread of its own (its own GL
+            # context), from a snapshot of the same scene
+            snap_box = {}
+            done = threading.Event()
+            app.facade.call(lambda s: s.render_snapshot(), on_done=lambda r, e: (snap_box.update(r=r), done.set()))
+            done.wait(30)
+            snap = snap_box["r"]
+            jobs: "queue.Queue[int | None]" = queue.Queue()
+            bare_times: "queue.Queue[float]" = queue.Queue()
+
+            def bare():
+                import mujoco
+
+                from usarsim.sim.builder import camera_fovy_deg
+
+                cam = next(iter(snap.cameras.values()))
+                r = mujoco.Renderer(snap.model, h, w)
+                r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+                r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+                snap.model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, w, h)
+                while (count := jobs.get()) is not None:
+                    t = time.perf_counter()
+                    for _ in range(count):
+                        r.update_scene(snap.data, camera=cam.cam_id)
+                        encode_picture(r.render(), 3)
+                    bare_times.put(count / (time.perf_counter() - t))
+                r.close()
+
+            bt = threading.Thread(target=bare)
+            bt.start()
+            jobs.put(1)
+            bare_times.get()  # its context is open
+            served_runs, bare_runs = [], []
+            per_round = max(5, frames // ROUNDS)
+            for _ in range(ROUNDS):  # alternate, so that both see the same machine load
+                t0 = time.perf_counter()
+                for _ in range(per_round):
+                    frame()
+                served_runs.append(per_round / (time.perf_counter() - t0))
+                jobs.put(per_round)
+                bare_runs.append(bare_times.get())
+            jobs.put(None)
+            bt.join()
+            served = statistics.median(served_runs)
+            bare_box = {"fps": statistics.median(bare_runs)}
+            viewer.close()
+            ctl.close()
+        finally:
+            fut = asyncio.run_coroutine_threadsafe(app.stop(), loop)
+            fut.result(10)
+            loop.call_soon_threadsafe(loop.stop)
+            th.join(5)
+            loop.close()
+        bare_fps = bare_box["fps"]
+        row = {"size": f"{w}x{h}", "served_fps": round(served, 2), "bare_render_jpeg_fps": round(bare_fps, 2),
+               "ratio": round(served / bare_fps, 3), "frames": frames, "world": world.name,
+               "cpu_count": os.cpu_count()}
+        results.append(row)
+        if not args.json:
+            print(f"camera {w}x{h}: served {served:.1f} frames/s through the image server; bare MuJoCo render + "
+                  f"JPEG {bare_fps:.1f} frames/s; ratio {served / bare_fps:.2f}")
+    if args.json:
+        print(json.dumps(results))
     return 0
 
 

@@ -119,6 +119,12 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--seconds", type=float, default=10.0, help="simulated seconds to run (default: %(default)s)")
     b.add_argument("--world", default="DM-USAR_yellow", help="world (default: %(default)s)")
     b.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    b.add_argument("--cameras", action="store_true",
+                   help="measure the image server instead: frames per second a client gets of a P2AT's camera, "
+                        "beside bare MuJoCo rendering plus JPEG encoding of the same view, and their ratio")
+    b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
+                   help="with --cameras: picture sizes (default: 320x240 640x480)")
+    b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
     return p
 
 
@@ -245,9 +251,9 @@ def cmd_robots(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from usarsim.bench import run_bench
+    from usarsim.bench import run_bench, run_camera_bench
 
-    return run_bench(args)
+    return run_camera_bench(args) if args.cameras else run_bench(args)
 
 
 def main(argv: list[str] | None = None) -> int:

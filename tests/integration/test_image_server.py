@@ -13,6 +13,7 @@ import threading
 import numpy as np
 import pytest
 
+import usarsim  # noqa: F401  (chooses the offscreen GL backend before MuJoCo loads)
 from helpers import DEFAULT_TIMEOUT, segments
 
 IMAGE_WORLD = """\
@@ -272,3 +273,16 @@ def test_an_omnidirectional_camera_renders_a_panorama(server_factory, image_worl
     for edge in (pano[40:80, 0:20], pano[40:80, 460:480]):  # straight behind
         assert colour_of(edge) != (1, 0, 0)
     viewer.close()
+
+
+def test_the_camera_bench_reports_served_and_bare_frame_rates():
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "usarsim", "bench", "--cameras", "--sizes", "64x48", "--frames", "10",
+                          "--json"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    (row,) = json.loads(out.stdout)
+    assert row["size"] == "64x48" and row["served_fps"] > 0 and row["bare_render_jpeg_fps"] > 0
+    assert row["ratio"] == pytest.approx(row["served_fps"] / row["bare_render_jpeg_fps"], rel=0.01)
