@@ -286,3 +286,49 @@ def test_the_camera_bench_reports_served_and_bare_frame_rates():
     (row,) = json.loads(out.stdout)
     assert row["size"] == "64x48" and row["served_fps"] > 0 and row["bare_render_jpeg_fps"] > 0
     assert row["ratio"] == pytest.approx(row["served_fps"] / row["bare_render_jpeg_fps"], rel=0.01)
+
+
+def test_the_stereo_robot_renders_both_eyes(server_factory, image_world):
+    """The StereoP2AT's two cameras, 0.12 m apart, see the stripe at different places."""
+    srv = serve(server_factory, image_world, image_type=0, width=320, height=240)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.StereoP2AT} {Name S} {Start Stripe}")
+    c.step(1.0)
+    v_left, v_right = Viewer(srv.app.image.port), Viewer(srv.app.image.port)
+    c.send(f"SET {{Type Camera}} {{Robot S}} {{Name CameraLeft}} {{Client 127.0.0.1:{v_left.local_port}}}")
+    c.send(f"SET {{Type Camera}} {{Robot S}} {{Name CameraRight}} {{Client 127.0.0.1:{v_right.local_port}}}")
+    c.step(0.1)
+
+    def stripe_column(img):
+        red = (img[:, :, 0] > 120) & (img[:, :, 1] < 80)
+        return float(np.nonzero(red.any(axis=0))[0].mean())
+
+    left, right = stripe_column(v_left.picture()), stripe_column(v_right.picture())
+    assert left > right + 5  # the left eye sees the stripe further right (parallax)
+    v_left.close()
+    v_right.close()
+
+
+def test_the_headlight_lights_what_the_camera_sees(server_factory, tmp_path):
+    from usarsim.config.world import load_world
+
+    dim = IMAGE_WORLD.replace("materials:", "ambient_light: [0.0, 0.0, 0.0]\nlights:\n"
+                              "  - {name: moon, type: directional, direction: [0.0, 0.0, 1.0], intensity: 0.05}\n"
+                              "materials:", 1)
+    (tmp_path / "Dim.yaml").write_text(dim.replace("name: CameraRange", "name: Dim"))
+    from usarsim.server.image import ImageSettings
+
+    srv = server_factory(world=load_world(tmp_path / "Dim.yaml"), image=ImageSettings(image_type=0, width=160,
+                                                                                      height=120))
+    robot = spawn(srv, "R1", "White")
+    robot.step(1.0)
+    robot.send("SET {Type Camera} {Robot R1} {Name Camera} {Client 127.0.0.1}")
+    robot.step(0.1)
+    viewer = Viewer(srv.app.image.port)
+    dark = viewer.picture()[40:80, 60:100].mean()
+    robot.send("DRIVE {Light True}")
+    robot.step(0.2)
+    lit = viewer.picture()[40:80, 60:100].mean()
+    assert lit > dark + 20, (dark, lit)
+    viewer.close()
