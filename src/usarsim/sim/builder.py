@@ -51,6 +51,14 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     o.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     s.visual.global_.offwidth = MAX_PICTURE_WIDTH
     s.visual.global_.offheight = MAX_PICTURE_HEIGHT
+    # a sky for the cameras (a pale gradient, lighter at the horizon) instead of black
+    sky = s.add_texture()
+    sky.name = "sky"
+    sky.type = mujoco.mjtTexture.mjTEXTURE_SKYBOX
+    sky.builtin = mujoco.mjtBuiltin.mjBUILTIN_GRADIENT
+    sky.rgb1 = [0.78, 0.84, 0.90]
+    sky.rgb2 = [0.36, 0.46, 0.58]
+    sky.width = sky.height = 64
 
     fl = world.floor
     floor_mat = world.materials[fl.material]
