@@ -477,7 +477,6 @@ def test_unknown_commands_are_ignored(server):
         c.send("FOO {Bar 1}")
         c.send("HELLO")
         c.send("MISPKG {Name CameraPanTilt} {Link 1} {Value 1.0}")  # known, but this robot has none
-        c.send("SET {Type Viewports} {Config SingleView}")
         assert [ln.type for ln in c.sync()] == ["NFO"]
         assert sensor_lines(c.step(0.2), "GroundTruth")
 

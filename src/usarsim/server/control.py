@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import re
+import time
+from collections import deque
 from typing import Any
 
 from usarsim.protocol import messages as M
@@ -24,6 +27,13 @@ from usarsim.sim.simulation import Output
 log = logging.getLogger("usarsim.server")
 
 HIGH_WATER = 256 * 1024
+# A connection's lines are handled for at most this long at a time (s); the rest wait while
+# its socket is not read, so that one client flooding the port slows only itself (TCP pushes
+# back on it) and never the event loop, the other clients or the physics.
+LINE_BUDGET_S = 0.002
+# A run of the same repeatable DRIVE line (speeds or lights, no joint Order, no Flip) in one
+# read collapses to one line before the lines are even split: sending it again changes nothing.
+_REPEATED_DRIVE = re.compile(rb"(?:^|(?<=[\r\n]))(DRIVE(?:(?![Oo]rder|[Ff]lip)[^\r\n])*[\r\n]+)(?:\1)+")
 
 
 def output_to_message(o: Output) -> Any:
@@ -57,6 +67,10 @@ class Connection(asyncio.Protocol):
         self._paused = False
         self._held: dict[str, bytes] = {}  # latest periodic line per stream while paused
         self.dropped_periodic = 0
+        self._backlog: deque[str] = deque()  # lines received, not handled yet
+        self._last_line = ""
+        self._reading_paused = False
+        self.repeats_skipped = 0
 
     # asyncio.Protocol -----------------------------------------------------------------
     def connection_made(self, transport) -> None:
@@ -80,14 +94,55 @@ class Connection(asyncio.Protocol):
         if self.session is None:
             return
         before = self.buffer.dropped_lines
+        if len(data) > 2048 and b"DRIVE" in data:
+            data = _REPEATED_DRIVE.sub(rb"\1", data)
         lines = self.buffer.feed(data)
         if self.buffer.dropped_lines != before:
             self.session.log_once("too-long", "dropped a line longer than %d bytes", self.buffer.max_line_bytes)
-        for line in lines:
+        self._backlog.extend(lines)
+        self._drain()
+
+    @staticmethod
+    def _repeatable(line: str) -> bool:
+        """A DRIVE that sets speeds or lights only: sending it again changes nothing."""
+        head = line[:5].upper()
+        if head != "DRIVE":
+            return False
+        low = line.lower()
+        return "order" not in low and "flip" not in low
+
+    def _drain(self) -> None:
+        """Handle waiting lines within the time budget; the same repeatable DRIVE sent again
+        and again is handled once (a flood of identical commands costs almost nothing)."""
+        session = self.session
+        if session is None or session.state == CLOSED:
+            self._backlog.clear()
+            return
+        start = time.perf_counter()
+        backlog, prev = self._backlog, self._last_line
+        n = 0
+        while backlog:
+            line = backlog.popleft()
+            if line == prev and self._repeatable(line):
+                self.repeats_skipped += 1
+                continue
+            prev = line
             try:
-                self.session.handle_line(line)
+                session.handle_line(line)
             except Exception:  # nothing a client sends may take the server down
                 log.exception("%s: error while handling %.200r", self.peer, line)
+            n += 1
+            if n % 32 == 0 and backlog and time.perf_counter() - start > LINE_BUDGET_S:
+                self._last_line = prev
+                if not self._reading_paused and self.transport is not None:
+                    self.transport.pause_reading()
+                    self._reading_paused = True
+                asyncio.get_running_loop().call_later(LINE_BUDGET_S / 2, self._drain)
+                return
+        self._last_line = prev
+        if self._reading_paused and self.transport is not None and not self.transport.is_closing():
+            self.transport.resume_reading()
+            self._reading_paused = False
 
     def connection_lost(self, exc) -> None:
         s = self.session

@@ -73,7 +73,8 @@ class CameraBindings:
 def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
     """One UPIS frame: type byte, 4-byte big-endian length, payload."""
     h, w = rgb.shape[:2]
-    if image_type == 0:
+    if image_type == 0 or w == 0 or h == 0:  # an empty rectangle goes back as an empty raw picture
+        image_type = 0
         payload = struct.pack(">HH", w, h) + np.ascontiguousarray(rgb[:, :, ::-1]).tobytes()
     else:
         from PIL import Image

@@ -1,0 +1,139 @@
+"""Hostile and broken input on the control, ground-truth and image ports (issue:
+reliability): each gets the documented reply or is ignored, and the connection, the
+server and another client's robot stay healthy."""
+
+from __future__ import annotations
+
+import math
+import os
+import socket
+import struct
+
+import pytest
+
+from helpers import ground_truth, sensor_lines
+
+
+@pytest.fixture
+def witness_server(server_factory):
+    """A lock-step server with a witness robot whose SEN lines prove the world runs on."""
+    srv = server_factory(seed=4)
+    w = srv.connect()
+    w.nfo()
+    w.send("INIT {ClassName USARBot.P2AT} {Name Witness} {Start PlayerStart1}")
+    w.step(0.5)
+    srv.witness = w
+    return srv
+
+
+def assert_world_runs(srv, seconds: float = 0.5) -> None:
+    lines = srv.witness.step(seconds)
+    assert len(sensor_lines(lines, "GroundTruth")) >= int(seconds / 0.1)
+    (_, loc, ori), = ground_truth(lines)[-1:]
+    assert all(math.isfinite(v) for v in (*loc, *ori)) and abs(ori[0]) < 0.1 and abs(ori[1]) < 0.1
+
+
+def assert_alive(client) -> None:
+    assert client.ask("GETSTARTPOSES", "NFO {StartPoses").text.startswith("NFO {StartPoses")
+
+
+@pytest.mark.parametrize("payload", [
+    os.urandom(4096) + b"\r\n",
+    b"DRIVE {Left \xff\xfe\xfd} {Right 1}\r\n",  # invalid UTF-8
+    b"DRIVE " + b"9" * 100_000 + b"\r\n",  # far longer than a line may be
+    b"\x00\x01\x02\r\n{{{{}}}}\r\n}}}{{\r\n",
+    b"INIT {ClassName USARBot.P2AT} {Location nan,0,0}\r\n",
+    b"INIT {ClassName USARBot.P2AT} {Location 1e308,1e308,1e308}\r\n",
+    b"INIT {ClassName USARBot.P2AT} {Location 500,500,-0.3}\r\n",  # outside the world
+    b"INIT {ClassName USARBot.NoSuchRobot} {Start PlayerStart2}\r\n",
+    b"DRIVE {Left 1} {Right 1}\r\nSET {Type Camera} {Name Camera} {Opcode Zoom} {Params 1}\r\n",  # before INIT
+], ids=["garbage", "bad-utf8", "over-long", "braces", "init-nan", "init-huge", "init-outside", "unknown-class",
+        "before-init"])
+def test_broken_lines_are_refused_and_everything_runs_on(witness_server, payload):
+    srv = witness_server
+    c = srv.connect()
+    c.nfo()
+    c.send_raw(payload)
+    assert_alive(c)
+    assert_world_runs(srv)
+    assert srv.on_sim(lambda sim: sorted(r.name for r in sim.robots.values())) == ["Witness"]
+
+
+def test_absurd_numbers_for_a_live_robot_change_nothing_else(witness_server):
+    srv = witness_server
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name Target} {Start PlayerStart3}")
+    c.step(0.3)
+    for line in ["DRIVE {Left NaN} {Right inf}", "DRIVE {Left 1e308} {Right -1e308}", "DRIVE {Speed nan}",
+                 "MISPKG {Name CameraPanTilt} {Link 1} {Value nan}", "MISPKG {Name CameraPanTilt} {Link 2} {Value 1e300}",
+                 "MULTIDRIVE {CameraPanTilt_Link1 inf}", "SET {Type Camera} {Name Camera} {Opcode Zoom} {Params inf}",
+                 "SET {Type Joint} {Name CameraPanTilt_Link2} {Opcode Torque} {Params 1e30}",
+                 "CAMERA {Rotation nan,inf,-inf} {Zoom nan}", "INIT {ClassName USARBot.P2AT} {Name Twice}"]:
+        c.send(line)
+    lines = c.step(1.0)
+    (_, loc, _), = ground_truth(lines)[-1:]
+    assert all(math.isfinite(v) for v in loc)
+    assert_alive(c)
+    assert_world_runs(srv)
+    assert srv.on_sim(lambda sim: sorted(r.name for r in sim.robots.values())) == ["Target", "Witness"]
+
+
+def test_a_robot_put_inside_a_wall_does_not_disturb_the_others(witness_server):
+    srv = witness_server
+    before = ground_truth(srv.witness.step(0.1))[-1][1]
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name Walled} {Location 0.0,-7.2,-0.3}")  # in the west outer wall
+    c.step(1.0)
+    assert_alive(c)
+    after = ground_truth(srv.witness.step(0.1))[-1][1]
+    assert math.dist(before, after) < 0.05  # the witness stood still, untouched
+
+
+def test_half_a_line_then_a_disconnect_leaves_nothing_behind(witness_server):
+    srv = witness_server
+    for abrupt in (False, True):
+        s = socket.create_connection(("127.0.0.1", srv.port), timeout=5)
+        s.recv(4096)
+        s.sendall(b"INIT {ClassName USARBot.P2")
+        if abrupt:  # a reset rather than a close
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        s.close()
+    assert_world_runs(srv)
+    assert srv.on_sim(lambda sim: sorted(r.name for r in sim.robots.values())) == ["Witness"]
+
+
+def test_the_truth_and_image_ports_shrug_off_garbage(witness_server):
+    srv = witness_server
+    truth = socket.create_connection(("127.0.0.1", srv.app.truth.port), timeout=5)
+    truth.sendall(os.urandom(3000) + b"\r\n" + b"{Class " + b"x" * 10_000 + b"\r\n{Class Victim}\r\n")
+    data = b""
+    while data.count(b"{End}") < 2:
+        chunk = truth.recv(65536)
+        assert chunk
+        data += chunk
+    image = socket.create_connection(("127.0.0.1", srv.app.image.port), timeout=5)
+    image.sendall(os.urandom(2000).replace(b"O", b"o").replace(b"U", b"u"))
+    image.sendall(b"U" + struct.pack(">IIII", 2**32 - 1, 2**32 - 1, 2**32 - 1, 2**32 - 1))  # far off the picture
+    head = b""
+    while len(head) < 5:
+        chunk = image.recv(5 - len(head))
+        assert chunk
+        head += chunk
+    kind, length = struct.unpack(">BI", head)
+    assert (kind, length) == (0, 4)  # an empty raw picture: 0 x 0
+    assert image.recv(4) == b"\x00\x00\x00\x00"
+    truth.close()
+    image.close()
+    assert_world_runs(srv)
+
+
+def test_repeated_drive_lines_collapse_but_actions_and_joint_orders_do_not():
+    from usarsim.server.control import _REPEATED_DRIVE
+
+    data = (b"DRIVE {Left 1} {Right 1}\r\n" * 1000 + b"DRIVE {Flip True}\r\n" * 2
+            + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n")
+    assert _REPEATED_DRIVE.sub(rb"\1", data) == (
+        b"DRIVE {Left 1} {Right 1}\r\n" + b"DRIVE {Flip True}\r\n" * 2
+        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n")

@@ -1,0 +1,161 @@
+"""Load and faults (issue: reliability): connect/INIT/drive/disconnect cycles leave nothing
+behind; a client flooding DRIVE lines does not slow the others' status messages; a client
+that never reads is held to latest-wins and bounded memory while everyone else runs on."""
+
+from __future__ import annotations
+
+import gc
+import os
+import socket
+import struct
+import threading
+import time
+
+import pytest
+
+from helpers import Client
+from stress_scale import FULL, scaled
+
+
+def open_fds() -> int:
+    return len(os.listdir("/proc/self/fd"))
+
+
+def rss_mb() -> float:
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return 0.0
+
+
+def test_connect_init_drive_disconnect_cycles_leave_nothing_behind(server_factory):
+    srv = server_factory(lockstep=False, speed=None, seed=2)
+    port = srv.port
+    cycles = scaled(150, 1000)
+
+    def cycle(i: int) -> None:
+        s = socket.create_connection(("127.0.0.1", port), timeout=10)
+        f = s.makefile("rb")
+        f.readline()  # NFO
+        s.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name C{i}}} {{Location {-16 + (i % 5) * 1.5},-6,-0.3}}\r\n"
+                  "DRIVE {Left 2} {Right 2}\r\n".encode())
+        while b"STA" not in f.readline():  # the robot exists and reports
+            pass
+        if i % 2:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # abrupt reset
+        f.close()
+        s.close()
+
+    for i in range(10):  # warm up: caches, compiled kernels, the event loop's buffers
+        cycle(i)
+    gc.collect()
+    time.sleep(0.5)
+    fds, threads, mem = open_fds(), threading.active_count(), rss_mb()
+    t0 = time.perf_counter()
+    for i in range(cycles):
+        cycle(i)
+    elapsed = time.perf_counter() - t0
+    deadline = time.monotonic() + 10
+    while srv.on_sim(lambda sim: len(sim.robots)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    gc.collect()
+    assert srv.on_sim(lambda sim: len(sim.robots)) == 0
+    assert threading.active_count() <= threads
+    assert open_fds() <= fds + 2
+    grown = rss_mb() - mem
+    print(f"\n{cycles} cycles in {elapsed:.1f} s; fds {fds} -> {open_fds()}, threads {threads}, "
+          f"memory {mem:.0f} MB -> {rss_mb():.0f} MB")
+    assert grown < 40.0
+
+
+def test_a_drive_flood_does_not_slow_the_other_robots(server_factory):
+    """One client sends DRIVE lines as fast as it can; the others' STA lines keep their 5 Hz."""
+    others = scaled(7, 63)
+    flood_lines = int(os.environ.get("USARSIM_FLOOD_LINES", scaled(100_000, 500_000)))
+    srv = server_factory(lockstep=False, speed=1.0, seed=3, max_connections=others + 2)
+    clients = []
+    for i in range(others):
+        c = srv.connect()
+        c.nfo()
+        c.send(f"INIT {{ClassName USARBot.Zerg}} {{Name O{i}}} {{Location {-19 + (i % 9) * 1.2},{-9 + (i // 9) * 1.2},-0.3}}")
+        clients.append(c)
+    flooder = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
+    flooder.recv(4096)
+    flooder.sendall(b"INIT {ClassName USARBot.Zerg} {Name Flood} {Location -8,8,-0.3}\r\n")
+    time.sleep(2.0)
+    for c in clients:
+        c.sock.settimeout(0.0) if hasattr(c, "sock") else None
+    counts = [0] * others
+    stop = threading.Event()
+
+    def reader(k: int, c: Client) -> None:
+        while not stop.is_set():
+            try:
+                line = c.next_line(timeout=0.5)
+            except Exception:
+                continue
+            if line.text.startswith("STA") and t_start <= time.monotonic() <= t_end:
+                counts[k] += 1
+
+    line = b"DRIVE {Left 1.5} {Right -1.5}\r\n"
+    burst = line * 1000
+    t_start = time.monotonic() + 0.3
+    t_end = t_start + 3.0
+    readers = [threading.Thread(target=reader, args=(k, c), daemon=True) for k, c in enumerate(clients)]
+    for th in readers:
+        th.start()
+    sent = 0
+    while sent < flood_lines:
+        flooder.sendall(burst)
+        sent += 1000
+    flood_s = time.monotonic() - (t_start - 0.3)
+    while time.monotonic() < t_end + 0.3:
+        time.sleep(0.05)
+    stop.set()
+    for th in readers:
+        th.join(2)
+    flooder.close()
+    window = 3.0
+    rates = [n / window for n in counts]
+    print(f"\n{flood_lines} DRIVE lines sent in {flood_s:.2f} s; STA rates of {others} robots: "
+          f"{min(rates):.2f} .. {max(rates):.2f} per s (5 expected)")
+    assert all(abs(r - 5.0) <= 0.5 + 1e-9 for r in rates), rates
+
+
+def test_a_client_that_never_reads_is_bounded_and_harms_no_one(server_factory):
+    srv = server_factory(lockstep=False, speed=None, seed=5)
+    lazy = socket.socket()
+    lazy.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # a small window, set before connecting
+    lazy.settimeout(10)
+    lazy.connect(("127.0.0.1", srv.port))
+    lazy.sendall(b"INIT {ClassName USARBot.P2AT} {Name Lazy} {Start PlayerStart2}\r\nDRIVE {Left 1} {Right 1}\r\n")
+    busy = srv.connect()
+    busy.nfo()
+    busy.send("INIT {ClassName USARBot.P2AT} {Name Busy} {Start PlayerStart3}")
+    time.sleep(0.5)
+    mem = rss_mb()
+    t_end = time.monotonic() + scaled(8.0, 30.0)
+    n = 0
+    while time.monotonic() < t_end:
+        line = busy.next_line(timeout=5.0)
+        n += line.text.startswith("SEN")
+        if n % 200 == 0:
+            lazy.sendall(b"GETSTARTPOSES\r\n")  # replies pile up too: they are never dropped
+    sim_time = srv.on_sim(lambda sim: sim.time)
+    stats = srv.on_loop(lambda: [(c.transport.get_write_buffer_size(), len(c._held), c.dropped_periodic)
+                                 for c in srv.app.control.connections.values()
+                                 if c.transport is not None and getattr(c.session, "robot_name", "") == "Lazy"])
+    buffered, held, dropped = stats[0]
+    grown = rss_mb() - mem
+    print(f"\nbusy client got {n} SEN lines in {scaled(8.0, 30.0):.0f} s wall ({sim_time:.0f} simulated s); "
+          f"memory grew {grown:.1f} MB; the lazy client: {buffered} bytes waiting, {held} streams held "
+          f"latest-wins, {dropped} periodic lines dropped")
+    from usarsim.server.control import HIGH_WATER
+
+    assert n > 100 and grown < 60.0
+    # what waits for the lazy client stays near the high-water mark: past it, its sensor
+    # lines are held latest-wins (one per stream) instead of piling up
+    assert buffered < HIGH_WATER + 64 * 1024 and held <= 64
+    assert buffered > HIGH_WATER // 2 and (dropped > 0 or buffered < HIGH_WATER)
+    lazy.close()
