@@ -4,5 +4,23 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/_env.sh
 "$USARSIM_PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
+# The operator console's tests drive a headless Chromium: Debian's package (Playwright's own
+# browser download is not used).  Without it those tests are skipped, with the reason.
+if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1 \
+    && command -v apt-get >/dev/null 2>&1; then
+  sudo=""
+  if [ "$(id -u)" != 0 ]; then
+    if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then sudo="sudo -n"; else sudo="none"; fi
+  fi
+  if [ "$sudo" = none ]; then
+    echo "scripts/test.sh: no chromium and no root to install it (apt-get install chromium): the browser tests will be skipped" >&2
+  else
+    echo "scripts/test.sh: installing chromium for the console's browser tests" >&2
+    { $sudo env DEBIAN_FRONTEND=noninteractive apt-get update -q \
+        && $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium; } \
+        </dev/null >/dev/null \
+      || echo "scripts/test.sh: could not install chromium: the browser tests will be skipped" >&2
+  fi
+fi
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
 exec "$USARSIM_PYTHON" -m pytest -q "$@"

@@ -249,12 +249,16 @@ class ServerThread:
     """An :class:`usarsim.server.app.Application` served by its own asyncio loop in a thread."""
 
     def __init__(self, world, *, seed: int = 1, lockstep: bool = True, speed: float | None = None,
-                 max_connections: int = 64, robot_dirs: tuple[str, ...] = (), image=None):
+                 max_connections: int = 64, robot_dirs: tuple[str, ...] = (), image=None,
+                 wireless_model: str | None = None):
         from usarsim.server.app import Application
+        from usarsim.server.wireless import WirelessOptions
 
+        # every listener on a free port (0), so that tests never collide
+        wireless = WirelessOptions(wcs_port=0, wss_port=0, interface_port=0, model=wireless_model)
         self.app = Application(world, host="127.0.0.1", port=0, seed=seed, speed=speed, lockstep=lockstep,
                                max_connections=max_connections, robot_dirs=robot_dirs, truth_port=0, image_port=0,
-                               image=image)
+                               image=image, wireless=wireless, web_port=0)
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._serve, name="test-server-loop", daemon=True)
         self.clients: list[Client] = []

@@ -99,7 +99,7 @@ def run_bench(args) -> int:
         return 2
     poses = free_spots(world, n)
     app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n),
-                      truth_port=None, image_port=None)
+                      truth_port=None, image_port=None, web_port=None)
     loop = asyncio.new_event_loop()
     ready = threading.Event()
 
@@ -185,7 +185,8 @@ def run_camera_bench(args) -> int:
     for size in args.sizes:
         w, h = size
         app = Application(world, host="127.0.0.1", port=0, seed=0, speed=1.0, lockstep=False, truth_port=None,
-                          image_port=0, image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0))
+                          image_port=0, image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0),
+                          web_port=None)
         loop = asyncio.new_event_loop()
         ready = threading.Event()
 

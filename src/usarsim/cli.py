@@ -48,6 +48,8 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from usarsim.config.world import WIRELESS_MODELS
+
     p = argparse.ArgumentParser(
         prog="usarsim",
         description="A USARSim-compatible robot simulator on MuJoCo. Controllers written for USARSim 3.x "
@@ -97,9 +99,33 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-fps", type=float, default=30.0,
                    help="frame budget: new pictures per second, all image clients together, so that cameras do "
                         "not slow the physics (default: %(default)s)")
+    s.add_argument("--wcs-port", type=_port, default=None, metavar="P",
+                   help="wireless ComServer port (default: 5874, or ListenPort of --wireless-config; 0 picks a "
+                        "free port): REGISTER, LISTEN, OPEN, GETSS; links relayed while the radio signal holds")
+    s.add_argument("--wss-port", type=_port, default=50000, metavar="P",
+                   help="Wireless Simulation Server control port (default: %(default)s; 0 picks a free port): "
+                        "INIT, GETSS, DNS, REVERSEDNS and relay ports per robot pair")
+    s.add_argument("--cominterface-port", type=_port, default=None, metavar="P",
+                   help="ComServerInterface port (default: 7435, or iListenPort of --wireless-config; 0 picks a "
+                        "free port): GETPOS and GETOBS")
+    s.add_argument("--wireless-model", default=None, choices=WIRELESS_MODELS,
+                   help="radio propagation model: waf (wall attenuation factor, the USARSim manual's constants; the "
+                        "default unless the world names one), waf2009 (the later USARSim code's constants), "
+                        "distance (walls ignored), perfect (every link holds)")
+    s.add_argument("--wireless-config", default=None, metavar="FILE",
+                   help="an ini file in the form of USARSim's USARComServer.ini: ListenPort, bDebug, ePdo, eDo, eN, "
+                        "eCutoff, eMaxObs, eAttenFac (and Model, CacheDistance, iListenPort); its constants override "
+                        "the world's")
+    s.add_argument("--no-wireless", action="store_true",
+                   help="do not simulate wireless communication (no ComServer, WSS or ComServerInterface)")
     s.add_argument("--robot-dir", action="append", default=[], metavar="DIR",
                    help="a folder of robot files of your own (one YAML file per class, named after the class); "
                         "clients INIT them by class name like the shipped robots; may be repeated")
+    s.add_argument("--web-port", type=_port, default=8080, metavar="P",
+                   help="operator console port (default: %(default)s; 0 picks a free port): open "
+                        "http://HOST:P/ in a browser to watch the world, spawn and drive robots with their video "
+                        "and sensors, and send any command")
+    s.add_argument("--no-web", action="store_true", help="do not serve the operator console")
 
     v = sub.add_parser("validate", help="check a world, robot, RNDF or MDF file",
                        description="Load a world or robot file, build its MuJoCo model and print a one-line "
@@ -165,10 +191,31 @@ def cmd_serve(args) -> int:
                           wide_mode=max(0, args.multiview_columns), tile_width=args.multiview_tile[0],
                           tile_height=args.multiview_tile[1], frame_skip=max(0, args.frame_skip),
                           max_fps=args.max_fps)
+    wireless = None
+    if not args.no_wireless:
+        from usarsim.server.wireless import INTERFACE_PORT, WCS_PORT, WirelessOptions
+        from usarsim.sim.radio import load_wireless_file, resolve_model
+
+        try:
+            wfile = load_wireless_file(args.wireless_config) if args.wireless_config else None
+            layer = wfile.radio if wfile is not None else None
+            resolve_model(world.wireless, layer, model=args.wireless_model)  # reported now, not at start
+        except UsarsimError as exc:
+            print(f"usarsim: error: {exc}", file=sys.stderr)
+            return 1
+
+        def port_of(given, from_file, default):
+            return given if given is not None else from_file if from_file is not None else default
+
+        wireless = WirelessOptions(
+            wcs_port=port_of(args.wcs_port, wfile and wfile.listen_port, WCS_PORT), wss_port=args.wss_port,
+            interface_port=port_of(args.cominterface_port, wfile and wfile.interface_port, INTERFACE_PORT),
+            model=args.wireless_model, config=layer, debug=bool(wfile and wfile.debug))
     app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
                       robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port,
-                      image_port=None if args.no_image else args.image_port, image=image)
+                      image_port=None if args.no_image else args.image_port, image=image, wireless=wireless,
+                      web_port=None if args.no_web else args.web_port)
 
     async def main() -> None:
         loop = asyncio.get_running_loop()
@@ -183,6 +230,10 @@ def cmd_serve(args) -> int:
             raise SystemExit(1) from exc
         for service, host, port in app.listeners():
             print(f"usarsim: {service} listening on {host}:{port}", flush=True)
+        if app.web is not None:
+            where = "127.0.0.1" if args.host in ("", "0.0.0.0") else args.host
+            where = f"[{where}]" if ":" in where else where
+            print(f"usarsim: operator console at http://{where}:{app.web.port}/", flush=True)
         mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
         log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
         await stop.wait()

@@ -20,6 +20,9 @@ from helpers import Client, sensor_lines
 NFO_ON_CONNECT = b"NFO {Gametype BotDeathMatch} {Level DM-USAR_yellow} {TimeLimit 0}\r\n"
 LISTENING = re.compile(r"usarsim: control listening on 127\.0\.0\.1:(\d+)")
 SHIPPED = Path(__import__("usarsim").__file__).parent / "data"
+# every listener beside the control port, on a free port
+PORT_OPTIONS = ("--truth-port", "--image-port", "--wcs-port", "--wss-port", "--cominterface-port", "--web-port")
+FREE_PORTS = tuple(x for opt in PORT_OPTIONS for x in (opt, "0"))
 
 
 def usarsim(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
@@ -77,7 +80,7 @@ def serve(tmp_path):
     started: list[Serve] = []
 
     def start(*args: str) -> Serve:
-        s = Serve(*args, "--truth-port", "0", "--image-port", "0", stderr_path=tmp_path / f"serve{len(started)}.err")
+        s = Serve(*args, *FREE_PORTS, stderr_path=tmp_path / f"serve{len(started)}.err")
         started.append(s)
         return s
 
@@ -199,15 +202,17 @@ def test_port_in_use_exits_1(tmp_path):
         busy.bind(("127.0.0.1", 0))
         busy.listen(1)
         port = busy.getsockname()[1]
-        out = usarsim("serve", "--port", str(port), "--truth-port", "0", "--image-port", "0")
+        out = usarsim("serve", "--port", str(port), *FREE_PORTS)
         assert out.returncode == 1
         assert f"cannot listen on 127.0.0.1, the control port {port} (--port)" in out.stderr
-        truth = usarsim("serve", "--port", "0", "--truth-port", str(port), "--image-port", "0")
-        assert truth.returncode == 1
-        assert f"cannot listen on 127.0.0.1, the ground-truth port {port} (--truth-port)" in truth.stderr
-        image = usarsim("serve", "--port", "0", "--truth-port", "0", "--image-port", str(port))
-        assert image.returncode == 1
-        assert f"cannot listen on 127.0.0.1, the image port {port} (--image-port)" in image.stderr
+        names = {"--truth-port": "the ground-truth port", "--image-port": "the image port",
+                 "--wcs-port": "the ComServer port", "--wss-port": "the WSS port",
+                 "--cominterface-port": "the ComServerInterface port", "--web-port": "the web port"}
+        for option, name in names.items():
+            args = [x for opt in PORT_OPTIONS for x in (opt, str(port) if opt == option else "0")]
+            busy_one = usarsim("serve", "--port", "0", *args)
+            assert busy_one.returncode == 1, option
+            assert f"cannot listen on 127.0.0.1, {name} {port} ({option})" in busy_one.stderr
 
 
 @pytest.mark.parametrize("args, message", [

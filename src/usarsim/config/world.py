@@ -33,6 +33,14 @@ RAMP_FOOT_SINK_M = 0.005
 # Body parts a victim is made of (protocol.md 7.9: the UT2004 victim model's collision boxes).
 VICTIM_PARTS = ("Head", "Chest", "Pelvis", "Arm", "Hand", "Leg", "Foot")
 VICTIM_POSTURES = ("lying", "sitting")
+# Radio propagation models of the wireless simulation (usarsim.sim.radio; manual 3.2.4,
+# protocol.md 12.2): the Wall Attenuation Factor model with the manual's constants, the
+# same with the later USARSim code's, distance only, a perfect link.
+WIRELESS_MODELS = ("waf", "waf2009", "distance", "perfect")
+# The ComConnection keys of USARSim's USARComServer.ini (manual 3.2.4.2), as the world's
+# ``wireless`` section and ``--wireless-config`` take them, and the setting each gives.
+WIRELESS_KEYS = {"ePdo": "pd0_dbm", "eDo": "d0_m", "eN": "path_loss_exponent", "eCutoff": "cutoff_dbm",
+                 "eMaxObs": "max_walls", "eAttenFac": "wall_db"}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -175,6 +183,21 @@ class RfidTagConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
+class WirelessConfig:
+    """A world's (or a configuration file's) choice of radio model and the constants it
+    overrides; None: not given (the model's own value).  ``max_walls`` below 0: no cap."""
+
+    model: str | None = None
+    pd0_dbm: float | None = None
+    d0_m: float | None = None
+    path_loss_exponent: float | None = None
+    cutoff_dbm: float | None = None
+    max_walls: int | None = None
+    wall_db: float | None = None
+    cache_distance_m: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
 class WorldConfig:
     name: str
     description: str
@@ -193,6 +216,7 @@ class WorldConfig:
     water: tuple[WaterVolume, ...] = ()
     lights: tuple[Light, ...] = ()  # none: the default lighting (builder.world_spec)
     ambient_light: tuple[float, float, float] | None = None  # None: MuJoCo's default (0.1 grey)
+    wireless: WirelessConfig | None = None  # None: the default radio model
     extra: dict = field(default_factory=dict)
 
     def start_pose(self, name: str) -> StartPose | None:
@@ -496,12 +520,32 @@ def load_world(path: str | Path) -> WorldConfig:
     if ambient is not None and any(c < 0 or c > 1 for c in ambient):
         raise top.error("ambient_light", f"each colour component must be within [0, 1], got {list(ambient)}")
 
+    wireless = _wireless(top.section("wireless")) if top.has("wireless") else None
+
     top.finish()
     return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
                        objects=tuple(objects), start_poses=tuple(poses), time_limit_min=time_limit,
                        timestep_s=timestep, gravity_m_s2=gravity, geo=geo, victims=tuple(victims),
                        false_alarms=tuple(alarms), rfid_tags=tuple(tags), water=tuple(water), lights=tuple(lights),
-                       ambient_light=ambient)
+                       ambient_light=ambient, wireless=wireless)
+
+
+def _wireless(s: Section) -> WirelessConfig:
+    """The ``wireless`` section: ``model`` (WIRELESS_MODELS), the ini keys of WIRELESS_KEYS
+    and ``cache_distance_m``."""
+    model = s.str("model", None, choices=WIRELESS_MODELS)
+    d0 = s.float("eDo", None, min=0.0, min_exclusive=True)
+    n = s.float("eN", None, min=0.0, max=10.0)
+    waf = s.float("eAttenFac", None, min=0.0, max=200.0)
+    max_obs = s.int("eMaxObs", None)
+    if max_obs is None and s.data.get("eMaxObs", 0) is None:
+        max_obs = -1  # eMaxObs: null, no cap
+    cache = s.float("cache_distance_m", None, min=0.0)
+    cfg = WirelessConfig(model=model, pd0_dbm=s.float("ePdo", None, min=-300.0, max=100.0), d0_m=d0,
+                         path_loss_exponent=n, cutoff_dbm=s.float("eCutoff", None, min=-300.0, max=100.0),
+                         max_walls=max_obs, wall_db=waf, cache_distance_m=cache)
+    s.finish()
+    return cfg
 
 
 def _slope_check(s: Section, key: str, rise: float, run: float, what: str) -> None:

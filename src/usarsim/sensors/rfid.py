@@ -8,9 +8,12 @@ tag keeps what was written, for everyone.
 The reader's three sensing modes, after the UT2004 RFID sensor (manual 10.9.3):
 
 * 0, radius: every tag within MaxRange is detected, walls or not;
-* 1, radius with occlusion: ... and the straight line to it is free;
+* 1, radius with occlusion: ... and no wall stands on the straight line to it;
 * 2, signal strength: the tag's signal at the reader, P(d) = P(1 m) - 10 n log10(d) -
   ObstacleLoss x (walls crossed), must reach the Threshold (and d <= MaxRange).
+
+Walls are the static solids of the world, counted as the wireless simulation counts them
+(``RayCaster.count_walls``); robots and victims are not walls.
 """
 
 from __future__ import annotations
@@ -23,8 +26,6 @@ import numpy as np
 from usarsim.readings import RfidReading, RfidTag
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames
-
-MAX_OBSTACLES = 10  # walls counted along a line at most (each needs a ray cast)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -79,8 +80,9 @@ class RFID(Sensor):
         near = np.flatnonzero(dist <= c.max_range_m)
         out = []
         if len(near) and c.sensing_mode > 0:
-            dirs = delta[near] / np.maximum(dist[near], 1e-9)[:, None]
-            walls = self._obstacles(view, pos, dirs, dist[near], stop_at_first=c.sensing_mode == 1)
+            # walls on each line to a tag (a tag lying on a surface is not behind it)
+            walls = view.caster.count_walls(np.broadcast_to(pos, (len(near), 3)), world[near], kind=self.RAY_KIND,
+                                            end_margin=0.01, stop_at_first=c.sensing_mode == 1)
         for k, i in enumerate(near.tolist()):
             if c.sensing_mode == 1 and walls[k] > 0:
                 continue
@@ -92,32 +94,6 @@ class RFID(Sensor):
             local = rot.T @ delta[i]
             out.append((ids[i], frames.from_mj_vec(local)))
         return out
-
-    def _obstacles(self, view, pos, dirs, lengths, stop_at_first: bool) -> list[int]:
-        """Walls crossed on each line from ``pos`` (rays cast again just past each hit)."""
-        counts = [0] * len(dirs)
-        origins = np.repeat(pos[None, :], len(dirs), axis=0)
-        left = np.array(lengths, dtype=float) - 0.01  # a tag lying on a surface is not behind it
-        active = np.flatnonzero(left > 0)
-        for _ in range(2 * MAX_OBSTACLES):
-            if not len(active):
-                break
-            hit, nrm, _ = view.caster.cast_from(origins[active], dirs[active], float(left[active].max()),
-                                                self.handle.body_id, normals=True, kind=self.RAY_KIND)
-            still = []
-            for j, a in enumerate(active.tolist()):
-                h = float(hit[j])
-                if h < left[a]:
-                    # a wall counts where the line enters it (from inside, the next hit is its far face)
-                    if float(nrm[j] @ dirs[a]) < 0:
-                        counts[a] += 1
-                    step = h + 0.005
-                    origins[a] = origins[a] + dirs[a] * step
-                    left[a] -= step
-                    if not (stop_at_first and counts[a]) and left[a] > 0:
-                        still.append(a)
-            active = np.array(still, dtype=int)
-        return counts
 
     def measure(self, view) -> RfidReading:
         ents = view.entities

@@ -25,31 +25,11 @@ from usarsim.readings import HumanMotionReading, SoundReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import builder, frames
 
-MAX_WALLS = 10
 
-
-def _walls_between(view, pos_mj: np.ndarray, target_mj: np.ndarray, exclude_body: int, kind: str) -> int:
-    """Number of surfaces crossed on the segment (rays cast again just past each hit)."""
-    delta = target_mj - pos_mj
-    left = float(np.linalg.norm(delta)) - 0.05  # the target's own surface does not count
-    if left <= 0:
-        return 0
-    u = delta / np.linalg.norm(delta)
-    origin = pos_mj.copy()
-    walls = 0
-    for _ in range(2 * MAX_WALLS):
-        dist, nrm, gid = view.caster.cast(origin, u[None, :], left, exclude_body, normals=True, kind=kind)
-        h = float(dist[0])
-        if not math.isfinite(h) or h >= left:
-            break
-        part = view.entities.parts.get(int(gid[0])) if view.entities is not None else None
-        # a wall counts where the segment enters it (from inside, the next hit is its far face)
-        if float(nrm[0] @ u) < 0 and (part is None or part.false_alarm):
-            walls += 1
-        step = h + 0.005
-        origin = origin + u * step
-        left -= step
-    return walls
+def _walls_between(view, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str, stop_at_first: bool = False) -> int:
+    """Walls on the segment (``RayCaster.count_walls``); the target's own surface does not count."""
+    return int(view.caster.count_walls(pos_mj[None, :], target_mj[None, :], kind=kind, end_margin=0.05,
+                                       stop_at_first=stop_at_first)[0])
 
 
 def _victim_point(victim, local) -> np.ndarray:
@@ -96,7 +76,7 @@ class Sound(Sensor):
                 d = max(float(np.linalg.norm(head - pos)), 1.0)
                 level = v.sound_loudness_db - 20.0 * math.log10(d)
                 if c.wall_loss_db > 0:
-                    level -= c.wall_loss_db * _walls_between(view, pos, head, self.handle.body_id, "sonar")
+                    level -= c.wall_loss_db * _walls_between(view, pos, head, "sonar")
                 if c.sigma_db > 0:
                     level += float(self.rng.normal(0.0, c.sigma_db))
                 if level >= c.threshold_db and level > best[0]:
@@ -142,7 +122,7 @@ class HumanMotion(Sensor):
                 forward = rot[:, 0]  # the sensor's X axis, world (MuJoCo) frame
                 if math.acos(max(-1.0, min(1.0, float(forward @ delta) / d))) > c.fov_rad / 2.0:
                     continue
-                if _walls_between(view, pos, arm, self.handle.body_id, self.RAY_KIND):
+                if _walls_between(view, pos, arm, self.RAY_KIND, stop_at_first=True):
                     continue
                 seen = True
                 best = max(best, 1.0 - d / c.max_range_m)

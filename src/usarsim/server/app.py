@@ -8,6 +8,7 @@ from usarsim.config.world import WorldConfig
 from usarsim.server.control import ControlServer
 from usarsim.server.image import CameraBindings, ImageServer, ImageSettings
 from usarsim.server.truth import TruthServer
+from usarsim.server.wireless import WirelessOptions, WirelessServers
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.render import RenderService
 
@@ -18,7 +19,8 @@ class Application:
     def __init__(self, world: WorldConfig, *, host: str = "127.0.0.1", port: int = 3000, seed: int = 0,
                  speed: float | None = 1.0, lockstep: bool = False, max_connections: int = 64,
                  robot_dirs: tuple[str, ...] = (), truth_port: int | None = 3989, image_port: int | None = 5003,
-                 image: ImageSettings | None = None):
+                 image: ImageSettings | None = None, wireless: WirelessOptions | None = None,
+                 web_port: int | None = 8080):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
@@ -38,6 +40,29 @@ class Application:
                 max_fps=self.image_settings.max_fps)
             self.image = ImageServer(renderer, self.camera_bindings, self.image_settings, host=host, port=image_port)
         self.facade.sim.multiview_cameras = self.image_settings.camera_num  # before its thread starts
+        # the wireless simulation (protocol.md 12): ComServer, WSS, ComServerInterface; None: not served
+        self.wireless = WirelessServers(self.facade, wireless, host=host) if wireless is not None else None
+        # the operator console in the browser (usarsim.web), a client of the listeners above;
+        # None: not served
+        self.web = None
+        if web_port is not None:
+            from usarsim.web import WebConsole
+
+            self.web = WebConsole(self, host=host, port=web_port)
+
+    def _extras(self) -> list[tuple[object, str, str]]:
+        """(server, listener name, what names its port in an error) of every listener
+        beside the control port."""
+        out = []
+        if self.truth is not None:
+            out.append((self.truth, "truth", "the ground-truth port %s (--truth-port)"))
+        if self.image is not None:
+            out.append((self.image, "image", "the image port %s (--image-port)"))
+        if self.wireless is not None:
+            out += self.wireless.servers()
+        if self.web is not None:  # last: it connects to the others
+            out.append((self.web, "web", "the web port %s (--web-port)"))
+        return out
 
     async def start(self) -> None:
         """Open every listener, then start the simulation.  An OSError (a port taken) names
@@ -48,10 +73,9 @@ class Application:
             exc.usarsim_listener = f"the control port {self.control.port} (--port)"
             raise
         started = [self.control]
-        for extra, what in ((self.truth, "the ground-truth port %s (--truth-port)"),
-                            (self.image, "the image port %s (--image-port)")):
-            if extra is None:
-                continue
+        if self.wireless is not None:
+            self.wireless.bind_loop()
+        for extra, _, what in self._extras():
             try:
                 await extra.start()
             except OSError as exc:
@@ -63,17 +87,11 @@ class Application:
         self.facade.start()
 
     def listeners(self) -> list[tuple[str, str, int]]:
-        out = [("control", self.host, self.control.port)]
-        if self.truth is not None:
-            out.append(("truth", self.host, self.truth.port))
-        if self.image is not None:
-            out.append(("image", self.host, self.image.port))
-        return out
+        return [("control", self.host, self.control.port)] + [(name, self.host, srv.port)
+                                                              for srv, name, _ in self._extras()]
 
     async def stop(self) -> None:
-        if self.image is not None:
-            await self.image.stop()
-        if self.truth is not None:
-            await self.truth.stop()
+        for srv, _, _ in reversed(self._extras()):
+            await srv.stop()
         await self.control.stop()
         self.facade.stop()

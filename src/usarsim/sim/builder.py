@@ -359,6 +359,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     for item in robot.items:
         if item.item_type in CAMERA_TYPES:
             _add_camera(spec, body, item, prefix)
+    _add_chase_camera(body, robot, prefix)
     return body
 
 
@@ -386,6 +387,38 @@ def _add_camera(spec, chassis, item, prefix: str) -> None:
     cam.pos = frames.to_mj_vec(item.location).tolist()
     cam.quat = frames.mat_to_quat(frames.usar_euler_to_mj_mat(item.orientation) @ _CAMERA_AXES).tolist()
     cam.fovy = camera_fovy_deg(math.radians(50.0), 4, 3)  # set from the camera's zoom at each picture
+
+
+# The chase view (the spectator's view over a robot, manual 5.1: key C): a camera on the
+# chassis, behind and above the robot, looking down at it.  Viewers bind to it under the
+# reserved camera name CHASE_CAMERA, like to any camera the robot carries.
+CHASE_CAMERA = "Chase"
+CHASE_FOV_RAD = math.radians(70.0)  # horizontal field of view
+CHASE_MIN_BACK_M, CHASE_MIN_UP_M = 1.2, 0.7  # how far behind and above the chassis origin, at least
+
+
+def chase_camera_name(prefix: str) -> str:
+    return f"{prefix}/chase"
+
+
+def chase_camera_pose(robot: RobotConfig) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Where the chase camera sits on the chassis (USARSim robot frame) and its orientation:
+    2.5 robot lengths behind and 2 heights above the origin (at least 1.2 m and 0.7 m),
+    pitched down to look at a point half a length ahead of the origin."""
+    length, _, height = robot.geometry.dimensions
+    back = max(CHASE_MIN_BACK_M, 2.5 * length)
+    up = max(CHASE_MIN_UP_M, 2.0 * height)
+    pitch = -math.atan2(up, back + 0.5 * length)
+    return (-back, 0.0, -up), (0.0, pitch, 0.0)
+
+
+def _add_chase_camera(chassis, robot: RobotConfig, prefix: str) -> None:
+    location, orientation = chase_camera_pose(robot)
+    cam = chassis.add_camera()
+    cam.name = chase_camera_name(prefix)
+    cam.pos = frames.to_mj_vec(location).tolist()
+    cam.quat = frames.mat_to_quat(frames.usar_euler_to_mj_mat(orientation) @ _CAMERA_AXES).tolist()
+    cam.fovy = camera_fovy_deg(CHASE_FOV_RAD, 4, 3)
 
 
 # Aerial robots hover: gravity is compensated on their bodies, and velocity servos on a

@@ -14,7 +14,7 @@ import itertools
 import logging
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import mujoco
 import numpy as np
@@ -225,6 +225,9 @@ class Simulation:
         self._multiview_cameras = 4
         self._multiview: list[tuple[int, str]] | None = None
         self._multiview_robots: set[int] = set()
+        # called with the simulation at the end of every ``advance`` (on the simulation
+        # thread, at the simulated instant the clock reached): the wireless links
+        self.after_advance: list[Callable[["Simulation"], None]] = []
 
     # Clock -------------------------------------------------------------------
     @property
@@ -957,6 +960,8 @@ class Simulation:
             if self._legged:  # gaits are updated every GAIT_STEPS
                 n = min(n, GAIT_STEPS)
             self._step(n)
+        for fn in self.after_advance:
+            fn(self)
 
     def _step(self, n: int) -> None:
         """``n`` physics steps in one call.  If a robot blows up on the way, the
@@ -1193,6 +1198,11 @@ class Simulation:
                     snap.cameras[(r.uid, cam.name.lower())] = CameraState(
                         cam_id=cid, fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
                         omni=cam.item.item_type != "Camera")
+            # the chase view behind and above the robot (builder.CHASE_CAMERA)
+            cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, builder.chase_camera_name(r.prefix))
+            if cid >= 0:
+                snap.cameras.setdefault((r.uid, builder.CHASE_CAMERA.lower()),
+                                        CameraState(cam_id=cid, fov_rad=builder.CHASE_FOV_RAD, omni=False))
         return snap
 
     def truth(self, class_name: str | None = None, name: str | None = None) -> list[tuple]:

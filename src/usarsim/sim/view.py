@@ -46,6 +46,12 @@ RAY_RESTART_M = 1e-6
 POROSITY_DIR_QUANTUM = 2.0 ** -16
 # Surfaces met on one ray at most (grids are met twice each: entering and leaving).
 MAX_LEGS = 64
+# Counting the walls between two points (protocol.md 12.3, the UDK ComServerInterface's
+# obstacle count): each trace starts this far beyond the last hit (50 UU, 0.2 m), to get
+# out of the solid it met.
+WALL_STEP_M = 0.2
+# Hits followed along one segment at most (each wall costs one or two traces).
+MAX_WALL_HITS = 64
 
 
 class RayCaster:
@@ -99,6 +105,10 @@ class RayCaster:
             # a stable value per geom (its name survives rebuilds, its id may not)
             self._salt = np.array([zlib.crc32((m.geom(g).name or f"#{g}").encode()) for g in range(m.ngeom)],
                                   dtype=np.uint64)
+        # what wall counting sees: the static solids of the world, not robots, movable
+        # objects or victims (protocol.md 12.3)
+        victims = np.array([m.names.startswith(b"victim/", a) for a in m.name_geomadr], dtype=bool)
+        self._solid = self._visible & (group == GROUP_STATIC) & ~victims
         self._gtype = np.ascontiguousarray(m.geom_type, dtype=np.int64)
         self._gbody = np.ascontiguousarray(m.geom_bodyid, dtype=np.int64)
         backend = backend or os.environ.get("USARSIM_RAYCAST", "") or "compiled"
@@ -161,6 +171,74 @@ class RayCaster:
         else:
             self._cast_plain(origins, dirs, float(max_range), int(exclude_body), normals, kind, dist, gid, nrm)
         return dist, (nrm if normals else None), gid
+
+    def count_walls(self, starts: np.ndarray, ends: np.ndarray, *, kind: str | None = None,
+                    end_margin: float = 0.0, stop_at_first: bool = False, step: float = WALL_STEP_M) -> np.ndarray:
+        """Walls crossed on each segment ``starts[i]`` -> ``ends[i]`` (n x 3 each, MuJoCo frame).
+
+        As USARSim counted obstacles between two radios (protocol.md 12.3): a trace along
+        the segment, then another from ``step`` (0.2 m) beyond each hit, until the end is
+        reached.  Only the static solids of the world count (robots, movable objects and
+        victims are not seen); a hit where the segment enters a solid is one wall, so a
+        wall thicker than ``step`` is left through its far face without counting twice, and
+        a solid that begins less than ``step`` beyond the point where the segment entered
+        the one before counts as part of it.  ``kind`` lets the materials that kind sees
+        through pass (glass); ``end_margin`` stops each segment that far short of its end
+        (a target lying on a surface is not behind it); ``stop_at_first`` stops a segment
+        at its first wall (occlusion tests).
+        """
+        starts = np.ascontiguousarray(starts, dtype=float).reshape(-1, 3)
+        ends = np.ascontiguousarray(ends, dtype=float).reshape(-1, 3)
+        n = len(starts)
+        counts = np.zeros(n, dtype=np.int64)
+        delta = ends - starts
+        length = np.linalg.norm(delta, axis=1)
+        left = length - end_margin
+        active = np.flatnonzero(left > 1e-9)
+        if not len(active):
+            return counts
+        dirs = np.zeros_like(delta)
+        dirs[active] = delta[active] / length[active, None]
+        origins = starts.copy()
+        mask = self._solid
+        if kind is not None and kind in self._see_through:
+            mask = mask & ~self._see_through[kind]
+        for _ in range(MAX_WALL_HITS):
+            if not len(active):
+                break
+            k = len(active)
+            dist, gid, nrm = np.empty(k), np.empty(k, np.int32), np.zeros((k, 3))
+            self._cast_solid(origins[active], dirs[active], float(left[active].max()), mask, dist, gid, nrm)
+            hit = dist < left[active]
+            entering = hit & (np.einsum("ij,ij->i", nrm, dirs[active]) < 0.0)
+            counts[active[entering]] += 1
+            moved = dist[hit] + step
+            idx = active[hit]
+            origins[idx] += dirs[idx] * moved[:, None]
+            left[idx] -= moved
+            keep = hit & (left[active] > 0.0)
+            if stop_at_first:
+                keep &= counts[active] == 0
+            active = active[keep]
+        return counts
+
+    def _cast_solid(self, origins, dirs, max_range, mask, dist, gid, nrm) -> None:
+        """Straight rays against the geoms of ``mask`` only (no body excluded), with normals."""
+        if self.backend == "compiled":
+            from usarsim.sim.raycast import cast_kernel
+
+            m, d = self.m, self.d
+            cast_kernel(origins, dirs, max_range, self._gtype, m.geom_size, m.geom_rbound, self._gbody, mask,
+                        d.geom_xpos, d.geom_xmat, -1, True, dist, gid, nrm)
+            return
+        # mj_multiRay filters by group only: hide every other visible geom in an unseen group
+        hide = self._visible & ~mask
+        saved = self.m.geom_group[hide].copy()
+        self.m.geom_group[hide] = 5
+        try:
+            self._cast_mujoco(origins, dirs, max_range, -1, True, dist, gid, nrm)
+        finally:
+            self.m.geom_group[hide] = saved
 
     def _cast_plain(self, origins, dirs, max_range, exclude_body, normals, kind, dist, gid, nrm) -> None:
         """Straight rays: the nearest surface that ``kind`` does not see through."""

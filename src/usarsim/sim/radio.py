@@ -1,0 +1,355 @@
+"""Radio propagation of the wireless simulation (manual section 3.2.4; protocol.md 12).
+
+A message between two robots gets through while the signal strength S at the receiver,
+in dBm, is at least the cutoff.  Models (``--wireless-model``, a world's ``wireless``
+section, ``--wireless-config``):
+
+* ``waf``, the Wall Attenuation Factor model (Seidel and Rappaport) with the constants of
+  the USARSim 3.1.3 manual (section 3.2.4, measured at International University Bremen):
+  S = P(d0) - 10 n log10(d / d0) - min(n_w, C) WAF, with P(d0) = -49.67 dBm, d0 = 2 m,
+  n = 1.09, C = 5 walls, WAF = 6.625 dB and a cutoff of -93 dBm; n_w is the number of walls
+  crossed by the straight line between the two antennas.  The default.
+* ``waf2009``: the same formula with the constants of the later USARSim code (the UDK
+  ComServer's ini and the WSS obstacle model, protocol.md 12.1 and 12.2): n = 1,
+  WAF = 6.325 dB and no cap on the walls.
+* ``distance``: S = P(d0) - 10 n log10(d / d0), walls ignored (the WSS distance-only
+  model), with the manual's P(d0), d0, n and cutoff.
+* ``perfect``: 0 dBm, every link holds (the WSS's Noop model).
+
+Every constant can be changed with the ComConnection keys of USARComServer.ini (manual
+3.2.4.2): ``ePdo`` P(d0), ``eDo`` d0, ``eN`` n, ``eCutoff`` the cutoff, ``eMaxObs`` C (below
+0: no cap), ``eAttenFac`` WAF.  Wall counts between two robots are kept per pair until
+either robot has moved more than ``cache_distance_m`` (1 m, the WSS's ``maxcachedist``).
+
+:class:`RadioNet` holds the links' state on the simulation thread: signals are computed
+from the simulated poses, so in lock-step a link's fate depends on simulated time only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
+
+from usarsim.config.reader import did_you_mean
+from usarsim.config.world import WIRELESS_KEYS, WIRELESS_MODELS, WirelessConfig
+from usarsim.errors import ConfigError
+from usarsim.sim import frames
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
+
+# Closer than this, two antennas count as this far apart (the formula has no value at 0).
+MIN_DISTANCE_M = 0.01
+
+
+def waf_signal_dbm(distance_m: float, walls: int, *, pd0_dbm: float, d0_m: float, path_loss_exponent: float,
+                   wall_db: float, max_walls: int | None) -> float:
+    """The Wall Attenuation Factor model (manual 3.2.4): S = P(d0) - 10 n log10(d / d0) -
+    min(walls, C) WAF, in dBm; ``max_walls`` None: no cap (C infinite)."""
+    d = max(float(distance_m), MIN_DISTANCE_M)
+    counted = walls if max_walls is None else min(walls, max_walls)
+    return pd0_dbm - 10.0 * path_loss_exponent * math.log10(d / d0_m) - counted * wall_db
+
+
+@dataclass(frozen=True, kw_only=True)
+class RadioModel:
+    name: str = "waf"
+    pd0_dbm: float = -49.67
+    d0_m: float = 2.0
+    path_loss_exponent: float = 1.09
+    cutoff_dbm: float = -93.0
+    max_walls: int | None = 5  # C; None: no cap
+    wall_db: float = 6.625  # WAF
+    cache_distance_m: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.name not in WIRELESS_MODELS:
+            raise ValueError(f"unknown radio model {self.name!r}{did_you_mean(self.name, WIRELESS_MODELS)}")
+        if not self.d0_m > 0 or self.path_loss_exponent < 0 or self.wall_db < 0 or self.cache_distance_m < 0:
+            raise ValueError("need eDo > 0, eN >= 0, eAttenFac >= 0 and cache_distance_m >= 0")
+
+    @property
+    def counts_walls(self) -> bool:
+        return self.name in ("waf", "waf2009")
+
+    def signal_dbm(self, distance_m: float, walls: int = 0) -> float:
+        if self.name == "perfect":
+            return 0.0
+        return waf_signal_dbm(distance_m, walls if self.counts_walls else 0, pd0_dbm=self.pd0_dbm, d0_m=self.d0_m,
+                              path_loss_exponent=self.path_loss_exponent, wall_db=self.wall_db,
+                              max_walls=self.max_walls)
+
+    def holds(self, dbm: float) -> bool:
+        """Whether a link with this signal strength carries messages."""
+        return self.name == "perfect" or dbm >= self.cutoff_dbm
+
+    def describe(self) -> str:
+        if self.name == "perfect":
+            return "perfect (0 dBm, every link holds)"
+        cap = "no cap" if self.max_walls is None else f"C {self.max_walls}"
+        walls = f", WAF {self.wall_db:g} dB, {cap}" if self.counts_walls else ""
+        return (f"{self.name} (P(d0) {self.pd0_dbm:g} dBm, d0 {self.d0_m:g} m, n {self.path_loss_exponent:g}"
+                f"{walls}, cutoff {self.cutoff_dbm:g} dBm)")
+
+
+PRESETS: dict[str, RadioModel] = {
+    "waf": RadioModel(),
+    "waf2009": RadioModel(name="waf2009", path_loss_exponent=1.0, wall_db=6.325, max_walls=None),
+    "distance": RadioModel(name="distance"),
+    "perfect": RadioModel(name="perfect"),
+}
+
+
+def resolve_model(*layers: WirelessConfig | None, model: str | None = None) -> RadioModel:
+    """The radio model: the one ``model`` names (the command line), else the last layer
+    naming one, else ``waf``; its preset's constants, then those each layer gives, in order
+    (the world's, then the configuration file's)."""
+    name = model or next((ly.model for ly in reversed(layers) if ly is not None and ly.model), None) or "waf"
+    if name not in PRESETS:
+        raise ConfigError(f"unknown radio model {name!r}{did_you_mean(name, WIRELESS_MODELS)}")
+    out = PRESETS[name]
+    for ly in layers:
+        if ly is None:
+            continue
+        given = {f.name: getattr(ly, f.name) for f in dataclasses.fields(ly)
+                 if f.name != "model" and getattr(ly, f.name) is not None}
+        if "max_walls" in given and given["max_walls"] < 0:
+            given["max_walls"] = None
+        out = dataclasses.replace(out, **given)
+    return out
+
+
+# --------------------------------------------------------------------------- the ini file
+
+# Extensions of this project accepted beside the ComConnection keys of WIRELESS_KEYS.
+_INI_EXTRA = {"Model": "model", "CacheDistance": "cache_distance_m", "maxcachedist": "cache_distance_m"}
+_INI_SERVER = ("ListenPort", "iListenPort", "bDebug")
+_SECTION_RE = re.compile(r"\[([^\]]*)\]\Z")
+
+
+@dataclass(frozen=True)
+class WirelessFile:
+    """What a USARComServer.ini-style file sets: the radio model (its constants as a
+    :class:`WirelessConfig` layer), the ComServer's ``ListenPort``, the ComServerInterface's
+    ``iListenPort`` and whether any ``bDebug`` is on."""
+
+    radio: WirelessConfig
+    listen_port: int | None = None
+    interface_port: int | None = None
+    debug: bool = False
+
+
+def load_wireless_file(path: str | Path) -> WirelessFile:
+    """Read an ini-style file as USARSim's USARComServer.ini (manual 3.2.4.2): ``[Section]``
+    headers (any, or none), ``Key=Value`` lines, ``;`` and ``#`` comments; keys in any case.
+    Keys: ListenPort, bDebug, ePdo, eDo, eN, eCutoff, eMaxObs, eAttenFac, plus ``Model``
+    (waf, waf2009, distance, perfect), ``CacheDistance`` (alias ``maxcachedist``, metres)
+    and ``iListenPort`` (the ComServerInterface's port).  An unknown key, or a value that
+    is not a number where one is needed, is an error naming the file, the line and the key."""
+    path = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise ConfigError(f"cannot read the wireless configuration: {exc.strerror}", path=path) from None
+    known = {k.lower(): k for k in (*WIRELESS_KEYS, *_INI_EXTRA, *_INI_SERVER)}
+    values: dict[str, object] = {}
+    listen = interface = None
+    debug = False
+    for no, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line[0] in ";#" or _SECTION_RE.match(line):
+            continue
+        where = f"line {no}"
+        if "=" not in line:
+            raise ConfigError(f"expected 'Key=Value', got {line[:80]!r}", path=path, key=where)
+        key, _, value = (p.strip() for p in line.partition("="))
+        name = known.get(key.lower())
+        if name is None:
+            raise ConfigError(f"unknown key '{key}'{did_you_mean(key, known.values())}", path=path, key=where)
+        where = f"{where}: {name}"
+        if name == "Model":
+            if value.lower() not in WIRELESS_MODELS:
+                raise ConfigError(f"'{value}' is not a radio model{did_you_mean(value.lower(), WIRELESS_MODELS)}",
+                                  path=path, key=where)
+            values["model"] = value.lower()
+        elif name == "bDebug":
+            if value.lower() not in ("true", "false", "1", "0"):
+                raise ConfigError(f"expected True or False, got {value!r}", path=path, key=where)
+            debug = debug or value.lower() in ("true", "1")
+        elif name in ("ListenPort", "iListenPort"):
+            if not value.isdigit() or not 0 <= int(value) <= 65535:
+                raise ConfigError(f"expected a port number 0..65535, got {value!r}", path=path, key=where)
+            if name == "ListenPort":
+                listen = int(value)
+            else:
+                interface = int(value)
+        else:
+            field = WIRELESS_KEYS.get(name) or _INI_EXTRA[name]
+            try:
+                number = float(value)
+            except ValueError:
+                number = math.nan
+            if field == "max_walls" and value.lower() in ("none", ""):
+                number = -1.0
+            if not math.isfinite(number):
+                raise ConfigError(f"expected a number, got {value!r}", path=path, key=where)
+            values[field] = int(number) if field == "max_walls" else number
+    layer = WirelessConfig(**values)
+    try:  # the constants' ranges, as RadioModel checks them
+        resolve_model(layer)
+    except (ValueError, ConfigError) as exc:
+        raise ConfigError(str(exc), path=path) from None
+    return WirelessFile(layer, listen, interface, debug)
+
+
+# --------------------------------------------------------------------------- links
+
+
+Pair = tuple[str, str]
+
+
+def pair_key(a: str, b: str) -> Pair:
+    """Two robot names as one key, whatever their order and letter case."""
+    a, b = a.lower(), b.lower()
+    return (a, b) if a <= b else (b, a)
+
+
+@dataclass(frozen=True)
+class Link:
+    """The radio link between two robots at one simulated instant."""
+
+    signal_dbm: float
+    distance_m: float
+    walls: int
+    holds: bool
+
+
+class RadioNet:
+    """The radio links between robots, computed on the simulation thread from their
+    simulated poses (antenna: the chassis origin).
+
+    The servers name the pairs they depend on in ``watched`` (a frozenset, replaced as a
+    whole from their thread); at the end of every advance of the clock the link of each
+    watched pair is computed and ``on_change(time, [(pair, holds), ...])`` is called
+    (on the simulation thread) with those whose state changed since it was last reported,
+    or that are new.  ``check`` computes one link at once (and reports it likewise).
+    ``min_interval_s`` spaces the evaluations out (0 in lock-step: every STEP).
+    """
+
+    def __init__(self, model: RadioModel):
+        self.model = model
+        self.watched: frozenset[Pair] = frozenset()
+        self.on_change: Callable[[float, list[tuple[Pair, bool]]], None] | None = None
+        self.min_interval_s = 0.0
+        self._reported: dict[Pair, bool] = {}
+        self._walls: dict[Pair, tuple[tuple, tuple, int]] = {}
+        self._last = -math.inf
+
+    # robots ---------------------------------------------------------------------------
+    @staticmethod
+    def positions(sim: "Simulation") -> list[tuple[str, tuple[float, float, float], bool]]:
+        """(name, location in the world frame, battery empty) of every robot."""
+        d = sim.data
+        return [(r.name, r.handle.location(d), r.battery_empty) for r in sim.robots.values()]
+
+    # walls ----------------------------------------------------------------------------
+    @staticmethod
+    def _count(sim: "Simulation", pa, pb) -> int:
+        """Walls crossed between two points (MuJoCo frame)."""
+        return int(sim.caster.count_walls(np.array([pa], dtype=float), np.array([pb], dtype=float))[0])
+
+    @classmethod
+    def walls_between(cls, sim: "Simulation", start, end) -> int:
+        """Walls crossed between two points of the world (USARSim frame)."""
+        return cls._count(sim, frames.to_mj_vec(start), frames.to_mj_vec(end))
+
+    @classmethod
+    def walls_between_robots(cls, sim: "Simulation", a: str, b: str) -> int:
+        """Walls between two robots' antennas now (not the links' cached count); -1: no such robot."""
+        antennas = cls.antennas(sim)
+        pa, pb = antennas.get(a.lower()), antennas.get(b.lower())
+        if pa is None or pb is None:
+            return -1
+        return cls._count(sim, pa, pb)
+
+    def _cached_walls(self, sim: "Simulation", pair: Pair, pa: tuple, pb: tuple) -> int:
+        hit = self._walls.get(pair)
+        lim = self.model.cache_distance_m
+        if hit is not None and math.dist(pa, hit[0]) <= lim and math.dist(pb, hit[1]) <= lim:
+            return hit[2]
+        n = self._count(sim, pa, pb)
+        self._walls[pair] = (pa, pb, n)
+        return n
+
+    # links ----------------------------------------------------------------------------
+    @staticmethod
+    def antennas(sim: "Simulation") -> dict[str, tuple[float, float, float]]:
+        """Where each robot's antenna is (its chassis origin, MuJoCo frame), by lower-case
+        name (the first spawned wins a name used twice)."""
+        d = sim.data
+        out: dict[str, tuple[float, float, float]] = {}
+        for r in sim.robots.values():
+            key = r.name.lower()
+            if key not in out:
+                out[key] = tuple(d.xpos[r.handle.body_id].tolist())
+        return out
+
+    def _signal(self, sim: "Simulation", pair: Pair, pa: tuple, pb: tuple) -> tuple[float, int]:
+        m = self.model
+        walls = self._cached_walls(sim, pair, pa, pb) if m.counts_walls else 0
+        return m.signal_dbm(math.dist(pa, pb), walls), walls
+
+    def link(self, sim: "Simulation", a: str, b: str, antennas: dict | None = None) -> Link | None:
+        """The link between the robots named ``a`` and ``b`` now; None when either is not
+        in the simulation."""
+        antennas = antennas if antennas is not None else self.antennas(sim)
+        pair = pair_key(a, b)
+        pa, pb = antennas.get(pair[0]), antennas.get(pair[1])
+        if pa is None or pb is None:
+            self._walls.pop(pair, None)
+            return None
+        s, walls = self._signal(sim, pair, pa, pb)
+        return Link(s, math.dist(pa, pb), walls, self.model.holds(s))
+
+    def check(self, sim: "Simulation", a: str, b: str) -> Link | None:
+        """``link``, for a link about to be opened on it: a state that differs from the one
+        last reported is reported at once, so that every server sees the same."""
+        ln = self.link(sim, a, b)
+        pair = pair_key(a, b)
+        up = ln is not None and ln.holds
+        if self._reported.get(pair) is not up:
+            self._reported[pair] = up
+            if self.on_change is not None:
+                self.on_change(sim.time, [(pair, up)])
+        return ln
+
+    def evaluate(self, sim: "Simulation") -> None:
+        """The ``after_advance`` hook: every watched pair's link, changes reported."""
+        watched = self.watched
+        if not watched and not self._reported:
+            return
+        now = sim.time
+        if now - self._last < self.min_interval_s - 1e-9:
+            return
+        self._last = now
+        antennas = self.antennas(sim)
+        holds = self.model.holds
+        changes = []
+        for pair in sorted(watched):
+            pa, pb = antennas.get(pair[0]), antennas.get(pair[1])
+            up = pa is not None and pb is not None and holds(self._signal(sim, pair, pa, pb)[0])
+            if self._reported.get(pair) is not up:
+                self._reported[pair] = up
+                changes.append((pair, up))
+        for pair in [p for p in self._reported if p not in watched]:
+            del self._reported[pair]
+        if len(self._walls) > 2 * len(watched) + 256:  # forget pairs nobody asks about
+            self._walls = {p: w for p, w in self._walls.items() if p in watched}
+        if changes and self.on_change is not None:
+            self.on_change(now, changes)

@@ -1,0 +1,465 @@
+"""The operator console: a web page served by the simulator (successor of USARSim's USAR_UI,
+SimpleUI and the Unreal spectator, manual 5.1, 5.2.1, 5.2.5), and the bridge between the
+page and the simulator's own TCP services.
+
+The console is a client like any other.  For each robot the page operates, the bridge
+opens a connection to the control port and relays protocol lines both ways (``/ws/control``:
+the page sends text lines, it receives every line the simulator sends).  Pictures come from
+the image server (``/ws/video``): the bridge connects to the image port, binds that
+connection to a robot camera with ``SET {Type Camera} {Robot r} {Name cam} {Client ip:port}``
+over one of the page's control connections, asks with ``OK`` and forwards each JPEG picture
+as a binary WebSocket message.  The world view polls the ground-truth service
+(``/api/truth``) and draws the world's static geometry (``/api/world``).
+
+Routes: ``/`` the page, ``/static/*`` its files, ``/api/info``, ``/api/world``,
+``/api/classes``, ``/api/truth``, ``/ws/control``, ``/ws/video``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import logging
+import re
+import socket
+import struct
+import time
+from pathlib import Path
+
+from aiohttp import WSMsgType, web
+
+from usarsim import __version__
+from usarsim.errors import ProtocolError, UsarsimError
+from usarsim.protocol.framing import LineBuffer
+from usarsim.protocol.grammar import parse_line
+
+log = logging.getLogger("usarsim.web")
+
+STATIC_DIR = Path(__file__).resolve().parent / "static"
+MAX_SERVER_LINE = 4 << 20  # the longest line relayed to the page (a 3D scanner's SEN line is long)
+MAX_PAGE_MESSAGE = 64 * 1024  # the longest message a page may send
+MAX_PICTURES_ASKED = 2  # pictures a page may have asked for and not yet received
+TRUTH_MAX_AGE_S = 0.05  # answers of the ground-truth service younger than this are shared
+TRUTH_TIMEOUT_S = 5.0
+BIND_WAIT_S = 1.0  # how long a camera binding sent over a control connection may take to apply
+CLOSE_TIMEOUT_S = 2.0  # how long a closing WebSocket waits for the browser's answer
+NAME_RE = re.compile(r"[A-Za-z0-9_.\-]{1,64}\Z")  # robot and camera names the page may bind to
+
+
+def _loopback(host: str) -> str:
+    """Where the bridge reaches a listener bound to ``host``."""
+    if host in ("", "0.0.0.0", "*"):
+        return "127.0.0.1"
+    if host == "::":
+        return "::1"
+    return host
+
+
+def _no_delay(writer: asyncio.StreamWriter) -> None:
+    sock = writer.get_extra_info("socket")
+    if sock is not None:
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except OSError:
+            pass
+
+
+def raw_to_jpeg(payload: bytes) -> bytes:
+    """A raw UPIS picture (16-bit width and height, then B, G, R rows) as a JPEG file."""
+    import numpy as np
+    from PIL import Image
+
+    w, h = struct.unpack(">HH", payload[:4])
+    bgr = np.frombuffer(payload[4:4 + 3 * w * h], dtype=np.uint8).reshape(h, w, 3)
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(bgr[:, :, ::-1])).save(buf, "JPEG", quality=85)
+    return buf.getvalue()
+
+
+def truth_row(text: str) -> dict | None:
+    """One line of the ground-truth service as a dict, None if it is not one."""
+    try:
+        raw = parse_line("TRUTH " + text)
+    except ProtocolError:
+        return None
+    seg = {s.key.lower(): s.value for s in raw.segments}
+    try:
+        return {"name": seg["name"], "class": seg["class"], "time": float(seg["time"]),
+                "location": [float(v) for v in seg["location"].split(",")],
+                "rotation": [float(v) for v in seg["rotation"].split(",")]}
+    except (KeyError, ValueError):
+        return None
+
+
+class ControlBridge:
+    """One page's robot session: a WebSocket and the control connection it is relayed to."""
+
+    def __init__(self, page: str, writer: asyncio.StreamWriter):
+        self.page = page
+        self.writer = writer
+        self.robot: str | None = None  # the Name of the INIT sent on it
+        self.alive = False  # the simulator has sent status or sensor lines: the robot exists
+
+    def note_sent(self, line: str) -> None:
+        if line.lstrip()[:4].upper() != "INIT":
+            return
+        try:
+            raw = parse_line(line)
+        except ProtocolError:
+            return
+        for s in raw.segments:
+            if s.key.lower() == "name" and s.value:
+                self.robot = s.value.strip()
+
+    def note_received(self, line: str) -> None:
+        if not self.alive and (line.startswith("STA") or line.startswith("SEN")):
+            self.alive = True
+
+    def send_line(self, line: str) -> None:
+        if not self.writer.is_closing():
+            self.writer.write(line.encode("ascii", "replace") + b"\r\n")
+
+
+class TruthClient:
+    """A connection to the ground-truth service, shared by every page: one request at a
+    time, answers shared for ``TRUTH_MAX_AGE_S``."""
+
+    def __init__(self, host: str, port: int):
+        self.host, self.port = host, port
+        self._lock = asyncio.Lock()
+        self._reader: asyncio.StreamReader | None = None
+        self._writer: asyncio.StreamWriter | None = None
+        self._answer: list[dict] = []
+        self._at = -1.0
+
+    async def query(self) -> list[dict]:
+        async with self._lock:
+            if time.monotonic() - self._at < TRUTH_MAX_AGE_S:
+                return self._answer
+            for attempt in (0, 1):  # a connection the service closed is opened again once
+                try:
+                    rows = await asyncio.wait_for(self._ask(), TRUTH_TIMEOUT_S)
+                    break
+                except (OSError, asyncio.IncompleteReadError, ConnectionError, asyncio.TimeoutError):
+                    self.close()
+                    if attempt:
+                        raise
+            self._answer, self._at = rows, time.monotonic()
+            return rows
+
+    async def _ask(self) -> list[dict]:
+        if self._writer is None:
+            self._reader, self._writer = await asyncio.open_connection(self.host, self.port)
+            _no_delay(self._writer)
+        assert self._reader is not None
+        self._writer.write(b"{Class}\r\n")  # no class and no name given: everything
+        await self._writer.drain()
+        rows = []
+        while True:
+            line = await self._reader.readline()
+            if not line:
+                raise ConnectionError("the ground-truth service closed the connection")
+            text = line.decode("ascii", "replace").strip()
+            if text == "{End}":
+                return rows
+            row = truth_row(text)
+            if row is not None:
+                rows.append(row)
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+        self._reader = self._writer = None
+
+
+class WebConsole:
+    """The console's HTTP and WebSocket server for one :class:`usarsim.server.app.Application`
+    (its ports, world and robot folders)."""
+
+    def __init__(self, app, host: str = "127.0.0.1", port: int = 8080):
+        self.app = app
+        self.host = host
+        self.port = port
+        self._runner: web.AppRunner | None = None
+        self._sockets: set[web.WebSocketResponse] = set()
+        self._bridges: set[ControlBridge] = set()
+        self._tasks: set[asyncio.Task] = set()
+        self._truth: TruthClient | None = None
+        self._world_json: dict | None = None
+        self._classes: list[dict] | None = None
+
+    # lifecycle --------------------------------------------------------------------------
+    async def start(self) -> int:
+        web_app = web.Application(client_max_size=MAX_PAGE_MESSAGE)
+        web_app.router.add_get("/", self._index)
+        web_app.router.add_get("/favicon.ico", self._favicon)
+        web_app.router.add_get("/api/info", self._info)
+        web_app.router.add_get("/api/world", self._world)
+        web_app.router.add_get("/api/classes", self._classes_json)
+        web_app.router.add_get("/api/truth", self._truth_json)
+        web_app.router.add_get("/ws/control", self._control_ws)
+        web_app.router.add_get("/ws/video", self._video_ws)
+        web_app.router.add_static("/static/", STATIC_DIR)
+        web_app.on_response_prepare.append(self._no_cache)
+        self._runner = web.AppRunner(web_app, access_log=None, shutdown_timeout=1.0)
+        await self._runner.setup()
+        site = web.TCPSite(self._runner, self.host, self.port, reuse_address=True)
+        try:
+            await site.start()
+        except OSError:
+            await self._runner.cleanup()
+            self._runner = None
+            raise
+        self.port = self._runner.addresses[0][1]
+        return self.port
+
+    async def stop(self) -> None:
+        await asyncio.gather(*(ws.close(code=1001, message=b"the simulator is shutting down")
+                               for ws in list(self._sockets)), return_exceptions=True)
+        for task in list(self._tasks):
+            task.cancel()
+        for b in list(self._bridges):
+            b.writer.close()
+        if self._truth is not None:
+            self._truth.close()
+        if self._runner is not None:
+            await self._runner.cleanup()
+            self._runner = None
+
+    @property
+    def service_host(self) -> str:
+        return _loopback(self.app.host)
+
+    def _spawn(self, coro) -> asyncio.Task:
+        task = asyncio.get_running_loop().create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return task
+
+    # pages and JSON ---------------------------------------------------------------------
+    @staticmethod
+    async def _no_cache(request: web.Request, response: web.StreamResponse) -> None:
+        if not isinstance(response, web.WebSocketResponse):
+            response.headers["Cache-Control"] = "no-cache"
+
+    async def _index(self, request: web.Request) -> web.StreamResponse:
+        return web.FileResponse(STATIC_DIR / "index.html")
+
+    async def _favicon(self, request: web.Request) -> web.StreamResponse:
+        return web.FileResponse(STATIC_DIR / "favicon.svg", headers={"Content-Type": "image/svg+xml"})
+
+    async def _info(self, request: web.Request) -> web.Response:
+        a = self.app
+        image = a.image
+        return web.json_response({
+            "version": __version__,
+            "world": a.world.name,
+            "lockstep": bool(a.facade.lockstep),
+            "ports": {"control": a.control.port, "truth": a.truth.port if a.truth is not None else None,
+                      "image": image.port if image is not None else None, "web": self.port},
+            "image_size": [a.image_settings.width, a.image_settings.height] if image is not None else None,
+        })
+
+    async def _world(self, request: web.Request) -> web.Response:
+        if self._world_json is None:
+            from usarsim.web.geometry import world_json
+
+            self._world_json = await asyncio.get_running_loop().run_in_executor(None, world_json, self.app.world)
+        return web.json_response(self._world_json)
+
+    def _load_classes(self) -> list[dict]:
+        from usarsim.config.catalog import resolve_robot, robot_files
+        from usarsim.web.geometry import robot_class_json
+
+        dirs = tuple(self.app.control.robot_dirs)
+        out = []
+        for name in robot_files(dirs):
+            try:
+                out.append(robot_class_json(resolve_robot(name, extra_dirs=dirs)))
+            except UsarsimError as exc:
+                log.warning("console: robot class %s left out: %s", name, exc)
+        return out
+
+    async def _classes_json(self, request: web.Request) -> web.Response:
+        if self._classes is None:
+            self._classes = await asyncio.get_running_loop().run_in_executor(None, self._load_classes)
+        return web.json_response(self._classes)
+
+    async def _truth_json(self, request: web.Request) -> web.Response:
+        truth = self.app.truth
+        if truth is None:
+            return web.json_response({"error": "no ground-truth service (usarsim serve --truth-port)", "objects": []})
+        if self._truth is None:
+            self._truth = TruthClient(self.service_host, truth.port)
+        try:
+            rows = await self._truth.query()
+        except (OSError, ConnectionError, asyncio.IncompleteReadError, asyncio.TimeoutError) as exc:
+            return web.json_response({"error": f"the ground-truth service did not answer: {exc}", "objects": []},
+                                     status=503)
+        return web.json_response({"objects": rows})
+
+    # robot sessions -----------------------------------------------------------------------
+    async def _control_ws(self, request: web.Request) -> web.WebSocketResponse:
+        ws = web.WebSocketResponse(max_msg_size=MAX_PAGE_MESSAGE, timeout=CLOSE_TIMEOUT_S)
+        await ws.prepare(request)
+        self._sockets.add(ws)
+        bridge = None
+        pump = None
+        try:
+            try:
+                reader, writer = await asyncio.open_connection(self.service_host, self.app.control.port)
+            except OSError as exc:
+                await ws.close(code=1011, message=f"cannot reach the control port: {exc.strerror}".encode()[:120])
+                return ws
+            _no_delay(writer)
+            bridge = ControlBridge(request.query.get("page", ""), writer)
+            self._bridges.add(bridge)
+            log.info("console %s: robot session opened on the control port", request.remote)
+            pump = self._spawn(self._relay_lines(reader, ws, bridge))
+            async for msg in ws:
+                if msg.type != WSMsgType.TEXT:
+                    continue
+                for line in msg.data.replace("\r", "\n").split("\n"):
+                    if line.strip():
+                        bridge.note_sent(line)
+                        bridge.send_line(line)
+                await writer.drain()
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self._sockets.discard(ws)
+            if bridge is not None:
+                self._bridges.discard(bridge)
+                bridge.writer.close()  # closing the connection removes the robot
+                log.info("console %s: robot session %s closed", request.remote, bridge.robot or "")
+            if pump is not None:
+                pump.cancel()
+            if not ws.closed:
+                await ws.close()
+        return ws
+
+    async def _relay_lines(self, reader: asyncio.StreamReader, ws: web.WebSocketResponse,
+                           bridge: ControlBridge) -> None:
+        """Every line the simulator sends on a control connection, one WebSocket message each.
+        A page that reads slowly slows this down, and the simulator then keeps only the
+        latest status and sensor lines for it, as for any slow client."""
+        lines = LineBuffer(max_line_bytes=MAX_SERVER_LINE)
+        try:
+            while True:
+                data = await reader.read(1 << 16)
+                if not data:
+                    break
+                for line in lines.feed(data):
+                    bridge.note_received(line)
+                    await ws.send_str(line)
+        except (ConnectionError, OSError, RuntimeError):
+            return
+        if not ws.closed:
+            await ws.close(code=1000, message=b"the simulator closed the connection")
+
+    # pictures ------------------------------------------------------------------------------
+    def _bridge_for(self, page: str, robot: str) -> ControlBridge | None:
+        """The control connection a camera binding is sent over: the one of the robot
+        itself, else another of the same page whose robot exists."""
+        best = None
+        for b in self._bridges:
+            if not b.alive or b.writer.is_closing():
+                continue
+            if b.robot is not None and b.robot.lower() == robot.lower():
+                return b
+            if b.page and b.page == page and best is None:
+                best = b
+        return best
+
+    async def _bind(self, page: str, client: tuple[str, int], robot: str | None, camera: str) -> dict:
+        """Show the image connection at ``client`` a robot camera (None: release it)."""
+        bindings = self.app.camera_bindings
+        address = f"{client[0]}:{client[1]}"
+        if robot is None:
+            bindings.release(address)
+            return {"bound": None}
+        bridge = self._bridge_for(page, robot)
+        line = f"SET {{Type Camera}} {{Robot {robot}}} {{Name {camera}}} {{Client {address}}}"
+        if bridge is None:
+            # no robot of this page to speak for it (a spectator): the binding is made
+            # directly, as the control server would make it
+            bindings.bind(address, robot, camera)
+            return {"bound": robot, "camera": camera, "via": "direct"}
+        bridge.send_line(line)
+        deadline = time.monotonic() + BIND_WAIT_S
+        while bindings.lookup(*client) != (robot, camera) and time.monotonic() < deadline:
+            await asyncio.sleep(0.01)
+        return {"bound": robot, "camera": camera, "via": "control", "robot": bridge.robot, "line": line}
+
+    async def _video_ws(self, request: web.Request) -> web.WebSocketResponse:
+        # JPEG pictures do not compress further: no per-message deflate
+        ws = web.WebSocketResponse(max_msg_size=MAX_PAGE_MESSAGE, timeout=CLOSE_TIMEOUT_S, compress=False)
+        await ws.prepare(request)
+        self._sockets.add(ws)
+        image = self.app.image
+        page = request.query.get("page", "")
+        writer = None
+        frames = None
+        client = ("", 0)
+        try:
+            if image is None:
+                await ws.send_json({"error": "no image server (usarsim serve was started with --no-image)"})
+                return ws
+            try:
+                reader, writer = await asyncio.open_connection(self.service_host, image.port)
+            except OSError as exc:
+                await ws.send_json({"error": f"cannot reach the image port: {exc.strerror}"})
+                return ws
+            _no_delay(writer)
+            sockname = writer.get_extra_info("sockname")
+            client = (sockname[0], sockname[1])
+            asked = [0]
+            frames = self._spawn(self._relay_pictures(reader, ws, asked))
+            async for msg in ws:
+                if msg.type != WSMsgType.TEXT:
+                    continue
+                if msg.data.strip() == "OK":
+                    if asked[0] < MAX_PICTURES_ASKED:
+                        asked[0] += 1
+                        writer.write(b"OK")
+                    continue
+                try:
+                    req = json.loads(msg.data)
+                except ValueError:
+                    continue
+                if not isinstance(req, dict) or "bind" not in req:
+                    continue
+                robot, camera = req.get("bind"), str(req.get("camera") or "Camera")
+                if robot is not None and not (NAME_RE.match(str(robot)) and NAME_RE.match(camera)):
+                    await ws.send_json({"error": f"not a robot and camera name: {robot!r} {camera!r}"})
+                    continue
+                await ws.send_json(await self._bind(page, client, None if robot is None else str(robot), camera))
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self._sockets.discard(ws)
+            if client[1]:
+                self.app.camera_bindings.release(f"{client[0]}:{client[1]}")
+            if frames is not None:
+                frames.cancel()
+            if writer is not None:
+                writer.close()
+            if not ws.closed:
+                await ws.close()
+        return ws
+
+    async def _relay_pictures(self, reader: asyncio.StreamReader, ws: web.WebSocketResponse, asked: list) -> None:
+        """Each UPIS picture as one binary WebSocket message holding a JPEG file."""
+        loop = asyncio.get_running_loop()
+        try:
+            while True:
+                kind, length = struct.unpack(">BI", await reader.readexactly(5))
+                payload = await reader.readexactly(length)
+                asked[0] = max(0, asked[0] - 1)
+                if kind == 0:
+                    payload = await loop.run_in_executor(None, raw_to_jpeg, payload)
+                await ws.send_bytes(payload)
+        except (asyncio.IncompleteReadError, ConnectionError, OSError, RuntimeError):
+            if not ws.closed:
+                await ws.close(code=1011, message=b"the image server closed the connection")
