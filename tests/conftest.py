@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+import usarsim  # noqa: F401  (first: it chooses MuJoCo's offscreen GL backend before MuJoCo loads)
 from helpers import ServerThread, write_test_world
 
 

@@ -12,6 +12,7 @@ import socket
 import threading
 import time
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable
 
@@ -361,3 +362,28 @@ def write_test_world(directory: Path) -> Path:
     p = Path(directory) / "TestArena.yaml"
     p.write_text(TEST_WORLD)
     return p
+
+
+@lru_cache(maxsize=None)
+def gl_problem() -> str:
+    """'' when an offscreen OpenGL context can be made here (pictures can be rendered), else why not."""
+    import mujoco
+
+    import usarsim  # noqa: F401  (chooses the offscreen GL backend, MUJOCO_GL, before the first context)
+
+    box: dict[str, str] = {}
+
+    def probe():
+        try:
+            m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
+            r = mujoco.Renderer(m, 8, 8)
+            r.render()
+            r.close()
+            box["ok"] = ""
+        except Exception as exc:  # no display, no EGL, no OSMesa
+            box["ok"] = f"no OpenGL context for rendering: {exc}"
+
+    t = threading.Thread(target=probe)
+    t.start()
+    t.join(60)
+    return box.get("ok", "the OpenGL probe did not finish")

@@ -8,13 +8,11 @@ from __future__ import annotations
 import io
 import socket
 import struct
-import threading
 
 import numpy as np
 import pytest
 
-import usarsim  # noqa: F401  (chooses the offscreen GL backend before MuJoCo loads)
-from helpers import DEFAULT_TIMEOUT, segments
+from helpers import DEFAULT_TIMEOUT, gl_problem, segments
 
 IMAGE_WORLD = """\
 name: CameraRange
@@ -43,29 +41,7 @@ start_poses:
 COLOURS = {"Red": (1, 0, 0), "Green": (0, 1, 0), "Blue": (0, 0, 1), "White": (1, 1, 1)}
 
 
-def _gl_works() -> str:
-    """'' when an offscreen OpenGL context can be made here, else why not."""
-    import mujoco
-
-    box = {}
-
-    def probe():
-        try:
-            m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
-            r = mujoco.Renderer(m, 8, 8)
-            r.render()
-            r.close()
-            box["ok"] = ""
-        except Exception as exc:  # no display, no EGL, no OSMesa
-            box["ok"] = f"no OpenGL context for rendering: {exc}"
-
-    t = threading.Thread(target=probe)
-    t.start()
-    t.join(60)
-    return box.get("ok", "the OpenGL probe did not finish")
-
-
-GL_PROBLEM = _gl_works()
+GL_PROBLEM = gl_problem()
 pytestmark = pytest.mark.skipif(bool(GL_PROBLEM), reason=GL_PROBLEM or "ok")
 
 
@@ -222,7 +198,7 @@ def test_the_multiview_tiles_four_robots_where_their_sta_view_says(server_factor
 def test_two_viewers_bound_to_two_robots_see_two_pictures(server_factory, image_world):
     srv = serve(server_factory, image_world, image_type=0, width=160, height=120)
     red = spawn(srv, "A", "Red")
-    blue = spawn(srv, "B", "Blue")
+    spawn(srv, "B", "Blue")
     red.step(1.0)
     v1, v2 = Viewer(srv.app.image.port), Viewer(srv.app.image.port)
     red.send(f"SET {{Type Camera}} {{Robot A}} {{Name Camera}} {{Client 127.0.0.1:{v1.local_port}}}")

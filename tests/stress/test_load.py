@@ -11,10 +11,8 @@ import struct
 import threading
 import time
 
-import pytest
-
 from helpers import Client
-from stress_scale import FULL, scaled
+from stress_scale import scaled
 
 
 def open_fds() -> int:

@@ -6,10 +6,8 @@ from __future__ import annotations
 import re
 import shutil
 import socket
-import threading
-from functools import lru_cache
 
-from helpers import DEFAULT_TIMEOUT
+from helpers import DEFAULT_TIMEOUT, gl_problem  # noqa: F401  (re-exported)
 
 
 def chromium_path() -> str | None:
@@ -18,29 +16,6 @@ def chromium_path() -> str | None:
         if path:
             return path
     return None
-
-
-@lru_cache(maxsize=None)
-def gl_problem() -> str:
-    """'' when an offscreen OpenGL context can be made here (pictures can be rendered), else why not."""
-    import mujoco
-
-    box: dict[str, str] = {}
-
-    def probe():
-        try:
-            m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
-            r = mujoco.Renderer(m, 8, 8)
-            r.render()
-            r.close()
-            box["ok"] = ""
-        except Exception as exc:  # no display, no EGL, no OSMesa
-            box["ok"] = f"no OpenGL context for rendering: {exc}"
-
-    t = threading.Thread(target=probe)
-    t.start()
-    t.join(60)
-    return box.get("ok", "the OpenGL probe did not finish")
 
 
 def truth(port: int, name: str | None = None) -> list[dict]:
