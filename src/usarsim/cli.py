@@ -74,8 +74,19 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--lockstep", action="store_true",
                    help="the world stands still until a client sends STEP {Time seconds}; the server then "
                         "advances that much simulated time and replies STEPPED {Time t}")
-    s.add_argument("--max-connections", type=int, default=64, help="control connections (robots) at most "
-                   "(default: %(default)s)")
+    s.add_argument("--max-connections", type=int, default=64, help="control connections at most; one more is "
+                   "refused and logged (default: %(default)s)")
+    s.add_argument("--max-robots", type=int, default=None,
+                   help="robots in the world at most; an INIT beyond it is refused and logged (default: "
+                        "--max-connections)")
+    s.add_argument("--max-line-bytes", type=int, default=8192,
+                   help="longest control line; a longer one is dropped and logged (default: %(default)s)")
+    s.add_argument("--max-pending-kb", type=int, default=256,
+                   help="output waiting for a slow client beyond which its sensor and status lines are "
+                        "held latest-wins, replies kept (default: %(default)s)")
+    s.add_argument("--max-viewers", type=int, default=16,
+                   help="connections at most on the image and ground-truth ports each; one more is refused "
+                        "and logged (default: %(default)s)")
     s.add_argument("--truth-port", type=_port, default=3989,
                    help="ground-truth service port (default: %(default)s; 0 picks a free port): "
                         "'{Class c} {Name n}' -> where every matching robot, victim, tag... is")
@@ -215,7 +226,9 @@ def cmd_serve(args) -> int:
                       lockstep=args.lockstep, max_connections=args.max_connections,
                       robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port,
                       image_port=None if args.no_image else args.image_port, image=image, wireless=wireless,
-                      web_port=None if args.no_web else args.web_port)
+                      web_port=None if args.no_web else args.web_port, max_robots=args.max_robots,
+                      max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
+                      max_viewers=max(1, args.max_viewers))
 
     async def main() -> None:
         loop = asyncio.get_running_loop()

@@ -137,3 +137,34 @@ def test_repeated_drive_lines_collapse_but_actions_and_joint_orders_do_not():
     assert _REPEATED_DRIVE.sub(rb"\1", data) == (
         b"DRIVE {Left 1} {Right 1}\r\n" + b"DRIVE {Flip True}\r\n" * 2
         + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n")
+
+
+def test_limits_are_refused_and_logged(server_factory, caplog):
+    """Past --max-robots an INIT is refused (logged), past --max-viewers a viewer is turned
+    away (logged); the robots and viewers already there go on."""
+    import logging
+
+    srv = server_factory(seed=8)
+    srv.app.control.max_robots = 2
+    srv.app.truth.max_connections = 1
+    clients = []
+    with caplog.at_level(logging.INFO, logger="usarsim"):
+        for i, start in enumerate(("PlayerStart1", "PlayerStart2", "PlayerStart3")):
+            c = srv.connect()
+            c.nfo()
+            c.send(f"INIT {{ClassName USARBot.P2AT}} {{Name R{i}}} {{Start {start}}}")
+            clients.append(c)
+        clients[0].step(0.3)
+        assert srv.on_sim(lambda sim: sorted(r.name for r in sim.robots.values())) == ["R0", "R1"]
+        assert any("INIT refused" in r.getMessage() and "--max-robots" in r.getMessage() for r in caplog.records)
+        first = socket.create_connection(("127.0.0.1", srv.app.truth.port), timeout=5)
+        first.sendall(b"{Class Victim}\r\n")
+        assert b"{End}" in first.recv(65536)
+        second = socket.create_connection(("127.0.0.1", srv.app.truth.port), timeout=5)
+        assert second.recv(100) == b""  # turned away
+        assert any("refused" in r.getMessage() for r in caplog.records if "truth" in r.getMessage())
+        first.sendall(b"{Class Victim}\r\n")
+        assert b"{End}" in first.recv(65536)
+        first.close()
+        second.close()
+    assert_alive(clients[2])

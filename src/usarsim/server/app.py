@@ -20,16 +20,20 @@ class Application:
                  speed: float | None = 1.0, lockstep: bool = False, max_connections: int = 64,
                  robot_dirs: tuple[str, ...] = (), truth_port: int | None = 3989, image_port: int | None = 5003,
                  image: ImageSettings | None = None, wireless: WirelessOptions | None = None,
-                 web_port: int | None = 8080):
+                 web_port: int | None = 8080, max_robots: int | None = None, max_line_bytes: int = 8192,
+                 max_pending_bytes: int = 256 * 1024, max_viewers: int = 16):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
         self.camera_bindings = CameraBindings()
         self.control = ControlServer(self.facade, host=host, port=port, max_connections=max_connections,
-                                     robot_dirs=tuple(robot_dirs))
+                                     robot_dirs=tuple(robot_dirs), max_line_bytes=max_line_bytes,
+                                     max_pending_bytes=max_pending_bytes,
+                                     max_robots=max_connections if max_robots is None else max_robots)
         self.control.camera_bindings = self.camera_bindings
         # the ground-truth service (protocol.md 12.4); None: not served
-        self.truth = TruthServer(self.facade, host=host, port=truth_port) if truth_port is not None else None
+        self.truth = (TruthServer(self.facade, host=host, port=truth_port, max_connections=max_viewers)
+                      if truth_port is not None else None)
         # the image server (protocol.md 10) and its render thread; None: not served
         self.image_settings = image or ImageSettings()
         self.image = None
@@ -38,7 +42,8 @@ class Application:
             renderer = RenderService(
                 lambda reuse, done: facade.call(lambda sim: sim.render_snapshot(reuse), on_done=done),
                 max_fps=self.image_settings.max_fps)
-            self.image = ImageServer(renderer, self.camera_bindings, self.image_settings, host=host, port=image_port)
+            self.image = ImageServer(renderer, self.camera_bindings, self.image_settings, host=host, port=image_port,
+                                     max_connections=max_viewers)
         self.facade.sim.multiview_cameras = self.image_settings.camera_num  # before its thread starts
         # the wireless simulation (protocol.md 12): ComServer, WSS, ComServerInterface; None: not served
         self.wireless = WirelessServers(self.facade, wireless, host=host) if wireless is not None else None

@@ -75,7 +75,7 @@ class Connection(asyncio.Protocol):
     # asyncio.Protocol -----------------------------------------------------------------
     def connection_made(self, transport) -> None:
         self.transport = transport
-        transport.set_write_buffer_limits(high=HIGH_WATER)
+        transport.set_write_buffer_limits(high=self.server.max_pending_bytes)
         peer = transport.get_extra_info("peername")
         self.peer = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
         srv = self.server
@@ -196,7 +196,8 @@ class Connection(asyncio.Protocol):
 
 class ControlServer:
     def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3000,
-                 max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = ()):
+                 max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = (),
+                 max_pending_bytes: int = HIGH_WATER, max_robots: int | None = None):
         self.facade = facade
         self.robot_dirs = robot_dirs  # extra folders of robot files (serve --robot-dir)
         from usarsim.server.image import CameraBindings
@@ -206,6 +207,9 @@ class ControlServer:
         self.port = port
         self.max_connections = max_connections
         self.max_line_bytes = max_line_bytes
+        # output waiting for a slow client beyond which its sensor lines are held latest-wins
+        self.max_pending_bytes = max(4096, int(max_pending_bytes))
+        self.max_robots = max_connections if max_robots is None else max(0, int(max_robots))
         self.connections: dict[int, Connection] = {}
         self._uid = 0
         self._server: asyncio.base_events.Server | None = None

@@ -148,6 +148,13 @@ class Session:
         if not all(math.isfinite(v) for v in (*location, *rotation)):
             self.log_once("init", "INIT ignored: location and rotation must be finite")
             return
+        server = self.conn.server
+        robots = sum(1 for c in server.connections.values() if c.session is not None
+                     and c.session.state in (SPAWNING, ALIVE))
+        if robots >= server.max_robots:
+            self.log_once("init", "INIT refused: the world has %d robots already (limit --max-robots %d)", robots,
+                          server.max_robots)
+            return
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
         self.state = SPAWNING
