@@ -168,3 +168,45 @@ def test_limits_are_refused_and_logged(server_factory, caplog):
         first.close()
         second.close()
     assert_alive(clients[2])
+
+
+def test_the_web_port_shrugs_off_garbage_and_oversized_messages(witness_server):
+    """Garbage instead of HTTP, and a page sending binary junk and a message over the size
+    limit on its control socket: the console turns them away and goes on serving."""
+    import asyncio
+
+    import aiohttp
+
+    srv = witness_server
+    port = srv.app.web.port
+    raw = socket.create_connection(("127.0.0.1", port), timeout=5)
+    raw.sendall(os.urandom(4096) + b"\r\n\r\n")
+    raw.settimeout(5)
+    try:
+        while raw.recv(65536):
+            pass
+    except (ConnectionResetError, socket.timeout):
+        pass
+    raw.close()
+
+    async def page():
+        async with aiohttp.ClientSession() as s:
+            async with s.ws_connect(f"http://127.0.0.1:{port}/ws/control") as ws:
+                await ws.send_bytes(os.urandom(1000))
+                await ws.send_str("x" * 200_000)  # over the page message limit
+                closed = False
+                try:
+                    while True:
+                        msg = await asyncio.wait_for(ws.receive(), 5)
+                        if msg.type in (aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED, aiohttp.WSMsgType.ERROR):
+                            closed = True
+                            break
+                except asyncio.TimeoutError:
+                    pass
+            async with s.get(f"http://127.0.0.1:{port}/api/info") as r:
+                return closed, r.status
+
+    closed, status = asyncio.run(page())
+    assert status == 200
+    assert_world_runs(srv)
+    assert srv.on_sim(lambda sim: sorted(r.name for r in sim.robots.values())) == ["Witness"]
