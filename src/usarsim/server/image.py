@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from usarsim.server.listener import TcpListener
 from usarsim.sim.render import RenderService, Tile, grid_tiles
 
 log = logging.getLogger("usarsim.server")
@@ -183,18 +184,17 @@ class ImageConnection(asyncio.Protocol):
         self.transport.write(encode_picture(picture, self.server.settings.image_type))
 
 
-class ImageServer:
+class ImageServer(TcpListener):
     def __init__(self, renderer: RenderService, bindings: CameraBindings, settings: ImageSettings | None = None, *,
                  host: str = "127.0.0.1", port: int = 5003, max_connections: int = 16):
+        super().__init__(host, port)
         self.renderer = renderer
         self.bindings = bindings
         self.settings = settings or ImageSettings()
-        self.host = host
-        self.port = port
         self.max_connections = max_connections
-        self.connections: set[ImageConnection] = set()
-        self._server: asyncio.base_events.Server | None = None
-        self.loop: asyncio.AbstractEventLoop | None = None
+
+    def make_protocol(self) -> "ImageConnection":
+        return ImageConnection(self)
 
     def layout(self, snap, binding) -> tuple[int, int, list[Tile]]:
         """What a picture shows: the bound robot camera over the whole picture, or the
@@ -208,19 +208,6 @@ class ImageServer:
         tiles, width, height = grid_tiles(snap.multiview, s.camera_num, s.wide_mode, s.tile_width, s.tile_height)
         return width, height, tiles
 
-    async def start(self) -> int:
-        self.loop = asyncio.get_running_loop()
-        self._server = await self.loop.create_server(lambda: ImageConnection(self), self.host, self.port,
-                                                     reuse_address=True)
-        self.port = self._server.sockets[0].getsockname()[1]
-        return self.port
-
     async def stop(self) -> None:
-        if self._server is not None:
-            self._server.close()
-            for c in list(self.connections):
-                if c.transport is not None:
-                    c.transport.close()
-            await self._server.wait_closed()
-            self._server = None
+        await super().stop()
         self.renderer.stop()

@@ -15,6 +15,7 @@ import logging
 from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.truth import END, TruthObject, format_truth_object, parse_truth_request
+from usarsim.server.listener import TcpListener
 from usarsim.sim.facade import SimFacade
 
 log = logging.getLogger("usarsim.server")
@@ -73,28 +74,11 @@ class TruthConnection(asyncio.Protocol):
             self.transport.write(text.encode("ascii", "replace"))
 
 
-class TruthServer:
+class TruthServer(TcpListener):
     def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3989, max_connections: int = 16):
+        super().__init__(host, port)
         self.facade = facade
-        self.host = host
-        self.port = port
         self.max_connections = max_connections
-        self.connections: set[TruthConnection] = set()
-        self.loop: asyncio.AbstractEventLoop | None = None
-        self._server: asyncio.base_events.Server | None = None
 
-    async def start(self) -> int:
-        self.loop = asyncio.get_running_loop()
-        self._server = await self.loop.create_server(lambda: TruthConnection(self), self.host, self.port,
-                                                     reuse_address=True)
-        self.port = self._server.sockets[0].getsockname()[1]
-        return self.port
-
-    async def stop(self) -> None:
-        if self._server is not None:
-            self._server.close()
-        for conn in list(self.connections):
-            if conn.transport is not None:
-                conn.transport.close()
-        if self._server is not None:
-            await self._server.wait_closed()
+    def make_protocol(self) -> TruthConnection:
+        return TruthConnection(self)

@@ -38,6 +38,7 @@ from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.grammar import parse_line, parse_vector
 from usarsim.protocol.numbers import vec4
+from usarsim.server.listener import TcpListener
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet, pair_key, resolve_model
 
@@ -284,32 +285,16 @@ class _LineConnection(_Connection):
             return None
 
 
-class _Listener:
+class _Listener(TcpListener):
     """A TCP server of one kind of :class:`_Connection`."""
 
     def __init__(self, factory, owner, host: str, port: int):
+        super().__init__(host, port)
         self._factory = factory
         self.owner = owner  # the server the connections serve
-        self.host = host
-        self.port = port
-        self.connections: set = set()
-        self._server: asyncio.base_events.Server | None = None
 
-    async def start(self) -> int:
-        loop = asyncio.get_running_loop()
-        self._server = await loop.create_server(lambda: self._factory(self), self.host, self.port,
-                                                reuse_address=True)
-        self.port = self._server.sockets[0].getsockname()[1]
-        return self.port
-
-    async def stop(self) -> None:
-        if self._server is not None:
-            self._server.close()
-        for conn in list(self.connections):
-            if conn.transport is not None:
-                conn.transport.close()
-        if self._server is not None:
-            await self._server.wait_closed()
+    def make_protocol(self):
+        return self._factory(self)
 
 
 # --------------------------------------------------------------------------- ComServer
