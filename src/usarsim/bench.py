@@ -86,6 +86,31 @@ async def _client_main(port: int, poses: list, seconds_hint: float) -> None:
     await asyncio.gather(*(drive(i, r, w) for i, (r, w) in enumerate(conns)))
 
 
+class _ServedApp:
+    """An Application served by its own event loop on a thread, until ``stop()``."""
+
+    def __init__(self, app):
+        self.app = app
+        self.loop = asyncio.new_event_loop()
+        ready = threading.Event()
+
+        def serve():
+            asyncio.set_event_loop(self.loop)
+            self.loop.run_until_complete(app.start())
+            ready.set()
+            self.loop.run_forever()
+
+        self.thread = threading.Thread(target=serve, name="bench-server", daemon=True)
+        self.thread.start()
+        ready.wait(30)
+
+    def stop(self) -> None:
+        asyncio.run_coroutine_threadsafe(self.app.stop(), self.loop).result(10)
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self.thread.join(5)
+        self.loop.close()
+
+
 def run_bench(args) -> int:
     from usarsim.config.catalog import resolve_world
     from usarsim.server.app import Application
@@ -100,18 +125,7 @@ def run_bench(args) -> int:
     poses = free_spots(world, n)
     app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n),
                       truth_port=None, image_port=None, web_port=None)
-    loop = asyncio.new_event_loop()
-    ready = threading.Event()
-
-    def serve():
-        asyncio.set_event_loop(loop)
-        loop.run_until_complete(app.start())
-        ready.set()
-        loop.run_forever()
-
-    th = threading.Thread(target=serve, name="bench-server", daemon=True)
-    th.start()
-    ready.wait(30)
+    served = _ServedApp(app)
     port = app.control.port
     client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
                                str(seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -143,11 +157,7 @@ def run_bench(args) -> int:
     finally:
         client.terminate()
         client.wait(10)
-        fut = asyncio.run_coroutine_threadsafe(app.stop(), loop)
-        fut.result(10)
-        loop.call_soon_threadsafe(loop.stop)
-        th.join(5)
-        loop.close()
+        served.stop()
 
     sim_s = sim_end - sim_start
     wall_s = wall_end - wall_start
@@ -187,18 +197,7 @@ def run_camera_bench(args) -> int:
         app = Application(world, host="127.0.0.1", port=0, seed=0, speed=1.0, lockstep=False, truth_port=None,
                           image_port=0, image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0),
                           web_port=None)
-        loop = asyncio.new_event_loop()
-        ready = threading.Event()
-
-        def serve(loop=loop, app=app, ready=ready):
-            asyncio.set_event_loop(loop)
-            loop.run_until_complete(app.start())
-            ready.set()
-            loop.run_forever()
-
-        th = threading.Thread(target=serve, name="bench-server", daemon=True)
-        th.start()
-        ready.wait(30)
+        server = _ServedApp(app)
         try:
             ctl = socket.create_connection(("127.0.0.1", app.control.port), timeout=30)
             pose = world.start_poses[0]
@@ -271,11 +270,7 @@ def run_camera_bench(args) -> int:
             viewer.close()
             ctl.close()
         finally:
-            fut = asyncio.run_coroutine_threadsafe(app.stop(), loop)
-            fut.result(10)
-            loop.call_soon_threadsafe(loop.stop)
-            th.join(5)
-            loop.close()
+            server.stop()
         bare_fps = bare_box["fps"]
         row = {"size": f"{w}x{h}", "served_fps": round(served, 2), "bare_render_jpeg_fps": round(bare_fps, 2),
                "ratio": round(served / bare_fps, 3), "frames": frames, "world": world.name,
