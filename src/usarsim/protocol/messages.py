@@ -967,11 +967,13 @@ def _split_poses(r: _Reader, seg: Segment) -> tuple[StartPose, ...]:
 
 def _parse_nfo(r: _Reader) -> Message:
     raw = r.raw
-    if raw.has("StartPoses") or raw.has("PathNodes"):
-        key = "StartPoses" if raw.has("StartPoses") else "PathNodes"
+    segs = raw.segments
+    # a pose list: its kind is the first StartPoses or PathNodes segment (a pose further on
+    # may itself be named so)
+    idx = next((i for i, s in enumerate(segs) if s.key.lower() in ("startposes", "pathnodes")), None)
+    if idx is not None:
+        key = "StartPoses" if segs[idx].key.lower() == "startposes" else "PathNodes"
         count = r.req_int(key)
-        segs = raw.segments
-        idx = next(i for i, s in enumerate(segs) if s.key.lower() == key.lower())
         poses = _split_poses(r, segs[idx + 1]) if count and idx + 1 < len(segs) else ()
         if len(poses) != count:
             raise r.error(key, str(count), f"the number of poses listed ({len(poses)})")
