@@ -87,6 +87,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-viewers", type=int, default=16,
                    help="connections at most on the image and ground-truth ports each; one more is refused "
                         "and logged (default: %(default)s)")
+    s.add_argument("--max-wireless-connections", type=int, default=64, metavar="N",
+                   help="connections at most on the ComServer, WSS and ComServerInterface ports each; one more is "
+                        "refused and logged (default: %(default)s)")
+    s.add_argument("--max-web-connections", type=int, default=64, metavar="N",
+                   help="open connections at most on the web console port; a request beyond them is answered "
+                        "503 and logged (default: %(default)s)")
     s.add_argument("--truth-port", type=_port, default=3989,
                    help="ground-truth service port (default: %(default)s; 0 picks a free port): "
                         "'{Class c} {Name n}' -> where every matching robot, victim, tag... is")
@@ -221,14 +227,15 @@ def cmd_serve(args) -> int:
         wireless = WirelessOptions(
             wcs_port=port_of(args.wcs_port, wfile and wfile.listen_port, WCS_PORT), wss_port=args.wss_port,
             interface_port=port_of(args.cominterface_port, wfile and wfile.interface_port, INTERFACE_PORT),
-            model=args.wireless_model, config=layer, debug=bool(wfile and wfile.debug))
+            model=args.wireless_model, config=layer, debug=bool(wfile and wfile.debug),
+            max_connections=max(1, args.max_wireless_connections))
     app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
                       robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port,
                       image_port=None if args.no_image else args.image_port, image=image, wireless=wireless,
                       web_port=None if args.no_web else args.web_port, max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
-                      max_viewers=max(1, args.max_viewers))
+                      max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections))
 
     async def main() -> None:
         loop = asyncio.get_running_loop()

@@ -8,6 +8,7 @@ import math
 import os
 import socket
 import struct
+import time
 
 import pytest
 
@@ -215,3 +216,54 @@ def test_the_web_port_shrugs_off_garbage_and_oversized_messages(witness_server):
     assert status == 200
     assert_world_runs(srv)
     assert srv.on_sim(lambda sim: sorted(r.name for r in sim.robots.values())) == ["Witness"]
+
+
+def test_wireless_and_web_connection_limits_are_refused_and_logged(witness_server, caplog):
+    """Past --max-wireless-connections a ComServer, WSS or ComServerInterface connection is
+    closed at once (logged); past --max-web-connections a console request is answered 503
+    (logged).  The connections already there, and the robots, go on."""
+    import logging
+    import urllib.error
+    import urllib.request
+
+    srv = witness_server
+    wireless = srv.app.wireless
+    with caplog.at_level(logging.INFO, logger="usarsim"):
+        for server, ask, answer in ((wireless.comserver, b"GETSS Witness Witness;", b"Fail"),
+                                    (wireless.wss, b"INIT {Robot W1} {Port 9000}\r\n", b"INITREPLY {Status OK}"),
+                                    (wireless.interface, b"GETPOS\r\n", b"POSITIONS {Robots 1}")):
+            server.listener.max_connections = 1
+            first = socket.create_connection(("127.0.0.1", server.port), timeout=5)
+            second = socket.create_connection(("127.0.0.1", server.port), timeout=5)
+            second.settimeout(5)
+            assert second.recv(100) == b""  # turned away
+            first.sendall(ask)
+            first.settimeout(5)
+            assert answer in first.recv(4096), server
+            first.close()
+            second.close()
+        refusals = [r.getMessage() for r in caplog.records if "--max-wireless-connections" in r.getMessage()]
+        assert len(refusals) == 3
+
+        web = srv.app.web
+        web.max_connections = 2
+        url = f"http://127.0.0.1:{web.port}/api/info"
+        idle = [socket.create_connection(("127.0.0.1", web.port), timeout=5) for _ in range(2)]
+        try:
+            with pytest.raises(urllib.error.HTTPError) as refused:
+                urllib.request.urlopen(url, timeout=5)
+            assert refused.value.code == 503 and b"connections" in refused.value.read()
+        finally:
+            for s in idle:
+                s.close()
+        assert any("--max-web-connections" in r.getMessage() for r in caplog.records)
+        deadline = time.monotonic() + 5
+        while True:  # the idle connections are gone once the server has seen them close
+            try:
+                with urllib.request.urlopen(url, timeout=5) as r:
+                    assert r.status == 200
+                break
+            except urllib.error.HTTPError:
+                assert time.monotonic() < deadline
+    assert_world_runs(srv)
+    assert_alive(srv.witness)

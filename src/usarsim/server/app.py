@@ -21,7 +21,8 @@ class Application:
                  robot_dirs: tuple[str, ...] = (), truth_port: int | None = 3989, image_port: int | None = 5003,
                  image: ImageSettings | None = None, wireless: WirelessOptions | None = None,
                  web_port: int | None = 8080, max_robots: int | None = None, max_line_bytes: int = 8192,
-                 max_pending_bytes: int = 256 * 1024, max_viewers: int = 16):
+                 max_pending_bytes: int = 256 * 1024, max_viewers: int = 16,
+                 max_web_connections: int = 64):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
@@ -53,7 +54,7 @@ class Application:
         if web_port is not None:
             from usarsim.web import WebConsole
 
-            self.web = WebConsole(self, host=host, port=web_port)
+            self.web = WebConsole(self, host=host, port=web_port, max_connections=max_web_connections)
 
     def _extras(self) -> list[tuple[object, str, str]]:
         """(server, listener name, what names its port in an error) of every listener

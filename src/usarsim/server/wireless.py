@@ -57,8 +57,8 @@ CLOCKED_INTERVAL_S = 0.02
 CONNECT_TIMEOUT_S = 5.0
 # Requests of one connection waiting to be answered at most; more are dropped.
 MAX_QUEUED = 256
-# Connections per server at most.
-MAX_CONNECTIONS = 256
+# Connections per server at most (``usarsim serve --max-wireless-connections``).
+MAX_CONNECTIONS = 64
 
 
 @dataclass(frozen=True)
@@ -73,6 +73,7 @@ class WirelessOptions:
     model: str | None = None
     config: WirelessConfig | None = None
     debug: bool = False
+    max_connections: int = MAX_CONNECTIONS
 
 
 def _fmt_wcs_dbm(x: float) -> str:
@@ -205,8 +206,10 @@ class _Connection(asyncio.Protocol):
         peer = transport.get_extra_info("peername")
         if isinstance(peer, tuple):
             self.ip, self.peer = str(peer[0]), f"{peer[0]}:{peer[1]}"
-        if len(self.server.connections) >= MAX_CONNECTIONS:
-            log.warning("%s %s: refused: %d connections already", self.what, self.peer, MAX_CONNECTIONS)
+        limit = self.server.max_connections
+        if len(self.server.connections) >= limit:
+            log.warning("%s %s: refused: %d connections already (limit --max-wireless-connections %d)",
+                        self.what, self.peer, len(self.server.connections), limit)
             transport.close()
             return
         self.server.connections.add(self)
@@ -288,13 +291,34 @@ class _LineConnection(_Connection):
 class _Listener(TcpListener):
     """A TCP server of one kind of :class:`_Connection`."""
 
-    def __init__(self, factory, owner, host: str, port: int):
+    def __init__(self, factory, owner, host: str, port: int, max_connections: int):
         super().__init__(host, port)
         self._factory = factory
         self.owner = owner  # the server the connections serve
+        self.max_connections = max_connections
 
     def make_protocol(self):
         return self._factory(self)
+
+
+class _WirelessServer:
+    """One of the three servers: its listener of ``connection`` objects and its port."""
+
+    connection: type[_Connection]
+
+    def __init__(self, service: "WirelessService", host: str, port: int, max_connections: int):
+        self.service = service
+        self.listener = _Listener(self.connection, self, host, port, max(1, max_connections))
+
+    @property
+    def port(self) -> int:
+        return self.listener.port
+
+    async def start(self) -> int:
+        return await self.listener.start()
+
+    async def stop(self) -> None:
+        await self.listener.stop()
 
 
 # --------------------------------------------------------------------------- ComServer
@@ -553,26 +577,21 @@ class WcsConnection(_Connection):
             self.write(await srv.getss(words[1], words[2], self.ip))
 
 
-class ComServer:
+class ComServer(_WirelessServer):
     """The WCS (protocol.md 12.1): robots register, listen and open links through it."""
 
-    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WCS_PORT):
-        self.service = service
-        self.listener = _Listener(WcsConnection, self, host, port)
+    connection = WcsConnection
+
+    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WCS_PORT,
+                 max_connections: int = MAX_CONNECTIONS):
+        super().__init__(service, host, port, max_connections)
         self.registered: dict[str, str] = {}  # robot name -> the IP its client listens on
         self.listening: list[tuple[str, int]] = []  # (robot, port) waiting for a link
         self.links: set[WcsLink] = set()
         service.subscribers.append(self._on_pair)
 
-    @property
-    def port(self) -> int:
-        return self.listener.port
-
-    async def start(self) -> int:
-        return await self.listener.start()
-
     async def stop(self) -> None:
-        await self.listener.stop()
+        await super().stop()
         for link in list(self.links):
             link.close("server stopping")
 
@@ -961,12 +980,14 @@ class WssConnection(_LineConnection):
             self.write("ERROR {Reason Method.Unknown.Or.Can.INIT.only.once}\r\n")
 
 
-class WssServer:
+class WssServer(_WirelessServer):
     """The Wireless Simulation Server (protocol.md 12.2)."""
 
-    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WSS_PORT):
-        self.service = service
-        self.listener = _Listener(WssConnection, self, host, port)
+    connection = WssConnection
+
+    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WSS_PORT,
+                 max_connections: int = MAX_CONNECTIONS):
+        super().__init__(service, host, port, max_connections)
         self.robots: dict[str, WssRobot] = {}
         self.ports: dict[tuple[str, str, int], RelayPort] = {}
         self.by_number: dict[int, RelayPort] = {}
@@ -974,15 +995,8 @@ class WssServer:
         self.tasks: set[asyncio.Task] = set()  # pipes being connected
         service.subscribers.append(self._on_pair)
 
-    @property
-    def port(self) -> int:
-        return self.listener.port
-
-    async def start(self) -> int:
-        return await self.listener.start()
-
     async def stop(self) -> None:
-        await self.listener.stop()
+        await super().stop()
         for rp in list(self.ports.values()):
             rp.close()
         self.ports.clear()
@@ -1098,20 +1112,14 @@ class InterfaceConnection(_LineConnection):
             self.log_once(f"unknown-{raw.type}", "unknown command %s; ignored", raw.type)
 
 
-class ComInterfaceServer:
-    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = INTERFACE_PORT):
-        self.service = service
-        self.listener = _Listener(InterfaceConnection, self, host, port)
+class ComInterfaceServer(_WirelessServer):
+    """The ComServerInterface (protocol.md 12.3): robot positions and walls between two points."""
 
-    @property
-    def port(self) -> int:
-        return self.listener.port
+    connection = InterfaceConnection
 
-    async def start(self) -> int:
-        return await self.listener.start()
-
-    async def stop(self) -> None:
-        await self.listener.stop()
+    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = INTERFACE_PORT,
+                 max_connections: int = MAX_CONNECTIONS):
+        super().__init__(service, host, port, max_connections)
 
 
 # --------------------------------------------------------------------------- together
@@ -1123,9 +1131,11 @@ class WirelessServers:
     def __init__(self, facade: SimFacade, options: WirelessOptions, *, host: str = "127.0.0.1"):
         model = resolve_model(facade.world.wireless, options.config, model=options.model)
         self.service = WirelessService(facade, model, debug=options.debug)
-        self.comserver = ComServer(self.service, host=host, port=options.wcs_port)
-        self.wss = WssServer(self.service, host=host, port=options.wss_port)
-        self.interface = ComInterfaceServer(self.service, host=host, port=options.interface_port)
+        limit = options.max_connections
+        self.comserver = ComServer(self.service, host=host, port=options.wcs_port, max_connections=limit)
+        self.wss = WssServer(self.service, host=host, port=options.wss_port, max_connections=limit)
+        self.interface = ComInterfaceServer(self.service, host=host, port=options.interface_port,
+                                            max_connections=limit)
         log.info("wireless: radio model %s", model.describe())
 
     def servers(self) -> list[tuple[Any, str, str]]:

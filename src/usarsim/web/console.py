@@ -44,6 +44,7 @@ TRUTH_MAX_AGE_S = 0.05  # answers of the ground-truth service younger than this 
 TRUTH_TIMEOUT_S = 5.0
 BIND_WAIT_S = 1.0  # how long a camera binding sent over a control connection may take to apply
 CLOSE_TIMEOUT_S = 2.0  # how long a closing WebSocket waits for the browser's answer
+MAX_CONNECTIONS = 64  # open connections on the web port at most (``usarsim serve --max-web-connections``)
 NAME_RE = re.compile(r"[A-Za-z0-9_.\-]{1,64}\Z")  # robot and camera names the page may bind to
 
 
@@ -177,10 +178,13 @@ class WebConsole:
     """The console's HTTP and WebSocket server for one :class:`usarsim.server.app.Application`
     (its ports, world and robot folders)."""
 
-    def __init__(self, app, host: str = "127.0.0.1", port: int = 8080):
+    def __init__(self, app, host: str = "127.0.0.1", port: int = 8080, max_connections: int = MAX_CONNECTIONS):
         self.app = app
         self.host = host
         self.port = port
+        self.max_connections = max(2, max_connections)
+        self.refused = 0  # requests answered 503 because of the limit
+        self._refused_at = 0  # open connections at the last refusal
         self._runner: web.AppRunner | None = None
         self._sockets: set[web.WebSocketResponse] = set()
         self._bridges: set[ControlBridge] = set()
@@ -191,7 +195,7 @@ class WebConsole:
 
     # lifecycle --------------------------------------------------------------------------
     async def start(self) -> int:
-        web_app = web.Application(client_max_size=MAX_PAGE_MESSAGE)
+        web_app = web.Application(client_max_size=MAX_PAGE_MESSAGE, middlewares=[self._limit])
         web_app.router.add_get("/", self._index)
         web_app.router.add_get("/favicon.ico", self._favicon)
         web_app.router.add_get("/api/info", self._info)
@@ -226,6 +230,23 @@ class WebConsole:
         if self._runner is not None:
             await self._runner.cleanup()
             self._runner = None
+
+    @web.middleware
+    async def _limit(self, request: web.Request, handler) -> web.StreamResponse:
+        """A request on a connection beyond ``max_connections`` open ones is answered 503 and
+        its connection closed, so that a crowd of browsers or scripts cannot exhaust the
+        simulator's sockets; the first refusal of a burst is logged."""
+        runner = self._runner
+        open_now = len(runner.server.connections) if runner is not None and runner.server is not None else 0
+        if open_now <= self.max_connections:
+            return await handler(request)
+        if self.refused == 0 or open_now > self._refused_at:
+            log.warning("console %s: refused %s: %d connections open (limit --max-web-connections %d)",
+                        request.remote, request.path, open_now, self.max_connections)
+        self.refused += 1
+        self._refused_at = open_now
+        return web.Response(status=503, text=f"usarsim: more than {self.max_connections} connections to the web "
+                            "console; close a page and retry\n", headers={"Connection": "close", "Retry-After": "5"})
 
     @property
     def service_host(self) -> str:
