@@ -171,3 +171,81 @@ def test_a_client_that_never_reads_is_bounded_and_harms_no_one(server_factory):
         assert buffered < HIGH_WATER + asked * reply + 64 * 1024 and held <= 64
     finally:
         lazy.close()
+
+
+def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
+    """Clients that pour requests into the ground-truth, ComServerInterface, WSS and image
+    ports and never read the answers: each connection is answered one request at a time
+    (its socket unread beyond a backlog, no answer asked while its unread answers pass the
+    high-water mark), so the robot's status keeps its 5 Hz and memory stays bounded; a
+    polite client of each port is still answered."""
+    from helpers import gl_problem
+
+    lines = scaled(100_000, 1_000_000)
+    srv = server_factory(lockstep=False, speed=1.0, seed=9)
+    w = srv.connect()
+    w.nfo()
+    w.send("INIT {ClassName USARBot.P2AT} {Name Witness} {Start PlayerStart1}")
+    w.wait_line("STA")
+    floods = [(srv.app.truth.port, b"{Class Victim}\r\n{Class}\r\n"),
+              (srv.app.wireless.interface.port, b"GETOBS {Start -1e30,0,1} {End 1e30,0,1}\r\nGETPOS\r\n"),
+              (srv.app.wireless.wss.port, b"GETSS {Robot Witness}\r\n")]
+    if not gl_problem():
+        floods.append((srv.app.image.port, b"OKU" + struct.pack(">IIII", 0, 0, 64, 64)))
+        with socket.create_connection(("127.0.0.1", srv.app.image.port), timeout=30) as first:
+            first.sendall(b"OK")  # the renderer is made before memory is measured
+            assert first.recv(5)
+    socks = []
+    for port, unit in floods:
+        s = socket.create_connection(("127.0.0.1", port), timeout=10)
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        if port == srv.app.wireless.wss.port:
+            s.sendall(b"INIT {Robot Flooder} {Port 9}\r\n")
+        socks.append(s)
+    mem = rss_mb()
+    stop = threading.Event()
+    sent = [0] * len(floods)
+
+    def pour(k: int, s: socket.socket, unit: bytes) -> None:
+        chunk = unit * max(1, 8192 // len(unit))
+        per = len(chunk) // len(unit)
+        s.settimeout(0.2)
+        while not stop.is_set() and sent[k] < lines:
+            try:
+                s.sendall(chunk)
+                sent[k] += per
+            except socket.timeout:
+                pass  # the server reads no more for now: it answers what it has first
+            except OSError:
+                return
+
+    threads = [threading.Thread(target=pour, args=(k, s, u), daemon=True) for k, (s, (_, u)) in
+               enumerate(zip(socks, floods))]
+    for th in threads:
+        th.start()
+    window = scaled(4.0, 20.0)
+    t0 = time.monotonic() + 0.5
+    count = 0
+    while time.monotonic() < t0 + window:
+        line = w.next_line(timeout=5.0)
+        count += line.text.startswith("STA") and time.monotonic() >= t0
+    # polite clients are answered meanwhile
+    probe = socket.create_connection(("127.0.0.1", srv.app.truth.port), timeout=10)
+    probe.sendall(b"{Class Victim}\r\n")
+    assert b"{End}" in probe.recv(65536)
+    probe.close()
+    with Client(srv.app.wireless.interface.port) as polite:
+        assert polite.ask("GETPOS", "POSITIONS").text.startswith("POSITIONS {Robots 1}")
+    stop.set()
+    for th in threads:
+        th.join(5)
+    grown = rss_mb() - mem
+    for s in socks:
+        s.close()
+    rate = count / window
+    print(f"\nfloods of {', '.join(str(n) for n in sent)} request lines on {len(floods)} ports: the robot's STA "
+          f"at {rate:.2f} per s (5 expected); memory grew {grown:.1f} MB")
+    assert abs(rate - 5.0) <= 0.5
+    assert grown < 80.0
+    assert min(sent) > 0
+    assert w.sync()

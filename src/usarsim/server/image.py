@@ -15,6 +15,7 @@ cameras (protocol.md 11).
 from __future__ import annotations
 
 import asyncio
+import collections
 import io
 import logging
 import struct
@@ -32,7 +33,7 @@ log = logging.getLogger("usarsim.server")
 IMAGE_TYPES = {"raw": 0, "superb": 1, "super": 1, "good": 2, "normal": 3, "fair": 4, "average": 4, "bad": 5}
 # JPEG quality (libjpeg's 1..100 scale) of each UPIS level: our own choice of five steps
 JPEG_QUALITY = {1: 95, 2: 85, 3: 75, 4: 60, 5: 40}
-MAX_PENDING = 8  # requests a connection may have waiting; more are dropped (and logged once)
+MAX_PENDING = 8  # requests a connection may have waiting; beyond them its socket is not read
 
 
 @dataclass
@@ -92,11 +93,13 @@ class ImageConnection(asyncio.Protocol):
         self.transport: asyncio.Transport | None = None
         self.peer = ("?", 0)
         self.buffer = bytearray()
-        self.pending: list[tuple[int, int, int, int] | None] = []
+        self.pending: collections.deque[tuple[int, int, int, int] | None] = collections.deque()
         self.busy = False
         self.requests = 0
         self.last: np.ndarray | None = None
         self._warned: set[str] = set()
+        self.writable = True  # False while the client does not read its pictures
+        self.reading = True
 
     def warn_once(self, key: str, msg: str, *args) -> None:
         if key not in self._warned:
@@ -140,16 +143,30 @@ class ImageConnection(asyncio.Protocol):
         self._next()
 
     def _queue(self, rect) -> None:
-        if len(self.pending) >= MAX_PENDING:
-            self.warn_once("pending", "more than %d pictures asked for at once: the extra requests are dropped",
-                           MAX_PENDING)
-            return
         self.pending.append(rect)
+        if len(self.pending) >= MAX_PENDING and self.reading and self.transport is not None:
+            # asked faster than pictures are made: the socket is not read until they are sent
+            self.reading = False
+            self.transport.pause_reading()
+            self.warn_once("pending", "more than %d pictures asked for at once: reading paused until they "
+                           "are sent", MAX_PENDING)
+
+    def pause_writing(self) -> None:
+        self.writable = False
+
+    def resume_writing(self) -> None:
+        self.writable = True
+        self._next()
 
     def _next(self) -> None:
-        if self.busy or not self.pending or self.transport is None:
+        # no picture is made for a client that does not read the ones sent: its unread
+        # output stays within one picture beyond asyncio's high-water mark
+        if self.busy or not self.writable or not self.pending or self.transport is None:
             return
-        rect = self.pending.pop(0)
+        rect = self.pending.popleft()
+        if not self.reading and len(self.pending) < MAX_PENDING // 2:
+            self.reading = True
+            self.transport.resume_reading()
         settings = self.server.settings
         self.requests += 1
         if self.last is not None and settings.frame_skip > 0 and (self.requests - 1) % (settings.frame_skip + 1):

@@ -5,11 +5,17 @@ asyncio glue only: lines (protocol.framing) -> request (protocol.truth) -> a sna
 taken on the simulation thread -> one line per object, then ``{End}``.  The connection
 stays open for further requests.  An unparseable line is logged once per connection and
 answered with a bare ``{End}``.
+
+A connection's requests are answered one after another, one at a time on the simulation
+thread, so that a flood of requests cannot stall the world: beyond MAX_WAITING waiting
+requests its socket is not read until they are answered, and while its unread answers
+exceed asyncio's high-water mark no further request is asked.
 """
 
 from __future__ import annotations
 
 import asyncio
+import collections
 import logging
 
 from usarsim.errors import ProtocolError
@@ -20,6 +26,8 @@ from usarsim.sim.facade import SimFacade
 
 log = logging.getLogger("usarsim.server")
 
+MAX_WAITING = 64  # requests of one connection waiting; beyond them its socket is not read
+
 
 class TruthConnection(asyncio.Protocol):
     def __init__(self, server: "TruthServer"):
@@ -28,6 +36,10 @@ class TruthConnection(asyncio.Protocol):
         self.buffer = LineBuffer(max_line_bytes=4096)
         self.peer = "?"
         self._warned = False
+        self.waiting: collections.deque = collections.deque()  # parsed requests (None: unparseable)
+        self._busy = False  # a request is being answered on the simulation thread
+        self._writable = True  # False while the client does not read its answers
+        self._reading = True
 
     def connection_made(self, transport) -> None:
         self.transport = transport
@@ -42,19 +54,46 @@ class TruthConnection(asyncio.Protocol):
 
     def connection_lost(self, exc) -> None:
         self.server.connections.discard(self)
+        self.waiting.clear()
+        self.transport = None
 
     def data_received(self, data: bytes) -> None:
         for line in self.buffer.feed(data):
             if not line.strip():
                 continue
             try:
-                request = parse_truth_request(line)
+                self.waiting.append(parse_truth_request(line))
             except ProtocolError as exc:
                 if not self._warned:
                     log.warning("truth %s: %s", self.peer, exc)
                     self._warned = True
+                self.waiting.append(None)  # answered with a bare {End}, in its turn
+        if len(self.waiting) >= MAX_WAITING and self._reading and self.transport is not None:
+            self._reading = False
+            self.transport.pause_reading()
+            log.info("truth %s: more than %d requests waiting; reading paused until they are answered",
+                     self.peer, MAX_WAITING)
+        self._next()
+
+    def pause_writing(self) -> None:
+        self._writable = False
+
+    def resume_writing(self) -> None:
+        self._writable = True
+        self._next()
+
+    def _next(self) -> None:
+        """Ask the next waiting request, unless one is being answered or the client is not
+        reading its answers."""
+        while not self._busy and self._writable and self.waiting and self.transport is not None:
+            request = self.waiting.popleft()
+            if not self._reading and len(self.waiting) < MAX_WAITING // 2:
+                self._reading = True
+                self.transport.resume_reading()
+            if request is None:
                 self._write(END)
                 continue
+            self._busy = True
             self.server.facade.call(lambda sim, rq=request: sim.truth(rq.class_name, rq.name),
                                     on_done=self._answer_threadsafe)
 
@@ -64,10 +103,12 @@ class TruthConnection(asyncio.Protocol):
             loop.call_soon_threadsafe(self._answer, rows or [], error)
 
     def _answer(self, rows, error) -> None:
+        self._busy = False
         if error is not None:
             log.error("truth %s: %s", self.peer, error)
         text = "".join(format_truth_object(TruthObject(*row)) for row in rows) + END
         self._write(text)
+        self._next()
 
     def _write(self, text: str) -> None:
         if self.transport is not None and not self.transport.is_closing():

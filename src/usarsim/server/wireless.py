@@ -55,7 +55,8 @@ MAX_SEND_BYTES = 1 << 20
 CLOCKED_INTERVAL_S = 0.02
 # Wall-clock limit on the server's own connection to a robot's listening port.
 CONNECT_TIMEOUT_S = 5.0
-# Requests of one connection waiting to be answered at most; more are dropped.
+# Requests of one connection waiting to be answered; beyond them its socket is not read
+# until they are answered.
 MAX_QUEUED = 256
 # Connections per server at most (``usarsim serve --max-wireless-connections``).
 MAX_CONNECTIONS = 64
@@ -200,6 +201,9 @@ class _Connection(asyncio.Protocol):
         self._queue: collections.deque = collections.deque()
         self._task: asyncio.Task | None = None
         self._warned: set[str] = set()
+        self._writable = asyncio.Event()  # cleared while the client does not read its replies
+        self._writable.set()
+        self._reading = True
 
     def connection_made(self, transport) -> None:
         self.transport = transport
@@ -237,17 +241,32 @@ class _Connection(asyncio.Protocol):
     def data_received(self, data: bytes) -> None:
         if self not in self.server.connections:
             return
-        for req in self.split(data):
-            if len(self._queue) >= MAX_QUEUED:
-                self.log_once("flood", "more than %d requests waiting; dropped", MAX_QUEUED)
-                continue
-            self._queue.append(req)
+        self._queue.extend(self.split(data))
+        if len(self._queue) >= MAX_QUEUED and self._reading:
+            # a client sending faster than it is answered: its socket is not read until the
+            # requests waiting are answered (nothing is dropped, the sender is slowed down)
+            self._reading = False
+            self.transport.pause_reading()
+            self.log_once("flood", "more than %d requests waiting; reading paused until they are answered",
+                          MAX_QUEUED)
         if self._queue and (self._task is None or self._task.done()):
             self._task = asyncio.get_running_loop().create_task(self._work())
 
+    def pause_writing(self) -> None:
+        self._writable.clear()
+
+    def resume_writing(self) -> None:
+        self._writable.set()
+
     async def _work(self) -> None:
         while self._queue:
+            # a client that does not read its replies is not answered further until it does,
+            # so that its unread replies stay bounded (asyncio's high-water mark)
+            await self._writable.wait()
             req = self._queue.popleft()
+            if not self._reading and len(self._queue) < MAX_QUEUED // 2 and self.transport is not None:
+                self._reading = True
+                self.transport.resume_reading()
             try:
                 await self.handle(req)
             except asyncio.CancelledError:
