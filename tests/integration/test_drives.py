@@ -224,15 +224,28 @@ def test_a_land_robot_loses_its_battery_in_water(server_factory, tmp_path):
     assert not [ln for ln in c.step(1.0) if ln.text.startswith(("SEN", "MISSTA"))]
 
 
-def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factory, test_world):
+def _legged(server_factory, test_world, init: str, height: float):
+    """A server and a client whose legged robot (``init``) stands on its feet, its chassis
+    at ``height``, a second after its INIT."""
     srv = server_factory(world=test_world, seed=3)
     c = srv.connect()
     c.nfo()
-    c.send("INIT {ClassName USARBot.ERS} {Name Dog} {Location -6,0,-0.3} {Rotation 0,0,0}")
+    c.send(init)
     lines = c.step(1.0)
     sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
     assert sta.startswith("STA {Type LeggedRobot} {Time ")
-    assert ground_truth(lines)[-1][1][2] == pytest.approx(-0.157, abs=0.01)  # standing on its legs
+    assert ground_truth(lines)[-1][1][2] == pytest.approx(height, abs=0.01)
+    return srv, c
+
+
+def _joint_angle(srv, joint: str) -> float:
+    return srv.on_sim(lambda sim: float(sim.data.qpos[sim.robots[1].handle.joint_qpos[joint]]))
+
+
+def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factory, test_world):
+    # standing on its legs
+    srv, c = _legged(server_factory, test_world, "INIT {ClassName USARBot.ERS} {Name Dog} {Location -6,0,-0.3} "
+                     "{Rotation 0,0,0}", -0.157)
     c.send("DRIVE {LinearVelocity 0.1}")
     c.step(2.0)
     speed, rate, _, (p0, p1) = motion(c, 2.0)
@@ -246,20 +259,13 @@ def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factor
     # standing still, its joints obey joint commands: lift the left front paw
     c.send("MULTIDRIVE {LF_J1 1.2}")
     c.step(1.0)
-    angle = srv.on_sim(lambda sim: float(sim.data.qpos[sim.robots[1].handle.joint_qpos["LF_J1"]]))
-    assert angle == pytest.approx(1.2, abs=0.05)
+    assert _joint_angle(srv, "LF_J1") == pytest.approx(1.2, abs=0.05)
 
 
 def test_the_humanoid_stands_walks_turns_side_steps_and_takes_joint_commands(server_factory, test_world):
-    srv = server_factory(world=test_world, seed=3)
-    c = srv.connect()
-    c.nfo()
-    # a start pose 1 m up: a walking robot is set down on its feet, not dropped
-    c.send("INIT {ClassName USARBot.QRIO} {Name Q} {Location -6,0,-1.0} {Rotation 0,0,0}")
-    lines = c.step(1.0)
-    sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
-    assert sta.startswith("STA {Type LeggedRobot} {Time ")
-    assert ground_truth(lines)[-1][1][2] == pytest.approx(-0.365, abs=0.01)  # trunk 0.36 m up
+    # a start pose 1 m up: a walking robot is set down on its feet (trunk 0.36 m up), not dropped
+    srv, c = _legged(server_factory, test_world, "INIT {ClassName USARBot.QRIO} {Name Q} {Location -6,0,-1.0} "
+                     "{Rotation 0,0,0}", -0.365)
     c.send("DRIVE {LinearVelocity 0.1}")
     c.step(3.0)
     speed, rate, _, (p0, p1) = motion(c, 4.0)
@@ -281,8 +287,7 @@ def test_the_humanoid_stands_walks_turns_side_steps_and_takes_joint_commands(ser
     # at rest, its joints obey joint commands: turn the left foot out
     c.send("MULTIDRIVE {LHipYaw -0.3}")
     c.step(1.0)
-    angle = srv.on_sim(lambda sim: float(sim.data.qpos[sim.robots[1].handle.joint_qpos["LHipYaw"]]))
-    assert angle == pytest.approx(-0.3, abs=0.03)
+    assert _joint_angle(srv, "LHipYaw") == pytest.approx(-0.3, abs=0.03)
 
 
 def test_the_humanoid_keeps_its_feet_under_changing_commands(test_world):

@@ -457,23 +457,30 @@ class _RndfParser:
         name = None
         if r.peek_word() == "segment_name":
             name = r.text(r.check_values(r.take(), None))
-        lanes: list[Lane] = []
+        lanes = self.counted("segment", sid, nl_line, num_lanes, "lane", "end_segment", self.lane)
+        return Segment(id=sid, lanes=tuple(lanes), name=name)
+
+    def counted(self, kind: str, pid: int, count_line: _Line, count: int, child: str, end: str, read) -> list:
+        """The ``child`` blocks of segment or zone ``pid`` up to its ``end`` line, each read by
+        ``read(pid, n)``: exactly ``count`` of them, the number ``count_line`` gave."""
+        r = self.r
+        out: list = []
         while True:
             line = r.peek()
             word = None if line is None else line.word
-            if word == "lane":
-                if len(lanes) >= num_lanes:
-                    raise r.error(line, f"one lane too many: num_lanes of segment {sid} (line {nl_line.number}) "
-                                        f"is {num_lanes}")
-                lanes.append(self.lane(sid, len(lanes) + 1))
-            elif word == "end_segment":
-                if len(lanes) < num_lanes:
-                    raise r.error(line, f"segment {sid} has {len(lanes)} lanes but num_lanes (line "
-                                        f"{nl_line.number}) is {num_lanes}")
+            if word == child:
+                if len(out) >= count:
+                    raise r.error(line, f"one {child} too many: {count_line.word} of {kind} {pid} (line "
+                                        f"{count_line.number}) is {count}")
+                out.append(read(pid, len(out) + 1))
+            elif word == end:
+                if len(out) < count:
+                    raise r.error(line, f"{kind} {pid} has {len(out)} {child}s but {count_line.word} (line "
+                                        f"{count_line.number}) is {count}")
                 r.check_values(r.take(), 0)
-                return Segment(id=sid, lanes=tuple(lanes), name=name)
+                return out
             else:
-                raise r.unexpected(line, f"'lane {sid}.{len(lanes) + 1}' or 'end_segment'")
+                raise r.unexpected(line, f"'{child} {pid}.{len(out) + 1}' or '{end}'")
 
     def lane(self, sid: int, lid: int) -> Lane:
         r = self.r
@@ -538,23 +545,8 @@ class _RndfParser:
         if r.peek_word() == "zone_name":
             name = r.text(r.check_values(r.take(), None))
         perimeter = self.perimeter(zid)
-        spots: list[Spot] = []
-        while True:
-            line = r.peek()
-            word = None if line is None else line.word
-            if word == "spot":
-                if len(spots) >= num_spots:
-                    raise r.error(line, f"one spot too many: num_spots of zone {zid} (line {ns_line.number}) "
-                                        f"is {num_spots}")
-                spots.append(self.spot(zid, len(spots) + 1))
-            elif word == "end_zone":
-                if len(spots) < num_spots:
-                    raise r.error(line, f"zone {zid} has {len(spots)} spots but num_spots (line {ns_line.number}) "
-                                        f"is {num_spots}")
-                r.check_values(r.take(), 0)
-                return Zone(id=zid, perimeter=perimeter, spots=tuple(spots), name=name)
-            else:
-                raise r.unexpected(line, f"'spot {zid}.{len(spots) + 1}' or 'end_zone'")
+        spots = self.counted("zone", zid, ns_line, num_spots, "spot", "end_zone", self.spot)
+        return Zone(id=zid, perimeter=perimeter, spots=tuple(spots), name=name)
 
     def perimeter(self, zid: int) -> Perimeter:
         r = self.r

@@ -321,6 +321,24 @@ def utm_to_latlon(utm: UtmCoordinate) -> tuple[float, float]:
     return math.degrees(phi), (lon + 180.0) % 360.0 - 180.0
 
 
+def _entries(top: Section, key: str, path: str):
+    """Each entry of the list ``key`` as a Section; its unknown keys are refused once the
+    loop's body has read it."""
+    for i, raw in enumerate(top.list(key, [])):
+        s = Section(raw, path=path, key=f"{key}[{i}]")
+        yield s
+        s.finish()
+
+
+def _unique_name(s: Section, taken: set[str], what: str = "name") -> str:
+    """The entry's ``name``, refused when ``taken`` has it already (then it has it)."""
+    name = s.str("name")
+    if name in taken:
+        raise s.error("name", f"duplicate {what} '{name}'")
+    taken.add(name)
+    return name
+
+
 def load_world(path: str | Path) -> WorldConfig:
     path = str(path)
     top = Section(load_yaml(path), path=path)
@@ -378,18 +396,13 @@ def load_world(path: str | Path) -> WorldConfig:
     objects: list[StaticObject] = []
     names: set[str] = set()
     world_dir = Path(path).resolve().parent
-    for i, raw in enumerate(top.list("objects", [])):
-        s = Section(raw, path=path, key=f"objects[{i}]")
-        oname = s.str("name")
-        if oname in names:
-            raise s.error("name", f"duplicate object name '{oname}'")
-        names.add(oname)
+    for s in _entries(top, "objects", path):
+        oname = _unique_name(s, names, "object name")
         shape = s.str("shape", choices=OBJECT_SHAPES)
         material = s.str("material", "default")
         check_material(s, "material", material)
         if shape in ("ramp", "stairs"):
             parts = _ramp(s, oname, material) if shape == "ramp" else _stairs(s, oname, material)
-            s.finish()
             for part in parts:
                 if part.name != oname and part.name in names:
                     raise s.error("name", f"object '{part.name}' (a part of '{oname}') has the name of another object")
@@ -411,13 +424,11 @@ def load_world(path: str | Path) -> WorldConfig:
             obj = StaticObject(name=oname, shape=shape, center=center, rotation=rotation, material=material,
                                mass_kg=mass, mesh_file=_mesh_file(s, world_dir),
                                scale=s.vec("scale", 3, (1.0, 1.0, 1.0), positive=True))
-        s.finish()
         objects.append(obj)
 
     poses: list[StartPose] = []
     pnames: set[str] = set()
-    for i, raw in enumerate(top.list("start_poses", [])):
-        s = Section(raw, path=path, key=f"start_poses[{i}]")
+    for s in _entries(top, "start_poses", path):
         pname = s.str("name")
         if any(c in pname for c in "{} \t,"):
             raise s.error("name", f"a start pose name may not contain spaces, commas or braces, got {pname!r}")
@@ -425,7 +436,6 @@ def load_world(path: str | Path) -> WorldConfig:
             raise s.error("name", f"duplicate start pose name '{pname}'")
         pnames.add(pname.lower())
         poses.append(StartPose(name=pname, location=s.vec("location"), rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0))))
-        s.finish()
 
     g = top.section("geo_reference", {})
     utm = None
@@ -451,12 +461,8 @@ def load_world(path: str | Path) -> WorldConfig:
     g.finish()
 
     victims: list[Victim] = []
-    for i, raw in enumerate(top.list("victims", [])):
-        s = Section(raw, path=path, key=f"victims[{i}]")
-        vname = s.str("name")
-        if vname in names:
-            raise s.error("name", f"duplicate name '{vname}'")
-        names.add(vname)
+    for s in _entries(top, "victims", path):
+        vname = _unique_name(s, names)
         sound = s.section("sound", {})
         victims.append(Victim(name=vname, location=s.vec("location"), rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0)),
                               posture=s.str("posture", "lying", choices=VICTIM_POSTURES),
@@ -465,26 +471,19 @@ def load_world(path: str | Path) -> WorldConfig:
                               sound_period_s=sound.float("period_s", 5.0, min=0.1),
                               sound_duration_s=sound.float("duration_s", 1.0, min=0.01)))
         sound.finish()
-        s.finish()
 
     alarms: list[FalseAlarm] = []
-    for i, raw in enumerate(top.list("false_alarms", [])):
-        s = Section(raw, path=path, key=f"false_alarms[{i}]")
-        aname = s.str("name")
-        if aname in names:
-            raise s.error("name", f"duplicate name '{aname}'")
-        names.add(aname)
+    for s in _entries(top, "false_alarms", path):
+        aname = _unique_name(s, names)
         material = s.str("material", "default")
         check_material(s, "material", material)
         alarms.append(FalseAlarm(name=aname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
                                  rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0)),
                                  part=s.str("part", "Head", choices=VICTIM_PARTS), material=material))
-        s.finish()
 
     tags: list[RfidTagConfig] = []
     ids: set[int] = set()
-    for i, raw in enumerate(top.list("rfid_tags", [])):
-        s = Section(raw, path=path, key=f"rfid_tags[{i}]")
+    for s in _entries(top, "rfid_tags", path):
         tid = s.int("id", min=0)
         if tid in ids:
             raise s.error("id", f"duplicate RFID tag id {tid}")
@@ -493,29 +492,17 @@ def load_world(path: str | Path) -> WorldConfig:
         if any(c in mem for c in "{}\r\n"):
             raise s.error("memory", "tag memory may not contain braces or line breaks")
         tags.append(RfidTagConfig(tag_id=tid, location=s.vec("location"), memory=mem))
-        s.finish()
 
     water: list[WaterVolume] = []
-    for i, raw in enumerate(top.list("water", [])):
-        s = Section(raw, path=path, key=f"water[{i}]")
-        wname = s.str("name")
-        if wname in names:
-            raise s.error("name", f"duplicate name '{wname}'")
-        names.add(wname)
+    for s in _entries(top, "water", path):
+        wname = _unique_name(s, names)
         water.append(WaterVolume(name=wname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
                                  density_kg_m3=s.float("density_kg_m3", 1000.0, min=1.0, max=20000.0)))
-        s.finish()
 
     lights: list[Light] = []
     lnames: set[str] = set()
-    for i, raw in enumerate(top.list("lights", [])):
-        s = Section(raw, path=path, key=f"lights[{i}]")
-        lname = s.str("name")
-        if lname in lnames:
-            raise s.error("name", f"duplicate light name '{lname}'")
-        lnames.add(lname)
-        lights.append(_light(s, lname))
-        s.finish()
+    for s in _entries(top, "lights", path):
+        lights.append(_light(s, _unique_name(s, lnames, "light name")))
     ambient = top.vec("ambient_light", 3, None)
     if ambient is not None and any(c < 0 or c > 1 for c in ambient):
         raise top.error("ambient_light", f"each colour component must be within [0, 1], got {list(ambient)}")
