@@ -45,5 +45,6 @@ def test_many_robots_run_long_with_flat_memory(server_factory):
     quarter = [m for t, m in samples if t >= 0.25 * t_end]
     print(f"\n{n} robots, {t_end:.0f} simulated s: resident memory {quarter[0]:.0f} MB after a quarter, "
           f"{max(quarter):.0f} MB at most, {samples[-1][1]:.0f} MB at the end; "
-          f"resets {srv.on_sim(lambda sim: sim.resets)}")
+          f"robots reset by the blow-up guard: "
+          f"{srv.on_sim(lambda sim: {r.name: r.resets for r in sim.robots.values() if r.resets}) or 'none'}")
     assert max(quarter) - quarter[0] < 30.0  # flat after the first quarter
