@@ -267,3 +267,94 @@ def test_wireless_and_web_connection_limits_are_refused_and_logged(witness_serve
                 assert time.monotonic() < deadline
     assert_world_runs(srv)
     assert_alive(srv.witness)
+
+
+def test_camera_bindings_cannot_grow_without_bound(witness_server, caplog):
+    """SET {Type Camera} with ever new viewer addresses (and absurdly long ones): the table
+    of bindings stops at its limit, the refusal is logged once, bound viewers keep theirs."""
+    import logging
+
+    from usarsim.server.image import CameraBindings
+
+    srv = witness_server
+    bindings = srv.app.camera_bindings
+    c = srv.witness
+    with caplog.at_level(logging.WARNING, logger="usarsim"):
+        c.send("SET {Type Camera} {Robot Witness} {Name Camera} {Client 10.0.0.1}")
+        c.send("SET {Type Camera} {Robot Witness} {Name Camera} {Client " + "9" * 5000 + "}")
+        burst = "".join(f"SET {{Type Camera}} {{Robot Witness}} {{Name Camera}} {{Client 10.{i >> 16}.{(i >> 8) & 255}."
+                        f"{i & 255}:{1000 + i % 50000}}}\r\n" for i in range(CameraBindings.MAX_BINDINGS + 500))
+        c.send_raw(burst.encode())
+        c.sync()
+    assert len(bindings) == CameraBindings.MAX_BINDINGS
+    assert bindings.lookup("10.0.0.1", 5) == ("Witness", "Camera")
+    refusals = [r for r in caplog.records if "viewer address" in r.getMessage()]
+    assert len(refusals) == 1
+    assert_world_runs(srv)
+
+
+def test_comserver_tables_cannot_grow_without_bound(witness_server):
+    """REGISTER and LISTEN with ever new names and ports: past the ComServer's limits each
+    is refused with a Fail reply; what was registered before keeps working."""
+    from usarsim.server.wireless import MAX_LISTENING, MAX_REGISTERED
+
+    srv = witness_server
+    s = socket.create_connection(("127.0.0.1", srv.app.wireless.comserver.port), timeout=10)
+    s.settimeout(10)
+    buf = b""
+
+    def replies(n: int) -> list[bytes]:
+        nonlocal buf
+        while buf.count(b";") < n:
+            data = s.recv(65536)
+            assert data
+            buf += data
+        *out, buf = buf.split(b";", n)
+        return out
+
+    s.sendall(b"".join(b"REGISTER R%d 127.0.0.1;" % i for i in range(MAX_REGISTERED + 3)))
+    got = replies(MAX_REGISTERED + 3)
+    assert got[:MAX_REGISTERED] == [b"OK"] * MAX_REGISTERED
+    assert got[MAX_REGISTERED:] == [b"Fail: Too many robots registered"] * 3
+    s.sendall(b"".join(b"LISTEN R%d %d;" % (i % 8, 1 + i) for i in range(MAX_LISTENING + 2)))
+    got = replies(MAX_LISTENING + 2)
+    assert got[:MAX_LISTENING] == [b"OK"] * MAX_LISTENING and got[-1] == b"Fail: Too many robots listening"
+    s.sendall(b"REGISTER R5 127.0.0.1;")  # registered before: still known
+    assert replies(1) == [b"OK"]
+    s.close()
+    assert_world_runs(srv)
+
+
+def test_ever_new_garbage_is_logged_within_bounds(witness_server, caplog):
+    """Thousands of different unknown commands on the control, WSS and ComServerInterface
+    ports: each connection logs a bounded number of warnings (the first kinds, then one
+    note that more follow) and keeps answering."""
+    import logging
+
+    from usarsim.server.session import MAX_LOGGED_KINDS
+
+    srv = witness_server
+    junk = b"".join(b"NOSUCH%d {A 1}\r\n" % i for i in range(3000))
+    wss, interface = srv.app.wireless.wss.port, srv.app.wireless.interface.port
+    with caplog.at_level(logging.INFO, logger="usarsim"):
+        c = srv.connect()
+        c.nfo()
+        c.send_raw(junk)
+        assert_alive(c)
+        for port, first, last, answers in ((wss, b"INIT {Robot G} {Port 9}\r\n", b"", 3001),
+                                           (interface, b"", b"GETPOS\r\n", 1)):
+            with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+                s.sendall(first + junk + last)
+                s.settimeout(10)
+                got = b""
+                while got.count(b"\n") < answers:
+                    data = s.recv(1 << 16)
+                    assert data
+                    got += data
+    per_peer: dict[str, int] = {}
+    for r in caplog.records:
+        if "NOSUCH" in r.getMessage() or "kinds of problem" in r.getMessage():
+            peer = r.getMessage().split(": ")[0]
+            per_peer[peer] = per_peer.get(peer, 0) + 1
+    assert len(per_peer) == 3 and all(n <= MAX_LOGGED_KINDS + 1 for n in per_peer.values()), per_peer
+    assert_world_runs(srv)

@@ -59,9 +59,23 @@ class CameraBindings:
         self._lock = threading.Lock()
         self._by_client: dict[str, tuple[str, str]] = {}
 
-    def bind(self, client: str, robot: str, camera: str) -> None:
+    MAX_BINDINGS = 1024  # viewer addresses bound at once; a new one beyond them is refused
+    MAX_ADDRESS = 64  # the longest viewer address (an IPv6 address with a port is 47 characters)
+
+    def bind(self, client: str, robot: str, camera: str) -> bool:
+        """False (nothing bound) when ``client`` is too long to be an address or the table is
+        full, so that a client cannot grow it without bound."""
+        key = client.strip().lower()
+        if len(key) > self.MAX_ADDRESS:
+            return False
         with self._lock:
-            self._by_client[client.strip().lower()] = (robot, camera)
+            if key not in self._by_client and len(self._by_client) >= self.MAX_BINDINGS:
+                return False
+            self._by_client[key] = (robot, camera)
+            return True
+
+    def __len__(self) -> int:
+        return len(self._by_client)
 
     def release(self, client: str) -> None:
         with self._lock:

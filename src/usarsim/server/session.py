@@ -24,6 +24,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("usarsim.server")
 
+# Kinds of problem logged once per connection at most (see Session.log_once).
+MAX_LOGGED_KINDS = 32
+
 NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
 
 
@@ -77,7 +80,17 @@ class Session:
         return self.conn.server.facade
 
     def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:
+        """Log the first problem of each kind at ``level``, its repetitions at DEBUG; past
+        MAX_LOGGED_KINDS kinds (a client sending ever new garbage) every new kind is
+        repeated at DEBUG too, so that the log and this set stay bounded."""
         if kind in self._logged:
+            log.debug("%s: " + msg, self.conn.peer, *args)
+            return
+        if len(self._logged) >= MAX_LOGGED_KINDS:
+            if "(more)" not in self._logged:
+                self._logged.add("(more)")
+                log.warning("%s: more than %d kinds of problem on this connection; further ones are logged at "
+                            "debug level", self.conn.peer, MAX_LOGGED_KINDS)
             log.debug("%s: " + msg, self.conn.peer, *args)
             return
         self._logged.add(kind)
@@ -367,7 +380,11 @@ class Session:
             log.info("%s: image viewers at %s see the MultiView again", self.conn.peer, client)
             return
         camera = cmd.name or "Camera"
-        bindings.bind(client, cmd.robot, camera)
+        if not bindings.bind(client, cmd.robot, camera):
+            self.log_once("bind-full", "SET {Type Camera}: viewer address %.80r refused (longer than %d characters, "
+                          "or %d addresses bound already); ignored", client, bindings.MAX_ADDRESS,
+                          bindings.MAX_BINDINGS)
+            return
         log.info("%s: image viewers at %s see camera %s of robot %s", self.conn.peer, client, camera, cmd.robot)
 
     def on_viewports(self, cmd: C.Set) -> None:

@@ -58,6 +58,12 @@ CONNECT_TIMEOUT_S = 5.0
 # Requests of one connection waiting to be answered; beyond them its socket is not read
 # until they are answered.
 MAX_QUEUED = 256
+# Robot names registered with the ComServer, and (robot, port) pairs listening, at most:
+# more would let one client grow them without bound.
+MAX_REGISTERED = 1024
+MAX_LISTENING = 4096
+# Kinds of problem logged once per connection at most.
+MAX_LOGGED_KINDS = 32
 # Connections per server at most (``usarsim serve --max-wireless-connections``).
 MAX_CONNECTIONS = 64
 
@@ -279,9 +285,17 @@ class _Connection(asyncio.Protocol):
             self.transport.write(text.encode("ascii", "replace"))
 
     def log_once(self, key: str, fmt: str, *args) -> None:
-        if key not in self._warned:
-            self._warned.add(key)
-            log.warning("%s %s: " + fmt + " (logged once per connection)", self.what, self.peer, *args)
+        """The first problem of each kind at WARNING, once; past MAX_LOGGED_KINDS kinds (ever
+        new garbage) only a note that more follow, so that the log and this set stay bounded."""
+        if key in self._warned:
+            return
+        if len(self._warned) >= MAX_LOGGED_KINDS:
+            key, fmt, args = "(more)", "more than %d kinds of problem; further ones are not logged", \
+                (MAX_LOGGED_KINDS,)
+            if key in self._warned:
+                return
+        self._warned.add(key)
+        log.warning("%s %s: " + fmt + " (logged once per connection)", self.what, self.peer, *args)
 
 
 class _LineConnection(_Connection):
@@ -605,7 +619,7 @@ class ComServer(_WirelessServer):
                  max_connections: int = MAX_CONNECTIONS):
         super().__init__(service, host, port, max_connections)
         self.registered: dict[str, str] = {}  # robot name -> the IP its client listens on
-        self.listening: list[tuple[str, int]] = []  # (robot, port) waiting for a link
+        self.listening: dict[tuple[str, int], None] = {}  # (robot, port) waiting for a link, in order
         self.links: set[WcsLink] = set()
         service.subscribers.append(self._on_pair)
 
@@ -625,6 +639,9 @@ class ComServer(_WirelessServer):
         known = self.registered.get(name)
         if known is not None and known != ip:
             return f"Fail: Robot with name {name} already registered;"
+        if known is None and len(self.registered) >= MAX_REGISTERED:
+            log.warning("comserver: REGISTER %.80s refused: %d robots registered already", name, MAX_REGISTERED)
+            return "Fail: Too many robots registered;"
         self.registered[name] = ip
         self.service.event("comserver: %s registered at %s", name, ip)
         return "OK;"
@@ -637,7 +654,10 @@ class ComServer(_WirelessServer):
             return "Fail: Incorrect Message;"
         if (name, port) in self.listening:
             return f"Fail: Robot with name {name} already listening at port {port};"
-        self.listening.append((name, port))
+        if len(self.listening) >= MAX_LISTENING:
+            log.warning("comserver: LISTEN %.80s %d refused: %d ports listening already", name, port, MAX_LISTENING)
+            return "Fail: Too many robots listening;"
+        self.listening[(name, port)] = None
         return "OK;"
 
     async def open(self, a: str, pa_text: str, b: str, pb_text: str) -> str:
@@ -669,7 +689,7 @@ class ComServer(_WirelessServer):
                     end.transport.close()
                 return f"Fail: Cannot connect to {b};" if svc.down_since(pair, t) else \
                     f"Fail: {b} not listening on port {pb};"
-            self.listening.remove((b, pb))
+            del self.listening[(b, pb)]
             link = WcsLink(self, ends[0], ends[1], t)
             svc.watch(pair)  # for as long as the link lives
             self.links.add(link)

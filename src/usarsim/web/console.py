@@ -405,7 +405,8 @@ class WebConsole:
         if bridge is None:
             # no robot of this page to speak for it (a spectator): the binding is made
             # directly, as the control server would make it
-            bindings.bind(address, robot, camera)
+            if not bindings.bind(address, robot, camera):
+                return {"error": f"no camera binding: {len(bindings)} viewers bound already"}
             return {"bound": robot, "camera": camera, "via": "direct"}
         bridge.send_line(line)
         deadline = time.monotonic() + BIND_WAIT_S
