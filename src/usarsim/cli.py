@@ -176,6 +176,24 @@ def _setup_logging(verbose: int) -> None:
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
 
 
+def _raise_file_limit(want: int = 65536) -> None:
+    """Every connection, relay port and link is a file descriptor: lift the soft limit on
+    them towards the hard one (a desktop's default soft limit, 1024, is less than what the
+    servers' own limits allow together)."""
+    try:
+        import resource
+    except ImportError:  # not on this platform
+        return
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    target = want if hard == resource.RLIM_INFINITY else min(want, hard)
+    if soft != resource.RLIM_INFINITY and soft < target:
+        try:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (target, hard))
+            log.debug("open files limit raised from %d to %d", soft, target)
+        except (ValueError, OSError) as exc:
+            log.warning("open files limit stays at %d (%s)", soft, exc)
+
+
 def cmd_serve(args) -> int:
     from usarsim.config.catalog import resolve_world
     from usarsim.errors import UsarsimError
@@ -236,6 +254,8 @@ def cmd_serve(args) -> int:
                       web_port=None if args.no_web else args.web_port, max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections))
+
+    _raise_file_limit()
 
     async def main() -> None:
         loop = asyncio.get_running_loop()

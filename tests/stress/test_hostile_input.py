@@ -358,3 +358,48 @@ def test_ever_new_garbage_is_logged_within_bounds(witness_server, caplog):
             per_peer[peer] = per_peer.get(peer, 0) + 1
     assert len(per_peer) == 3 and all(n <= MAX_LOGGED_KINDS + 1 for n in per_peer.values()), per_peer
     assert_world_runs(srv)
+
+
+def test_wss_relay_ports_are_bounded(witness_server, monkeypatch, caplog):
+    """DNS for ever new ports of a robot that declared many: each relay port is a listening
+    socket, so past the limit the WSS answers Could.Not.Allocate.Port (logged) and keeps
+    the file descriptors for everyone else; ports allocated before keep their numbers."""
+    import logging
+
+    from helpers import Client
+    from usarsim.server import wireless
+
+    monkeypatch.setattr(wireless, "MAX_RELAY_PORTS", 3)
+    srv = witness_server
+    port = srv.app.wireless.wss.port
+    with Client(port) as a, Client(port) as b, caplog.at_level(logging.WARNING, logger="usarsim"):
+        assert a.ask("INIT {Robot Witness} {Port " + ",".join(str(p) for p in range(2000, 2400)) + "}",
+                     "INITREPLY").text == "INITREPLY {Status OK}"
+        assert b.ask("INIT {Robot Other} {Port 7}", "INITREPLY").text == "INITREPLY {Status OK}"
+        replies = [b.ask(f"DNS {{Robot Witness}} {{Port {p}}}", "").text for p in range(2000, 2005)]
+        assert all(r.startswith("DNSREPLY {Robot Witness} {Port ") for r in replies[:3])
+        assert replies[3:] == ["ERROR {Reason Could.Not.Allocate.Port}"] * 2
+        assert b.ask("DNS {Robot Witness} {Port 2001}", "").text == replies[1]
+        assert any("no relay port" in r.getMessage() for r in caplog.records)
+    assert_world_runs(srv)
+
+
+def test_comserver_links_are_bounded(witness_server, monkeypatch, caplog):
+    """OPEN past the limit of open links is refused (logged), as a link the server cannot
+    establish."""
+    import logging
+
+    from usarsim.server import wireless
+
+    monkeypatch.setattr(wireless, "MAX_LINKS", 0)
+    s = socket.create_connection(("127.0.0.1", witness_server.app.wireless.comserver.port), timeout=10)
+    with caplog.at_level(logging.WARNING, logger="usarsim"):
+        s.sendall(b"REGISTER A0 127.0.0.1;REGISTER B0 127.0.0.1;LISTEN B0 4000;OPEN A0 4001 B0 4000;")
+        got = b""
+        while got.count(b";") < 4:
+            data = s.recv(4096)
+            assert data
+            got += data
+    assert got.split(b";")[:4] == [b"OK", b"OK", b"OK", b"Fail: Could not establish connection"]
+    assert any("links open already" in r.getMessage() for r in caplog.records)
+    s.close()

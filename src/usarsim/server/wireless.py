@@ -62,6 +62,10 @@ MAX_QUEUED = 256
 # more would let one client grow them without bound.
 MAX_REGISTERED = 1024
 MAX_LISTENING = 4096
+# ComServer links (two sockets each) open at once at most.
+MAX_LINKS = 512
+# WSS relay ports (listening sockets, one per robot pair and port asked for) at most.
+MAX_RELAY_PORTS = 1024
 # Kinds of problem logged once per connection at most.
 MAX_LOGGED_KINDS = 32
 # Connections per server at most (``usarsim serve --max-wireless-connections``).
@@ -672,6 +676,9 @@ class ComServer(_WirelessServer):
             return f"Fail: Robot {a} not registered;"
         if a.lower() == b.lower():
             return f"Fail: Cannot connect to {b};"
+        if len(self.links) >= MAX_LINKS:  # two sockets each: keep file descriptors for the rest
+            log.warning("comserver: OPEN %.80s -> %.80s refused: %d links open already", a, b, MAX_LINKS)
+            return "Fail: Could not establish connection;"
         svc = self.service
         pair = pair_key(a, b)
         svc.watch(pair)  # while the link is being set up
@@ -1058,6 +1065,10 @@ class WssServer(_WirelessServer):
         if rp is not None:
             return rp.number
         if not dst_port:
+            return None
+        if len(self.ports) >= MAX_RELAY_PORTS:  # each is a listening socket: keep file descriptors for the rest
+            log.warning("wss: no relay port for %s -> %s:%d: %d allocated already", src, dst, dst_port,
+                        MAX_RELAY_PORTS)
             return None
         pair = pair_key(src, dst)
         self.service.watch(pair)
