@@ -249,3 +249,52 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
     assert grown < 80.0
     assert min(sent) > 0
     assert w.sync()
+
+
+def test_a_client_that_asks_and_never_reads_is_bounded_and_loses_nothing(server_factory):
+    """A client pours GETSTARTPOSES lines and does not read: once its unread replies pass
+    a few high-water marks its further lines wait unread (memory stays bounded, the other
+    robot runs on); when it reads at last, every reply arrives, none lost."""
+    from usarsim.server.control import HIGH_WATER, REPLY_CAP_FACTOR
+
+    asks = scaled(20_000, 200_000)
+    srv = server_factory(lockstep=False, speed=1.0, seed=12)
+    w = srv.connect()
+    w.nfo()
+    w.send("INIT {ClassName USARBot.P2AT} {Name Witness} {Start PlayerStart1}")
+    w.wait_line("STA")
+    asker = socket.socket()
+    asker.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    asker.connect(("127.0.0.1", srv.port))
+    mem = rss_mb()
+    burst = b"GETSTARTPOSES\r\n" * 1000
+    done = threading.Event()
+
+    def pour():
+        for _ in range(asks // 1000):
+            asker.sendall(burst)  # blocks once the server stops reading: TCP pushes back
+        done.set()
+
+    threading.Thread(target=pour, daemon=True).start()
+    t0 = time.monotonic()
+    sta = 0
+    while time.monotonic() < t0 + 4.0:
+        sta += w.next_line(timeout=5.0).text.startswith("STA")
+    waiting = srv.on_loop(lambda: max(c.transport.get_write_buffer_size() for c in srv.app.control.connections.values()
+                                      if c.transport is not None))
+    grown = rss_mb() - mem
+    print(f"\nunread replies held at {waiting // 1024} kB (cap {REPLY_CAP_FACTOR * HIGH_WATER // 1024} kB); "
+          f"memory grew {grown:.1f} MB; the witness got {sta} STA lines in 4 s")
+    assert waiting < REPLY_CAP_FACTOR * HIGH_WATER + 256 * 1024
+    assert grown < 40.0 and sta >= 18
+    # it reads at last: every one of its questions is answered
+    asker.settimeout(30)
+    got, buf = 0, b""
+    while got < asks + 1:  # the NFO greeting, then one NFO {StartPoses ...} per question
+        data = asker.recv(1 << 20)
+        assert data
+        buf += data
+        got += data.count(b"\n")
+    assert done.wait(30)
+    asker.close()
+    assert got == asks + 1

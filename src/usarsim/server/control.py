@@ -27,6 +27,9 @@ from usarsim.sim.simulation import Output
 log = logging.getLogger("usarsim.server")
 
 HIGH_WATER = 256 * 1024
+# Replies unread beyond this many high-water marks: the client's further lines wait (its
+# sensor lines are held latest-wins already, and its replies are never dropped).
+REPLY_CAP_FACTOR = 4
 # A connection's lines are handled for at most this long at a time (s); the rest wait while
 # its socket is not read, so that one client flooding the port slows only itself (TCP pushes
 # back on it) and never the event loop, the other clients or the physics.
@@ -122,6 +125,18 @@ class Connection(asyncio.Protocol):
         backlog, prev = self._backlog, self._last_line
         n = 0
         while backlog:
+            if self._paused and self.transport is not None and \
+                    self.transport.get_write_buffer_size() > REPLY_CAP_FACTOR * self.server.max_pending_bytes:
+                # the client asks and asks but does not read the replies: its further lines
+                # wait, its socket unread, until it reads (resume_writing drains them)
+                self._last_line = prev
+                if not self._reading_paused:
+                    self.transport.pause_reading()
+                    self._reading_paused = True
+                    self.session.log_once("unread-replies", "more than %d kB of replies unread; the next lines "
+                                          "wait until the client reads", REPLY_CAP_FACTOR *
+                                          self.server.max_pending_bytes // 1024)
+                return
             line = backlog.popleft()
             if line == prev and self._repeatable(line):
                 self.repeats_skipped += 1
@@ -162,6 +177,8 @@ class Connection(asyncio.Protocol):
         held, self._held = self._held, {}
         if held and self.transport is not None:
             self.transport.write(b"".join(held.values()))
+        if self._backlog:
+            self._drain()
 
     # Output ----------------------------------------------------------------------------
     def send_reply(self, msg) -> None:
