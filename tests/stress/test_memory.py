@@ -14,7 +14,7 @@ from stress_scale import scaled
 from test_load import rss_mb
 
 
-def test_many_robots_run_long_with_flat_memory(server_factory):
+def test_many_robots_run_long_with_flat_memory(server_factory, caplog):
     from usarsim.bench import free_spots
 
     n = scaled(8, 64)
@@ -47,4 +47,6 @@ def test_many_robots_run_long_with_flat_memory(server_factory):
           f"{max(quarter):.0f} MB at most, {samples[-1][1]:.0f} MB at the end; "
           f"robots reset by the blow-up guard: "
           f"{srv.on_sim(lambda sim: {r.name: r.resets for r in sim.robots.values() if r.resets}) or 'none'}")
+    for line in [r.getMessage() for r in caplog.records if "unstable" in r.getMessage()][:5]:
+        print("  " + line)
     assert max(quarter) - quarter[0] < 30.0  # flat after the first quarter
