@@ -115,13 +115,18 @@ def spawn(srv, name: str, start: str):
     return c
 
 
-def test_a_camera_facing_a_red_wall_sends_a_red_jpeg(server_factory, image_world):
-    srv = serve(server_factory, image_world)
-    robot = spawn(srv, "R1", "Red")
+def bound_viewer(srv, start: str):
+    """Robot R1 at ``start``, landed, and an image viewer bound to its camera."""
+    robot = spawn(srv, "R1", start)
     robot.step(1.0)
     robot.send("SET {Type Camera} {Robot R1} {Name Camera} {Client 127.0.0.1}")
     robot.step(0.1)
-    viewer = Viewer(srv.app.image.port)
+    return robot, Viewer(srv.app.image.port)
+
+
+def test_a_camera_facing_a_red_wall_sends_a_red_jpeg(server_factory, image_world):
+    srv = serve(server_factory, image_world)
+    robot, viewer = bound_viewer(srv, "Red")
     kind, payload = viewer.frame()
     assert kind == 3  # JPEG "normal" by default
     from PIL import Image
@@ -135,11 +140,7 @@ def test_a_camera_facing_a_red_wall_sends_a_red_jpeg(server_factory, image_world
 
 def test_a_raw_frame_decodes_to_its_size_and_u_returns_the_rectangle(server_factory, image_world):
     srv = serve(server_factory, image_world, image_type=0, width=320, height=240)
-    robot = spawn(srv, "R1", "Green")
-    robot.step(1.0)
-    robot.send("SET {Type Camera} {Robot R1} {Name Camera} {Client 127.0.0.1}")
-    robot.step(0.1)
-    viewer = Viewer(srv.app.image.port)
+    robot, viewer = bound_viewer(srv, "Green")
     kind, payload = viewer.frame()
     assert kind == 0
     w, h = struct.unpack(">HH", payload[:4])
@@ -156,11 +157,7 @@ def test_a_raw_frame_decodes_to_its_size_and_u_returns_the_rectangle(server_fact
 
 def test_zoom_changes_what_is_seen(server_factory, image_world):
     srv = serve(server_factory, image_world, image_type=0, width=320, height=240)
-    robot = spawn(srv, "R1", "Stripe")
-    robot.step(1.0)
-    robot.send("SET {Type Camera} {Robot R1} {Name Camera} {Client 127.0.0.1}")
-    robot.step(0.1)
-    viewer = Viewer(srv.app.image.port)
+    robot, viewer = bound_viewer(srv, "Stripe")
 
     def red_share(img):
         return float(np.mean((img[:, :, 0] > 120) & (img[:, :, 1] < 80)))
@@ -297,11 +294,7 @@ def test_the_headlight_lights_what_the_camera_sees(server_factory, tmp_path):
 
     srv = server_factory(world=load_world(tmp_path / "Dim.yaml"), image=ImageSettings(image_type=0, width=160,
                                                                                       height=120))
-    robot = spawn(srv, "R1", "White")
-    robot.step(1.0)
-    robot.send("SET {Type Camera} {Robot R1} {Name Camera} {Client 127.0.0.1}")
-    robot.step(0.1)
-    viewer = Viewer(srv.app.image.port)
+    robot, viewer = bound_viewer(srv, "White")
     dark = viewer.picture()[40:80, 60:100].mean()
     robot.send("DRIVE {Light True}")
     robot.step(0.2)

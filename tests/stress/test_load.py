@@ -173,6 +173,16 @@ def test_a_client_that_never_reads_is_bounded_and_harms_no_one(server_factory):
         lazy.close()
 
 
+def _real_time_witness(server_factory, seed: int):
+    """A real-time server and the client of a P2AT whose status lines show the world runs."""
+    srv = server_factory(lockstep=False, speed=1.0, seed=seed)
+    w = srv.connect()
+    w.nfo()
+    w.send("INIT {ClassName USARBot.P2AT} {Name Witness} {Start PlayerStart1}")
+    w.wait_line("STA")
+    return srv, w
+
+
 def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
     """Clients that pour requests into the ground-truth, ComServerInterface, WSS and image
     ports and never read the answers: each connection is answered one request at a time
@@ -182,11 +192,7 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
     from helpers import gl_problem
 
     lines = scaled(100_000, 1_000_000)
-    srv = server_factory(lockstep=False, speed=1.0, seed=9)
-    w = srv.connect()
-    w.nfo()
-    w.send("INIT {ClassName USARBot.P2AT} {Name Witness} {Start PlayerStart1}")
-    w.wait_line("STA")
+    srv, w = _real_time_witness(server_factory, seed=9)
     floods = [(srv.app.truth.port, b"{Class Victim}\r\n{Class}\r\n"),
               (srv.app.wireless.interface.port, b"GETOBS {Start -1e30,0,1} {End 1e30,0,1}\r\nGETPOS\r\n"),
               (srv.app.wireless.wss.port, b"GETSS {Robot Witness}\r\n")]
@@ -258,11 +264,7 @@ def test_a_client_that_asks_and_never_reads_is_bounded_and_loses_nothing(server_
     from usarsim.server.control import HIGH_WATER, REPLY_CAP_FACTOR
 
     asks = scaled(20_000, 200_000)
-    srv = server_factory(lockstep=False, speed=1.0, seed=12)
-    w = srv.connect()
-    w.nfo()
-    w.send("INIT {ClassName USARBot.P2AT} {Name Witness} {Start PlayerStart1}")
-    w.wait_line("STA")
+    srv, w = _real_time_witness(server_factory, seed=12)
     asker = socket.create_connection(("127.0.0.1", srv.port), timeout=30)
     mem = rss_mb()
     burst = b"GETSTARTPOSES\r\n" * 1000

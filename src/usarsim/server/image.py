@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.server.listener import TcpListener
+from usarsim.server.listener import ReadGate, TcpListener
 from usarsim.sim.render import RenderService, Tile, grid_tiles
 
 log = logging.getLogger("usarsim.server")
@@ -113,7 +113,7 @@ class ImageConnection(asyncio.Protocol):
         self.last: np.ndarray | None = None
         self._warned: set[str] = set()
         self.writable = True  # False while the client does not read its pictures
-        self.reading = True
+        self.gate = ReadGate(MAX_PENDING)
 
     def warn_once(self, key: str, msg: str, *args) -> None:
         if key not in self._warned:
@@ -158,10 +158,7 @@ class ImageConnection(asyncio.Protocol):
 
     def _queue(self, rect) -> None:
         self.pending.append(rect)
-        if len(self.pending) >= MAX_PENDING and self.reading and self.transport is not None:
-            # asked faster than pictures are made: the socket is not read until they are sent
-            self.reading = False
-            self.transport.pause_reading()
+        if self.gate.queued(self.transport, len(self.pending)):
             self.warn_once("pending", "more than %d pictures asked for at once: reading paused until they "
                            "are sent", MAX_PENDING)
 
@@ -178,9 +175,7 @@ class ImageConnection(asyncio.Protocol):
         if self.busy or not self.writable or not self.pending or self.transport is None:
             return
         rect = self.pending.popleft()
-        if not self.reading and len(self.pending) < MAX_PENDING // 2:
-            self.reading = True
-            self.transport.resume_reading()
+        self.gate.taken(self.transport, len(self.pending))
         settings = self.server.settings
         self.requests += 1
         if self.last is not None and settings.frame_skip > 0 and (self.requests - 1) % (settings.frame_skip + 1):

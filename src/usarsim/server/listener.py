@@ -36,3 +36,27 @@ class TcpListener:
                 conn.transport.close()
         if server is not None:
             await server.wait_closed()
+
+
+class ReadGate:
+    """Backpressure on one connection's requests: its socket is not read while ``limit``
+    requests wait, and is read again once fewer than half of them do.  TCP then slows the
+    sender down; nothing is dropped."""
+
+    def __init__(self, limit: int):
+        self.limit = limit
+        self.reading = True
+
+    def queued(self, transport, waiting: int) -> bool:
+        """After requests were queued: True when this closed the gate (the caller logs it)."""
+        if self.reading and waiting >= self.limit and transport is not None:
+            self.reading = False
+            transport.pause_reading()
+            return True
+        return False
+
+    def taken(self, transport, waiting: int) -> None:
+        """After a request was taken from the queue."""
+        if not self.reading and waiting < self.limit // 2 and transport is not None:
+            self.reading = True
+            transport.resume_reading()

@@ -21,7 +21,7 @@ import logging
 from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.truth import END, TruthObject, format_truth_object, parse_truth_request
-from usarsim.server.listener import TcpListener
+from usarsim.server.listener import ReadGate, TcpListener
 from usarsim.sim.facade import SimFacade
 
 log = logging.getLogger("usarsim.server")
@@ -39,7 +39,7 @@ class TruthConnection(asyncio.Protocol):
         self.waiting: collections.deque = collections.deque()  # parsed requests (None: unparseable)
         self._busy = False  # a request is being answered on the simulation thread
         self._writable = True  # False while the client does not read its answers
-        self._reading = True
+        self._gate = ReadGate(MAX_WAITING)
 
     def connection_made(self, transport) -> None:
         self.transport = transport
@@ -68,9 +68,7 @@ class TruthConnection(asyncio.Protocol):
                     log.warning("truth %s: %s", self.peer, exc)
                     self._warned = True
                 self.waiting.append(None)  # answered with a bare {End}, in its turn
-        if len(self.waiting) >= MAX_WAITING and self._reading and self.transport is not None:
-            self._reading = False
-            self.transport.pause_reading()
+        if self._gate.queued(self.transport, len(self.waiting)):
             log.info("truth %s: more than %d requests waiting; reading paused until they are answered",
                      self.peer, MAX_WAITING)
         self._next()
@@ -87,9 +85,7 @@ class TruthConnection(asyncio.Protocol):
         reading its answers."""
         while not self._busy and self._writable and self.waiting and self.transport is not None:
             request = self.waiting.popleft()
-            if not self._reading and len(self.waiting) < MAX_WAITING // 2:
-                self._reading = True
-                self.transport.resume_reading()
+            self._gate.taken(self.transport, len(self.waiting))
             if request is None:
                 self._write(END)
                 continue

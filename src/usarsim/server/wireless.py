@@ -38,7 +38,7 @@ from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.grammar import parse_line, parse_vector
 from usarsim.protocol.numbers import vec4
-from usarsim.server.listener import TcpListener
+from usarsim.server.listener import ReadGate, TcpListener
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet, pair_key, resolve_model
 
@@ -213,7 +213,7 @@ class _Connection(asyncio.Protocol):
         self._warned: set[str] = set()
         self._writable = asyncio.Event()  # cleared while the client does not read its replies
         self._writable.set()
-        self._reading = True
+        self._gate = ReadGate(MAX_QUEUED)
 
     def connection_made(self, transport) -> None:
         self.transport = transport
@@ -252,11 +252,7 @@ class _Connection(asyncio.Protocol):
         if self not in self.server.connections:
             return
         self._queue.extend(self.split(data))
-        if len(self._queue) >= MAX_QUEUED and self._reading:
-            # a client sending faster than it is answered: its socket is not read until the
-            # requests waiting are answered (nothing is dropped, the sender is slowed down)
-            self._reading = False
-            self.transport.pause_reading()
+        if self._gate.queued(self.transport, len(self._queue)):
             self.log_once("flood", "more than %d requests waiting; reading paused until they are answered",
                           MAX_QUEUED)
         if self._queue and (self._task is None or self._task.done()):
@@ -274,9 +270,7 @@ class _Connection(asyncio.Protocol):
             # so that its unread replies stay bounded (asyncio's high-water mark)
             await self._writable.wait()
             req = self._queue.popleft()
-            if not self._reading and len(self._queue) < MAX_QUEUED // 2 and self.transport is not None:
-                self._reading = True
-                self.transport.resume_reading()
+            self._gate.taken(self.transport, len(self._queue))
             try:
                 await self.handle(req)
             except asyncio.CancelledError:
@@ -361,6 +355,14 @@ class _WirelessServer:
 # --------------------------------------------------------------------------- ComServer
 
 
+def _skip_space(buf: bytearray) -> None:
+    """Drop the blanks and line breaks at the start of ``buf``."""
+    i = 0
+    while i < len(buf) and buf[i] in b" \t\r\n":
+        i += 1
+    del buf[:i]
+
+
 class SendParser:
     """The framing of a relayed ComServer link (manual 3.2.4.3): ``SEND <n> <n bytes>;``
     (binary-safe) and ``CLOSE;``, both words case-sensitive; whitespace between frames is
@@ -379,16 +381,14 @@ class SendParser:
         self._body = bytearray()
 
     def feed(self, data: bytes) -> list:
+        """The messages completed by ``data``: payload bytes, CLOSE, or the text of a problem."""
         buf = self._buf
         buf += data
         out: list = []
         while True:
             st = self._state
             if st == "head":
-                i = 0
-                while i < len(buf) and buf[i] in b" \t\r\n":
-                    i += 1
-                del buf[:i]
+                _skip_space(buf)
                 if not buf:
                     break
                 head = bytes(buf[:5])
@@ -443,10 +443,7 @@ class SendParser:
                     self._state = "skip"
                 self._body = bytearray()
             elif st == "close":
-                i = 0
-                while i < len(buf) and buf[i] in b" \t\r\n":
-                    i += 1
-                del buf[:i]
+                _skip_space(buf)
                 if not buf:
                     break
                 if buf[0] == 59:
