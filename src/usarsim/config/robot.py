@@ -17,6 +17,8 @@ Vec3 = tuple[float, float, float]
 
 VEHICLE_TYPES = ("GroundVehicle", "AerialVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform")
 STEERING_TYPES = ("SkidSteered", "AckermanSteered", "HolonomSteered", "OmniDrive", "None")
+# The drives built in (usarsim.robots); a robot file may name any drive registered there
+# (a plugin's own), checked with the drive registry when the robot is validated or spawned.
 DRIVES = ("skid", "ackermann", "holonomic", "aerial", "static", "nautical", "legged")
 STEER_GROUPS = ("none", "front", "rear", "free")
 
@@ -314,7 +316,9 @@ def load_robot(path: str | Path) -> RobotConfig:
     desc = top.str("description", "")
     vehicle_type = top.str("vehicle_type", choices=VEHICLE_TYPES)
     steering = top.str("steering_type", choices=STEERING_TYPES)
-    drive = top.str("drive", choices=DRIVES)
+    drive = top.str("drive")
+    if not drive.isidentifier() or drive != drive.lower():
+        raise top.error("drive", f"a drive name is a lower-case word (built in: {', '.join(DRIVES)}), got {drive!r}")
     mass = top.float("mass_kg", min=0.01)
     max_speed = top.float("max_speed_rad_s", min=0.0, min_exclusive=True)
     max_torque = top.float("max_torque_nm", min=0.0, min_exclusive=True)

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+from usarsim import controls as K
 from usarsim.errors import ProtocolError
 
 from .grammar import (
@@ -171,6 +172,28 @@ class Drive:
     rudder: float | None = None
     stern_plane: float | None = None
     joints: tuple[JointDrive, ...] = ()
+
+    def command(self) -> K.DriveCommand:
+        """The typed command the simulation applies: one part per kind of key that was
+        sent (a robot's drive model applies those its kind understands), the joint orders
+        that carry a Value, and the Light, Flip and Normalized keys."""
+        parts: list[K.DrivePart] = []
+        if self.left is not None or self.right is not None:
+            parts.append(K.WheelSpeeds(self.left, self.right))
+        if self.speed is not None or self.front_steer is not None or self.rear_steer is not None:
+            parts.append(K.AckermannDrive(self.speed, self.front_steer, self.rear_steer))
+        if self.wheels:
+            parts.append(K.SteeredWheels(tuple(K.SteeredWheel(w.number, w.speed, w.steer) for w in self.wheels)))
+        if any(v is not None for v in (self.altitude_velocity, self.linear_velocity, self.lateral_velocity,
+                                       self.rotational_velocity)):
+            parts.append(K.Velocities(self.altitude_velocity, self.linear_velocity, self.lateral_velocity,
+                                      self.rotational_velocity))
+        if self.propeller is not None or self.rudder is not None or self.stern_plane is not None:
+            parts.append(K.NauticalDrive(self.propeller, self.rudder, self.stern_plane))
+        return K.DriveCommand(parts=tuple(parts),
+                              joints=tuple(K.JointOrder(j.name, j.value, j.order) for j in self.joints
+                                           if j.value is not None),
+                              normalized=bool(self.normalized), light=self.light, flip=bool(self.flip))
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -1,8 +1,9 @@
 """The narrow, thread-safe door from the servers into the simulation.
 
-Servers (asyncio) call these methods from their own thread; every change of the
-world runs on the simulation thread, in the order the calls were made.  Results
-come back through callbacks, called on the simulation thread.
+Servers (asyncio) call these named, typed methods from their own thread; every change of
+the world runs on the simulation thread, in the order the calls were made.  Results come
+back through callbacks ``on_done(result, error)``, called on the simulation thread.  The
+servers import nothing else from the simulation layer but :mod:`usarsim.sim.types`.
 """
 
 from __future__ import annotations
@@ -12,22 +13,32 @@ from typing import Any, Callable
 
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
+from usarsim.controls import DriveCommand, JointOrder
+from usarsim.sim.outputs import ItemDescription, Output
+from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner, StepRequest
-from usarsim.sim.simulation import ItemDescription, Output, Simulation, describe_items
+from usarsim.sim.simulation import Simulation, describe_items
 
 log = logging.getLogger("usarsim.sim")
+
+Done = Callable[[Any, BaseException | None], None]
+Position = tuple[str, tuple[float, float, float], bool]
+
+# Outside lock-step the radio links are evaluated at most this often (simulated seconds).
+RADIO_INTERVAL_S = 0.02
 
 
 class SimFacade:
     def __init__(self, world: WorldConfig, *, seed: int = 0, speed: float | None = 1.0, lockstep: bool = False,
                  deliver: Callable[[list[Output]], None] | None = None):
         self.world = world
-        self.sim = Simulation(world, seed=seed)
+        self.sim = Simulation(world, seed=seed)  # for tests and benchmarks; servers use the methods
         self.lockstep = lockstep
         self.speed = speed
         self._deliver = deliver or (lambda outs: None)
         self.runner = SimulationRunner(self.sim, self._on_outputs, speed=speed, lockstep=lockstep)
         self._descriptions: dict[str, list[ItemDescription]] = {}
+        self._radio: RadioNet | None = None
 
     def set_deliver(self, deliver: Callable[[list[Output]], None]) -> None:
         self._deliver = deliver
@@ -63,60 +74,117 @@ class SimFacade:
             self._descriptions[robot.path] = d
         return d
 
+    def drive_accepts(self, robot: RobotConfig) -> frozenset[type]:
+        """The kinds of DRIVE part (:mod:`usarsim.controls`) the robot's drive applies."""
+        from usarsim.robots import DRIVES
+
+        return DRIVES.get(robot.drive).ACCEPTS
+
     def live_conf(self, uid: int, item_type: str, name: str):
         """CONF fields of a robot's item that changed at run time, or None."""
         return self.sim.live_conf.get((uid, item_type, name))
 
-    # Requests ----------------------------------------------------------------------
-    def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation,
-              on_done: Callable[[Any, BaseException | None], None], set_down: bool = False) -> None:
+    # Robots ------------------------------------------------------------------------
+    def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation, on_done: Done,
+              set_down: bool = False) -> None:
         self.runner.submit(Request(lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down),
                                    immediate=True, on_done=on_done))
 
     def remove(self, uid: int) -> None:
         self.runner.submit(Request(lambda sim: sim.remove(uid), immediate=True))
 
-    def drive_skid(self, uid: int, left, right, normalized: bool, light) -> None:
-        self.runner.submit(Request(lambda sim: sim.drive_skid(uid, left, right, normalized, light)))
+    def drive(self, uid: int, command: DriveCommand) -> None:
+        """One DRIVE: its parts go to the robot's drive model, which applies those its kind
+        understands; Flip, Light and joint orders apply to any robot."""
+        self.runner.submit(Request(lambda sim: sim.drive(uid, command)))
 
-    def flip(self, uid: int) -> None:
-        self.runner.submit(Request(lambda sim: sim.flip(uid)))
-
-    def drive_ackermann(self, uid: int, speed, front, rear, normalized: bool, light) -> None:
-        self.runner.submit(Request(lambda sim: sim.drive_ackermann(uid, speed, front, rear, normalized, light)))
-
-    def drive_aerial(self, uid: int, altitude, linear, lateral, rotational, normalized: bool, light) -> None:
-        self.runner.submit(Request(
-            lambda sim: sim.drive_aerial(uid, altitude, linear, lateral, rotational, normalized, light)))
-
-    def drive_nautical(self, uid: int, propeller, rudder, stern_plane, normalized: bool, light) -> None:
-        self.runner.submit(Request(
-            lambda sim: sim.drive_nautical(uid, propeller, rudder, stern_plane, normalized, light)))
-
-    def drive_wheels(self, uid: int, wheels, normalized: bool, light) -> None:
-        self.runner.submit(Request(lambda sim: sim.drive_wheels(uid, wheels, normalized, light)))
-
-    def drive_joints(self, uid: int, commands: list[tuple[str, float, int]]) -> None:
-        """Joint commands (name, value, order), applied together."""
-        def action(sim: Simulation):
-            for name, value, order in commands:
-                if not sim.drive_joint(uid, name, value, order):
-                    log.info("robot id %d: no joint '%s' for order %d (or no power); ignored", uid, name, order)
-
-        self.runner.submit(Request(action))
+    def drive_joints(self, uid: int, orders: list[JointOrder]) -> None:
+        """Joint orders (MULTIDRIVE, MISPKG, SET Joint, CAMERA), applied together."""
+        self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders)))
 
     def operate(self, uid: int, item_type, name, opcode, params) -> None:
-        def action(sim: Simulation):
-            before = len(sim.outbox)
-            res = sim.operate(uid, item_type, name, opcode, params)
-            if res is not None:  # the RES first, then whatever the operation reported (EFF)
-                sim.outbox.insert(before, Output(uid, sim.time, res, "RES", periodic=False))
+        """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF)."""
+        self.runner.submit(Request(lambda sim: sim.operate(uid, item_type, name, opcode, params)))
 
-        self.runner.submit(Request(action))
+    def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
+        """SET {Type Viewports}: ``on_done((time, [(camera, status), ...]), error)``."""
+        self.runner.submit(Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)),
+                                   immediate=True, on_done=on_done))
 
     def step(self, seconds: float, on_done: Callable[[float], None]) -> None:
         self.runner.submit(StepRequest(seconds, on_done))
 
-    def call(self, fn: Callable[[Simulation], Any], on_done=None, immediate: bool = True) -> None:
-        """Run ``fn(sim)`` on the simulation thread (tools, tests, benchmarks)."""
+    # Ground truth and pictures -----------------------------------------------------
+    def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
+        """Everything the ground-truth service knows now (rows of
+        :func:`usarsim.sim.truth.truth_rows`), filtered by class and name."""
+        self.runner.submit(Request(lambda sim: sim.truth(class_name, name), immediate=True, on_done=on_done))
+
+    def set_multiview_cameras(self, count: int) -> None:
+        """How many robot cameras the MultiView shows at most (before the simulation starts)."""
+        self.sim.cameras.multiview_cameras = count
+
+    def render_snapshot(self, reuse, on_done: Done) -> None:
+        """A copy of the state for the render thread (``reuse``: the previous one)."""
+        self.runner.submit(Request(lambda sim: sim.cameras.render_snapshot(sim, reuse), immediate=True,
+                                   on_done=on_done))
+
+    def render_service(self, max_fps: float):
+        """The render thread of the image server, fed with snapshots of this simulation."""
+        from usarsim.sim.render import RenderService
+
+        return RenderService(self.render_snapshot, max_fps=max_fps)
+
+    # The radio (protocol.md 12) ----------------------------------------------------
+    def open_radio(self, model: RadioModel, on_change: Callable[[float, list[tuple[Pair, bool]]], None]) -> None:
+        """Compute radio links with ``model`` after every advance of the clock (every STEP in
+        lock-step, else at most every RADIO_INTERVAL_S); ``on_change(time, [(pair, holds)])``
+        is called on the simulation thread for the watched pairs whose state changed.  Call
+        before :meth:`start`."""
+        net = RadioNet(model)
+        net.min_interval_s = 0.0 if self.lockstep else RADIO_INTERVAL_S
+        net.on_change = on_change
+        self._radio = net
+        self.sim.on_advance(net.evaluate)
+
+    def radio_watch(self, pairs: frozenset[Pair]) -> None:
+        """The pairs whose links are evaluated after every advance (replaced as a whole)."""
+        self._net().watched = frozenset(pairs)
+
+    def radio_check(self, a: str, b: str, on_done: Done) -> None:
+        """``on_done((time, Link | None))`` for a link about to be opened; a state that differs
+        from the one last reported is reported at once."""
+        net = self._net()
+        self.runner.submit(Request(lambda sim: (sim.time, net.check(sim, a, b)), immediate=True, on_done=on_done))
+
+    def radio_link(self, a: str, b: str, on_done: Done) -> None:
+        """``on_done(Link | None)``: the link between two robots now."""
+        net = self._net()
+        self.runner.submit(Request(lambda sim: net.link(sim, a, b), immediate=True, on_done=on_done))
+
+    def robot_positions(self, on_done: Done) -> None:
+        """``on_done([(name, location, battery empty), ...])`` for every robot."""
+        self.runner.submit(Request(RadioNet.positions, immediate=True, on_done=on_done))
+
+    def walls_between_robots(self, a: str, b: str, on_done: Done) -> None:
+        """``on_done(n)``: walls between two robots (-1: either is unknown)."""
+        self.runner.submit(Request(lambda sim: RadioNet.walls_between_robots(sim, a, b), immediate=True,
+                                   on_done=on_done))
+
+    def walls_between(self, start, end, on_done: Done) -> None:
+        """``on_done(n)``: walls between two points of the world (USARSim frame)."""
+        self.runner.submit(Request(lambda sim: RadioNet.walls_between(sim, start, end), immediate=True,
+                                   on_done=on_done))
+
+    def _net(self) -> RadioNet:
+        if self._radio is None:
+            raise RuntimeError("open_radio() first")
+        return self._radio
+
+    # Tools, tests and benchmarks ---------------------------------------------------
+    def call(self, fn: Callable[[Simulation], Any], on_done: Done | None = None, immediate: bool = True) -> None:
+        """Run ``fn(sim)`` on the simulation thread (tools, tests, benchmarks; not servers)."""
         self.runner.submit(Request(fn, immediate=immediate, on_done=on_done))
+
+
+__all__ = ["Link", "SimFacade"]

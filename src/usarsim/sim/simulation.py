@@ -26,6 +26,7 @@ from usarsim.readings import CommandResult, EffecterState, PackageState, RobotSt
 from usarsim.sensors import Sensor, make_sensor
 from usarsim.sim import builder, frames
 from usarsim.sim.entities import Entities
+from usarsim.sim.outputs import ItemDescription, Output
 from usarsim.sim.view import RayCaster, RobotHandle, WorldView
 
 log = logging.getLogger("usarsim.sim")
@@ -81,21 +82,6 @@ def sane_velocity(robot: RobotConfig) -> float:
 
 # What a physics step changes: kept before each stretch of steps to replay it on a blow-up.
 STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
-
-
-@dataclass(frozen=True, slots=True)
-class Output:
-    """One message-worth of data for the client that owns robot ``uid``.
-
-    ``key`` identifies the periodic stream (``STA``, ``SEN:Sonar``, ``SEN:RangeScanner:Scanner1``)
-    for latest-wins dropping; ``periodic`` is False for replies that must not be dropped.
-    """
-
-    uid: int
-    time: float | None
-    value: Any
-    key: str
-    periodic: bool = True
 
 
 @dataclass(eq=False)
@@ -166,18 +152,6 @@ class SimRobot:
 
     def battery_left(self, now: float | None = None) -> float:
         return max(0.0, self.config.battery_s - self.battery_used_s)
-
-
-@dataclass(frozen=True)
-class ItemDescription:
-    """What GETGEO/GETCONF report for one mounted item."""
-
-    item_type: str
-    name: str
-    location: tuple[float, float, float]
-    orientation: tuple[float, float, float]
-    mount: str
-    conf: tuple[tuple[str, Any], ...]
 
 
 def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:
