@@ -387,3 +387,43 @@ def gl_problem() -> str:
     t.start()
     t.join(60)
     return box.get("ok", "the OpenGL probe did not finish")
+
+
+# Driving a robot of a Simulation directly (on its own thread, no server): the typed DRIVE
+# commands of usarsim.controls, as the protocol makes them from DRIVE lines.
+
+def drive_skid(sim, uid: int, left, right, normalized: bool = False, light=None) -> None:
+    """``DRIVE {Left} {Right}``."""
+    from usarsim.controls import DriveCommand, WheelSpeeds
+
+    sim.drive(uid, DriveCommand(parts=(WheelSpeeds(left, right),), normalized=normalized, light=light))
+
+
+def drive_velocities(sim, uid: int, altitude, linear, lateral, rotational, normalized: bool = False) -> None:
+    """``DRIVE {AltitudeVelocity} {LinearVelocity} {LateralVelocity} {RotationalVelocity}``."""
+    from usarsim.controls import DriveCommand, Velocities
+
+    sim.drive(uid, DriveCommand(parts=(Velocities(altitude, linear, lateral, rotational),), normalized=normalized))
+
+
+def drive_ackermann(sim, uid: int, speed, front, rear, normalized: bool = False) -> None:
+    """``DRIVE {Speed} {FrontSteer} {RearSteer}``."""
+    from usarsim.controls import AckermannDrive, DriveCommand
+
+    sim.drive(uid, DriveCommand(parts=(AckermannDrive(speed, front, rear),), normalized=normalized))
+
+
+def drive_wheels(sim, uid: int, wheels, normalized: bool = False) -> None:
+    """``DRIVE {WheelNumber n} {WheelSpeed v} {WheelSteer a} ...``: ``wheels`` as (n, v, a)."""
+    from usarsim.controls import DriveCommand, SteeredWheel, SteeredWheels
+
+    sim.drive(uid, DriveCommand(parts=(SteeredWheels(tuple(SteeredWheel(*w) for w in wheels)),),
+                                normalized=normalized))
+
+
+def drive_joint(sim, uid: int, name: str, value: float, order: int = 0) -> bool:
+    """A joint order; False when the robot has no such joint (or no power)."""
+    from usarsim.sim import joints
+
+    r = sim.robots.get(uid)
+    return r is not None and joints.order(sim, r, name, value, order)

@@ -226,7 +226,7 @@ def run_camera_bench(args) -> int:
             # context), from a snapshot of the same scene
             snap_box = {}
             done = threading.Event()
-            app.facade.call(lambda s: s.render_snapshot(), on_done=lambda r, e: (snap_box.update(r=r), done.set()))
+            app.facade.call(lambda s: s.cameras.render_snapshot(), on_done=lambda r, e: (snap_box.update(r=r), done.set()))
             done.wait(30)
             snap = snap_box["r"]
             jobs: "queue.Queue[int | None]" = queue.Queue()

@@ -20,6 +20,7 @@ from usarsim.protocol.messages import SensorMessage, format_message, parse_messa
 from usarsim.sensors import SENSORS
 from usarsim.sim.builder import robot_model_summary
 from usarsim.sim.simulation import Simulation, describe_items
+from helpers import drive_joint, drive_skid
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
 WORLD_FILES = sorted(WORLDS_DIR.glob("*.yaml"))
@@ -118,7 +119,7 @@ def _probe_run(tmp_path, sensor_type: str, seed: int, seconds: float):
     start = world.start_poses[0]
     sim = Simulation(world, seed=seed)
     sim.spawn(1, robot, "R1", start.location, start.rotation)
-    sim.drive_skid(1, 1.0, 1.2)  # moving, so that readings change
+    drive_skid(sim, 1, 1.0, 1.2)  # moving, so that readings change
     sim.advance(seconds)
     return robot, sim, [o for o in sim.take_outputs() if o.key != "STA" and not o.key.startswith("MISSTA")]
 
@@ -187,7 +188,7 @@ def test_every_camera_robot_pans_and_tilts_its_camera(path: Path, test_world):
     for name, value in ((pan, 0.3), (tilt, 0.2)):
         ln = robot.link(name)
         reach[name] = max(min(value, ln.max_range), ln.min_range) if ln.limited else value
-        assert sim.drive_joint(1, name, value)
+        assert drive_joint(sim, 1, name, value)
     sim.advance(0.3 / min(robot.link(pan).max_speed, robot.link(tilt).max_speed) + 1.0)
     yaw1, pitch1 = view()
     assert reach[tilt] > 0.1, "the camera tilts"

@@ -14,6 +14,7 @@ from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
 from usarsim.protocol import messages as M
 from usarsim.sim.simulation import Simulation
+from helpers import drive_ackermann, drive_skid, drive_velocities, drive_wheels
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
 WORLD_FILES = sorted(WORLDS_DIR.glob("*.yaml"))
@@ -142,17 +143,17 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     radius = robot.geometry.wheel_radius_m
     if robot.drive == "aerial":  # m/s: "spin" x "radius" is the linear speed
         spin, radius = 0.5 * robot.aerial.max_linear_m_s, 1.0
-        sim.drive_aerial(1, None, spin, None, None)
+        drive_velocities(sim, 1, None, spin, None, None)
     elif robot.drive == "legged":
         spin, radius = 0.5 * robot.gait.max_linear_m_s, 1.0
-        sim.drive_aerial(1, None, spin, None, None)
+        drive_velocities(sim, 1, None, spin, None, None)
     elif robot.drive == "skid":
-        sim.drive_skid(1, spin, spin)
+        drive_skid(sim, 1, spin, spin)
     elif robot.drive == "ackermann":
-        sim.drive_ackermann(1, spin, 0.0, 0.0)
+        drive_ackermann(sim, 1, spin, 0.0, 0.0)
     else:
         drive = [(w.number, spin, 0.0) for w in robot.wheels if w.number >= 0]
-        sim.drive_wheels(1, drive)
+        drive_wheels(sim, 1, drive)
     # time to reach the speed: at least 3 s, more for a fast car accelerating at 0.3 g
     sim.advance(max(3.0, spin * radius / (0.3 * 9.81) + 1.0))
     (x0, y0, _), _ = sim.pose_of(1)
@@ -162,15 +163,15 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     assert abs(y1 - y0) < 0.1 * spin * radius + 0.01 and abs(math.remainder(yaw, 2 * math.pi)) < 0.15
     # turning left: yaw decreases (protocol.md 3)
     if robot.drive == "skid":
-        sim.drive_skid(1, -0.3 * robot.max_speed_rad_s, 0.3 * robot.max_speed_rad_s)
+        drive_skid(sim, 1, -0.3 * robot.max_speed_rad_s, 0.3 * robot.max_speed_rad_s)
     elif robot.drive == "aerial":
-        sim.drive_aerial(1, None, None, None, -0.5 * robot.aerial.max_yaw_rate_rad_s)
+        drive_velocities(sim, 1, None, None, None, -0.5 * robot.aerial.max_yaw_rate_rad_s)
     elif robot.drive == "legged":
-        sim.drive_aerial(1, None, 0.0, None, -0.5 * robot.gait.max_yaw_rate_rad_s)
+        drive_velocities(sim, 1, None, 0.0, None, -0.5 * robot.gait.max_yaw_rate_rad_s)
     elif robot.drive == "ackermann":
-        sim.drive_ackermann(1, None, -0.5 * robot.max_front_steer_rad, None)
+        drive_ackermann(sim, 1, None, -0.5 * robot.max_front_steer_rad, None)
     else:
-        sim.drive_wheels(1, [(w.number, (-spin if w.side == "left" else spin), 0.0)
+        drive_wheels(sim, 1, [(w.number, (-spin if w.side == "left" else spin), 0.0)
                              for w in robot.wheels if w.number >= 0])
     sim.advance(1.0)
     _, (_, _, y_a) = sim.pose_of(1)

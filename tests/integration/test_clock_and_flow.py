@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from helpers import segments, wait_for
+from helpers import drive_skid, segments, wait_for
 
 INIT = "INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}"
 
@@ -100,7 +100,7 @@ def test_when_the_battery_runs_out_the_robot_stops(test_world):
     sim = Simulation(test_world, seed=1)
     pose = test_world.start_pose("Open")
     sim.spawn(1, robot, "R1", pose.location, pose.rotation)
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     sim.advance(2.0)
     x_moving = sim.pose_of(1)[0][0]
     assert x_moving > pose.location[0] + 0.3  # it drove
@@ -114,7 +114,7 @@ def test_when_the_battery_runs_out_the_robot_stops(test_world):
     dead_at = next(o.time for o in sta if o.value.battery_s == 0)
     assert not [o for o in outs if o.key != "STA" and o.time is not None and o.time > dead_at + 1e-9]
     x_dead = sim.pose_of(1)[0][0]
-    sim.drive_skid(1, 3.0, 3.0)  # ignored: no power
+    drive_skid(sim, 1, 3.0, 3.0)  # ignored: no power
     sim.advance(2.0)
     assert abs(sim.pose_of(1)[0][0] - x_dead) < 0.02
 
@@ -130,7 +130,7 @@ def test_the_battery_drains_faster_under_load_and_then_only_sta_flows(test_world
         sim.spawn(uid, robot, f"R{uid}", p.location, p.rotation)
     sim.advance(1.0)
     idle0, busy0 = sim.robots[1].battery_used_s, sim.robots[2].battery_used_s
-    sim.drive_skid(2, 5.0, -5.0)  # spinning on the spot at full speed: hard work for the motors
+    drive_skid(sim, 2, 5.0, -5.0)  # spinning on the spot at full speed: hard work for the motors
     sim.advance(10.0)
     idle = sim.robots[1].battery_used_s - idle0
     busy = sim.robots[2].battery_used_s - busy0

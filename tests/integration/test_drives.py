@@ -10,7 +10,7 @@ import re
 
 import pytest
 
-from helpers import ground_truth, segments
+from helpers import drive_velocities, ground_truth, segments
 
 TEST_CAR = """\
 class_name: TestCar
@@ -305,7 +305,7 @@ def test_the_humanoid_keeps_its_feet_under_changing_commands(test_world):
     rng = random.Random(7)
     worst = 0.0
     for _ in range(12):
-        sim.drive_aerial(1, None, rng.uniform(-0.1, 0.1), rng.choice([0.0, rng.uniform(-0.02, 0.02)]),
+        drive_velocities(sim, 1, None, rng.uniform(-0.1, 0.1), rng.choice([0.0, rng.uniform(-0.02, 0.02)]),
                          rng.choice([0.0, rng.uniform(-0.4, 0.4)]))
         for _ in range(rng.choice([2, 7, 15])):
             sim.advance(0.2)

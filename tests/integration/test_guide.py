@@ -14,6 +14,7 @@ import pytest
 from usarsim.config.catalog import resolve_robot
 from usarsim.config.world import load_world
 from usarsim.sim.simulation import Simulation
+from helpers import drive_skid
 
 GUIDE = Path(__file__).resolve().parents[2] / "docs" / "building-worlds.md"
 
@@ -50,10 +51,10 @@ def test_a_robot_drives_through_the_doorway_and_up_the_ramp(arena):
     sim.spawn(3, p2at, "Climber", (2.2, -1.5, -0.25), (0.0, 0.0, 0.0))  # before the ramp's foot
     sim.advance(1.0)
     (_, _, z0), _ = sim.pose_of(3)
-    sim.drive_skid(1, 3.0, 3.0)  # Start1 faces the doorway
-    sim.drive_skid(3, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)  # Start1 faces the doorway
+    drive_skid(sim, 3, 3.0, 3.0)
     sim.advance(10.0)
-    sim.drive_skid(3, 0.0, 0.0)
+    drive_skid(sim, 3, 0.0, 0.0)
     (x3, _, z3), (_, pitch, _) = sim.pose_of(3)
     sim.advance(4.0)
     (x1, y1, _), _ = sim.pose_of(1)

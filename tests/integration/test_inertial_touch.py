@@ -15,7 +15,7 @@ import pytest
 
 import usarsim.sensors.inertial  # noqa: F401  (registration)
 import usarsim.sensors.touch  # noqa: F401  (registration)
-from helpers import WALL_FACE_X
+from helpers import WALL_FACE_X, drive_skid
 from usarsim.config.catalog import ROBOTS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
 from usarsim.errors import ConfigError
@@ -119,7 +119,7 @@ def angle_err(a, b) -> np.ndarray:
 
 def test_tachometer_wheel_speeds_angles_and_reset(test_world, probe):
     sim = spawned(test_world, probe)
-    sim.drive_skid(1, 2.0, 2.0)
+    drive_skid(sim, 1, 2.0, 2.0)
     tach = of(run(sim, 2.0), TachometerReading)
     assert len(tach) == 10  # ScanInterval 0.2 (protocol.md 7.5)
     (t1, a), (t2, b) = tach[4], tach[-1]
@@ -130,7 +130,7 @@ def test_tachometer_wheel_speeds_angles_and_reset(test_world, probe):
     assert all(p > 2.5 for p in b.positions_rad)
 
     # turning in place to the left: left wheels (LeftFWheel, LeftRWheel) back, right ones forward
-    sim.drive_skid(1, -1.0, 1.0)
+    drive_skid(sim, 1, -1.0, 1.0)
     turn = of(run(sim, 1.0), TachometerReading)[-1][1]
     v = turn.velocities_rad_s
     assert v[0] < -0.5 and v[2] < -0.5 and v[1] > 0.5 and v[3] > 0.5
@@ -139,7 +139,7 @@ def test_tachometer_wheel_speeds_angles_and_reset(test_world, probe):
     res = sim.operate(1, "Tachometer", "TachTest", "RESET", None)
     assert res.status == "OK"
     assert sim.operate(1, "Tachometer", "TachTest", "SCAN", None).status == "Failed"
-    sim.drive_skid(1, 0.0, 0.0)
+    drive_skid(sim, 1, 0.0, 0.0)
     after = of(run(sim, 0.4), TachometerReading)
     assert max(abs(p) for p in after[0][1].positions_rad) < 0.25  # at most one 0.2 s tick of turning
 
@@ -161,7 +161,7 @@ def test_imu_at_rest_reads_gravity_up_and_no_rotation(test_world, probe):
 
 def test_imu_forward_acceleration_and_yaw_rate(test_world, probe):
     sim = spawned(test_world, probe)
-    sim.drive_skid(1, 2.0, 2.0)
+    drive_skid(sim, 1, 2.0, 2.0)
     outs = run(sim, 1.0)
     imu = of(outs, ImuReading)
     ax = [r.acceleration[0] for _, r in imu]
@@ -170,7 +170,7 @@ def test_imu_forward_acceleration_and_yaw_rate(test_world, probe):
     assert max(abs(r.acceleration[1]) for _, r in imu) < 0.05
 
     # spinning to the left: yaw decreases (positive yaw is clockwise, protocol.md section 3)
-    sim.drive_skid(1, -2.0, 2.0)
+    drive_skid(sim, 1, -2.0, 2.0)
     outs = run(sim, 2.0)
     imu = of(outs, ImuReading)[5:]  # past the spin-up
     gt = dict(of(outs, PoseReading, "GroundTruth"))
@@ -190,7 +190,7 @@ def test_imu_forward_acceleration_and_yaw_rate(test_world, probe):
 
 def test_imu_off_centre_and_rotated_mount(test_world, imu_pair):
     sim = spawned(test_world, imu_pair)
-    sim.drive_skid(1, -5.0, 5.0)  # spin in place, fast
+    drive_skid(sim, 1, -5.0, 5.0)  # spin in place, fast
     sim.advance(1.0)
     sim.take_outputs()
     imu = of(run(sim, 3.0), ImuReading)
@@ -216,7 +216,7 @@ def test_imu_off_centre_and_rotated_mount(test_world, imu_pair):
 
 def test_inu_is_the_ground_truth_orientation(test_world, probe):
     sim = spawned(test_world, probe, pose="OpenEast")
-    sim.drive_skid(1, 3.0, 1.0)  # a right-hand curve
+    drive_skid(sim, 1, 3.0, 1.0)  # a right-hand curve
     outs = run(sim, 2.0)
     inu = of(outs, OrientationReading)
     gt = dict(of(outs, PoseReading, "GroundTruth"))
@@ -239,7 +239,7 @@ def test_touch_bumper_against_the_wall(test_world, probe):
     assert [i.name for i in first.items] == ["Bumper", "Inside", "Belly", "Reach"]
     assert touches(first) == {"Bumper": False, "Inside": False, "Belly": True, "Reach": False}
 
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     last_x = sim.pose_of(1)[0][0]
     for _ in range(40):  # until it stops against the wall
         sim.advance(0.5)
@@ -252,7 +252,7 @@ def test_touch_bumper_against_the_wall(test_world, probe):
     assert touches(at_wall)["Bumper"] is True
     assert touches(at_wall)["Inside"] is False
 
-    sim.drive_skid(1, -3.0, -3.0)
+    drive_skid(sim, 1, -3.0, -3.0)
     backed = of(run(sim, 1.5), TouchReading)[-1][1]
     assert sim.pose_of(1)[0][0] < WALL_FACE_X - 0.6
     # (Reach, 0.8 m ahead, is now in the 0.1 m thick wall: not asserted here)
@@ -307,7 +307,7 @@ def test_signed_distances(gtype, size, point, expected):
 
 def noisy_run(world, robot, seed: int) -> list:
     sim = spawned(world, robot, seed=seed)
-    sim.drive_skid(1, 2.0, 2.0)
+    drive_skid(sim, 1, 2.0, 2.0)
     sim.advance(1.0)  # spin-up
     sim.take_outputs()
     return run(sim, 8.0)
@@ -413,7 +413,7 @@ LINE_SHAPES = {
 
 def test_sen_lines_have_the_spec_shape_and_parse_back(test_world, probe):
     sim = spawned(test_world, probe, settle=0.5)
-    sim.drive_skid(1, -1.0, 1.5)
+    drive_skid(sim, 1, -1.0, 1.5)
     outs = run(sim, 0.6)
     seen = set()
     for t, r in outs:

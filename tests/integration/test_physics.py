@@ -14,6 +14,7 @@ import pytest
 
 from helpers import (
     RIGHT_WALL_FACE_Y,
+    drive_skid,
     WALL_FACE_X,
     angle_diff,
     ground_truth,
@@ -237,7 +238,7 @@ def _twin(test_world, perturb: bool):
         sim.spawn(uid, robot, f"R{uid}", p.location, p.rotation)
     sim.advance(1.0)
     for uid in (1, 2):
-        sim.drive_skid(uid, 2.0, 1.0)
+        drive_skid(sim, uid, 2.0, 1.0)
     sim.advance(1.0)
     if perturb:  # robot 1 blows up: its chassis spins at an absurd rate
         h = sim.robots[1].handle

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from usarsim.sim.view import RayCaster
+from usarsim.sim.raycaster import RayCaster
 
 SHAPES = """<mujoco><worldbody>
 <geom name="floor" type="plane" size="3 3 0.1"/>

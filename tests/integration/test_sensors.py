@@ -13,7 +13,7 @@ import re
 import numpy as np
 import pytest
 
-from helpers import WALL_FACE_X, ground_truth, segment_list, segments, sensor_lines, vec
+from helpers import WALL_FACE_X, drive_skid, ground_truth, segment_list, segments, sensor_lines, vec
 from usarsim.config.catalog import resolve_robot
 from usarsim.readings import EncoderReading, PoseReading, RangeReading, RangeScanReading
 from usarsim.sim.simulation import Simulation
@@ -85,7 +85,7 @@ def test_sonar_noise_is_bounded_and_max_range_is_exact(test_world, p2at):
 
 def test_ground_truth_is_the_exact_pose(test_world, p2at):
     sim = at_wall(test_world, p2at, seed=1)
-    sim.drive_skid(1, -1.0, 1.0)
+    drive_skid(sim, 1, -1.0, 1.0)
     sim.advance(0.9)
     sim.take_outputs()
     sim.advance(0.1)  # to t = 2.0: one GroundTruth, at the end
@@ -107,7 +107,7 @@ def test_ins_follows_the_truth_with_noise(test_world, p2at):
     sim.spawn(1, p2at, "R1", pose.location, pose.rotation)
     sim.advance(1.0)  # at rest: the INS starts integrating
     sim.take_outputs()
-    sim.drive_skid(1, 3.0, 2.5)  # a gentle right-hand curve
+    drive_skid(sim, 1, 3.0, 2.5)  # a gentle right-hand curve
     sim.advance(4.0)
     outs = sim.take_outputs()
     ins = [o.value for o in outs if isinstance(o.value, PoseReading) and o.value.sensor_type == "INS"]
@@ -126,7 +126,7 @@ def test_ins_follows_the_truth_with_noise(test_world, p2at):
 
 def test_encoders_count_wheel_turns(test_world, p2at):
     sim = at_wall(test_world, p2at, seed=1)
-    sim.drive_skid(1, -2.0, -2.0)  # backwards, away from the wall
+    drive_skid(sim, 1, -2.0, -2.0)  # backwards, away from the wall
     enc = readings(sim, EncoderReading, 2.0)
     last = {i.name: i.tick for i in enc[-1].items}
     assert list(last) == ["ECLeft", "ECRight"]

@@ -22,7 +22,8 @@ from usarsim.readings import RangeReading, RangeScanReading
 from usarsim.sim import builder
 from usarsim.sim.entities import Entities
 from usarsim.sim.simulation import Simulation
-from usarsim.sim.view import RayCaster
+from usarsim.sim.raycaster import RayCaster
+from helpers import drive_skid
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 REST_Z = -0.1455  # P2AT chassis origin above the floor (Z down)
@@ -251,7 +252,7 @@ def test_a_grid_fence_lets_its_porosity_through_repeatably(world, probe):
 
 def test_a_robot_does_not_drive_through_a_grid_fence(world):
     sim = settled(world, resolve_robot("P2AT"), "Fence")
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     sim.advance(8.0)  # 0.39 m/s for 8 s: 3 m if nothing stopped it
     x = sim.pose_of(1)[0][0]
     assert x < 2.985 - 0.2  # the chassis front (0.26 m ahead of its origin) pushes on the fence
@@ -264,12 +265,12 @@ def test_a_p2at_drives_up_a_ramp_onto_the_deck(world):
     sim = settled(world, resolve_robot("P2AT"), "Ramp")
     (x0, y0, z0), _ = sim.pose_of(1)
     assert z0 == pytest.approx(REST_Z, abs=0.01)
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     zs = []
     for _ in range(28):  # 14 s at 0.39 m/s: about 5.5 m, from the floor up the ramp onto the deck
         sim.advance(0.5)
         zs.append(sim.pose_of(1)[0][2])
-    sim.drive_skid(1, 0.0, 0.0)
+    drive_skid(sim, 1, 0.0, 0.0)
     sim.advance(1.0)
     (x1, y1, z1), (roll, pitch, _) = sim.pose_of(1)
     assert 4.6 < x1 < 7.2 and abs(y1 - y0) < 0.3  # on the deck
@@ -322,7 +323,7 @@ def test_a_turned_and_scaled_mesh(mesh_world, probe):
 
 def test_a_robot_does_not_drive_through_a_mesh_wall(mesh_world):
     sim = settled(mesh_world, resolve_robot("P2AT"), "Wedge")
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     sim.advance(8.0)  # 0.39 m/s for 8 s: 3 m if nothing stopped it
     x = sim.pose_of(1)[0][0]
     assert 2.4 < x < 3.0 - 0.2  # the chassis front (0.26 m ahead of its origin) against the back face

@@ -13,7 +13,7 @@ import re
 import numpy as np
 import pytest
 
-from helpers import segments
+from helpers import drive_skid, segments
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
 from usarsim.readings import (RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading)
@@ -514,7 +514,7 @@ def test_an_item_mounted_on_a_wheel_turns_with_it(world, tmp_path):
     (desc,) = describe_items(robot)
     assert desc.mount == "LeftFWheel"
     sim = settled(world, robot, "Victim")
-    sim.drive_skid(1, 0.8, 0.8)  # 0.8 rad/s: a quarter turn in 2 s, readings every 0.2 s
+    drive_skid(sim, 1, 0.8, 0.8)  # 0.8 rad/s: a quarter turn in 2 s, readings every 0.2 s
     ranges = [r.items[0].range_m for r in values(sim, RangeReading, 8.0)]
     assert len(ranges) == 40
     assert min(ranges) < 0.2  # pointing (nearly) straight down: the floor right under the hub

@@ -10,6 +10,7 @@ import pytest
 
 from usarsim.config.catalog import resolve_robot, resolve_world
 from usarsim.sim.simulation import Simulation
+from helpers import drive_skid
 
 
 def test_a_p2at_climbs_the_orange_ramp_to_the_upper_level():
@@ -21,7 +22,7 @@ def test_a_p2at_climbs_the_orange_ramp_to_the_upper_level():
     sim.spawn(1, resolve_robot("P2AT"), "R1", (-3.2, -10.0, -0.25), (0.0, 0.0, 0.0))
     sim.advance(1.0)
     (_, _, z_floor), _ = sim.pose_of(1)
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     steepest = 0.0
     for _ in range(20):
         sim.advance(1.0)
@@ -44,7 +45,7 @@ def test_a_robot_pushes_the_brick_in_its_way():
     sim.spawn(1, resolve_robot("P2AT"), "R1", pose.location, pose.rotation, set_down=True)
     sim.advance(1.0)
     (before,) = sim.truth("MovableObject", "brick_foyer")
-    sim.drive_skid(1, 3.0, 3.0)
+    drive_skid(sim, 1, 3.0, 3.0)
     sim.advance(22.0)
     (after,) = sim.truth("MovableObject", "brick_foyer")
     (x, y, _), _ = sim.pose_of(1)
@@ -64,7 +65,7 @@ def test_paper_on_the_orange_floor_is_slippery():
         sim = Simulation(world, seed=0)
         sim.spawn(1, resolve_robot("P2AT"), "R", (x, y, -0.3), (0.0, 0.0, 0.0))
         sim.advance(1.0)
-        sim.drive_skid(1, -3.0, 3.0)
+        drive_skid(sim, 1, -3.0, 3.0)
         sim.advance(1.0)
         _, (_, _, a0) = sim.pose_of(1)
         sim.advance(1.0)

@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from usarsim.config.reader import did_you_mean
-from usarsim.errors import ConfigError, PluginNotFoundError
+from usarsim.errors import ConfigError
+from usarsim.registry import Registry
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
@@ -138,40 +139,6 @@ class Sensor:
             self._ubuf, i = buf, 0
         self._upos = i + k
         return buf[i:i + k]
-
-
-class Registry:
-    """Plugins registered under their USARSim type name, looked up case-insensitively."""
-
-    def __init__(self, kind: str):
-        self.kind = kind
-        self._by_lower: dict[str, type] = {}
-        self._canonical: dict[str, str] = {}
-
-    def register(self, name: str, *aliases: str):
-        def deco(cls):
-            cls.TYPE = name
-            for n in (name, *aliases):
-                self._by_lower[n.lower()] = cls
-                self._canonical[n.lower()] = name
-            return cls
-
-        return deco
-
-    def names(self) -> list[str]:
-        return sorted(set(self._canonical.values()))
-
-    def canonical(self, name: str) -> str | None:
-        return self._canonical.get(name.lower())
-
-    def get(self, name: str) -> type:
-        cls = self._by_lower.get(name.lower())
-        if cls is None:
-            raise PluginNotFoundError(f"unknown {self.kind} type '{name}'{did_you_mean(name, self.names())}")
-        return cls
-
-    def __contains__(self, name: str) -> bool:
-        return name.lower() in self._by_lower
 
 
 SENSORS = Registry("sensor")

@@ -10,7 +10,6 @@ from usarsim.server.image import CameraBindings, ImageServer, ImageSettings
 from usarsim.server.truth import TruthServer
 from usarsim.server.wireless import WirelessOptions, WirelessServers
 from usarsim.sim.facade import SimFacade
-from usarsim.sim.render import RenderService
 
 log = logging.getLogger("usarsim")
 
@@ -39,13 +38,10 @@ class Application:
         self.image_settings = image or ImageSettings()
         self.image = None
         if image_port is not None:
-            facade = self.facade
-            renderer = RenderService(
-                lambda reuse, done: facade.call(lambda sim: sim.render_snapshot(reuse), on_done=done),
-                max_fps=self.image_settings.max_fps)
+            renderer = self.facade.render_service(self.image_settings.max_fps)
             self.image = ImageServer(renderer, self.camera_bindings, self.image_settings, host=host, port=image_port,
                                      max_connections=max_viewers)
-        self.facade.sim.multiview_cameras = self.image_settings.camera_num  # before its thread starts
+        self.facade.set_multiview_cameras(self.image_settings.camera_num)  # before its thread starts
         # the wireless simulation (protocol.md 12): ComServer, WSS, ComServerInterface; None: not served
         self.wireless = WirelessServers(self.facade, wireless, host=host) if wireless is not None else None
         # the operator console in the browser (usarsim.web), a client of the listeners above;

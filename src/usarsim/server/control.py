@@ -22,7 +22,7 @@ from usarsim.protocol.framing import LineBuffer
 from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus, ZoomResult
 from usarsim.server.session import CLOSED, Session
 from usarsim.sim.facade import SimFacade
-from usarsim.sim.simulation import Output
+from usarsim.sim.types import Output
 
 log = logging.getLogger("usarsim.server")
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from usarsim.server.listener import ReadGate, TcpListener
-from usarsim.sim.render import RenderService, Tile, grid_tiles
+from usarsim.sim.types import Tile, grid_tiles
 
 log = logging.getLogger("usarsim.server")
 
@@ -211,7 +211,7 @@ class ImageConnection(asyncio.Protocol):
 
 
 class ImageServer(TcpListener):
-    def __init__(self, renderer: RenderService, bindings: CameraBindings, settings: ImageSettings | None = None, *,
+    def __init__(self, renderer, bindings: CameraBindings, settings: ImageSettings | None = None, *,
                  host: str = "127.0.0.1", port: int = 5003, max_connections: int = 16):
         super().__init__(host, port)
         self.renderer = renderer

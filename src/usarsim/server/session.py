@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Callable
 
 from usarsim.config.catalog import resolve_robot
 from usarsim.config.robot import RobotConfig
+from usarsim.controls import JointOrder
 from usarsim.errors import ConfigError, ProtocolError
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
@@ -189,28 +190,15 @@ class Session:
         if self.state not in (SPAWNING, ALIVE):
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
-        if cmd.flip:
-            self.facade.flip(self.uid)
-        skid = cmd.left is not None or cmd.right is not None
-        ackermann = cmd.speed is not None or cmd.front_steer is not None or cmd.rear_steer is not None
-        if ackermann:
-            self.facade.drive_ackermann(self.uid, cmd.speed, cmd.front_steer, cmd.rear_steer, bool(cmd.normalized),
-                                        cmd.light)
-        elif any(v is not None for v in (cmd.altitude_velocity, cmd.linear_velocity, cmd.lateral_velocity,
-                                         cmd.rotational_velocity)):
-            self.facade.drive_aerial(self.uid, cmd.altitude_velocity, cmd.linear_velocity, cmd.lateral_velocity,
-                                     cmd.rotational_velocity, bool(cmd.normalized), cmd.light)
-        elif any(v is not None for v in (cmd.propeller, cmd.rudder, cmd.stern_plane)):
-            self.facade.drive_nautical(self.uid, cmd.propeller, cmd.rudder, cmd.stern_plane, bool(cmd.normalized),
-                                       cmd.light)
-        elif cmd.wheels:
-            self.facade.drive_wheels(self.uid, [(w.number, w.speed, w.steer) for w in cmd.wheels],
-                                     bool(cmd.normalized), cmd.light)
-        elif skid or cmd.light is not None:
-            self.facade.drive_skid(self.uid, cmd.left, cmd.right, bool(cmd.normalized), cmd.light)
-        joints = [(j.name, j.value, j.order) for j in cmd.joints if j.value is not None]
-        if joints:
-            self.facade.drive_joints(self.uid, joints)
+        command = cmd.command()
+        if self.robot is not None and command.parts:
+            accepts = self.facade.drive_accepts(self.robot)
+            for part in command.parts:
+                if type(part) not in accepts:
+                    kind = type(part).__name__
+                    self.log_once(f"drive-part:{kind}", "DRIVE: a %s robot (drive %s) ignores %s keys",
+                                  self.robot.class_name, self.robot.drive, kind, level=logging.INFO)
+        self.facade.drive(self.uid, command)
 
     def _alive(self) -> bool:
         if self.state not in (SPAWNING, ALIVE):
@@ -221,7 +209,7 @@ class Session:
     def on_multidrive(self, cmd: C.MultiDrive) -> None:
         """``MULTIDRIVE {Joint angle} ...``: absolute angles (protocol.md 5.3g)."""
         if self._alive() and cmd.joints:
-            self.facade.drive_joints(self.uid, [(name, value, 0) for name, value in cmd.joints])
+            self.facade.drive_joints(self.uid, [JointOrder(name, value, 0) for name, value in cmd.joints])
 
     def on_mispkg(self, cmd: C.MisPkg) -> None:
         """``MISPKG {Name P} {Link n} {Value v} {Order o} ...`` and the older
@@ -238,14 +226,14 @@ class Session:
             if not 1 <= lc.link <= len(pkg.links):
                 self.log_once(f"mispkg-link:{lc.link}", "MISPKG %s has no link %d; ignored", pkg.name, lc.link)
                 continue
-            commands.append((pkg.links[lc.link - 1], lc.value, lc.order))
+            commands.append(JointOrder(pkg.links[lc.link - 1], lc.value, lc.order))
         if cmd.rotation is not None:
             order = cmd.order or 0
             _, tilt, pan = cmd.rotation
             if len(pkg.links) >= 1:
-                commands.append((pkg.links[0], pan, order))
+                commands.append(JointOrder(pkg.links[0], pan, order))
             if len(pkg.links) >= 2:
-                commands.append((pkg.links[1], tilt, order))
+                commands.append(JointOrder(pkg.links[1], tilt, order))
         if commands:
             self.facade.drive_joints(self.uid, commands)
 
@@ -256,7 +244,7 @@ class Session:
         pkg = self.robot.package("CameraPanTilt") if self.robot is not None else None
         if cmd.rotation is not None and pkg is not None and len(pkg.links) >= 2:
             _, tilt, pan = cmd.rotation
-            self.facade.drive_joints(self.uid, [(pkg.links[0], pan, 0), (pkg.links[1], tilt, 0)])
+            self.facade.drive_joints(self.uid, [JointOrder(pkg.links[0], pan, 0), JointOrder(pkg.links[1], tilt, 0)])
         if cmd.zoom is not None:
             self.facade.operate(self.uid, "Camera", None, "Zoom", repr(cmd.zoom))
 
@@ -356,7 +344,7 @@ class Session:
                 self.log_once("set-joint", "SET {Type Joint} needs a Name, an Opcode (Angle, Velocity, Torque, "
                                            "RelAngle, RelVelocity, RelTorque or 0/1/2/10/11/12) and a Params value")
                 return
-            self.facade.drive_joints(self.uid, [(cmd.name, parts[0], order)])
+            self.facade.drive_joints(self.uid, [JointOrder(cmd.name, parts[0], order)])
             return
         if t == "camera" and (cmd.client is not None or cmd.robot is not None):
             self.on_bind_camera(cmd)
@@ -407,8 +395,7 @@ class Session:
                 time=time_s, config=cfg or config, config_status="OK" if cfg else "Failed",
                 viewports=tuple(M.ViewportState(index=i + 1, camera=c, status=st) for i, (c, st) in enumerate(states))))
 
-        uid = self.uid
-        self.facade.call(lambda sim: (sim.time, sim.set_viewports(uid, names)), on_done=done)
+        self.facade.set_viewports(self.uid, names, on_done=done)
 
     MAX_STEP_S = 3600.0
 

@@ -90,8 +90,7 @@ class TruthConnection(asyncio.Protocol):
                 self._write(END)
                 continue
             self._busy = True
-            self.server.facade.call(lambda sim, rq=request: sim.truth(rq.class_name, rq.name),
-                                    on_done=self._answer_threadsafe)
+            self.server.facade.truth(request.class_name, request.name, on_done=self._answer_threadsafe)
 
     def _answer_threadsafe(self, rows, error) -> None:
         loop = self.server.loop

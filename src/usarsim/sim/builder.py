@@ -12,7 +12,7 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.sim import frames
-from usarsim.sim.view import GROUP_MOVABLE, GROUP_ROBOT, GROUP_STATIC, GROUP_WHEEL
+from usarsim.sim.constants import GROUP_MOVABLE, GROUP_ROBOT, GROUP_STATIC, GROUP_WHEEL, WAVE_AMPLITUDE_RAD, WAVE_PERIOD_S
 
 # Collision classes (MuJoCo contype/conaffinity bits): world geometry and chassis
 # collide with everything; wheels collide with world geometry and chassis but not
@@ -203,11 +203,9 @@ VICTIM_LYING = (
     ("Foot", "box", (-0.86, -0.10, -0.05), (0.08, 0.09, 0.22)),
     ("Foot", "box", (-0.86, 0.10, -0.05), (0.08, 0.09, 0.22)),
 )
-# The waving arm (the right one) swings about the shoulder, 0.6 rad either way, once
-# every 2 s (the manual's victims wave an arm to draw attention, section 3.2.1).
+# The waving arm (the right one) swings about the shoulder (constants.WAVE_AMPLITUDE_RAD,
+# WAVE_PERIOD_S).
 SHOULDER = (0.62, 0.24, 0.0)  # the right shoulder, victim frame
-WAVE_AMPLITUDE_RAD = 0.6
-WAVE_PERIOD_S = 2.0
 VICTIM_RGBA = [0.87, 0.68, 0.55, 1.0]
 
 
@@ -266,9 +264,16 @@ def add_victim(spec: mujoco.MjSpec, victim) -> None:
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
 
-def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation) -> mujoco.MjsBody:
+def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation,
+              drive=None) -> mujoco.MjsBody:
     """Add a robot's bodies, joints and actuators under ``prefix``; its chassis origin at
-    ``location`` (USARSim frame) with ``rotation`` (roll, pitch, yaw)."""
+    ``location`` (USARSim frame) with ``rotation`` (roll, pitch, yaw).  ``drive``, the
+    robot's drive model (:mod:`usarsim.robots`; by default its class), adds what its kind
+    needs on the chassis (an aerial robot's rotors)."""
+    if drive is None:
+        from usarsim.robots import DRIVES
+
+        drive = DRIVES.get(robot.drive)
     body = spec.worldbody.add_body()
     body.name = prefix
     body.pos = frames.to_mj_vec(location).tolist()
@@ -277,8 +282,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     root.name = f"{prefix}/root"
     for i, piece in enumerate(robot.chassis):
         _add_piece(body, f"{prefix}/chassis{i}", piece, robot)
-    if robot.drive == "aerial":
-        _add_rotors(spec, body, robot, prefix)
+    drive.build(spec, body, robot, prefix)
     # the headlight (every robot has one, protocol.md 8): a spotlight at the front of the
     # body, looking forward, off until DRIVE {Light True}
     lamp = body.add_light()
@@ -299,7 +303,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         lb.name = f"{prefix}/{ln.name}"
         lb.pos = frames.to_mj_vec(ln.location).tolist()
         lb.quat = frames.usar_euler_to_mj_quat(ln.orientation).tolist()
-        if robot.drive == "aerial":
+        if drive.GRAVITY_COMPENSATED:
             lb.gravcomp = 1.0
         j = lb.add_joint()
         j.name = f"{prefix}/{ln.name}"
@@ -419,37 +423,6 @@ def _add_chase_camera(chassis, robot: RobotConfig, prefix: str) -> None:
     cam.pos = frames.to_mj_vec(location).tolist()
     cam.quat = frames.mat_to_quat(frames.usar_euler_to_mj_mat(orientation) @ _CAMERA_AXES).tolist()
     cam.fovy = camera_fovy_deg(CHASE_FOV_RAD, 4, 3)
-
-
-# Aerial robots hover: gravity is compensated on their bodies, and velocity servos on a
-# site at the chassis origin push along and turn about its axes (forward, left, up in
-# MuJoCo's frame) with up to max_accel_m_s2 x mass; roll and pitch are damped.
-AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
-
-
-def _add_rotors(spec, body, robot, prefix: str) -> None:
-    body.gravcomp = 1.0
-    site = body.add_site()
-    site.name = f"{prefix}/rotors"
-    force = robot.aerial.max_accel_m_s2 * robot.mass_kg
-    dims = robot.geometry.dimensions
-    inertia = robot.mass_kg * (dims[0] ** 2 + dims[1] ** 2) / 12.0
-    for i, axis in enumerate(AERIAL_AXES):
-        a = spec.add_actuator()
-        a.name = f"{prefix}/{axis}"
-        a.target = f"{prefix}/rotors"
-        a.trntype = mujoco.mjtTrn.mjTRN_SITE
-        gear = [0.0] * 6
-        gear[i] = 1.0
-        a.gear = gear
-        limit = force if i < 3 else 4.0 * inertia * robot.aerial.max_yaw_rate_rad_s / 0.25
-        kv = limit / (0.25 * (robot.aerial.max_linear_m_s if i < 3 else robot.aerial.max_yaw_rate_rad_s))
-        a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-        a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-        a.gainprm[0] = kv
-        a.biasprm[0], a.biasprm[1], a.biasprm[2] = 0.0, 0.0, -kv
-        a.forcelimited = 1
-        a.forcerange = [-limit, limit]
 
 
 # Joint servo (manual 3.2.3: a joint is driven at its speed towards a target angle, with

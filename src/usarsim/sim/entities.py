@@ -16,7 +16,8 @@ import mujoco
 import numpy as np
 
 from usarsim.config.world import SEE_THROUGH_KINDS, WorldConfig
-from usarsim.sim import builder, frames
+from usarsim.sim import frames
+from usarsim.sim.constants import WAVE_AMPLITUDE_RAD, WAVE_PERIOD_S
 
 # Tag ids handed to tags dropped by an RFIDReleaser start here (world tags keep theirs).
 RELEASED_TAG_FIRST_ID = 20000
@@ -114,7 +115,7 @@ class Entities:
     def update(self, d: mujoco.MjData, time: float) -> None:
         """Move the waving victims' arms to their angle at ``time``."""
         for mocap, v in self._wavers:
-            swing = builder.WAVE_AMPLITUDE_RAD * math.sin(2.0 * math.pi * time / builder.WAVE_PERIOD_S)
+            swing = WAVE_AMPLITUDE_RAD * math.sin(2.0 * math.pi * time / WAVE_PERIOD_S)
             roll, pitch, yaw = v.rotation
             d.mocap_quat[mocap] = frames.usar_euler_to_mj_quat((roll + swing, pitch, yaw))
 

@@ -126,7 +126,7 @@ class SimFacade:
 
     def render_snapshot(self, reuse, on_done: Done) -> None:
         """A copy of the state for the render thread (``reuse``: the previous one)."""
-        self.runner.submit(Request(lambda sim: sim.cameras.render_snapshot(sim, reuse), immediate=True,
+        self.runner.submit(Request(lambda sim: sim.cameras.render_snapshot(reuse), immediate=True,
                                    on_done=on_done))
 
     def render_service(self, max_fps: float):

@@ -12,7 +12,7 @@ invisible geoms (alpha 0), excluded groups and the excluded body are skipped.
 
 Shapes: plane, sphere, capsule, ellipsoid, cylinder, box.  A model that ray casts
 would see with other shapes (meshes, height fields) is handled by ``mj_multiRay``
-in :class:`usarsim.sim.view.RayCaster`.  The kernel is compiled by numba on first
+in :class:`usarsim.sim.raycaster.RayCaster`.  The kernel is compiled by numba on first
 use and cached on disk.
 """
 

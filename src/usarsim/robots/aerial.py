@@ -1,0 +1,88 @@
+"""Aerial robots (protocol.md 5.3d): the AirRobot, helicopters, airships.
+
+They hover: gravity is compensated on their bodies, and velocity servos on a site at the
+chassis origin push along and turn about its axes (forward, left, up in MuJoCo's frame)
+with up to ``max_accel_m_s2`` x mass; roll and pitch are damped, and the levelling system
+(:mod:`usarsim.sim.systems.levelling`) keeps them upright.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+
+from usarsim.config.robot import RobotConfig
+from usarsim.controls import Velocities
+from usarsim.robots.base import DRIVES, DriveModel, clamp
+
+AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
+
+
+@DRIVES.register("aerial")
+class Aerial(DriveModel):
+    """``DRIVE {AltitudeVelocity} {LinearVelocity} {LateralVelocity} {RotationalVelocity}``:
+    m/s up, forward, right and rad/s clockwise; unsent ones keep their value; limited to
+    the robot's maxima (percentages of them when Normalized); all zero: hover."""
+
+    ACCEPTS = frozenset({Velocities})
+    GRAVITY_COMPENSATED = True
+    HOVERS = True
+
+    def __init__(self, robot: RobotConfig):
+        super().__init__(robot)
+        self.fly = {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0}
+        self.rotor: dict[str, int] = {}  # actuator per axis
+
+    @classmethod
+    def build(cls, spec, chassis, robot: RobotConfig, prefix: str) -> None:
+        chassis.gravcomp = 1.0
+        site = chassis.add_site()
+        site.name = f"{prefix}/rotors"
+        force = robot.aerial.max_accel_m_s2 * robot.mass_kg
+        dims = robot.geometry.dimensions
+        inertia = robot.mass_kg * (dims[0] ** 2 + dims[1] ** 2) / 12.0
+        for i, axis in enumerate(AERIAL_AXES):
+            a = spec.add_actuator()
+            a.name = f"{prefix}/{axis}"
+            a.target = f"{prefix}/rotors"
+            a.trntype = mujoco.mjtTrn.mjTRN_SITE
+            gear = [0.0] * 6
+            gear[i] = 1.0
+            a.gear = gear
+            limit = force if i < 3 else 4.0 * inertia * robot.aerial.max_yaw_rate_rad_s / 0.25
+            kv = limit / (0.25 * (robot.aerial.max_linear_m_s if i < 3 else robot.aerial.max_yaw_rate_rad_s))
+            a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+            a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+            a.gainprm[0] = kv
+            a.biasprm[0], a.biasprm[1], a.biasprm[2] = 0.0, 0.0, -kv
+            a.forcelimited = 1
+            a.forcerange = [-limit, limit]
+
+    def resolve(self, model, handle) -> None:
+        self.rotor = {axis: model.actuator(f"{handle.prefix}/{axis}").id for axis in AERIAL_AXES}
+
+    def own_actuators(self) -> list[tuple[int, float]]:
+        lim, mass = self.robot.aerial, self.robot.mass_kg
+        return [(a, lim.max_accel_m_s2 * mass * lim.max_linear_m_s if axis in ("linear", "lateral", "vertical")
+                 else 0.0) for axis, a in self.rotor.items()]
+
+    def command(self, part: Velocities, normalized: bool) -> None:
+        lim = self.robot.aerial
+        for key, value, top in (("altitude", part.altitude, lim.max_vertical_m_s),
+                                ("linear", part.linear, lim.max_linear_m_s),
+                                ("lateral", part.lateral, lim.max_lateral_m_s),
+                                ("rotational", part.rotational, lim.max_yaw_rate_rad_s)):
+            if value is not None and math.isfinite(value):
+                self.fly[key] = clamp(value * top / 100.0 if normalized else value, top)
+
+    def apply_own(self, ctrl, powered: bool) -> None:
+        f = self.fly if powered else dict.fromkeys(self.fly, 0.0)
+        rot = self.rotor
+        # MuJoCo's site axes: x forward, y left, z up; USARSim's lateral is to the right and
+        # its yaw clockwise seen from above
+        ctrl[rot["linear"]] = f["linear"]
+        ctrl[rot["lateral"]] = -f["lateral"]
+        ctrl[rot["vertical"]] = f["altitude"]
+        ctrl[rot["yaw"]] = -f["rotational"]
+        ctrl[rot["roll"]] = ctrl[rot["pitch"]] = 0.0

@@ -1,0 +1,154 @@
+"""Drive models: how a kind of robot moves (design.md 4.8).
+
+A robot file names its drive (``drive: skid``); the drive model of that name accepts the
+parts of a DRIVE its kind understands (:mod:`usarsim.controls`), keeps the state they set,
+writes its controls into MuJoCo before the physics steps, and reports its STA steering
+angles.  Everything that is the same for every robot (the headlight, joint servos,
+batteries, self-righting) lives in the simulation, not here.
+
+Adding a kind of drive is one module that subclasses :class:`DriveModel` and registers it
+with ``@DRIVES.register("name")``, plus robot files that say ``drive: name``.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from usarsim.config.robot import RobotConfig, Wheel
+from usarsim.controls import DrivePart
+from usarsim.errors import ConfigError, PluginNotFoundError
+from usarsim.registry import Registry
+
+if TYPE_CHECKING:
+    import mujoco
+    import numpy as np
+
+    from usarsim.config.robot import NauticalSpec
+    from usarsim.sim.robot import SimRobot
+    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.view import RobotHandle
+
+DRIVES = Registry("drive")
+
+
+class DriveModel:
+    """One robot's drive: its kind's commands, state and controls.
+
+    Class attributes say what the simulation must do for the kind: ``ACCEPTS`` the kinds
+    of DRIVE part it applies (the others are ignored), ``GRAVITY_COMPENSATED`` (links
+    float: aerial robots), ``SET_DOWN_AT_START`` (put on the surface below a start pose;
+    a vessel starts where the pose is), ``SET_DOWN_ALWAYS`` (wherever it is put: a
+    walking robot would not survive a drop), ``HOVERS`` (kept level by the levelling
+    system) and ``STEP_EVERY`` (a :meth:`pre_step` is wanted at least every that many
+    physics steps: gaits).
+    """
+
+    TYPE: ClassVar[str] = ""  # the robot file's drive key (set by DRIVES.register)
+    ACCEPTS: ClassVar[frozenset[type]] = frozenset()
+    GRAVITY_COMPENSATED: ClassVar[bool] = False
+    SET_DOWN_AT_START: ClassVar[bool] = True
+    SET_DOWN_ALWAYS: ClassVar[bool] = False
+    HOVERS: ClassVar[bool] = False
+    STEP_EVERY: ClassVar[int | None] = None
+
+    def __init__(self, robot: RobotConfig):
+        self.robot = robot
+        # driven wheels whose speed a joint order (or a holonomic DRIVE) set, rad/s: they
+        # keep it until the kind's own wheel command takes them back
+        self.wheel_speed: dict[str, float] = {}
+
+    # The robot file and the model ---------------------------------------------------------
+    @classmethod
+    def check(cls, robot: RobotConfig) -> None:
+        """Raise ConfigError when the robot file lacks what this kind needs."""
+
+    @classmethod
+    def build(cls, spec: "mujoco.MjSpec", chassis: "mujoco.MjsBody", robot: RobotConfig, prefix: str) -> None:
+        """Add what the kind needs to the robot's chassis body in the model (rotors)."""
+
+    def resolve(self, model: "mujoco.MjModel", handle: "RobotHandle") -> None:
+        """Look the kind's own MuJoCo ids up by name, after every model build."""
+
+    def own_actuators(self) -> list[tuple[int, float]]:
+        """Actuators of the kind's own beyond wheels and links, with the mechanical power
+        (W) each contributes to the robot's rating (the battery drains faster under load)."""
+        return []
+
+    # Commands and controls ------------------------------------------------------------------
+    def command(self, part: DrivePart, normalized: bool) -> None:
+        """Apply one part of a DRIVE (only kinds in ``ACCEPTS`` are given)."""
+
+    def wheel_target(self, w: Wheel) -> float:
+        """The spin speed (rad/s) of a driven wheel no joint order has taken."""
+        return 0.0
+
+    def steer_target(self, w: Wheel) -> float:
+        """The angle (rad, positive right) of a steered wheel."""
+        return 0.0
+
+    def apply_own(self, ctrl: "np.ndarray", powered: bool) -> None:
+        """Write the kind's own controls (not wheels)."""
+
+    def apply(self, r: "SimRobot", ctrl: "np.ndarray") -> None:
+        """Write every control of the drive: its own, each steered wheel's angle, each
+        driven wheel's speed (a joint order's, else the kind's; 0 without power)."""
+        powered = not r.battery_empty
+        self.apply_own(ctrl, powered)
+        handle = r.handle
+        for w in self.robot.wheels:
+            if w.steer != "none":
+                ctrl[handle.steer_actuator[w.name]] = self.steer_target(w)
+            if not w.driven:
+                continue
+            a = handle.actuator[w.name]
+            if not powered:
+                ctrl[a] = 0.0
+            elif w.name in self.wheel_speed:
+                ctrl[a] = self.wheel_speed[w.name]
+            else:
+                ctrl[a] = self.wheel_target(w)
+
+    def on_battery_empty(self) -> None:
+        """The battery ran out: the wheels stop (the controls are written after this)."""
+        self.wheel_speed.clear()
+
+    # What it reports --------------------------------------------------------------------------
+    def steer_angles(self, data: "mujoco.MjData", handle: "RobotHandle") -> tuple[float, float]:
+        """STA ``FrontSteer`` and ``RearSteer``: the axles' current angles (rad)."""
+        return 0.0, 0.0
+
+    @property
+    def vessel(self) -> "NauticalSpec | None":
+        """A vessel's hull (buoyancy, drag); None for a robot not built for water."""
+        return None
+
+    def propulsion(self, rot: "np.ndarray", lin: "np.ndarray", frac: float) -> tuple[Any, tuple]:
+        """A vessel's own force and torques in water (its propeller, rudder and planes)."""
+        raise NotImplementedError
+
+    # Hooks of the simulation --------------------------------------------------------------------
+    def on_spawn(self, sim: "Simulation", r: "SimRobot") -> None:
+        """Right after the robot was built into the world."""
+
+    def pre_step(self, sim: "Simulation", r: "SimRobot") -> None:
+        """Before a stretch of physics steps (kinds with ``STEP_EVERY``)."""
+
+
+def drive_class(robot: RobotConfig) -> type[DriveModel]:
+    """The drive model class a robot file names (ConfigError naming the file when unknown)."""
+    try:
+        return DRIVES.get(robot.drive)
+    except PluginNotFoundError as exc:
+        raise ConfigError(str(exc), path=robot.path, key="drive") from None
+
+
+def make_drive(robot: RobotConfig) -> DriveModel:
+    """A new drive model for one robot (its file checked for what the kind needs)."""
+    cls = drive_class(robot)
+    cls.check(robot)
+    return cls(robot)
+
+
+def clamp(value: float, top: float) -> float:
+    """``value`` within [-top, top]."""
+    return max(-top, min(top, value))

@@ -1,0 +1,222 @@
+"""Walking robots (drive ``legged``): the AIBO (ERS) trots, the QRIO walks.
+
+A gait engine sets the leg joints' angles every GAIT_STEPS physics steps: each foot stands
+for ``duty`` of a period, staying where it was put while the body moves over it, then
+swings forward, lifted, to where it will stand; a biped sways over its standing foot.
+DRIVE {LinearVelocity} {LateralVelocity} {RotationalVelocity} (protocol.md 5.3d) sets the
+walking speeds; {Left} {Right} (5.3a) are taken as a skid-steered robot's sides: their
+mean the forward speed, their difference the turn rate.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import mujoco
+
+from usarsim.config.robot import RobotConfig
+from usarsim.controls import Velocities, WheelSpeeds
+from usarsim.errors import ConfigError
+from usarsim.robots.base import DRIVES, DriveModel, clamp
+from usarsim.sim import joints
+
+if TYPE_CHECKING:
+    from usarsim.sim.robot import SimRobot
+    from usarsim.sim.simulation import Simulation
+
+GAIT_STEPS = 5  # a walking robot's joint targets are renewed every 5 physics steps (20 ms)
+
+
+def leg_ik(fx: float, fy: float, fz: float, upper: float, lower: float,
+           knee_forward: bool = False) -> tuple[float, float, float]:
+    """Hip pitch, hip roll and knee angles that put a foot at (fx, fy, fz) from its hip
+    (USARSim frame: forward, right, down), for a leg of two segments whose knee bends
+    backwards (or forwards, as a person's, with ``knee_forward``).  Positive pitch swings
+    the leg forward, positive roll swings it left, a positive knee folds the lower leg
+    forward.  The roll turns the plane in which pitch and knee move."""
+    roll = -math.atan2(fy, fz)
+    down = math.hypot(fy, fz)
+    d = min(max(math.hypot(fx, down), abs(upper - lower) + 1e-6), (upper + lower) * 0.999)
+    inner = math.acos(max(-1.0, min(1.0, (upper ** 2 + lower ** 2 - d ** 2) / (2 * upper * lower))))
+    beta = math.acos(max(-1.0, min(1.0, (upper ** 2 + d ** 2 - lower ** 2) / (2 * upper * d))))
+    if knee_forward:
+        return math.atan2(fx, down) + beta, roll, inner - math.pi
+    return math.atan2(fx, down) - beta, roll, math.pi - inner
+
+
+def _smooth(x: float) -> float:
+    """0 to 1 over x in [0, 1], with zero slope at both ends."""
+    return 0.5 - 0.5 * math.cos(math.pi * min(1.0, max(0.0, x)))
+
+
+def _smooth(x: float) -> float:
+    """0 to 1 over x in [0, 1], with zero slope at both ends."""
+    return 0.5 - 0.5 * math.cos(math.pi * min(1.0, max(0.0, x)))
+
+
+@DRIVES.register("legged")
+class Legged(DriveModel):
+    """The gait of a walking robot, and the velocities it walks at."""
+
+    ACCEPTS = frozenset({Velocities, WheelSpeeds})
+    SET_DOWN_ALWAYS = True
+    STEP_EVERY = GAIT_STEPS
+
+    def __init__(self, robot: RobotConfig):
+        super().__init__(robot)
+        self.walk = {"linear": 0.0, "lateral": 0.0, "rotational": 0.0}
+        self.sides = [0.0, 0.0]  # the last {Left} {Right}, rad/s (or percent)
+        # the gait's clock; how far it has set off (0 standing, 1 walking; it fades in and
+        # out over half a period); the velocities it walks at (they follow the command
+        # within half a period); each foot's place (forward, right, yaw) from under its hip
+        # and where its swing began; the time the gait was last set
+        self.gait_clock = 0.0
+        self.gait_amp = 0.0
+        self.gait_vel: tuple = (0.0, 0.0, 0.0)
+        self.gait_last = 0.0
+        self.feet: list = []
+        self.swing_from: list = []
+
+    @classmethod
+    def check(cls, robot: RobotConfig) -> None:
+        if robot.gait is None:
+            raise ConfigError("a walking robot (drive: legged) needs its gait", path=robot.path, key="gait")
+
+    def command(self, part, normalized: bool) -> None:
+        g = self.robot.gait
+        if isinstance(part, WheelSpeeds):
+            # a side's speed as a fraction of the robot's MaxSpeed (or of 100 %): the mean of
+            # the two sides walks forward, their difference turns (left faster: right turn)
+            for i, v in enumerate((part.left, part.right)):
+                if v is not None and math.isfinite(v):
+                    self.sides[i] = v
+            top = 100.0 if normalized else self.robot.max_speed_rad_s
+            fwd = (self.sides[0] + self.sides[1]) / 2.0 / top
+            turn = (self.sides[0] - self.sides[1]) / 2.0 / top
+            self.walk["linear"] = clamp(fwd * g.max_linear_m_s, g.max_linear_m_s)
+            self.walk["rotational"] = clamp(turn * g.max_yaw_rate_rad_s, g.max_yaw_rate_rad_s)
+            return
+        for key, value, top in (("linear", part.linear, g.max_linear_m_s), ("lateral", part.lateral, g.max_lateral_m_s),
+                                ("rotational", part.rotational, g.max_yaw_rate_rad_s)):
+            if value is not None and math.isfinite(value):
+                self.walk[key] = clamp(value * top / 100.0 if normalized else value, top)
+
+    def pre_step(self, sim: "Simulation", r: "SimRobot") -> None:
+        """Set the leg joints of a walking robot for this instant of its gait.  Each foot
+        stands for ``duty`` of a period, staying where it was put while the body moves
+        over it (the commanded speed, side speed and turn rate carry the body), then swings
+        forward, lifted, to where it will stand evenly about its hip at the current speed:
+        a trot for four legs at duty 0.5 (diagonal legs together), a walk for two legs
+        above it, with both feet down at the start and end of every step while the body
+        sways over the foot that will stand alone.  Hip yaw joints turn the feet with the
+        ground, ankles keep the soles flat.  The gait sets off (swaying first) and comes to
+        rest over half a period each; the walking speed follows the command within half a
+        period.  At rest its feet are back under its hips and its joints are left to joint
+        commands."""
+        g = self.robot.gait
+        if r.battery_empty:
+            return
+        cmd = (self.walk["linear"], self.walk["lateral"], self.walk["rotational"])
+        moving = any(abs(c) > 1e-6 for c in cmd)
+        if not moving and self.gait_amp <= 0.0:
+            return  # standing: its joints are the client's (DRIVE Name groups, MULTIDRIVE)
+        n = len(g.legs)
+        dt = max(0.0, sim.time - self.gait_last)
+        self.gait_last = sim.time
+        if self.gait_amp <= 0.0:  # setting off: both feet down, the body between them
+            self.gait_clock = (g.duty - 0.5) / 2.0 * g.period_s
+            self.gait_amp, dt = 1e-9, 0.0
+            self.gait_vel = (0.0, 0.0, 0.0)
+            self.feet = [[0.0, 0.0, 0.0] for _ in range(n)]
+            self.swing_from = [None] * n
+        else:
+            self.gait_clock += dt
+        half = 0.5 * g.period_s
+        tops = (g.max_linear_m_s, g.max_lateral_m_s, g.max_yaw_rate_rad_s)
+        if self.gait_amp >= 1.0:  # under way: the walking speed follows the command
+            self.gait_vel = tuple(cur + max(-top * dt / half, min(top * dt / half, c - cur))
+                               for cur, c, top in zip(self.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops))
+        at_rest = not any(self.gait_vel) and all(abs(x) < 1e-4 for f in self.feet for x in f)
+        if moving:
+            self.gait_amp = min(1.0, self.gait_amp + dt / half)
+        elif at_rest:
+            self.gait_amp = max(0.0, self.gait_amp - dt / half)
+        # the feet: standing ones stay on the ground as the body moves, swinging ones go
+        # to where they will stand
+        stance_t = g.duty * g.period_s
+        v, lat, w = self.gait_vel
+        reach = 0.4 * (g.legs[0].upper_m + g.legs[0].lower_m)
+        for i, leg in enumerate(g.legs):
+            hip = self.robot.link_origin(leg.hip_pitch)
+            ground = (v - w * hip[1], lat + w * hip[0], w)  # how the ground moves past the hip
+            p = (self.gait_clock / g.period_s + leg.phase) % 1.0
+            f = self.feet[i]
+            if p < g.duty or self.gait_amp < 1.0:
+                if self.swing_from[i] is not None and self.gait_amp >= 1.0:  # it landed p x period ago
+                    for j in range(3):
+                        f[j] = ground[j] * (stance_t / 2.0 - p * g.period_s)
+                else:
+                    for j in range(3):
+                        f[j] -= ground[j] * dt
+                self.swing_from[i] = None
+            else:
+                if self.swing_from[i] is None:  # it stood until (p - duty) x period ago
+                    stood = max(0.0, dt - (p - g.duty) * g.period_s)
+                    self.swing_from[i] = [x - gx * stood for x, gx in zip(f, ground)]
+                s_ = _smooth((p - g.duty) / (1.0 - g.duty))
+                for j in range(3):
+                    f[j] = self.swing_from[i][j] + (ground[j] * stance_t / 2.0 - self.swing_from[i][j]) * s_
+            f[0] = max(-reach, min(reach, f[0]))
+            f[1] = max(-reach, min(reach, f[1]))
+            f[2] = max(-0.8, min(0.8, f[2]))
+        if self.gait_amp <= 0.0:
+            self.feet = [[0.0, 0.0, 0.0] for _ in range(n)]
+        for name, value in self._leg_targets(self.gait_clock, self.gait_amp):
+            r.joints[name] = (0, value)
+            joints.apply(sim.model, sim.data, r, self.robot.link(name))
+
+    def _leg_targets(self, t: float, amp: float) -> list[tuple[str, float]]:
+        """The angle of every leg joint of a walking robot at time ``t`` of its gait, its
+        feet where ``self.feet`` puts them, its sway and steps scaled by ``amp`` (0: standing,
+        every foot under its hip)."""
+        g = self.robot.gait
+        # a swaying robot sways first and steps once it sways fully
+        step_amp = max(0.0, 2.0 * amp - 1.0) if g.sway_m > 0.0 else amp
+        phases = [(t / g.period_s + leg.phase) % 1.0 for leg in g.legs]
+        # a biped's body sways sideways (right positive) as a sine of the gait, furthest
+        # over the standing foot in the middle of the other foot's swing: the smooth sway
+        # keeps the point where the feet carry the weight inside the standing sole
+        shift = 0.0
+        if amp > 0.0 and g.sway_m > 0.0:
+            side = self.robot.link_origin(g.legs[0].hip_pitch)[1]
+            shift = -math.copysign(g.sway_m * min(1.0, 2.0 * amp), side) * math.cos(
+                2.0 * math.pi * (phases[0] - (g.duty + 1.0) / 2.0))
+        targets = []
+        for i, (leg, p) in enumerate(zip(g.legs, phases)):
+            fx, fy, yaw = self.feet[i] if amp > 0.0 and self.feet else (0.0, 0.0, 0.0)
+            fy -= shift
+            fz = g.stand_height_m
+            if amp > 0.0 and p >= g.duty:  # swinging: lifted
+                fz -= g.step_height_m * step_amp * math.sin(math.pi * (p - g.duty) / (1.0 - g.duty))
+            if leg.hip_yaw is not None:
+                fx, fy = math.cos(yaw) * fx + math.sin(yaw) * fy, -math.sin(yaw) * fx + math.cos(yaw) * fy
+            pitch, roll, knee = leg_ik(fx, fy, fz, leg.upper_m, leg.lower_m, leg.knee_forward)
+            targets += [(leg.hip_pitch, pitch), (leg.hip_roll, roll), (leg.knee, knee)]
+            if leg.hip_yaw is not None:
+                targets.append((leg.hip_yaw, yaw))
+            if leg.ankle_pitch is not None:
+                targets.append((leg.ankle_pitch, -(pitch + knee)))
+            if leg.ankle_roll is not None:
+                targets.append((leg.ankle_roll, -roll))
+        return targets
+
+    def on_spawn(self, sim: "Simulation", r: "SimRobot") -> None:
+        """A walking robot is built standing: its leg joints start at their standing angles."""
+        m, d = sim.model, sim.data
+        for name, value in self._leg_targets(0.0, 0.0):
+            r.joints[name] = (0, value)
+            d.qpos[r.handle.joint_qpos[name]] = value
+            d.act[int(m.actuator_actadr[r.handle.actuator[name]])] = value
+            joints.apply(sim.model, sim.data, r, self.robot.link(name))
+        mujoco.mj_forward(m, d)

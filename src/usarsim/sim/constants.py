@@ -1,0 +1,18 @@
+"""Constants shared by the model builder, the ray caster and the world's entities (a leaf
+module: it imports nothing of the simulation, so that they need not import each other)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Geom groups: which geoms ray-cast sensors can see.
+GROUP_STATIC = 0  # world geometry
+GROUP_ROBOT = 1  # robot bodies (chassis)
+GROUP_MOVABLE = 2  # movable obstacles
+GROUP_WHEEL = 3  # wheels and other small moving parts: not seen by range sensors
+RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
+
+# Waving victims: the right arm swings about the shoulder, 0.6 rad either way, once every
+# 2 s (the manual's victims wave an arm to draw attention, section 3.2.1).
+WAVE_AMPLITUDE_RAD = 0.6
+WAVE_PERIOD_S = 2.0

@@ -1,0 +1,59 @@
+"""A robot in the simulation: what every robot has, whatever its drive (the drive's own
+state lives in its drive model, :mod:`usarsim.robots`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from usarsim.config.robot import RobotConfig
+from usarsim.sensors import Sensor, make_sensor
+from usarsim.sim.outputs import ItemDescription
+from usarsim.sim.view import RobotHandle
+
+if TYPE_CHECKING:
+    from usarsim.robots.base import DriveModel
+    from usarsim.sim.reports import Report
+
+
+@dataclass(eq=False)
+class SimRobot:
+    uid: int
+    name: str
+    config: RobotConfig
+    prefix: str
+    spawn_time: float
+    handle: RobotHandle
+    sensors: list[Sensor]
+    drive: "DriveModel"
+    reports: list["Report"] = field(default_factory=list)
+    light: bool = False
+    battery_empty: bool = False
+    removed: bool = False
+    resets: int = 0
+    owner_index: int = 0
+    spawn_qpos: np.ndarray | None = None
+    # link joints: name -> (order, value) with order 0 position, 1 speed, 2 torque
+    joints: dict = field(default_factory=dict)
+    # the cameras chosen by SET {Type Viewports} (protocol.md 5.4): the first is the one the
+    # MultiView shows; empty: the robot's first camera
+    viewports: tuple[str, ...] = ()
+    in_water: bool = False
+    battery_used_s: float = 0.0
+    rated_power_w: float = 1.0
+    flip_until: float = -1.0  # self-righting torque applied until this simulated time
+
+    def battery_left(self) -> float:
+        return max(0.0, self.config.battery_s - self.battery_used_s)
+
+
+def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:
+    """The mounted items of a robot class as GETGEO/GETCONF describe them (also
+    validates every sensor's configuration)."""
+    out = []
+    for item in robot.items:
+        s = make_sensor(item, robot, seed, "describe")
+        out.append(ItemDescription(s.TYPE, item.name, item.location, item.orientation, item.mount, s.conf_fields()))
+    return out

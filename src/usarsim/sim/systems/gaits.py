@@ -1,0 +1,25 @@
+"""Drives that act before each stretch of physics steps (their ``STEP_EVERY``): the gaits
+of walking robots set their leg joints' targets."""
+
+from __future__ import annotations
+
+from usarsim.sim.systems.base import SYSTEMS, System
+
+
+@SYSTEMS.register("gaits")
+class Gaits(System):
+    ORDER = 60
+
+    @classmethod
+    def wanted(cls, sim) -> bool:
+        return any(r.drive.STEP_EVERY is not None for r in sim.robots.values())
+
+    def max_steps(self) -> int | None:
+        return min((r.drive.STEP_EVERY for r in self.sim.robots.values() if r.drive.STEP_EVERY is not None),
+                   default=None)
+
+    def pre_step(self) -> None:
+        sim = self.sim
+        for r in sim.robots.values():
+            if r.drive.STEP_EVERY is not None:
+                r.drive.pre_step(sim, r)

@@ -1,0 +1,61 @@
+"""Roller tables (the RollerTable effecter): what lies on a table's top is carried along."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from usarsim.sensors.effecters import RollerTable
+from usarsim.sim.systems.base import SYSTEMS, System
+
+
+@SYSTEMS.register("rollers")
+class RollerTables(System):
+    """Every body touching a table's top (other than the robot) is pushed along the robot's
+    X towards the rollers' speed relative to the robot, with up to grip x its weight;
+    stopped rollers hold their load."""
+
+    ORDER = 50
+
+    def __init__(self, sim):
+        super().__init__(sim)
+        self._pushed: set[int] = set()
+
+    @staticmethod
+    def _tables(sim) -> list[RollerTable]:
+        return [s for r in sim.robots.values() for s in r.sensors if isinstance(s, RollerTable)]
+
+    @classmethod
+    def wanted(cls, sim) -> bool:
+        return bool(cls._tables(sim))
+
+    def pre_step(self) -> None:
+        sim = self.sim
+        m, d = sim.model, sim.data
+        pushed: set[int] = set()
+        tables = {t.geom: t for t in self._tables(sim)}
+        if tables:
+            g = sim.world.gravity_m_s2
+            for i in range(d.ncon):
+                c = d.contact[i]
+                t = tables.get(c.geom1) or tables.get(c.geom2)
+                if t is None:
+                    continue
+                other = c.geom2 if t.geom == c.geom1 else c.geom1
+                b = int(m.geom_bodyid[other])
+                if b in pushed or m.body_rootid[b] == t.handle.body_id or m.body_weldid[b] == 0:
+                    continue
+                pushed.add(b)
+                rot = d.xmat[t.handle.body_id].reshape(3, 3)
+                axis = rot[:, 0]
+                vel = np.empty(6)
+                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
+                robot_vel = np.empty(6)
+                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, t.handle.body_id, robot_vel, 0)
+                slip = t.speed - float(axis @ (vel[3:] - robot_vel[3:]))
+                mass = float(m.body_subtreemass[b])
+                push = max(-1.0, min(1.0, slip / 0.05)) * t.config.grip * mass * g
+                d.xfrc_applied[b, :3] = axis * push
+        for b in self._pushed - pushed:
+            d.xfrc_applied[b, :3] = 0.0
+        self._pushed = pushed

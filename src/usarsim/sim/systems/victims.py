@@ -1,0 +1,21 @@
+"""Waving victims (manual 3.2.1): their right arm swings about the shoulder."""
+
+from __future__ import annotations
+
+from usarsim.sim.systems.base import SYSTEMS, System
+
+
+@SYSTEMS.register("victims")
+class WavingVictims(System):
+    """Moves the waving victims' arms to their angle at the current time (kinematic: the
+    arm is a mocap body, so no force needs renewing)."""
+
+    ORDER = 10
+    EVERY_STEPS = None
+
+    @classmethod
+    def wanted(cls, sim) -> bool:
+        return sim.entities.has_motion
+
+    def pre_step(self) -> None:
+        self.sim.entities.update(self.sim.data, self.sim.time)

@@ -1,0 +1,42 @@
+"""The ground truth (protocol.md 12.4, the UDK's USARTruth): where every robot, victim, RFID
+tag, false alarm and movable object is, now."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from usarsim.sim import frames
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
+
+
+def truth_rows(sim: "Simulation", class_name: str | None = None, name: str | None = None) -> list[tuple]:
+    """Everything the ground-truth service knows, now: (name, class, time, location,
+    rotation) of every robot (its class and INIT name), victim (``Victim``), RFID tag
+    (``RFIDTag``, named by its id), false alarm (``FalseAlarm``) and movable object
+    (``MovableObject``); world frame, rotations in [0, 2 pi).  Filtered by class and
+    name (any case) when given."""
+    now = sim.time
+    m, d = sim.model, sim.data
+    rows = []
+    for r in sim.robots.values():
+        loc, rot = r.handle.location(d), r.handle.orientation(d)
+        rows.append((r.name, r.config.class_name, loc, rot))
+    for v in sim.world.victims:
+        b = m.body(f"victim/{v.name}").id
+        rows.append((v.name, "Victim", frames.from_mj_vec(d.xpos[b]), frames.mj_mat_to_usar_euler(d.xmat[b])))
+    for tag in sim.entities.tags.values():
+        rows.append((str(tag.tag_id), "RFIDTag", tuple(tag.location), (0.0, 0.0, 0.0)))
+    for a in sim.world.false_alarms:
+        rows.append((a.name, "FalseAlarm", tuple(a.center), tuple(a.rotation)))
+    for o in sim.world.objects:
+        if o.mass_kg > 0:
+            b = m.body(f"movable/{o.name}").id
+            rows.append((o.name, "MovableObject", frames.from_mj_vec(d.xpos[b]),
+                         frames.mj_mat_to_usar_euler(d.xmat[b])))
+    out = []
+    for n, c, loc, rot in rows:
+        if (class_name is None or c.lower() == class_name.lower()) and (name is None or n.lower() == name.lower()):
+            out.append((n, c, now, tuple(float(x) for x in loc), tuple(frames.wrap_2pi(float(a)) for a in rot)))
+    return out
