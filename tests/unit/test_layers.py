@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import ast
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -49,3 +51,53 @@ def test_sim_loads_no_asyncio_protocol_or_server(module):
     mods = loaded_after([module])
     assert "mujoco" in top(mods, "mujoco")  # it really is the simulation layer
     assert top(mods, "asyncio", "usarsim.protocol", "usarsim.server") == set()
+
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "usarsim"
+# What the servers and the console may import of the simulation layer: its facade and the
+# types that cross it (design.md 2 and 5).
+SIM_DOOR = ("usarsim.sim.facade", "usarsim.sim.types")
+BELOW_THE_DOOR = ("usarsim.sim", "usarsim.sensors", "usarsim.robots", "mujoco")
+
+
+def _imports(path: Path) -> list[tuple[int, str]]:
+    """(line, module) of every import in a file, at any depth (also inside functions)."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            out += [(node.lineno, node.module)] + [(node.lineno, f"{node.module}.{a.name}") for a in node.names
+                                                   if node.module == "usarsim.sim"]
+    return out
+
+
+def _server_files() -> list[Path]:
+    return sorted([*(SRC / "server").rglob("*.py"), *(SRC / "web").rglob("*.py")])
+
+
+@pytest.mark.parametrize("path", _server_files(), ids=lambda p: str(p.relative_to(SRC)))
+def test_servers_reach_the_simulation_only_through_its_facade(path):
+    bad = [(line, mod) for line, mod in _imports(path)
+           if any(mod == b or mod.startswith(b + ".") for b in BELOW_THE_DOOR)
+           and not any(mod == d or mod.startswith(d + ".") for d in SIM_DOOR)]
+    assert not bad, f"{path.relative_to(SRC)} imports below the simulation's facade: {bad}"
+    # and does not reach past the facade's methods: no facade.sim, facade.runner, facade.call
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    past = [(n.lineno, n.attr) for n in ast.walk(tree) if isinstance(n, ast.Attribute)
+            and n.attr in ("sim", "runner", "call") and _names_facade(n.value)]
+    assert not past, f"{path.relative_to(SRC)} reaches past the facade: {past}"
+
+
+def _names_facade(node: ast.AST) -> bool:
+    return (isinstance(node, ast.Name) and node.id == "facade") or \
+        (isinstance(node, ast.Attribute) and node.attr == "facade")
+
+
+def test_the_layering_check_sees_a_reach_past_the_facade(tmp_path):
+    probe = tmp_path / "probe.py"
+    probe.write_text("from usarsim.sim.simulation import Simulation\n"
+                     "def f(server):\n    server.facade.call(lambda sim: sim.time)\n")
+    assert ("usarsim.sim.simulation" in {m for _, m in _imports(probe)})
+    tree = ast.parse(probe.read_text())
+    assert any(isinstance(n, ast.Attribute) and n.attr == "call" and _names_facade(n.value) for n in ast.walk(tree))

@@ -23,7 +23,7 @@ import numpy as np
 
 from usarsim.readings import HumanMotionReading, SoundReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
-from usarsim.sim import builder, frames
+from usarsim.sim import frames, victims
 
 
 def _walls_between(view, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str, stop_at_first: bool = False) -> int:
@@ -34,7 +34,7 @@ def _walls_between(view, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str, s
 
 def _victim_point(victim, local) -> np.ndarray:
     """A point of a victim (its own frame, posture applied) in the world, MuJoCo frame."""
-    c = builder.victim_part_pose(victim.posture, local, None, None)[0]
+    c = victims.victim_part_pose(victim.posture, local, None, None)[0]
     world = np.array(victim.location, dtype=float) + frames.euler_to_mat(*victim.rotation) @ np.array(c)
     return frames.to_mj_vec(world)
 
@@ -114,7 +114,7 @@ class HumanMotion(Sensor):
             for v in world.victims:
                 if not v.waving:
                     continue
-                arm = _victim_point(v, builder.SHOULDER)
+                arm = _victim_point(v, victims.SHOULDER)
                 delta = arm - pos
                 d = float(np.linalg.norm(delta))
                 if d > c.max_range_m or d < 1e-6:

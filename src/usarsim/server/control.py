@@ -20,7 +20,7 @@ from typing import Any
 from usarsim.protocol import messages as M
 from usarsim.protocol.framing import LineBuffer
 from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus, ZoomResult
-from usarsim.server.session import CLOSED, Session
+from usarsim.server.session import ALIVE, CLOSED, SPAWNING, Session, SessionContext
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.types import Output
 
@@ -88,7 +88,9 @@ class Connection(asyncio.Protocol):
             transport.close()
             return
         uid = srv.next_uid()
-        self.session = Session(self, uid)
+        self.session = Session(SessionContext(facade=srv.facade, peer=self.peer, emit=self.send_reply,
+                                              threadsafe=srv.threadsafe, admit=srv.admit, robot_dirs=srv.robot_dirs,
+                                              camera_bindings=srv.camera_bindings), uid)
         srv.connections[uid] = self
         log.info("%s: connected (robot id %d)", self.peer, uid)
         self.send_reply(M.GameInfo(level=srv.facade.world_name, time_limit=srv.facade.world.time_limit_min))
@@ -195,21 +197,6 @@ class Connection(asyncio.Protocol):
             return
         self.transport.write(data)
 
-    # Callbacks from the simulation thread -------------------------------------------------
-    def spawn_done_threadsafe(self, result, error) -> None:
-        self.server.loop.call_soon_threadsafe(self._spawn_done, result, error)
-
-    def _spawn_done(self, result, error) -> None:
-        if self.session is not None:
-            self.session.spawn_done(result, error)
-
-    def send_reply_threadsafe(self, msg) -> None:
-        """``send_reply`` from another thread (the simulation's)."""
-        self.server.loop.call_soon_threadsafe(self.send_reply, msg)
-
-    def stepped_threadsafe(self, sim_time: float) -> None:
-        self.server.loop.call_soon_threadsafe(self.send_reply, M.Stepped(time=sim_time))
-
 
 class ControlServer:
     def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3000,
@@ -235,6 +222,26 @@ class ControlServer:
     def next_uid(self) -> int:
         self._uid += 1
         return self._uid
+
+    def admit(self) -> str | None:
+        """Why one more robot is refused (None: it is admitted)."""
+        robots = sum(1 for c in self.connections.values() if c.session is not None
+                     and c.session.state in (SPAWNING, ALIVE))
+        if robots >= self.max_robots:
+            return f"the world has {robots} robots already (limit --max-robots {self.max_robots})"
+        return None
+
+    def threadsafe(self, fn):
+        """``fn`` to be called from another thread (the simulation's): it runs on the event loop."""
+        def call(*args) -> None:
+            loop = self.loop
+            if loop is not None and not loop.is_closed():
+                try:
+                    loop.call_soon_threadsafe(fn, *args)
+                except RuntimeError:  # the loop closed meanwhile
+                    pass
+
+        return call
 
     async def start(self) -> int:
         self.loop = asyncio.get_running_loop()

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import TYPE_CHECKING, Callable
+from dataclasses import dataclass
+from typing import Any, Callable
 
 from usarsim.config.catalog import resolve_robot
 from usarsim.config.robot import RobotConfig
@@ -18,10 +19,7 @@ from usarsim.errors import ConfigError, ProtocolError
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.protocol.numbers import f4
-from usarsim.sensors import SENSORS
-
-if TYPE_CHECKING:
-    from usarsim.server.control import Connection
+from usarsim.sim.facade import SimFacade
 
 log = logging.getLogger("usarsim.server")
 
@@ -55,9 +53,27 @@ JOINT_OPCODES = {"angle": 0, "0": 0, "velocity": 1, "1": 1, "torque": 2, "2": 2,
                  "relangle": 10, "10": 10, "relvelocity": 11, "11": 11, "reltorque": 12, "12": 12}
 
 
+@dataclass
+class SessionContext:
+    """What a session needs of the world around it, and nothing else (it is tested
+    without sockets with a context of its own).
+
+    ``emit(msg)`` sends a message to the client (on the event loop); ``threadsafe(fn)``
+    wraps ``fn`` so that calling it from another thread (the simulation's) runs it on the
+    event loop; ``admit()`` says why one more robot is refused (None: admitted)."""
+
+    facade: SimFacade
+    peer: str
+    emit: Callable[[Any], None]
+    threadsafe: Callable[[Callable], Callable]
+    admit: Callable[[], str | None]
+    robot_dirs: tuple[str, ...] = ()  # extra folders of robot files (serve --robot-dir)
+    camera_bindings: Any = None  # the image server's CameraBindings
+
+
 class Session:
-    def __init__(self, conn: "Connection", uid: int):
-        self.conn = conn
+    def __init__(self, ctx: SessionContext, uid: int):
+        self.ctx = ctx
         self.uid = uid
         self.state = NEW
         self.robot: RobotConfig | None = None
@@ -75,27 +91,29 @@ class Session:
             C.MisPkg: self.on_mispkg,
             C.Camera: self.on_camera,
         }
+        self._spawn_done = ctx.threadsafe(self.spawn_done)
+        self._stepped = ctx.threadsafe(lambda t: self.send(M.Stepped(time=t)))
 
     @property
-    def facade(self):
-        return self.conn.server.facade
+    def facade(self) -> SimFacade:
+        return self.ctx.facade
 
     def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:
         """Log the first problem of each kind at ``level``, its repetitions at DEBUG; past
         MAX_LOGGED_KINDS kinds (a client sending ever new garbage) every new kind is
         repeated at DEBUG too, so that the log and this set stay bounded."""
         if kind in self._logged:
-            log.debug("%s: " + msg, self.conn.peer, *args)
+            log.debug("%s: " + msg, self.ctx.peer, *args)
             return
         if len(self._logged) >= MAX_LOGGED_KINDS:
             if "(more)" not in self._logged:
                 self._logged.add("(more)")
                 log.warning("%s: more than %d kinds of problem on this connection; further ones are logged at "
-                            "debug level", self.conn.peer, MAX_LOGGED_KINDS)
-            log.debug("%s: " + msg, self.conn.peer, *args)
+                            "debug level", self.ctx.peer, MAX_LOGGED_KINDS)
+            log.debug("%s: " + msg, self.ctx.peer, *args)
             return
         self._logged.add(kind)
-        log.log(level, "%s: " + msg, self.conn.peer, *args)
+        log.log(level, "%s: " + msg, self.ctx.peer, *args)
 
     # Entry point ---------------------------------------------------------------------
     def handle_line(self, line: str) -> None:
@@ -115,7 +133,7 @@ class Session:
         handler(cmd)
 
     def send(self, msg) -> None:
-        self.conn.send_reply(msg)
+        self.ctx.emit(msg)
 
     # Handlers ------------------------------------------------------------------------
     def on_get_start_poses(self, cmd: C.GetStartPoses) -> None:
@@ -131,7 +149,7 @@ class Session:
             self.log_once("init", "INIT without ClassName ignored")
             return
         try:
-            robot = resolve_robot(cmd.class_name, extra_dirs=self.conn.server.robot_dirs)
+            robot = resolve_robot(cmd.class_name, extra_dirs=self.ctx.robot_dirs)
         except ConfigError as exc:
             self.log_once("init", "INIT ignored: %s", exc)
             return
@@ -158,21 +176,18 @@ class Session:
             location = tuple(_r2(v) for v in poses[0].location)
             rotation = tuple(_r2(v) for v in poses[0].rotation)
             set_down = True
-            log.info("%s: INIT without Location or Start: using start pose %s", self.conn.peer, poses[0].name)
+            log.info("%s: INIT without Location or Start: using start pose %s", self.ctx.peer, poses[0].name)
         if not all(math.isfinite(v) for v in (*location, *rotation)):
             self.log_once("init", "INIT ignored: location and rotation must be finite")
             return
-        server = self.conn.server
-        robots = sum(1 for c in server.connections.values() if c.session is not None
-                     and c.session.state in (SPAWNING, ALIVE))
-        if robots >= server.max_robots:
-            self.log_once("init", "INIT refused: the world has %d robots already (limit --max-robots %d)", robots,
-                          server.max_robots)
+        refused = self.ctx.admit()
+        if refused is not None:
+            self.log_once("init", "INIT refused: %s", refused)
             return
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
         self.state = SPAWNING
-        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self.conn.spawn_done_threadsafe,
+        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self._spawn_done,
                           set_down=set_down)
 
     def spawn_done(self, result, error) -> None:
@@ -181,7 +196,7 @@ class Session:
         if error is not None:
             self.state = NEW
             self.robot = None
-            log.warning("%s: INIT failed: %s", self.conn.peer, error)
+            log.warning("%s: INIT failed: %s", self.ctx.peer, error)
             return
         self.state = ALIVE
 
@@ -251,7 +266,7 @@ class Session:
     def _items(self, item_type: str, name: str | None):
         assert self.robot is not None
         t = item_type.lower()
-        canonical = SENSORS.canonical(item_type) or item_type
+        canonical = self.facade.canonical_item_type(item_type)
         found = [d for d in self.facade.describe(self.robot) if d.item_type.lower() in (t, canonical.lower())
                  and (not name or d.name.lower() == name.lower())]
         return found
@@ -358,14 +373,14 @@ class Session:
         """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that
         robot camera to viewers at ``ip`` (or ``ip:port``); without Robot, releases them.
         No reply (protocol.md 5.4)."""
-        bindings = self.conn.server.camera_bindings
+        bindings = self.ctx.camera_bindings
         client = (cmd.client or "").strip()
         if not client:
             self.log_once("bind", "SET {Type Camera} {Robot r} {Name cam} needs a {Client ip}; ignored")
             return
         if not cmd.robot:
             bindings.release(client)
-            log.info("%s: image viewers at %s see the MultiView again", self.conn.peer, client)
+            log.info("%s: image viewers at %s see the MultiView again", self.ctx.peer, client)
             return
         camera = cmd.name or "Camera"
         if not bindings.bind(client, cmd.robot, camera):
@@ -373,7 +388,7 @@ class Session:
                           "or %d addresses bound already); ignored", client, bindings.MAX_ADDRESS,
                           bindings.MAX_BINDINGS)
             return
-        log.info("%s: image viewers at %s see camera %s of robot %s", self.conn.peer, client, camera, cmd.robot)
+        log.info("%s: image viewers at %s see camera %s of robot %s", self.ctx.peer, client, camera, cmd.robot)
 
     def on_viewports(self, cmd: C.Set) -> None:
         """``SET {Type Viewports} {Config SingleView|QuadView} {Viewport1 cam} ...``: which of
@@ -388,14 +403,14 @@ class Session:
                 names[index - 1] = cam
         def done(result, error):
             if error is not None:
-                log.error("%s: SET Viewports: %s", self.conn.peer, error)
+                log.error("%s: SET Viewports: %s", self.ctx.peer, error)
                 return
             time_s, states = result
-            self.conn.send_reply_threadsafe(M.ViewportsResult(
+            self.send(M.ViewportsResult(
                 time=time_s, config=cfg or config, config_status="OK" if cfg else "Failed",
                 viewports=tuple(M.ViewportState(index=i + 1, camera=c, status=st) for i, (c, st) in enumerate(states))))
 
-        self.facade.set_viewports(self.uid, names, on_done=done)
+        self.facade.set_viewports(self.uid, names, on_done=self.ctx.threadsafe(done))
 
     MAX_STEP_S = 3600.0
 
@@ -405,4 +420,4 @@ class Session:
             self.log_once("step", "STEP {Time %g} is longer than %g s; the world was not advanced", seconds,
                           self.MAX_STEP_S)
             seconds = 0.0
-        self.facade.step(seconds, self.conn.stepped_threadsafe)
+        self.facade.step(seconds, self._stepped)

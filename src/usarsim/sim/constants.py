@@ -12,6 +12,13 @@ GROUP_MOVABLE = 2  # movable obstacles
 GROUP_WHEEL = 3  # wheels and other small moving parts: not seen by range sensors
 RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
 
+# Collision classes (MuJoCo contype/conaffinity bits): world geometry and chassis
+# collide with everything; wheels collide with world geometry and chassis but not
+# with other wheels (cylinder-cylinder contacts between robots rubbing side by side
+# give unstable contact normals that launch robots).
+SOLID_CONTYPE, SOLID_CONAFFINITY = 1, 3
+WHEEL_CONTYPE, WHEEL_CONAFFINITY = 2, 0
+
 # Waving victims: the right arm swings about the shoulder, 0.6 rad either way, once every
 # 2 s (the manual's victims wave an arm to draw attention, section 3.2.1).
 WAVE_AMPLITUDE_RAD = 0.6

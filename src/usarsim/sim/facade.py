@@ -80,6 +80,14 @@ class SimFacade:
 
         return DRIVES.get(robot.drive).ACCEPTS
 
+    @staticmethod
+    def canonical_item_type(name: str) -> str:
+        """A mounted item's type in USARSim's spelling (``sonar`` -> ``Sonar``), or ``name``
+        itself when no plugin has it."""
+        from usarsim.sensors import SENSORS
+
+        return SENSORS.canonical(name) or name
+
     def live_conf(self, uid: int, item_type: str, name: str):
         """CONF fields of a robot's item that changed at run time, or None."""
         return self.sim.live_conf.get((uid, item_type, name))

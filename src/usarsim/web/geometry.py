@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from usarsim.config.world import WorldConfig
-from usarsim.sim.frames import euler_to_mat
+from usarsim.sim.types import euler_to_mat
 
 CIRCLE_POINTS = 24  # points around a cylinder's end when its outline is drawn
 
