@@ -131,3 +131,18 @@ def test_a_new_drive_kind_from_one_file_in_the_test_tree_and_a_robot_file(server
     c.step(1.0)
     dist, turn = travelled(c, 1.0)
     assert dist < 0.01 and abs(turn) < 0.01
+
+
+def test_a_robot_file_is_checked_by_its_drive_model(tmp_path):
+    from usarsim.config.robot import load_robot
+    from usarsim.errors import ConfigError
+    from usarsim.sim.builder import robot_model_summary
+
+    one_sided = UNICYCLE_ROBOT.replace("drive: unicycle", "drive: skid").replace("side: right", "side: left")
+    p = tmp_path / "OneSided.yaml"
+    p.write_text(one_sided)
+    with pytest.raises(ConfigError, match="skid-steered robot needs at least one left and one right wheel"):
+        robot_model_summary(load_robot(p))
+    p.write_text(UNICYCLE_ROBOT.replace("drive: unicycle", "drive: skidd"))
+    with pytest.raises(ConfigError, match=r"unknown drive type 'skidd'.*skid"):
+        robot_model_summary(load_robot(p))

@@ -9,7 +9,11 @@ from pathlib import Path
 import pytest
 
 from usarsim.cli import main as cli_main
+from usarsim.config import catalog
+from usarsim.config import robot as R
+from usarsim.config import world as W
 from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot, resolve_world
+from usarsim.config.reader import FieldDefaults
 from usarsim.config.robot import load_robot
 from usarsim.config.world import check_world_file, load_world
 from usarsim.errors import ConfigError, UsarsimError
@@ -99,6 +103,151 @@ def test_a_minimal_robot_loads_with_its_values(tmp_path):
     assert [w.name for w in r.wheels] == ["L", "R"]
     assert [(i.item_type, i.name) for i in r.items] == [("Sonar", "S1"), ("GroundTruth", "GroundTruth")]
     assert [d.item_type for d in describe_items(r)] == ["Sonar", "GroundTruth"]
+
+
+@pytest.mark.parametrize("name", sorted(catalog.robot_files()))
+def test_every_shipped_robot_file_loads(name):
+    assert load_robot(catalog.robot_files()[name]).class_name == name
+
+
+@pytest.mark.parametrize("name", sorted(catalog.world_files()))
+def test_every_shipped_world_file_loads(name):
+    assert check_world_file(catalog.world_files()[name]).name == name
+
+
+# --------------------------------------------------------------------------- defaults
+# A key a file leaves out takes the default of the dataclass field it fills: the expected
+# configs below are built with the dataclasses' own defaults, so a loader default that drifts
+# from its field's fails here.
+
+ROBOT_BARE = """\
+class_name: Bare
+vehicle_type: GroundVehicle
+steering_type: SkidSteered
+drive: skid
+mass_kg: 4.0
+max_speed_rad_s: 4.0
+max_torque_nm: 10.0
+geometry: {dimensions: [0.3, 0.3, 0.2]}
+chassis:
+  - {size: [0.3, 0.2, 0.1], mass_kg: 2.0}
+  - {shape: capsule, radius: 0.02, length: 0.1, mass_kg: 0.5}
+wheels:
+  - {name: L, position: [0.0, -0.15, 0.05], radius_m: 0.05, width_m: 0.02, mass_kg: 0.5, side: left}
+  - {name: R, position: [0.0, 0.15, 0.05], radius_m: 0.05, width_m: 0.02, mass_kg: 0.5, side: right}
+links:
+  - {name: arm, max_speed: 1.0, max_torque: 2.0, shapes: [{shape: sphere, radius: 0.05, mass_kg: 0.5}]}
+mission_packages:
+  - {name: Arm, links: [arm]}
+sensors:
+  - {type: Sonar, name: S1}
+"""
+
+# the top of a robot file of each special drive, and its chassis
+BARE_BODY = """\
+mass_kg: 2.0
+max_speed_rad_s: 4.0
+max_torque_nm: 10.0
+geometry: {dimensions: [0.3, 0.3, 0.2]}
+chassis:
+  - {size: [0.3, 0.2, 0.1], mass_kg: 2.0}
+"""
+
+WORLD_BARE = """\
+name: Bare
+floor: {center: [0.0, 0.0], size: [10.0, 8.0]}
+materials:
+  glass: {}
+objects:
+  - {name: b, shape: box, center: [1.0, 1.0, -0.5], size: [1.0, 1.0, 1.0]}
+  - {name: c, shape: cylinder, center: [2.0, 2.0, -0.5], radius: 0.1, length: 1.0}
+  - {name: m, shape: mesh, file: tetra.obj, center: [0.0, 3.0, 0.0]}
+start_poses:
+  - {name: A, location: [0.0, 0.0, -0.2]}
+victims:
+  - {name: v, location: [1.0, 2.0, -0.1], sound: {}}
+false_alarms:
+  - {name: fa, center: [1.0, 1.0, -0.1], size: [0.1, 0.1, 0.1]}
+rfid_tags:
+  - {id: 3, location: [1.0, 1.0, 0.0]}
+water:
+  - {name: pool, center: [0.0, 5.0, 0.0], size: [1.0, 1.0, 1.0]}
+lights:
+  - {name: sun}
+geo_reference: {}
+wireless: {}
+"""
+
+
+def test_a_bare_robot_file_gets_the_dataclass_defaults(tmp_path):
+    p = write(tmp_path, ROBOT_BARE)
+    wheel = {"radius_m": 0.05, "width_m": 0.02, "mass_kg": 0.5}
+    assert load_robot(p) == R.RobotConfig(
+        class_name="Bare", path=str(p), vehicle_type="GroundVehicle", steering_type="SkidSteered", drive="skid",
+        mass_kg=4.0, max_speed_rad_s=4.0, max_torque_nm=10.0,
+        geometry=R.RobotGeometryConfig(dimensions=(0.3, 0.3, 0.2)),
+        chassis=(R.ChassisBox(size=(0.3, 0.2, 0.1), mass_kg=2.0),
+                 R.ChassisBox(shape="capsule", radius_m=0.02, length_m=0.1, mass_kg=0.5)),
+        wheels=(R.Wheel(name="L", position=(0.0, -0.15, 0.05), side="left", **wheel),
+                R.Wheel(name="R", position=(0.0, 0.15, 0.05), side="right", **wheel)),
+        links=(R.Link(name="arm", max_speed=1.0, max_torque=2.0,
+                      shapes=(R.ChassisBox(shape="sphere", radius_m=0.05, mass_kg=0.5),)),),
+        mission_packages=(R.MissionPackage(name="Arm", links=("arm",)),),
+        items=(R.MountedItem(item_type="Sonar", name="S1", params={}, key_path="sensors[0]"),))
+
+
+@pytest.mark.parametrize("head, attribute, expected", [
+    ("vehicle_type: AerialVehicle\ndrive: aerial\naerial: {}\n", "aerial", R.AerialLimits()),
+    ("vehicle_type: AerialVehicle\ndrive: aerial\n", "aerial", R.AerialLimits()),
+    ("vehicle_type: NauticalVehicle\ndrive: nautical\nnautical: {volume_m3: 0.01}\n", "nautical",
+     R.NauticalSpec(volume_m3=0.01)),
+    (("vehicle_type: LeggedRobot\ndrive: legged\nlinks:\n"
+      "  - {name: hp, max_speed: 1.0, max_torque: 2.0}\n"
+      "  - {name: hr, parent: hp, max_speed: 1.0, max_torque: 2.0}\n"
+      "  - {name: kn, parent: hr, max_speed: 1.0, max_torque: 2.0}\n"
+      "gait:\n  stand_height_m: 0.2\n  legs: [{hip_pitch: hp, hip_roll: hr, knee: kn, upper_m: 0.1, lower_m: 0.1}]\n"),
+     "gait", R.Gait(legs=(R.Leg(hip_pitch="hp", hip_roll="hr", knee="kn", upper_m=0.1, lower_m=0.1),),
+                    stand_height_m=0.2)),
+])
+def test_a_bare_drive_section_gets_the_dataclass_defaults(tmp_path, head, attribute, expected):
+    r = load_robot(write(tmp_path, f"class_name: Bare\nsteering_type: None\n{head}{BARE_BODY}"))
+    assert getattr(r, attribute) == expected
+
+
+def test_a_bare_world_file_gets_the_dataclass_defaults(tmp_path):
+    (tmp_path / "tetra.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    p = write(tmp_path, WORLD_BARE)
+    assert load_world(p) == W.WorldConfig(
+        name="Bare", path=str(p), floor=W.Floor(center=(0.0, 0.0), size=(10.0, 8.0)),
+        materials={name: W.Material(name=name) for name in ("default", "glass", "floor")},
+        objects=(W.StaticObject(name="b", shape="box", center=(1.0, 1.0, -0.5), size=(1.0, 1.0, 1.0)),
+                 W.StaticObject(name="c", shape="cylinder", center=(2.0, 2.0, -0.5), radius_m=0.1, length_m=1.0),
+                 W.StaticObject(name="m", shape="mesh", center=(0.0, 3.0, 0.0),
+                                mesh_file=str((tmp_path / "tetra.obj").resolve()))),
+        start_poses=(W.StartPose(name="A", location=(0.0, 0.0, -0.2)),),
+        victims=(W.Victim(name="v", location=(1.0, 2.0, -0.1)),),
+        false_alarms=(W.FalseAlarm(name="fa", center=(1.0, 1.0, -0.1), size=(0.1, 0.1, 0.1)),),
+        rfid_tags=(W.RfidTagConfig(tag_id=3, location=(1.0, 1.0, 0.0)),),
+        water=(W.WaterVolume(name="pool", center=(0.0, 5.0, 0.0), size=(1.0, 1.0, 1.0)),),
+        lights=(W.Light(name="sun"),), wireless=W.WirelessConfig())
+
+
+def test_a_point_light_casts_no_shadow_unless_asked(tmp_path):
+    p = write(tmp_path, WORLD_OK + "lights:\n  - {name: bulb, type: point}\n  - {name: lamp, type: point, "
+                                   "cast_shadows: true}\n")
+    assert [light.cast_shadows for light in load_world(p).lights] == [False, True]
+
+
+def test_field_defaults_reads_defaults_and_refuses_fields_without_one():
+    assert FieldDefaults(R.RobotConfig).battery_s == 1200.0
+    geo = FieldDefaults(W.WorldConfig).geo  # a default_factory: a fresh value each time
+    assert geo == W.GeoReference() and geo is not FieldDefaults(W.WorldConfig).geo
+    with pytest.raises(AttributeError, match="RobotConfig.mass_kg has no default"):
+        _ = FieldDefaults(R.RobotConfig).mass_kg
+    with pytest.raises(AttributeError, match="did you mean 'battery_s'"):
+        _ = FieldDefaults(R.RobotConfig).battery
+    with pytest.raises(TypeError, match="needs a dataclass"):
+        FieldDefaults(dict)
 
 
 # --------------------------------------------------------------------------- world errors
@@ -376,7 +525,7 @@ def test_leg_ik_puts_the_foot_where_asked(knee_forward, foot):
     about the rolled Y; USARSim frame, Z down) reach the foot, the knee on its side."""
     import math
 
-    from usarsim.sim.simulation import leg_ik
+    from usarsim.robots.legged import leg_ik
 
     upper, lower = 0.11, 0.11
     pitch, roll, knee = leg_ik(*foot, upper, lower, knee_forward)

@@ -3,10 +3,12 @@ file, the key path, the value received and what is allowed."""
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
+from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import yaml
 
@@ -39,6 +41,33 @@ def did_you_mean(word: str, allowed: Iterable[str]) -> str:
             close = [lowered[word.lower()]]
     hint = f" (did you mean '{close[0]}'?)" if close else ""
     return f"{hint}; allowed: {', '.join(sorted(allowed))}"
+
+
+class FieldDefaults:
+    """The defaults a dataclass declares, by field name: ``FieldDefaults(RobotConfig).battery_s``.
+
+    Loaders read every optional key with the default of the field it fills
+    (``top.float("battery_s", d.battery_s, min=...)``), so the dataclass is the one place a
+    default is written.  A ``default_factory`` gives a fresh value; a field without a
+    default, or a name that is no field, is a programming error (AttributeError)."""
+
+    def __init__(self, cls: type):
+        if not (isinstance(cls, type) and dataclasses.is_dataclass(cls)):
+            raise TypeError(f"FieldDefaults needs a dataclass, got {cls!r}")
+        self._cls = cls
+        self._fields = {f.name: f for f in dataclasses.fields(cls)}
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        f = self._fields.get(name)
+        if f is None:
+            raise AttributeError(f"{self._cls.__name__} has no field '{name}'{did_you_mean(name, self._fields)}")
+        if f.default is not dataclasses.MISSING:
+            return f.default
+        if f.default_factory is not dataclasses.MISSING:
+            return f.default_factory()
+        raise AttributeError(f"{self._cls.__name__}.{name} has no default: read it as a required key")
 
 
 class Section:
@@ -110,7 +139,7 @@ class Section:
             return v
         return check_vec(v, n, self.path, self._k(name), positive=positive)
 
-    def section(self, name: str, default: Any = ...) -> "Section":
+    def section(self, name: str, default: Any = ...) -> Section:
         v = self.raw(name, default)
         return Section(v if v is not None else {}, path=self.path, key=self._k(name))
 
@@ -121,6 +150,15 @@ class Section:
         if not isinstance(v, list):
             raise self.error(name, f"expected a list, got {type(v).__name__}")
         return v
+
+    def entries(self, name: str, *, required: bool = False) -> Iterator[Section]:
+        """Each mapping of the list ``name`` (none when the key is missing, unless
+        ``required``) as a Section keyed ``name[i]``; its unknown keys are refused once the
+        loop's body has read it."""
+        for i, raw in enumerate(self.list(name) if required else self.list(name, [])):
+            s = Section(raw, path=self.path, key=f"{self._k(name)}[{i}]")
+            yield s
+            s.finish()
 
     def finish(self, allowed_extra: Iterable[str] = ()) -> None:
         """Fail on the first key that nothing read."""

@@ -62,6 +62,7 @@ the conversion the GPS sensor uses (:func:`usarsim.sensors.gps.world_to_geograph
 from __future__ import annotations
 
 import difflib
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -345,7 +346,7 @@ class _Reader:
             v = float(token)
         except ValueError:
             v = float("nan")
-        if v != v or v in (float("inf"), float("-inf")):
+        if not math.isfinite(v):
             raise self.error(line, f"{what} must be a number, got '{token}'")
         if (low is not None and v < low) or (high is not None and v > high):
             rng = f"within [{low:g}, {high:g}]" if high is not None else f">= {low:g}"

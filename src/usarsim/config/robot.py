@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from usarsim.config.reader import Section, did_you_mean, load_yaml
+from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml
 from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
@@ -31,7 +31,7 @@ JOINT_TYPES = ("revolute", "prismatic")
 class ChassisBox:
     """A solid piece of a robot body (the chassis or a link): a box by default."""
 
-    center: Vec3
+    center: Vec3 = (0.0, 0.0, 0.0)
     size: Vec3 = (0.0, 0.0, 0.0)  # box: full extents
     mass_kg: float
     shape: str = "box"
@@ -52,13 +52,13 @@ class Link:
     (continuous) joint, as in USARSim's CONF."""
 
     name: str
-    parent: str  # "chassis" or a link name
-    location: Vec3  # joint origin in the parent's frame
-    orientation: Vec3
-    joint: str
-    axis: Vec3
-    min_range: float
-    max_range: float
+    parent: str = "chassis"  # or a link name
+    location: Vec3 = (0.0, 0.0, 0.0)  # joint origin in the parent's frame
+    orientation: Vec3 = (0.0, 0.0, 0.0)
+    joint: str = "revolute"  # JOINT_TYPES
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    min_range: float = 1.0  # min_range > max_range: continuous unless a range is given
+    max_range: float = 0.0
     max_speed: float
     max_torque: float
     shapes: tuple[ChassisBox, ...] = ()
@@ -132,7 +132,7 @@ class Leg:
     knee: str
     upper_m: float
     lower_m: float
-    phase: float
+    phase: float = 0.0
     hip_yaw: str | None = None
     ankle_pitch: str | None = None
     ankle_roll: str | None = None
@@ -171,26 +171,29 @@ class MountedItem:
 
     item_type: str
     name: str
-    location: Vec3
-    orientation: Vec3
-    mount: str
+    location: Vec3 = (0.0, 0.0, 0.0)
+    orientation: Vec3 = (0.0, 0.0, 0.0)
+    mount: str = "HARD"  # HARD (the chassis), a wheel or a link
     params: dict[str, Any]
     key_path: str = ""
 
 
 @dataclass(frozen=True, kw_only=True)
 class RobotGeometryConfig:
+    """The robot's overall geometry as GEO reports it: its bounding box (the chassis origin
+    is its centre), centre of gravity and wheel layout (0: not given)."""
+
     dimensions: Vec3
-    cog: Vec3
-    wheel_radius_m: float
-    wheel_separation_m: float
-    wheel_base_m: float
+    cog: Vec3 = (0.0, 0.0, 0.0)
+    wheel_radius_m: float = 0.0
+    wheel_separation_m: float = 0.0
+    wheel_base_m: float = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
 class RobotConfig:
     class_name: str
-    description: str
+    description: str = ""
     path: str
     vehicle_type: str
     steering_type: str
@@ -198,10 +201,10 @@ class RobotConfig:
     mass_kg: float
     max_speed_rad_s: float
     max_torque_nm: float
-    max_front_steer_rad: float
-    max_rear_steer_rad: float
-    battery_s: float
-    status_interval_s: float
+    max_front_steer_rad: float = 0.0
+    max_rear_steer_rad: float = 0.0
+    battery_s: float = 1200.0  # battery life at rest (STA Battery)
+    status_interval_s: float = 0.2  # STA and MISSTA period
     geometry: RobotGeometryConfig
     chassis: tuple[ChassisBox, ...]
     wheels: tuple[Wheel, ...]
@@ -289,31 +292,159 @@ class RobotConfig:
 def _shape(s: Section) -> ChassisBox:
     """One solid piece: ``{shape: box, center, size, mass_kg}``, ``{shape: sphere, center,
     radius, mass_kg}``, ``{shape: cylinder|capsule, center, radius, length, rotation, mass_kg}``."""
-    shape = s.str("shape", "box", choices=SHAPES)
-    center = s.vec("center", 3, (0.0, 0.0, 0.0))
+    d = FieldDefaults(ChassisBox)
+    shape = s.str("shape", d.shape, choices=SHAPES)
+    center = s.vec("center", 3, d.center)
     mass = s.float("mass_kg", min=0.001)
-    rotation = s.vec("rotation", 3, (0.0, 0.0, 0.0))
-    friction = s.float("friction", None, min=0.0, max=10.0)
+    rotation = s.vec("rotation", 3, d.rotation)
+    friction = s.float("friction", d.friction, min=0.0, max=10.0)
     if shape == "box":
-        piece = ChassisBox(center=center, size=s.vec("size", positive=True), mass_kg=mass, rotation=rotation,
-                           friction=friction)
-    elif shape == "sphere":
-        piece = ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001), mass_kg=mass,
-                           friction=friction)
-    else:
-        piece = ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001),
-                           length_m=s.float("length", min=0.0), mass_kg=mass, rotation=rotation, friction=friction)
-    s.finish()
-    return piece
+        return ChassisBox(center=center, size=s.vec("size", positive=True), mass_kg=mass, rotation=rotation,
+                          friction=friction)
+    if shape == "sphere":
+        return ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001), mass_kg=mass,
+                          friction=friction)
+    return ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001),
+                      length_m=s.float("length", min=0.0), mass_kg=mass, rotation=rotation, friction=friction)
+
+
+def _aerial(a: Section) -> AerialLimits:
+    d = FieldDefaults(AerialLimits)
+    out = AerialLimits(max_linear_m_s=a.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
+                       max_lateral_m_s=a.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
+                       max_vertical_m_s=a.float("max_vertical_m_s", d.max_vertical_m_s, min=0.0, min_exclusive=True),
+                       max_yaw_rate_rad_s=a.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0,
+                                                  min_exclusive=True),
+                       max_accel_m_s2=a.float("max_accel_m_s2", d.max_accel_m_s2, min=0.0, min_exclusive=True))
+    a.finish()
+    return out
+
+
+def _nautical(n: Section) -> NauticalSpec:
+    d = FieldDefaults(NauticalSpec)
+    out = NauticalSpec(volume_m3=n.float("volume_m3", min=0.0, min_exclusive=True),  # required in a file
+                       max_thrust_n=n.float("max_thrust_n", d.max_thrust_n, min=0.0, min_exclusive=True),
+                       max_rudder_rad=n.float("max_rudder_rad", d.max_rudder_rad, min=0.0, max=1.6),
+                       max_stern_plane_rad=n.float("max_stern_plane_rad", d.max_stern_plane_rad, min=0.0, max=1.6),
+                       rudder_gain=n.float("rudder_gain", d.rudder_gain, min=0.0),
+                       stern_plane_gain=n.float("stern_plane_gain", d.stern_plane_gain, min=0.0),
+                       drag_n_per_m_s=n.float("drag_n_per_m_s", d.drag_n_per_m_s, min=0.0),
+                       angular_drag=n.float("angular_drag", d.angular_drag, min=0.0))
+    n.finish()
+    return out
+
+
+def _gait(gs: Section) -> Gait:
+    ld = FieldDefaults(Leg)
+    legs = []
+    for ls in gs.entries("legs", required=True):
+        legs.append(Leg(hip_pitch=ls.str("hip_pitch"), hip_roll=ls.str("hip_roll"), knee=ls.str("knee"),
+                        upper_m=ls.float("upper_m", min=0.001), lower_m=ls.float("lower_m", min=0.001),
+                        phase=ls.float("phase", ld.phase, min=0.0, max=1.0),
+                        hip_yaw=ls.str("hip_yaw", ld.hip_yaw), ankle_pitch=ls.str("ankle_pitch", ld.ankle_pitch),
+                        ankle_roll=ls.str("ankle_roll", ld.ankle_roll),
+                        knee_forward=ls.bool("knee_forward", ld.knee_forward)))
+    d = FieldDefaults(Gait)
+    out = Gait(legs=tuple(legs), stand_height_m=gs.float("stand_height_m", min=0.001),
+               step_height_m=gs.float("step_height_m", d.step_height_m, min=0.0),
+               period_s=gs.float("period_s", d.period_s, min=0.05),
+               max_linear_m_s=gs.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
+               max_lateral_m_s=gs.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
+               max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0, min_exclusive=True),
+               duty=gs.float("duty", d.duty, min=0.5, max=0.95), sway_m=gs.float("sway_m", d.sway_m, min=0.0))
+    gs.finish()
+    return out
+
+
+def _geometry(g: Section) -> RobotGeometryConfig:
+    """The ``geometry`` section; its wheel keys lack the ``_m`` of the fields they fill."""
+    d = FieldDefaults(RobotGeometryConfig)
+    out = RobotGeometryConfig(dimensions=g.vec("dimensions", positive=True), cog=g.vec("cog", 3, d.cog),
+                              wheel_radius_m=g.float("wheel_radius", d.wheel_radius_m, min=0.0),
+                              wheel_separation_m=g.float("wheel_separation", d.wheel_separation_m, min=0.0),
+                              wheel_base_m=g.float("wheel_base", d.wheel_base_m, min=0.0))
+    g.finish()
+    return out
+
+
+def _wheels(top: Section) -> list[Wheel]:
+    d = FieldDefaults(Wheel)
+    wheels: list[Wheel] = []
+    for s in top.entries("wheels"):
+        w = Wheel(name=s.str("name"), position=s.vec("position"), radius_m=s.float("radius_m", min=0.001),
+                  width_m=s.float("width_m", min=0.001), mass_kg=s.float("mass_kg", min=0.001),
+                  side=s.str("side", choices=("left", "right")), driven=s.bool("driven", d.driven),
+                  parent=s.str("parent", d.parent), steer=s.str("steer", d.steer, choices=STEER_GROUPS),
+                  number=s.int("number", d.number, min=-1))
+        if any(w.name == other.name for other in wheels):
+            raise s.error("name", f"duplicate wheel name '{w.name}'")
+        wheels.append(w)
+    return wheels
+
+
+def _links(top: Section, wnames: set[str]) -> list[Link]:
+    """The ``links`` list, each after its parent; names unique among links and wheels."""
+    d = FieldDefaults(Link)
+    links: list[Link] = []
+    lnames: set[str] = set()
+    for s in top.entries("links"):
+        lname = s.str("name")
+        if any(c in lname for c in "{} \t/") or lname in lnames or lname in wnames or lname.lower() == "chassis":
+            raise s.error("name", f"link names must be unique, without spaces, braces or '/', got {lname!r}")
+        parent = s.str("parent", d.parent)
+        if parent != "chassis" and parent not in lnames:
+            raise s.error("parent", f"unknown parent '{parent}' (links must come after their parent)"
+                                    f"{did_you_mean(parent, ['chassis', *lnames])}")
+        axis = s.vec("axis", 3, d.axis)
+        if sum(a * a for a in axis) < 1e-12:
+            raise s.error("axis", "the joint axis must not be zero")
+        shapes = tuple(_shape(sh) for sh in s.entries("shapes"))
+        links.append(Link(name=lname, parent=parent, location=s.vec("location", 3, d.location),
+                          orientation=s.vec("orientation", 3, d.orientation),
+                          joint=s.str("joint", d.joint, choices=JOINT_TYPES), axis=axis,
+                          min_range=s.float("min_range", d.min_range), max_range=s.float("max_range", d.max_range),
+                          max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
+                          max_torque=s.float("max_torque", min=0.0, min_exclusive=True), shapes=shapes,
+                          armature=s.float("armature", d.armature, min=0.0), collide=s.bool("collide", d.collide)))
+        lnames.add(lname)
+    return links
+
+
+def _items(top: Section, mounts: list[str]) -> list[MountedItem]:
+    """The ``sensors`` list (sensors and effecters); keys other than the pose stay raw in
+    ``params`` for the plugin's Config to check."""
+    d = FieldDefaults(MountedItem)
+    items: list[MountedItem] = []
+    inames: set[tuple[str, str]] = set()
+    for i, raw in enumerate(top.list("sensors", [])):
+        key = f"sensors[{i}]"
+        s = Section(raw, path=top.path, key=key)
+        itype = s.str("type")
+        iname = s.str("name")
+        if any(c in iname for c in "{} \t"):
+            raise s.error("name", f"an item name may not contain spaces or braces, got {iname!r}")
+        if (itype.lower(), iname.lower()) in inames:
+            raise s.error("name", f"duplicate {itype} name '{iname}'")
+        inames.add((itype.lower(), iname.lower()))
+        loc = s.vec("location", 3, d.location)
+        ori = s.vec("orientation", 3, d.orientation)
+        mount = s.str("mount", d.mount)
+        if mount != "HARD" and mount not in mounts:
+            raise s.error("mount", f"unknown mount '{mount}'{did_you_mean(mount, ['HARD', *mounts])}")
+        params = {k: v for k, v in s.data.items() if k not in ("type", "name", "location", "orientation", "mount")}
+        items.append(MountedItem(item_type=itype, name=iname, location=loc, orientation=ori, mount=mount,
+                                 params=params, key_path=key))
+    return items
 
 
 def load_robot(path: str | Path) -> RobotConfig:
     path = str(path)
+    d = FieldDefaults(RobotConfig)
     top = Section(load_yaml(path), path=path)
     class_name = top.str("class_name")
     if any(c in class_name for c in "{} \t."):
         raise top.error("class_name", f"a class name may not contain spaces, dots or braces, got {class_name!r}")
-    desc = top.str("description", "")
+    desc = top.str("description", d.description)
     vehicle_type = top.str("vehicle_type", choices=VEHICLE_TYPES)
     steering = top.str("steering_type", choices=STEERING_TYPES)
     drive = top.str("drive")
@@ -322,114 +453,40 @@ def load_robot(path: str | Path) -> RobotConfig:
     mass = top.float("mass_kg", min=0.01)
     max_speed = top.float("max_speed_rad_s", min=0.0, min_exclusive=True)
     max_torque = top.float("max_torque_nm", min=0.0, min_exclusive=True)
-    mfs = top.float("max_front_steer_rad", 0.0, min=0.0)
-    mrs = top.float("max_rear_steer_rad", 0.0, min=0.0)
-    battery = top.float("battery_s", 1200.0, min=0.0, min_exclusive=True)
-    status_interval = top.float("status_interval_s", 0.2, min=0.01, max=10.0)
-    spawn_clearance = top.float("spawn_clearance_m", 0.02, min=0.0, max=2.0)
-    wheel_friction = top.float("wheel_friction", 1.0, min=0.0, max=10.0)
-    wheel_gain = top.float("wheel_gain", 20.0, min=0.0, min_exclusive=True)
-    wheel_torque = top.float("wheel_torque_nm", None, min=0.0, min_exclusive=True)
-    steer_torque = top.float("steer_torque_nm", 50.0, min=0.0, min_exclusive=True)
-    a = top.section("aerial", {})
-    aerial = AerialLimits(max_linear_m_s=a.float("max_linear_m_s", 2.0, min=0.0, min_exclusive=True),
-                          max_lateral_m_s=a.float("max_lateral_m_s", 2.0, min=0.0, min_exclusive=True),
-                          max_vertical_m_s=a.float("max_vertical_m_s", 2.0, min=0.0, min_exclusive=True),
-                          max_yaw_rate_rad_s=a.float("max_yaw_rate_rad_s", 1.7453, min=0.0, min_exclusive=True),
-                          max_accel_m_s2=a.float("max_accel_m_s2", 4.0, min=0.0, min_exclusive=True))
-    a.finish()
-    nautical = None
+    mfs = top.float("max_front_steer_rad", d.max_front_steer_rad, min=0.0)
+    mrs = top.float("max_rear_steer_rad", d.max_rear_steer_rad, min=0.0)
+    battery = top.float("battery_s", d.battery_s, min=0.0, min_exclusive=True)
+    status_interval = top.float("status_interval_s", d.status_interval_s, min=0.01, max=10.0)
+    spawn_clearance = top.float("spawn_clearance_m", d.spawn_clearance_m, min=0.0, max=2.0)
+    wheel_friction = top.float("wheel_friction", d.wheel_friction, min=0.0, max=10.0)
+    wheel_gain = top.float("wheel_gain", d.wheel_gain, min=0.0, min_exclusive=True)
+    wheel_torque = top.float("wheel_torque_nm", d.wheel_torque_nm, min=0.0, min_exclusive=True)
+    steer_torque = top.float("steer_torque_nm", d.steer_torque_nm, min=0.0, min_exclusive=True)
+    aerial = _aerial(top.section("aerial", {}))
+    nautical = d.nautical
     if drive == "nautical" or top.has("nautical"):
         if drive != "nautical":
             raise top.error("nautical", "only a vessel (drive: nautical) has nautical settings")
-        n = top.section("nautical")
-        nautical = NauticalSpec(volume_m3=n.float("volume_m3", min=0.0, min_exclusive=True),
-                                max_thrust_n=n.float("max_thrust_n", 50.0, min=0.0, min_exclusive=True),
-                                max_rudder_rad=n.float("max_rudder_rad", 0.5, min=0.0, max=1.6),
-                                max_stern_plane_rad=n.float("max_stern_plane_rad", 0.5, min=0.0, max=1.6),
-                                rudder_gain=n.float("rudder_gain", 20.0, min=0.0),
-                                stern_plane_gain=n.float("stern_plane_gain", 20.0, min=0.0),
-                                drag_n_per_m_s=n.float("drag_n_per_m_s", 40.0, min=0.0),
-                                angular_drag=n.float("angular_drag", 20.0, min=0.0))
-        n.finish()
-    gait = None
+        nautical = _nautical(top.section("nautical"))
+    gait = d.gait
     if drive == "legged" or top.has("gait"):
         if drive != "legged":
             raise top.error("gait", "only a walking robot (drive: legged) has a gait")
-        gs = top.section("gait")
-        legs = []
-        for i, raw in enumerate(gs.list("legs")):
-            ls = Section(raw, path=path, key=f"gait.legs[{i}]")
-            legs.append(Leg(hip_pitch=ls.str("hip_pitch"), hip_roll=ls.str("hip_roll"), knee=ls.str("knee"),
-                            upper_m=ls.float("upper_m", min=0.001), lower_m=ls.float("lower_m", min=0.001),
-                            phase=ls.float("phase", 0.0, min=0.0, max=1.0),
-                            hip_yaw=ls.str("hip_yaw", None), ankle_pitch=ls.str("ankle_pitch", None),
-                            ankle_roll=ls.str("ankle_roll", None), knee_forward=ls.bool("knee_forward", False)))
-            ls.finish()
-        gait = Gait(legs=tuple(legs), stand_height_m=gs.float("stand_height_m", min=0.001),
-                    step_height_m=gs.float("step_height_m", 0.02, min=0.0),
-                    period_s=gs.float("period_s", 0.5, min=0.05),
-                    max_linear_m_s=gs.float("max_linear_m_s", 0.2, min=0.0, min_exclusive=True),
-                    max_lateral_m_s=gs.float("max_lateral_m_s", 0.1, min=0.0, min_exclusive=True),
-                    max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", 0.8, min=0.0, min_exclusive=True),
-                    duty=gs.float("duty", 0.5, min=0.5, max=0.95), sway_m=gs.float("sway_m", 0.0, min=0.0))
-        gs.finish()
+        gait = _gait(top.section("gait"))
     if top.has("aerial") and drive != "aerial":
         raise top.error("aerial", "only an aerial robot (drive: aerial) has aerial limits")
 
-    g = top.section("geometry")
-    geometry = RobotGeometryConfig(
-        dimensions=g.vec("dimensions", positive=True), cog=g.vec("cog", 3, (0.0, 0.0, 0.0)),
-        wheel_radius_m=g.float("wheel_radius", 0.0, min=0.0), wheel_separation_m=g.float("wheel_separation", 0.0, min=0.0),
-        wheel_base_m=g.float("wheel_base", 0.0, min=0.0))
-    g.finish()
+    geometry = _geometry(top.section("geometry"))
 
-    chassis = [_shape(Section(raw, path=path, key=f"chassis[{i}]")) for i, raw in enumerate(top.list("chassis"))]
+    chassis = [_shape(s) for s in top.entries("chassis", required=True)]
     if not chassis:
         raise top.error("chassis", "a robot needs at least one chassis box")
 
-    wheels = []
-    wnames: set[str] = set()
-    for i, raw in enumerate(top.list("wheels", [])):
-        s = Section(raw, path=path, key=f"wheels[{i}]")
-        w = Wheel(name=s.str("name"), position=s.vec("position"), radius_m=s.float("radius_m", min=0.001),
-                  width_m=s.float("width_m", min=0.001), mass_kg=s.float("mass_kg", min=0.001),
-                  side=s.str("side", choices=("left", "right")), driven=s.bool("driven", True),
-                  parent=s.str("parent", "chassis"), steer=s.str("steer", "none", choices=STEER_GROUPS),
-                  number=s.int("number", -1, min=-1))
-        if w.name in wnames:
-            raise s.error("name", f"duplicate wheel name '{w.name}'")
-        wnames.add(w.name)
-        s.finish()
-        wheels.append(w)
-    if drive == "skid" and not (any(w.side == "left" for w in wheels) and any(w.side == "right" for w in wheels)):
-        raise top.error("wheels", "a skid-steered robot needs at least one left and one right wheel")
+    wheels = _wheels(top)
+    wnames = {w.name for w in wheels}
 
-    links: list[Link] = []
-    lnames: set[str] = set()
-    for i, raw in enumerate(top.list("links", [])):
-        s = Section(raw, path=path, key=f"links[{i}]")
-        lname = s.str("name")
-        if any(c in lname for c in "{} \t/") or lname in lnames or lname in wnames or lname.lower() == "chassis":
-            raise s.error("name", f"link names must be unique, without spaces, braces or '/', got {lname!r}")
-        parent = s.str("parent", "chassis")
-        if parent != "chassis" and parent not in lnames:
-            raise s.error("parent", f"unknown parent '{parent}' (links must come after their parent)"
-                                    f"{did_you_mean(parent, ['chassis', *lnames])}")
-        axis = s.vec("axis", 3, (0.0, 0.0, 1.0))
-        if sum(a * a for a in axis) < 1e-12:
-            raise s.error("axis", "the joint axis must not be zero")
-        shapes = tuple(_shape(Section(r, path=path, key=f"links[{i}].shapes[{k}]"))
-                       for k, r in enumerate(s.list("shapes", [])))
-        links.append(Link(name=lname, parent=parent, location=s.vec("location", 3, (0.0, 0.0, 0.0)),
-                          orientation=s.vec("orientation", 3, (0.0, 0.0, 0.0)),
-                          joint=s.str("joint", "revolute", choices=JOINT_TYPES), axis=axis,
-                          min_range=s.float("min_range", 1.0), max_range=s.float("max_range", 0.0),
-                          max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
-                          max_torque=s.float("max_torque", min=0.0, min_exclusive=True), shapes=shapes,
-                          armature=s.float("armature", 0.05, min=0.0), collide=s.bool("collide", True)))
-        lnames.add(lname)
-        s.finish()
+    links = _links(top, wnames)
+    lnames = {ln.name for ln in links}
 
     for i, w in enumerate(wheels):
         if w.parent != "chassis" and w.parent not in lnames:
@@ -437,19 +494,8 @@ def load_robot(path: str | Path) -> RobotConfig:
                               path=path, key=f"wheels[{i}].parent")
         if w.steer != "none" and w.parent != "chassis":
             raise ConfigError("a steered wheel must sit on the chassis", path=path, key=f"wheels[{i}].steer")
-    if drive == "ackermann":
-        if not any(w.steer in ("front", "rear") for w in wheels) or not any(w.driven for w in wheels):
-            raise top.error("wheels", "an Ackermann-steered robot needs steered (steer: front or rear) and "
-                                      "driven wheels")
-        if mfs <= 0 and mrs <= 0:
-            raise top.error("max_front_steer_rad", "an Ackermann-steered robot needs max_front_steer_rad > 0 "
-                                                   "(or max_rear_steer_rad)")
-    if drive == "holonomic":
-        numbers = [w.number for w in wheels if w.steer == "free"]
-        if not numbers or -1 in numbers or len(set(numbers)) != len(numbers):
-            raise top.error("wheels", "a holonomic robot's steered wheels (steer: free) need distinct numbers "
-                                      "(number: 0, 1, ...), the WheelNumber of its DRIVE")
-
+    # what a kind of drive needs of the wheels (sides, steered axles, numbers) is checked by
+    # its drive model (usarsim.robots), when the robot is validated or spawned
     if gait is not None:
         if gait.sway_m > 0.0 and (len(gait.legs) != 2 or abs(abs(gait.legs[0].phase - gait.legs[1].phase) - 0.5) > 1e-6):
             raise top.error("gait.sway_m", "only a biped sways: two legs half a period apart (phase 0 and 0.5)")
@@ -463,8 +509,7 @@ def load_robot(path: str | Path) -> RobotConfig:
             raise top.error("status_joints", f"unknown link '{j}'{did_you_mean(j, lnames)}")
 
     packages: list[MissionPackage] = []
-    for i, raw in enumerate(top.list("mission_packages", [])):
-        s = Section(raw, path=path, key=f"mission_packages[{i}]")
+    for s in top.entries("mission_packages"):
         pname = s.str("name")
         plinks = s.list("links")
         for ln in plinks:
@@ -473,28 +518,8 @@ def load_robot(path: str | Path) -> RobotConfig:
         if not plinks:
             raise s.error("links", "a mission package needs at least one link")
         packages.append(MissionPackage(name=pname, links=tuple(str(x) for x in plinks)))
-        s.finish()
 
-    items = []
-    inames: set[tuple[str, str]] = set()
-    for i, raw in enumerate(top.list("sensors", [])):
-        key = f"sensors[{i}]"
-        s = Section(raw, path=path, key=key)
-        itype = s.str("type")
-        iname = s.str("name")
-        if any(c in iname for c in "{} \t"):
-            raise s.error("name", f"an item name may not contain spaces or braces, got {iname!r}")
-        if (itype.lower(), iname.lower()) in inames:
-            raise s.error("name", f"duplicate {itype} name '{iname}'")
-        inames.add((itype.lower(), iname.lower()))
-        loc = s.vec("location", 3, (0.0, 0.0, 0.0))
-        ori = s.vec("orientation", 3, (0.0, 0.0, 0.0))
-        mount = s.str("mount", "HARD")
-        if mount != "HARD" and mount not in wnames and mount not in lnames:
-            raise s.error("mount", f"unknown mount '{mount}'{did_you_mean(mount, ['HARD', *wnames, *lnames])}")
-        params = {k: v for k, v in s.data.items() if k not in ("type", "name", "location", "orientation", "mount")}
-        items.append(MountedItem(item_type=itype, name=iname, location=loc, orientation=ori, mount=mount,
-                                 params=params, key_path=key))
+    items = _items(top, [*wnames, *lnames])
     top.finish()
 
     total = (sum(c.mass_kg for c in chassis) + sum(w.mass_kg for w in wheels)

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from usarsim.config.reader import Section, load_yaml
+from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml
 from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
@@ -200,7 +200,7 @@ class WirelessConfig:
 @dataclass(frozen=True, kw_only=True)
 class WorldConfig:
     name: str
-    description: str
+    description: str = ""
     path: str
     floor: Floor
     materials: dict[str, Material]
@@ -321,15 +321,6 @@ def utm_to_latlon(utm: UtmCoordinate) -> tuple[float, float]:
     return math.degrees(phi), (lon + 180.0) % 360.0 - 180.0
 
 
-def _entries(top: Section, key: str, path: str):
-    """Each entry of the list ``key`` as a Section; its unknown keys are refused once the
-    loop's body has read it."""
-    for i, raw in enumerate(top.list(key, [])):
-        s = Section(raw, path=path, key=f"{key}[{i}]")
-        yield s
-        s.finish()
-
-
 def _unique_name(s: Section, taken: set[str], what: str = "name") -> str:
     """The entry's ``name``, refused when ``taken`` has it already (then it has it)."""
     name = s.str("name")
@@ -341,43 +332,42 @@ def _unique_name(s: Section, taken: set[str], what: str = "name") -> str:
 
 def load_world(path: str | Path) -> WorldConfig:
     path = str(path)
+    d = FieldDefaults(WorldConfig)
     top = Section(load_yaml(path), path=path)
     name = top.str("name")
     if any(c in name for c in "{} \t"):
         raise top.error("name", f"a world name may not contain spaces or braces, got {name!r}")
-    description = top.str("description", "")
-    time_limit = top.int("time_limit_min", 0, min=0)
+    description = top.str("description", d.description)
+    time_limit = top.int("time_limit_min", d.time_limit_min, min=0)
     physics = top.section("physics", {})
-    timestep = physics.float("timestep_s", 0.004, min=0.0005, max=0.02)
-    gravity = physics.float("gravity_m_s2", 9.81, min=0.0, max=100.0)
+    timestep = physics.float("timestep_s", d.timestep_s, min=0.0005, max=0.02)
+    gravity = physics.float("gravity_m_s2", d.gravity_m_s2, min=0.0, max=100.0)
     physics.finish()
 
     mats_sec = top.section("materials", {})
     materials: dict[str, Material] = {"default": Material(name="default")}
+    md = FieldDefaults(Material)
     for mname in list(mats_sec.data):
         ms = mats_sec.section(str(mname))
-        rgba = ms.vec("rgba", 4, (0.7, 0.7, 0.7, 1.0))
+        rgba = ms.vec("rgba", 4, md.rgba)
         if any(c < 0 or c > 1 for c in rgba):
             raise ms.error("rgba", f"each colour component must be within [0, 1], got {list(rgba)}")
         see = ms.list("see_through", [])
         for k in see:
             if k not in SEE_THROUGH_KINDS:
-                from usarsim.config.reader import did_you_mean
-
                 raise ms.error("see_through", f"unknown sensor kind {k!r}{did_you_mean(str(k), SEE_THROUGH_KINDS)}; "
                                               f"allowed: {', '.join(SEE_THROUGH_KINDS)}")
-        mirror = ms.bool("mirror", False)
-        porosity = ms.float("porosity", 0.0, min=0.0, max=1.0)
+        mirror = ms.bool("mirror", md.mirror)
+        porosity = ms.float("porosity", md.porosity, min=0.0, max=1.0)
         if mirror and porosity > 0:
             raise ms.error("porosity", "a mirror cannot be porous: give either mirror: true or a porosity")
-        materials[str(mname)] = Material(name=str(mname), rgba=rgba, friction=ms.float("friction", 1.0, min=0.0, max=10.0),
+        materials[str(mname)] = Material(name=str(mname), rgba=rgba,
+                                         friction=ms.float("friction", md.friction, min=0.0, max=10.0),
                                          see_through=tuple(see), mirror=mirror, porosity=porosity)
         ms.finish()
 
     def check_material(sec: Section, key: str, value: str) -> None:
         if value not in materials:
-            from usarsim.config.reader import did_you_mean
-
             raise sec.error(key, f"unknown material '{value}'{did_you_mean(value, materials)}")
 
     def check_flat(sec: Section, key: str, value: str, shape: str) -> None:
@@ -387,7 +377,8 @@ def load_world(path: str | Path) -> WorldConfig:
                                  f"stairs) may use; this object is a {shape}")
 
     fl = top.section("floor")
-    floor = Floor(center=fl.vec("center", 2), size=fl.vec("size", 2, positive=True), material=fl.str("material", "floor"))
+    floor = Floor(center=fl.vec("center", 2), size=fl.vec("size", 2, positive=True),
+                  material=fl.str("material", FieldDefaults(Floor).material))
     if floor.material not in materials:
         materials[floor.material] = Material(name=floor.material)
     check_flat(fl, "material", floor.material, "plane")
@@ -396,10 +387,11 @@ def load_world(path: str | Path) -> WorldConfig:
     objects: list[StaticObject] = []
     names: set[str] = set()
     world_dir = Path(path).resolve().parent
-    for s in _entries(top, "objects", path):
+    od = FieldDefaults(StaticObject)
+    for s in top.entries("objects"):
         oname = _unique_name(s, names, "object name")
         shape = s.str("shape", choices=OBJECT_SHAPES)
-        material = s.str("material", "default")
+        material = s.str("material", od.material)
         check_material(s, "material", material)
         if shape in ("ramp", "stairs"):
             parts = _ramp(s, oname, material) if shape == "ramp" else _stairs(s, oname, material)
@@ -411,8 +403,8 @@ def load_world(path: str | Path) -> WorldConfig:
             continue
         check_flat(s, "material", material, shape)
         center = s.vec("center")
-        rotation = s.vec("rotation", 3, (0.0, 0.0, 0.0))
-        mass = s.float("mass_kg", 0.0, min=0.0)
+        rotation = s.vec("rotation", 3, od.rotation)
+        mass = s.float("mass_kg", od.mass_kg, min=0.0)
         if shape == "box":
             obj = StaticObject(name=oname, shape=shape, center=center, size=s.vec("size", 3, positive=True),
                                rotation=rotation, material=material, mass_kg=mass)
@@ -423,22 +415,24 @@ def load_world(path: str | Path) -> WorldConfig:
         else:
             obj = StaticObject(name=oname, shape=shape, center=center, rotation=rotation, material=material,
                                mass_kg=mass, mesh_file=_mesh_file(s, world_dir),
-                               scale=s.vec("scale", 3, (1.0, 1.0, 1.0), positive=True))
+                               scale=s.vec("scale", 3, od.scale, positive=True))
         objects.append(obj)
 
     poses: list[StartPose] = []
     pnames: set[str] = set()
-    for s in _entries(top, "start_poses", path):
+    pd = FieldDefaults(StartPose)
+    for s in top.entries("start_poses"):
         pname = s.str("name")
         if any(c in pname for c in "{} \t,"):
             raise s.error("name", f"a start pose name may not contain spaces, commas or braces, got {pname!r}")
         if pname.lower() in pnames:
             raise s.error("name", f"duplicate start pose name '{pname}'")
         pnames.add(pname.lower())
-        poses.append(StartPose(name=pname, location=s.vec("location"), rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0))))
+        poses.append(StartPose(name=pname, location=s.vec("location"), rotation=s.vec("rotation", 3, pd.rotation)))
 
     g = top.section("geo_reference", {})
-    utm = None
+    gd = FieldDefaults(GeoReference)
+    utm = gd.utm
     if g.has("utm"):
         both = [k for k in ("latitude_deg", "longitude_deg") if g.has(k)]
         if both:
@@ -453,61 +447,64 @@ def load_world(path: str | Path) -> WorldConfig:
         if not -89.0 <= lat <= 89.0:
             raise g.error("utm", f"the origin must lie within 89 degrees of the equator, got latitude {lat:.4f}")
     else:
-        lat = g.float("latitude_deg", GeoReference.latitude_deg, min=-89.0, max=89.0)
-        lon = g.float("longitude_deg", GeoReference.longitude_deg, min=-180.0, max=180.0)
+        lat = g.float("latitude_deg", gd.latitude_deg, min=-89.0, max=89.0)
+        lon = g.float("longitude_deg", gd.longitude_deg, min=-180.0, max=180.0)
     geo = GeoReference(latitude_deg=lat, longitude_deg=lon,
-                       scale_latitude_m=g.float("scale_latitude_m", 111200.0, min=1.0),
-                       scale_longitude_m=g.float("scale_longitude_m", 71670.0, min=1.0), utm=utm)
+                       scale_latitude_m=g.float("scale_latitude_m", gd.scale_latitude_m, min=1.0),
+                       scale_longitude_m=g.float("scale_longitude_m", gd.scale_longitude_m, min=1.0), utm=utm)
     g.finish()
 
     victims: list[Victim] = []
-    for s in _entries(top, "victims", path):
+    vd = FieldDefaults(Victim)
+    for s in top.entries("victims"):
         vname = _unique_name(s, names)
-        sound = s.section("sound", {})
-        victims.append(Victim(name=vname, location=s.vec("location"), rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0)),
-                              posture=s.str("posture", "lying", choices=VICTIM_POSTURES),
-                              waving=s.bool("waving", False),
-                              sound_loudness_db=sound.float("loudness_db", 0.0, min=0.0, max=200.0),
-                              sound_period_s=sound.float("period_s", 5.0, min=0.1),
-                              sound_duration_s=sound.float("duration_s", 1.0, min=0.01)))
+        sound = s.section("sound", {})  # sound.X fills sound_X
+        victims.append(Victim(name=vname, location=s.vec("location"), rotation=s.vec("rotation", 3, vd.rotation),
+                              posture=s.str("posture", vd.posture, choices=VICTIM_POSTURES),
+                              waving=s.bool("waving", vd.waving),
+                              sound_loudness_db=sound.float("loudness_db", vd.sound_loudness_db, min=0.0, max=200.0),
+                              sound_period_s=sound.float("period_s", vd.sound_period_s, min=0.1),
+                              sound_duration_s=sound.float("duration_s", vd.sound_duration_s, min=0.01)))
         sound.finish()
 
     alarms: list[FalseAlarm] = []
-    for s in _entries(top, "false_alarms", path):
+    fd = FieldDefaults(FalseAlarm)
+    for s in top.entries("false_alarms"):
         aname = _unique_name(s, names)
-        material = s.str("material", "default")
+        material = s.str("material", fd.material)
         check_material(s, "material", material)
         alarms.append(FalseAlarm(name=aname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
-                                 rotation=s.vec("rotation", 3, (0.0, 0.0, 0.0)),
-                                 part=s.str("part", "Head", choices=VICTIM_PARTS), material=material))
+                                 rotation=s.vec("rotation", 3, fd.rotation),
+                                 part=s.str("part", fd.part, choices=VICTIM_PARTS), material=material))
 
     tags: list[RfidTagConfig] = []
     ids: set[int] = set()
-    for s in _entries(top, "rfid_tags", path):
+    for s in top.entries("rfid_tags"):
         tid = s.int("id", min=0)
         if tid in ids:
             raise s.error("id", f"duplicate RFID tag id {tid}")
         ids.add(tid)
-        mem = s.str("memory", "")
+        mem = s.str("memory", FieldDefaults(RfidTagConfig).memory)
         if any(c in mem for c in "{}\r\n"):
             raise s.error("memory", "tag memory may not contain braces or line breaks")
         tags.append(RfidTagConfig(tag_id=tid, location=s.vec("location"), memory=mem))
 
     water: list[WaterVolume] = []
-    for s in _entries(top, "water", path):
+    wd = FieldDefaults(WaterVolume)
+    for s in top.entries("water"):
         wname = _unique_name(s, names)
         water.append(WaterVolume(name=wname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
-                                 density_kg_m3=s.float("density_kg_m3", 1000.0, min=1.0, max=20000.0)))
+                                 density_kg_m3=s.float("density_kg_m3", wd.density_kg_m3, min=1.0, max=20000.0)))
 
     lights: list[Light] = []
     lnames: set[str] = set()
-    for s in _entries(top, "lights", path):
+    for s in top.entries("lights"):
         lights.append(_light(s, _unique_name(s, lnames, "light name")))
-    ambient = top.vec("ambient_light", 3, None)
+    ambient = top.vec("ambient_light", 3, d.ambient_light)
     if ambient is not None and any(c < 0 or c > 1 for c in ambient):
         raise top.error("ambient_light", f"each colour component must be within [0, 1], got {list(ambient)}")
 
-    wireless = _wireless(top.section("wireless")) if top.has("wireless") else None
+    wireless = _wireless(top.section("wireless")) if top.has("wireless") else d.wireless
 
     top.finish()
     return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
@@ -520,16 +517,17 @@ def load_world(path: str | Path) -> WorldConfig:
 def _wireless(s: Section) -> WirelessConfig:
     """The ``wireless`` section: ``model`` (WIRELESS_MODELS), the ini keys of WIRELESS_KEYS
     and ``cache_distance_m``."""
-    model = s.str("model", None, choices=WIRELESS_MODELS)
-    d0 = s.float("eDo", None, min=0.0, min_exclusive=True)
-    n = s.float("eN", None, min=0.0, max=10.0)
-    waf = s.float("eAttenFac", None, min=0.0, max=200.0)
-    max_obs = s.int("eMaxObs", None)
+    d = FieldDefaults(WirelessConfig)
+    model = s.str("model", d.model, choices=WIRELESS_MODELS)
+    d0 = s.float("eDo", d.d0_m, min=0.0, min_exclusive=True)
+    n = s.float("eN", d.path_loss_exponent, min=0.0, max=10.0)
+    waf = s.float("eAttenFac", d.wall_db, min=0.0, max=200.0)
+    max_obs = s.int("eMaxObs", d.max_walls)
     if max_obs is None and s.data.get("eMaxObs", 0) is None:
         max_obs = -1  # eMaxObs: null, no cap
-    cache = s.float("cache_distance_m", None, min=0.0)
-    cfg = WirelessConfig(model=model, pd0_dbm=s.float("ePdo", None, min=-300.0, max=100.0), d0_m=d0,
-                         path_loss_exponent=n, cutoff_dbm=s.float("eCutoff", None, min=-300.0, max=100.0),
+    cache = s.float("cache_distance_m", d.cache_distance_m, min=0.0)
+    cfg = WirelessConfig(model=model, pd0_dbm=s.float("ePdo", d.pd0_dbm, min=-300.0, max=100.0), d0_m=d0,
+                         path_loss_exponent=n, cutoff_dbm=s.float("eCutoff", d.cutoff_dbm, min=-300.0, max=100.0),
                          max_walls=max_obs, wall_db=waf, cache_distance_m=cache)
     s.finish()
     return cfg
@@ -614,7 +612,8 @@ def _mesh_file(s: Section, world_dir: Path) -> str:
 
 
 def _light(s: Section, name: str) -> Light:
-    ltype = s.str("type", "spot", choices=LIGHT_TYPES)
+    d = FieldDefaults(Light)
+    ltype = s.str("type", d.type, choices=LIGHT_TYPES)
 
     def rgb(key: str, default):
         v = s.vec(key, 3, default)
@@ -622,21 +621,23 @@ def _light(s: Section, name: str) -> Light:
             raise s.error(key, f"each colour component must be within [0, 1], got {list(v)}")
         return v
 
-    direction = s.vec("direction", 3, (0.0, 0.0, 1.0))
+    direction = s.vec("direction", 3, d.direction)
     norm = math.sqrt(sum(c * c for c in direction))
     if norm < 1e-9:
         raise s.error("direction", f"the direction must not be zero, got {list(direction)}")
-    position = s.vec("position", 3, (0.0, 0.0, -3.0))
-    attenuation = s.vec("attenuation", 3, (1.0, 0.0, 0.0))
+    position = s.vec("position", 3, d.position)
+    attenuation = s.vec("attenuation", 3, d.attenuation)
     if any(c < 0 for c in attenuation) or not any(c > 0 for c in attenuation):
         raise s.error("attenuation", f"[constant, linear, quadratic] must be >= 0 and not all 0, "
                                      f"got {list(attenuation)}")
     return Light(name=name, type=ltype, position=position, direction=tuple(c / norm for c in direction),
-                 color=rgb("color", (0.7, 0.7, 0.7)), intensity=s.float("intensity", 1.0, min=0.0, max=100.0),
-                 ambient=rgb("ambient", (0.0, 0.0, 0.0)), specular=rgb("specular", (0.3, 0.3, 0.3)),
-                 attenuation=attenuation, cutoff_deg=s.float("cutoff_deg", 45.0, min=0.0, max=90.0, min_exclusive=True),
-                 exponent=s.float("exponent", 10.0, min=0.0, max=128.0),
-                 cast_shadows=s.bool("cast_shadows", ltype != "point"))
+                 color=rgb("color", d.color), intensity=s.float("intensity", d.intensity, min=0.0, max=100.0),
+                 ambient=rgb("ambient", d.ambient), specular=rgb("specular", d.specular),
+                 attenuation=attenuation, cutoff_deg=s.float("cutoff_deg", d.cutoff_deg, min=0.0, max=90.0,
+                                                             min_exclusive=True),
+                 exponent=s.float("exponent", d.exponent, min=0.0, max=128.0),
+                 # a point light casts none unless asked (docs/world-files.md)
+                 cast_shadows=s.bool("cast_shadows", d.cast_shadows and ltype != "point"))
 
 
 def _utm(u: Section) -> UtmCoordinate:

@@ -476,13 +476,16 @@ def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
 
 
 def robot_model_summary(robot: RobotConfig) -> str:
-    """Compile a robot alone on a plane: checks that MuJoCo accepts it."""
+    """Compile a robot alone on a plane: checks that its drive model has what it needs and that
+    MuJoCo accepts it."""
     from usarsim.config.world import Floor, Material
 
     world = WorldConfig(name="check", description="", path="", floor=Floor(center=(0, 0), size=(10, 10)),
                         materials={"floor": Material(name="floor")}, objects=(), start_poses=())
+    from usarsim.robots import make_drive
+
     spec = world_spec(world)
-    add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0))
+    add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0), make_drive(robot))
     m = spec.compile()
     return f"{m.nbody - 1} bodies, {m.njnt} joints, {m.nu} actuators, {m.ngeom - 1} geoms"
 
