@@ -650,7 +650,7 @@ def run_team(world, robot_dir) -> tuple[int, int]:
         for n in names:
             assert wcs.ask(f"REGISTER {n} 127.0.0.1;") == "OK;"
         links: dict[tuple[int, int], tuple[socket.socket, socket.socket]] = {}
-        net = srv.app.wireless.service.net
+        net = srv.app.facade.radio_net  # the RadioNet the servers' links follow (facade.open_radio)
 
         def open_link(i, j):
             reply, ends = wcs_open(wcs, names[i], lis[i], names[j], lis[j])

@@ -367,7 +367,7 @@ def test_wss_relay_ports_are_bounded(witness_server, monkeypatch, caplog):
     import logging
 
     from helpers import Client
-    from usarsim.server import wireless
+    from usarsim.server.wireless import wss as wireless
 
     monkeypatch.setattr(wireless, "MAX_RELAY_PORTS", 3)
     srv = witness_server
@@ -389,7 +389,7 @@ def test_comserver_links_are_bounded(witness_server, monkeypatch, caplog):
     establish."""
     import logging
 
-    from usarsim.server import wireless
+    from usarsim.server.wireless import comserver as wireless
 
     monkeypatch.setattr(wireless, "MAX_LINKS", 0)
     s = socket.create_connection(("127.0.0.1", witness_server.app.wireless.comserver.port), timeout=10)

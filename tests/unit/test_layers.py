@@ -28,7 +28,8 @@ def top(modules: set[str], *names: str) -> set[str]:
 
 
 PROTOCOL_MODULES = ["usarsim.protocol", "usarsim.protocol.commands", "usarsim.protocol.messages",
-                    "usarsim.protocol.framing", "usarsim.protocol.grammar", "usarsim.protocol.numbers"]
+                    "usarsim.protocol.framing", "usarsim.protocol.grammar", "usarsim.protocol.numbers",
+                    "usarsim.protocol.wireless"]
 
 
 def test_protocol_loads_no_numpy_mujoco_asyncio_sim_or_server():

@@ -9,7 +9,7 @@ import pytest
 
 from usarsim.config.world import WirelessConfig, load_world
 from usarsim.errors import ConfigError
-from usarsim.server.wireless import SendParser
+from usarsim.protocol.wireless import SendParser
 from usarsim.sim.radio import PRESETS, RadioModel, load_wireless_file, pair_key, resolve_model, waf_signal_dbm
 
 MANUAL = dict(pd0_dbm=-49.67, d0_m=2.0, path_loss_exponent=1.09, wall_db=6.625, max_walls=5)

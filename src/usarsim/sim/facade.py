@@ -184,6 +184,11 @@ class SimFacade:
         self.runner.submit(Request(lambda sim: RadioNet.walls_between(sim, start, end), immediate=True,
                                    on_done=on_done))
 
+    @property
+    def radio_net(self) -> RadioNet | None:
+        """The radio links' state on the simulation thread (tests; servers use the methods)."""
+        return self._radio
+
     def _net(self) -> RadioNet:
         if self._radio is None:
             raise RuntimeError("open_radio() first")

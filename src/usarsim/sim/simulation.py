@@ -87,10 +87,6 @@ class Simulation:
     def view(self) -> WorldView:
         return WorldView(self.model, self.data, self.time, self.caster, self.world, self.entities)
 
-    @property
-    def after_advance(self):  # TEMPORARY until server/wireless uses the facade
-        return self._after_advance
-
     def on_advance(self, fn: Callable[["Simulation"], None]) -> None:
         """Call ``fn(sim)`` at the end of every :meth:`advance` (before the simulation starts)."""
         self._after_advance.append(fn)

@@ -1,0 +1,338 @@
+"""What the three wireless servers share (protocol.md 12): the radio links, asked of the
+simulation through the facade and followed as simulated time passes, and the connection
+and listener bases that hold each port's limits, log-once and backpressure.
+
+Link state follows simulated time: the facade computes the signal on the simulation
+thread from the simulated poses when a link is opened or a relay port allocated
+(:meth:`WirelessService.check`), and after every advance of the clock (every STEP in
+lock-step) for the pairs the servers depend on (:meth:`WirelessService.watch`); the
+changes come back to the event loop and on to each server's subscriber, so that a link
+whose signal falls below the cutoff is closed before anything else happens at that
+instant (in lock-step, before the STEPPED reply), and nothing is relayed on it after.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from usarsim.config.world import WirelessConfig
+from usarsim.errors import ProtocolError
+from usarsim.protocol.framing import LineBuffer
+from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
+from usarsim.server.listener import ReadGate, TcpListener
+from usarsim.sim.facade import SimFacade
+from usarsim.sim.types import Link, Pair, RadioModel
+
+log = logging.getLogger("usarsim.wireless")
+
+CONNECT_TIMEOUT_S = 5.0
+"""Wall-clock limit on a server's own connection to a robot's listening port."""
+MAX_QUEUED = 256
+"""Requests of one connection waiting to be answered; beyond them its socket is not read
+until they are answered."""
+MAX_LOGGED_KINDS = 32
+"""Kinds of problem logged once per connection at most."""
+MAX_CONNECTIONS = 64
+"""Connections per server at most (``usarsim serve --max-wireless-connections``)."""
+MAX_LINE_BYTES = 4096
+"""Longest request line of the WSS and the ComServerInterface; a longer one is dropped."""
+
+
+@dataclass(frozen=True)
+class WirelessOptions:
+    """How ``usarsim serve`` runs the wireless simulation: the ports (0 picks a free one),
+    the radio model named on the command line and the configuration file's layer (both
+    None: the world's ``wireless`` section, else ``waf``), and ``bDebug``."""
+
+    wcs_port: int = WCS_PORT
+    wss_port: int = WSS_PORT
+    interface_port: int = INTERFACE_PORT
+    model: str | None = None
+    config: WirelessConfig | None = None
+    debug: bool = False
+    max_connections: int = MAX_CONNECTIONS
+
+
+def same_host(ip: str | None) -> str | None:
+    """``ip`` with the spellings of the local host made one, to compare addresses."""
+    if ip is None:
+        return None
+    return "127.0.0.1" if ip in ("localhost", "::1", "::ffff:127.0.0.1") else ip
+
+
+class WirelessService:
+    """What the three servers share: the radio links (computed by the facade on the
+    simulation thread), the pairs the servers depend on, the latest state reported for
+    each pair, and the servers that follow the changes (``subscribers``)."""
+
+    def __init__(self, facade: SimFacade, model: RadioModel, *, debug: bool = False):
+        self.facade = facade
+        self.model = model
+        self.debug = debug
+        facade.open_radio(model, self._changes_threadsafe)  # before the simulation thread starts
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.state: dict[Pair, tuple[float, bool]] = {}  # pair -> (simulated time, holds)
+        self.subscribers: list[Callable[[Pair, bool, float], None]] = []
+        self._refs: collections.Counter[Pair] = collections.Counter()
+
+    def event(self, fmt: str, *args) -> None:
+        """A link event: logged at INFO with bDebug, at DEBUG otherwise."""
+        log.log(logging.INFO if self.debug else logging.DEBUG, fmt, *args)
+
+    # pairs ------------------------------------------------------------------------------
+    def watch(self, pair: Pair) -> None:
+        """One more thing (a link, a relay port, a link being opened) depends on ``pair``."""
+        self._refs[pair] += 1
+        if self._refs[pair] == 1:
+            self.facade.radio_watch(frozenset(self._refs))
+
+    def unwatch(self, pair: Pair) -> None:
+        """One thing less depends on ``pair``; with none left it is no longer evaluated."""
+        self._refs[pair] -= 1
+        if self._refs[pair] <= 0:
+            del self._refs[pair]
+            self.state.pop(pair, None)
+            self.facade.radio_watch(frozenset(self._refs))
+
+    def _changes_threadsafe(self, time: float, changes: list[tuple[Pair, bool]]) -> None:
+        """The facade's ``on_change`` (simulation thread): handed to the event loop."""
+        loop = self.loop
+        if loop is not None and not loop.is_closed():
+            try:
+                loop.call_soon_threadsafe(self._apply, time, changes)
+            except RuntimeError:  # the loop closed meanwhile
+                pass
+
+    def _apply(self, time: float, changes: list[tuple[Pair, bool]]) -> None:
+        for pair, up in changes:
+            if pair not in self._refs:
+                continue  # nothing depends on it any more
+            self.state[pair] = (time, up)
+            self.event("link %s - %s %s at t=%.3f", pair[0], pair[1], "holds" if up else "is down", time)
+            for fn in list(self.subscribers):
+                try:
+                    fn(pair, up, time)
+                except Exception:
+                    log.exception("wireless: error while applying a link change")
+
+    def down_since(self, pair: Pair, time: float) -> bool:
+        """Whether the pair was reported down at or after ``time``."""
+        st = self.state.get(pair)
+        return st is not None and st[0] >= time and not st[1]
+
+    # the simulation ----------------------------------------------------------------------
+    async def ask(self, method: Callable[..., None], *args) -> Any:
+        """The result of ``method(*args, on_done=...)``, a facade method that answers on the
+        simulation thread (at once, also in lock-step), awaited on the event loop."""
+        loop = asyncio.get_running_loop()
+        fut = loop.create_future()
+
+        def settle(result, error):
+            if not fut.done():
+                if error is not None:
+                    fut.set_exception(error)
+                else:
+                    fut.set_result(result)
+
+        def done(result, error):
+            if not loop.is_closed():
+                try:
+                    loop.call_soon_threadsafe(settle, result, error)
+                except RuntimeError:  # the loop closed meanwhile
+                    pass
+
+        method(*args, on_done=done)
+        return await fut
+
+    async def check(self, a: str, b: str) -> tuple[float, Link | None]:
+        """(simulated time, link) for a link about to be opened; its state is reported."""
+        return await self.ask(self.facade.radio_check, a, b)
+
+    async def signal(self, a: str, b: str) -> Link | None:
+        """The link between two robots now (None: either is not in the simulation)."""
+        return await self.ask(self.facade.radio_link, a, b)
+
+    async def positions(self) -> list[tuple[str, tuple[float, float, float], bool]]:
+        """(name, location, battery empty) of every robot."""
+        return await self.ask(self.facade.robot_positions)
+
+    async def walls_between_robots(self, a: str, b: str) -> int:
+        """Walls between two robots (-1: either is unknown)."""
+        return await self.ask(self.facade.walls_between_robots, a, b)
+
+    async def walls_between(self, start, end) -> int:
+        """Walls between two points of the world."""
+        return await self.ask(self.facade.walls_between, start, end)
+
+
+class WirelessConnection(asyncio.Protocol):
+    """A client connection of one of the servers, whose requests are answered one after
+    another, in order.  Subclasses split the bytes into requests (``split``) and answer
+    one (``handle``); this holds the connection limit, the queue and its backpressure
+    (:class:`~usarsim.server.listener.ReadGate`), the pause while the client does not read
+    its replies, and log-once."""
+
+    what = "wireless"  # names the server in log lines, before the peer address
+
+    def __init__(self, server: WirelessListener):
+        self.server = server
+        self.transport: asyncio.Transport | None = None
+        self.peer = "?"
+        self.ip = ""
+        self._queue: collections.deque = collections.deque()
+        self._task: asyncio.Task | None = None
+        self._warned: set[str] = set()
+        self._writable = asyncio.Event()  # cleared while the client does not read its replies
+        self._writable.set()
+        self._gate = ReadGate(MAX_QUEUED)
+
+    @property
+    def owner(self):
+        """The server (ComServer, WSS, ComServerInterface) this connection serves."""
+        return self.server.owner
+
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        peer = transport.get_extra_info("peername")
+        if isinstance(peer, tuple):
+            self.ip, self.peer = str(peer[0]), f"{peer[0]}:{peer[1]}"
+        limit = self.server.max_connections
+        if len(self.server.connections) >= limit:
+            log.warning("%s %s: refused: %d connections already (limit --max-wireless-connections %d)",
+                        self.what, self.peer, len(self.server.connections), limit)
+            transport.close()
+            return
+        self.server.connections.add(self)
+        log.info("%s %s: connected", self.what, self.peer)
+
+    def connection_lost(self, exc) -> None:
+        if self not in self.server.connections:
+            return
+        self.server.connections.discard(self)
+        if self._task is not None:
+            self._task.cancel()
+        self._queue.clear()
+        log.info("%s %s: disconnected", self.what, self.peer)
+        self.closed()
+
+    def closed(self) -> None:
+        """The client went away."""
+
+    def split(self, data: bytes) -> list[str]:
+        """The requests ``data`` completes."""
+        raise NotImplementedError
+
+    async def handle(self, request: str) -> None:
+        """Answer one request."""
+        raise NotImplementedError
+
+    def data_received(self, data: bytes) -> None:
+        if self not in self.server.connections:
+            return
+        self._queue.extend(self.split(data))
+        if self._gate.queued(self.transport, len(self._queue)):
+            self.log_once("flood", "more than %d requests waiting; reading paused until they are answered",
+                          MAX_QUEUED)
+        if self._queue and (self._task is None or self._task.done()):
+            self._task = asyncio.get_running_loop().create_task(self._work())
+
+    def pause_writing(self) -> None:
+        self._writable.clear()
+
+    def resume_writing(self) -> None:
+        self._writable.set()
+
+    async def _work(self) -> None:
+        while self._queue:
+            # a client that does not read its replies is not answered further until it does,
+            # so that its unread replies stay bounded (asyncio's high-water mark)
+            await self._writable.wait()
+            req = self._queue.popleft()
+            self._gate.taken(self.transport, len(self._queue))
+            try:
+                await self.handle(req)
+            except asyncio.CancelledError:
+                raise
+            except Exception:  # nothing a client sends may take the server down
+                log.exception("%s %s: error while handling %.200r", self.what, self.peer, req)
+
+    def write(self, text: str) -> None:
+        """Send a formatted reply (ASCII; anything else is replaced)."""
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.write(text.encode("ascii", "replace"))
+
+    def log_once(self, key: str, fmt: str, *args) -> None:
+        """The first problem of each kind at WARNING, once; past MAX_LOGGED_KINDS kinds (ever
+        new garbage) only a note that more follow, so that the log and this set stay bounded."""
+        if key in self._warned:
+            return
+        if len(self._warned) >= MAX_LOGGED_KINDS:
+            key, fmt, args = "(more)", "more than %d kinds of problem; further ones are not logged", \
+                (MAX_LOGGED_KINDS,)
+            if key in self._warned:
+                return
+        self._warned.add(key)
+        log.warning("%s %s: " + fmt + " (logged once per connection)", self.what, self.peer, *args)
+
+
+class LineConnection(WirelessConnection):
+    """A connection whose requests are text lines (brace syntax, CR LF): the WSS and the
+    ComServerInterface."""
+
+    def __init__(self, server: WirelessListener):
+        super().__init__(server)
+        self._lines = LineBuffer(max_line_bytes=MAX_LINE_BYTES)
+
+    def split(self, data: bytes) -> list[str]:
+        before = self._lines.dropped_lines
+        lines = self._lines.feed(data)
+        if self._lines.dropped_lines != before:
+            self.log_once("too-long", "dropped a line longer than %d bytes", self._lines.max_line_bytes)
+        return lines
+
+    def parse(self, line: str, parser: Callable[[str], Any]) -> Any:
+        """``parser(line)``, or None (logged once) when the line is malformed."""
+        try:
+            return parser(line)
+        except ProtocolError as exc:
+            self.log_once("malformed", "%s", exc)
+            return None
+
+
+class WirelessListener(TcpListener):
+    """The TCP listener of one server, making its kind of :class:`WirelessConnection`."""
+
+    def __init__(self, factory: type[WirelessConnection], owner: WirelessServer, host: str, port: int,
+                 max_connections: int):
+        super().__init__(host, port)
+        self._factory = factory
+        self.owner = owner  # the server the connections serve
+        self.max_connections = max_connections
+
+    def make_protocol(self) -> WirelessConnection:
+        return self._factory(self)
+
+
+class WirelessServer:
+    """One of the three servers: its listener of ``connection`` objects and its port."""
+
+    connection: type[WirelessConnection]
+
+    def __init__(self, service: WirelessService, host: str, port: int, max_connections: int):
+        self.service = service
+        self.listener = WirelessListener(self.connection, self, host, port, max(1, max_connections))
+
+    @property
+    def port(self) -> int:
+        return self.listener.port
+
+    async def start(self) -> int:
+        return await self.listener.start()
+
+    async def stop(self) -> None:
+        await self.listener.stop()

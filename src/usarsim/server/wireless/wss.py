@@ -1,0 +1,419 @@
+"""The Wireless Simulation Server (WSS, TCP 50000, ``--wss-port``; protocol.md 12.2), the
+RoboCup one: robots INIT with the ports they listen on, ask GETSS, DNS and REVERSEDNS, and
+connect to a relay port per ordered robot pair that copies bytes both ways while the radio
+link holds and refuses connections while it is down (under the same number).
+
+asyncio glue only: lines (:class:`~usarsim.protocol.framing.LineBuffer`) -> requests
+(:func:`~usarsim.protocol.wireless.parse_wss_request`) -> the registered robots, relay
+ports and the radio -> a typed reply, formatted by
+:func:`~usarsim.protocol.wireless.format_wss_reply`.  A malformed or unknown request gets
+the WSS's ``ERROR {Reason ...}``; each kind is logged once per connection.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import socket
+
+from usarsim.protocol.wireless import (
+    DNS_NO_ROBOT,
+    DNS_NOT_LISTENING,
+    REASON_INIT_FIRST,
+    REASON_NO_RELAY_PORT,
+    REASON_ROBOT_EXISTS,
+    REASON_UNKNOWN_METHOD,
+    REVERSEDNS_UNKNOWN_PORT,
+    SS_MODEL_NAN,
+    SS_NO_ROBOT,
+    SS_TO_SELF,
+    WSS_PORT,
+    WssDns,
+    WssDnsReply,
+    WssError,
+    WssGetSS,
+    WssInit,
+    WssInitReply,
+    WssInvalid,
+    WssReply,
+    WssRequest,
+    WssReverseDns,
+    WssReverseDnsReply,
+    WssSignal,
+    format_wss_reply,
+    parse_wss_request,
+)
+from usarsim.sim.types import Pair, pair_key
+
+from .service import (
+    CONNECT_TIMEOUT_S,
+    MAX_CONNECTIONS,
+    LineConnection,
+    WirelessServer,
+    WirelessService,
+    same_host,
+)
+
+log = logging.getLogger("usarsim.wireless")
+
+MAX_RELAY_PORTS = 1024
+"""Relay ports (listening sockets, one per robot pair and port asked for) at most."""
+
+
+class _PipeEnd(asyncio.Protocol):
+    """One socket of a :class:`Pipe`: what arrives is written to the other one, whose
+    backpressure pauses this one's reading."""
+
+    def __init__(self, pipe: Pipe):
+        self.pipe = pipe
+        self.peer: _PipeEnd | None = None
+        self.transport: asyncio.Transport | None = None
+
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        transport.pause_reading()  # until both ends are connected (Pipe.start)
+
+    def data_received(self, data: bytes) -> None:
+        peer = self.peer
+        if peer is not None and peer.transport is not None and not peer.transport.is_closing():
+            peer.transport.write(data)
+
+    def eof_received(self):
+        return False  # closes the pipe: the WSS closes both sockets
+
+    def connection_lost(self, exc) -> None:
+        self.pipe.close()
+
+    def pause_writing(self) -> None:
+        if self.peer is not None and self.peer.transport is not None:
+            self.peer.transport.pause_reading()
+
+    def resume_writing(self) -> None:
+        if self.peer is not None and self.peer.transport is not None and not self.peer.transport.is_closing():
+            self.peer.transport.resume_reading()
+
+
+class Pipe:
+    """One connection through a relay port: the robot that connected, and the server's
+    own connection to the destination robot's listening port."""
+
+    def __init__(self, port: RelayPort, sock: socket.socket):
+        self.port = port
+        self.sock = sock  # the accepted connection, until its transport takes it
+        self.ends: list[_PipeEnd] = []
+        self.closed = False
+        self.out_port = 0
+
+    async def start(self, dst_ip: str, dst_port: int) -> None:
+        loop = asyncio.get_running_loop()
+        try:
+            _, src = await loop.connect_accepted_socket(lambda: _PipeEnd(self), self.sock)
+        except OSError:
+            self.close()
+            return
+        self.ends.append(src)
+        if self.closed:
+            src.transport.close()
+            return
+        try:
+            dst_t, dst = await asyncio.wait_for(loop.create_connection(lambda: _PipeEnd(self), dst_ip, dst_port),
+                                                CONNECT_TIMEOUT_S)
+        except (TimeoutError, OSError) as exc:
+            self.port.server.service.event("wss: cannot connect to %s at %s:%d: %s", self.port.dst, dst_ip,
+                                           dst_port, exc)
+            self.close()
+            return
+        self.ends.append(dst)
+        if self.closed:
+            dst_t.close()
+            return
+        self.out_port = dst_t.get_extra_info("sockname")[1]
+        self.port.server.outgoing[self.out_port] = self.port
+        src.peer, dst.peer = dst, src
+        src.transport.resume_reading()
+        dst_t.resume_reading()
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        if not self.ends:
+            self.sock.close()
+        for end in self.ends:
+            if end.transport is not None:
+                end.transport.close()
+        self.port.pipes.discard(self)
+        if self.out_port:
+            self.port.server.outgoing.pop(self.out_port, None)
+
+
+class RelayPort:
+    """The WSS's port for one ordered robot pair (and one listening port of the
+    destination): it listens while the link holds and refuses connections otherwise,
+    always under the same number."""
+
+    def __init__(self, server: WssServer, src: str, dst: str, dst_port: int):
+        self.server = server
+        self.src, self.dst, self.dst_port = src, dst, dst_port
+        self.pair = pair_key(src, dst)
+        self.number = 0
+        self.up = False
+        self.checked_at = 0.0
+        self.pipes: set[Pipe] = set()
+        self._sock: socket.socket | None = None
+        self._listening = False
+
+    def _bind(self) -> None:
+        host = self.server.listener.host
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        sock = socket.socket(family, socket.SOCK_STREAM)
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.bind((host, self.number))
+            sock.setblocking(False)
+        except OSError:
+            sock.close()
+            raise
+        self._sock = sock
+        self.number = sock.getsockname()[1]
+
+    def open(self, up: bool, at: float) -> None:
+        """Reserve the port number (raises OSError when none is free) and set the state."""
+        self._bind()
+        self.set_up(up, at)
+
+    def set_up(self, up: bool, at: float) -> None:
+        self.checked_at = at
+        self.up = up
+        loop = asyncio.get_running_loop()
+        if up and not self._listening:
+            if self._sock is None:
+                try:
+                    self._bind()
+                except OSError as exc:
+                    log.error("wss: cannot listen again on relay port %d (%s -> %s): %s", self.number, self.src,
+                              self.dst, exc)
+                    return
+            self._sock.listen(16)
+            loop.add_reader(self._sock.fileno(), self._accept)
+            self._listening = True
+        elif not up:
+            for pipe in list(self.pipes):
+                pipe.close()
+            if self._listening:
+                self._release()
+                try:  # keep the number, without listening: connections are refused
+                    self._bind()
+                except OSError as exc:
+                    log.warning("wss: relay port %d lost while the link is down: %s", self.number, exc)
+
+    def _accept(self) -> None:
+        for _ in range(16):
+            try:
+                conn, addr = self._sock.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:
+                return
+            robot = self.server.robots.get(self.src)
+            dst = self.server.robots.get(self.dst)
+            if not self.up or robot is None or dst is None or same_host(addr[0]) != same_host(robot.ip):
+                conn.close()
+                continue
+            conn.setblocking(False)
+            pipe = Pipe(self, conn)
+            self.pipes.add(pipe)
+            task = asyncio.get_running_loop().create_task(pipe.start(dst.ip, self.dst_port))
+            self.server.tasks.add(task)
+            task.add_done_callback(self.server.tasks.discard)
+
+    def _release(self) -> None:
+        if self._sock is not None:
+            if self._listening:
+                asyncio.get_running_loop().remove_reader(self._sock.fileno())
+            self._sock.close()
+        self._sock = None
+        self._listening = False
+
+    def close(self) -> None:
+        for pipe in list(self.pipes):
+            pipe.close()
+        self._release()
+
+
+class WssRobot:
+    """A robot registered by INIT: its name, the address of its control connection and the
+    ports it listens on."""
+
+    def __init__(self, name: str, ip: str, ports: tuple[int, ...], conn: WssConnection):
+        self.name, self.ip, self.ports, self.conn = name, ip, ports, conn
+
+
+class WssConnection(LineConnection):
+    """A robot's control connection to the WSS (protocol.md 12.2)."""
+
+    what = "wss"
+
+    def __init__(self, server):
+        super().__init__(server)
+        self.robot: WssRobot | None = None
+
+    def closed(self) -> None:
+        if self.robot is not None:
+            self.owner.unregister(self.robot)
+
+    async def handle(self, line: str) -> None:
+        self.write(format_wss_reply(await self._answer(self.parse(line, parse_wss_request))))
+
+    async def _answer(self, req: WssRequest | None) -> WssReply:
+        """The reply to ``req`` (None: a malformed line, logged already)."""
+        srv: WssServer = self.owner
+        kind = req.type if req is not None else ""
+        if self.robot is None:
+            if kind != "INIT":
+                return WssError(REASON_INIT_FIRST)
+            if isinstance(req, WssInvalid):
+                return WssError(req.reason)
+            return self._init(req)
+        me = self.robot.name
+        if isinstance(req, WssInvalid) and kind != "INIT":
+            return WssError(req.reason)
+        if isinstance(req, WssGetSS):
+            return await srv.getss(me, req.robot)
+        if isinstance(req, WssDns):
+            return await srv.dns(me, req)
+        if isinstance(req, WssReverseDns):
+            who = srv.reverse_dns(me, req.port)
+            return WssReverseDnsReply(req.port, robot=who) if who is not None else \
+                WssReverseDnsReply(req.port, error=REVERSEDNS_UNKNOWN_PORT)
+        if req is not None:  # unknown, or INIT again
+            self.log_once(f"unknown-{kind}", "unknown or repeated command %s", kind)
+        return WssError(REASON_UNKNOWN_METHOD)
+
+    def _init(self, req: WssInit) -> WssReply:
+        srv: WssServer = self.owner
+        if req.robot in srv.robots:
+            return WssError(REASON_ROBOT_EXISTS)
+        self.robot = WssRobot(req.robot, self.ip, req.ports, self)
+        srv.robots[req.robot] = self.robot
+        srv.service.event("wss: %s registered at %s, ports %s", req.robot, self.ip, list(req.ports))
+        return WssInitReply()
+
+
+class WssServer(WirelessServer):
+    """The Wireless Simulation Server (protocol.md 12.2)."""
+
+    connection = WssConnection
+
+    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WSS_PORT,
+                 max_connections: int = MAX_CONNECTIONS):
+        super().__init__(service, host, port, max_connections)
+        self.robots: dict[str, WssRobot] = {}
+        self.ports: dict[tuple[str, str, int], RelayPort] = {}
+        self.by_number: dict[int, RelayPort] = {}
+        self.outgoing: dict[int, RelayPort] = {}  # the server's own end of each pipe -> its relay port
+        self.tasks: set[asyncio.Task] = set()  # pipes being connected
+        service.subscribers.append(self._on_pair)
+
+    async def stop(self) -> None:
+        await super().stop()
+        for rp in list(self.ports.values()):
+            rp.close()
+        self.ports.clear()
+        self.by_number.clear()
+        for task in list(self.tasks):
+            task.cancel()
+        if self.tasks:
+            await asyncio.gather(*self.tasks, return_exceptions=True)
+
+    def _on_pair(self, pair: Pair, up: bool, time: float) -> None:
+        for rp in list(self.ports.values()):
+            if rp.pair == pair and time >= rp.checked_at and rp.up != up:
+                rp.set_up(up, time)
+                self.service.event("wss relay port %d (%s -> %s) %s", rp.number, rp.src, rp.dst,
+                                   "listening" if up else "refusing connections")
+
+    # requests ---------------------------------------------------------------------------
+    async def getss(self, me: str, other: str) -> WssSignal:
+        """GETSS from ``me``: INF to itself, NaN for a robot that did not INIT or that the
+        model cannot answer for, else the strength in dBm."""
+        if other == me:
+            return WssSignal(other, math.inf, SS_TO_SELF)
+        if other not in self.robots:
+            return WssSignal(other, math.nan, SS_NO_ROBOT)
+        ln = await self.service.signal(me, other)
+        if ln is None or not math.isfinite(ln.signal_dbm) or ln.signal_dbm > 0:
+            return WssSignal(other, math.nan, SS_MODEL_NAN)
+        return WssSignal(other, ln.signal_dbm)
+
+    async def dns(self, me: str, req: WssDns) -> WssReply:
+        """DNS from ``me``: the relay port to ``req.robot`` on ``req.port`` (default: the
+        first port it declared)."""
+        other = req.robot
+        dst = self.robots.get(other)
+        if dst is None or other == me:
+            return WssDnsReply(other, -1, DNS_NO_ROBOT)
+        if req.port is not None and req.port not in dst.ports:
+            return WssDnsReply(other, -1, DNS_NOT_LISTENING)
+        port = await self.relay_port(me, other, req.port or (dst.ports[0] if dst.ports else 0))
+        return WssError(REASON_NO_RELAY_PORT) if port is None else WssDnsReply(other, port)
+
+    async def relay_port(self, src: str, dst: str, dst_port: int) -> int | None:
+        key = (src, dst, dst_port)
+        rp = self.ports.get(key)
+        if rp is not None:
+            return rp.number
+        if not dst_port:
+            return None
+        if len(self.ports) >= MAX_RELAY_PORTS:  # each is a listening socket: keep file descriptors for the rest
+            log.warning("wss: no relay port for %s -> %s:%d: %d allocated already", src, dst, dst_port,
+                        MAX_RELAY_PORTS)
+            return None
+        pair = pair_key(src, dst)
+        self.service.watch(pair)
+        try:
+            t, ln = await self.service.check(src, dst)
+        except BaseException:
+            self.service.unwatch(pair)
+            raise
+        rp = self.ports.get(key)  # allocated meanwhile
+        if rp is not None or src not in self.robots or dst not in self.robots:
+            self.service.unwatch(pair)
+            return rp.number if rp is not None else None
+        rp = RelayPort(self, src, dst, dst_port)
+        up = ln is not None and ln.holds and not self.service.down_since(pair, t)
+        try:
+            rp.open(up, t)
+        except OSError as exc:
+            log.error("wss: cannot allocate a relay port for %s -> %s: %s", src, dst, exc)
+            self.service.unwatch(pair)
+            return None
+        self.ports[key] = rp
+        self.by_number[rp.number] = rp
+        self.service.event("wss relay port %d for %s -> %s:%d (%s)", rp.number, src, dst, dst_port,
+                           "listening" if up else "link down")
+        return rp.number
+
+    def reverse_dns(self, me: str, port: int) -> str | None:
+        """The robot at the other end of ``port``: the server's end of a pipe into ``me``
+        (the peer port of a connection ``me`` accepted), or a relay port of ``me``."""
+        rp = self.outgoing.get(port)
+        if rp is not None and rp.dst == me:
+            return rp.src
+        rp = self.by_number.get(port)
+        if rp is not None and me in (rp.src, rp.dst):
+            return rp.dst if rp.src == me else rp.src
+        return None
+
+    def unregister(self, robot: WssRobot) -> None:
+        if self.robots.get(robot.name) is not robot:
+            return
+        del self.robots[robot.name]
+        for key, rp in list(self.ports.items()):
+            if robot.name in (rp.src, rp.dst):
+                rp.close()
+                del self.ports[key]
+                self.by_number.pop(rp.number, None)
+                self.service.unwatch(rp.pair)
+        self.service.event("wss: %s left", robot.name)
