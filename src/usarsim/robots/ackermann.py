@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import math
 
+import mujoco
+
 from usarsim.config.robot import RobotConfig, Wheel
 from usarsim.controls import AckermannDrive
 from usarsim.errors import ConfigError
 from usarsim.robots.base import DRIVES, DriveModel, clamp
+from usarsim.sim.view import RobotHandle
 
 
 @DRIVES.register("ackermann")
@@ -19,7 +22,7 @@ class Ackermann(DriveModel):
 
     ACCEPTS = frozenset({AckermannDrive})
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
         self.speed = 0.0  # driven wheels' spin speed, rad/s
         self.front_steer = 0.0  # commanded axle angles, rad (positive: right)
@@ -68,7 +71,7 @@ class Ackermann(DriveModel):
             return math.atan2(base * t, base - y * t)
         return math.atan2(-base * t, -base + y * t)  # a rear axle: on the front axle's line
 
-    def steer_angles(self, data, handle) -> tuple[float, float]:
+    def steer_angles(self, data: mujoco.MjData, handle: RobotHandle) -> tuple[float, float]:
         """The current angles of the axles (mean of their wheels)."""
         q = data.qpos
         fa = [float(q[handle.steer_qpos[w.name]]) for w in self.robot.wheels if w.steer == "front"]

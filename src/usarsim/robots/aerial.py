@@ -11,10 +11,12 @@ from __future__ import annotations
 import math
 
 import mujoco
+import numpy as np
 
 from usarsim.config.robot import RobotConfig
 from usarsim.controls import Velocities
 from usarsim.robots.base import DRIVES, DriveModel, clamp
+from usarsim.sim.view import RobotHandle
 
 AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
 
@@ -29,13 +31,13 @@ class Aerial(DriveModel):
     GRAVITY_COMPENSATED = True
     HOVERS = True
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
         self.fly = {"altitude": 0.0, "linear": 0.0, "lateral": 0.0, "rotational": 0.0}
         self.rotor: dict[str, int] = {}  # actuator per axis
 
     @classmethod
-    def build(cls, spec, chassis, robot: RobotConfig, prefix: str) -> None:
+    def build(cls, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, robot: RobotConfig, prefix: str) -> None:
         chassis.gravcomp = 1.0
         site = chassis.add_site()
         site.name = f"{prefix}/rotors"
@@ -59,7 +61,7 @@ class Aerial(DriveModel):
             a.forcelimited = 1
             a.forcerange = [-limit, limit]
 
-    def resolve(self, model, handle) -> None:
+    def resolve(self, model: mujoco.MjModel, handle: RobotHandle) -> None:
         self.rotor = {axis: model.actuator(f"{handle.prefix}/{axis}").id for axis in AERIAL_AXES}
 
     def own_actuators(self) -> list[tuple[int, float]]:
@@ -76,7 +78,7 @@ class Aerial(DriveModel):
             if value is not None and math.isfinite(value):
                 self.fly[key] = clamp(value * top / 100.0 if normalized else value, top)
 
-    def apply_own(self, ctrl, powered: bool) -> None:
+    def apply_own(self, ctrl: np.ndarray, powered: bool) -> None:
         f = self.fly if powered else dict.fromkeys(self.fly, 0.0)
         rot = self.rotor
         # MuJoCo's site axes: x forward, y left, z up; USARSim's lateral is to the right and

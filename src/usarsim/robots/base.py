@@ -51,7 +51,7 @@ class DriveModel:
     HOVERS: ClassVar[bool] = False
     STEP_EVERY: ClassVar[int | None] = None
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         self.robot = robot
         # driven wheels whose speed a joint order (or a holonomic DRIVE) set, rad/s: they
         # keep it until the kind's own wheel command takes them back

@@ -19,7 +19,7 @@ class Holonomic(DriveModel):
 
     ACCEPTS = frozenset({SteeredWheels})
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
         self.wheel_steer: dict[str, float] = {}  # wheel name -> angle, rad
         self._by_number = {w.number: w for w in robot.wheels if w.number >= 0}

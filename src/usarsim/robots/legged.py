@@ -63,7 +63,7 @@ class Legged(DriveModel):
     SET_DOWN_ALWAYS = True
     STEP_EVERY = GAIT_STEPS
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
         self.walk = {"linear": 0.0, "lateral": 0.0, "rotational": 0.0}
         self.sides = [0.0, 0.0]  # the last {Left} {Right}, rad/s (or percent)
@@ -83,7 +83,7 @@ class Legged(DriveModel):
         if robot.gait is None:
             raise ConfigError("a walking robot (drive: legged) needs its gait", path=robot.path, key="gait")
 
-    def command(self, part, normalized: bool) -> None:
+    def command(self, part: Velocities | WheelSpeeds, normalized: bool) -> None:
         g = self.robot.gait
         if isinstance(part, WheelSpeeds):
             # a side's speed as a fraction of the robot's MaxSpeed (or of 100 %): the mean of

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from usarsim.config.robot import RobotConfig
+from usarsim.config.robot import NauticalSpec, RobotConfig
 from usarsim.controls import NauticalDrive
 from usarsim.errors import ConfigError
 from usarsim.robots.base import DRIVES, DriveModel, clamp
@@ -25,7 +25,7 @@ class Nautical(DriveModel):
     ACCEPTS = frozenset({NauticalDrive})
     SET_DOWN_AT_START = False  # a vessel starts where the pose is: in water
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
         self.sail = {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0}
 
@@ -36,7 +36,7 @@ class Nautical(DriveModel):
                               key="nautical")
 
     @property
-    def vessel(self):
+    def vessel(self) -> NauticalSpec:
         return self.robot.nautical
 
     def command(self, part: NauticalDrive, normalized: bool) -> None:

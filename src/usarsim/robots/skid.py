@@ -18,7 +18,7 @@ class Skid(DriveModel):
 
     ACCEPTS = frozenset({WheelSpeeds})
 
-    def __init__(self, robot: RobotConfig):
+    def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
         self.left = 0.0
         self.right = 0.0
