@@ -287,10 +287,10 @@ class Session:
             self.send(M.EmptyGeometry(item_type="", name=cmd.name))
             return
         if cmd.type.lower() == "robot":
-            r, g = self.robot, self.robot.geometry
-            self.send(M.RobotGeometry(vehicle_type=r.vehicle_type, class_name=r.class_name, dimensions=g.dimensions,
-                                      cog=g.cog, wheel_radius=g.wheel_radius_m, wheel_separation=g.wheel_separation_m,
-                                      wheel_base=g.wheel_base_m))
+            n = self.facade.robot_numbers(self.robot)
+            self.send(M.RobotGeometry(vehicle_type=n.vehicle_type, class_name=n.class_name, dimensions=n.dimensions,
+                                      cog=n.cog, wheel_radius=n.wheel_radius, wheel_separation=n.wheel_separation,
+                                      wheel_base=n.wheel_base))
             return
         if cmd.type.lower() == "mispkg":
             pkgs = self._packages(cmd.name)
@@ -317,11 +317,11 @@ class Session:
             self.send(M.EmptyConfiguration(item_type="", name=cmd.name))
             return
         if cmd.type.lower() == "robot":
-            r = self.robot
-            self.send(M.RobotConfiguration(vehicle_type=r.vehicle_type, class_name=r.class_name,
-                                           steering_type=r.steering_type, mass_kg=r.mass_kg,
-                                           max_speed=r.max_speed_rad_s, max_torque=r.max_torque_nm,
-                                           max_front_steer=r.max_front_steer_rad, max_rear_steer=r.max_rear_steer_rad))
+            n = self.facade.robot_numbers(self.robot)
+            self.send(M.RobotConfiguration(vehicle_type=n.vehicle_type, class_name=n.class_name,
+                                           steering_type=n.steering_type, mass_kg=n.mass_kg, max_speed=n.max_speed,
+                                           max_torque=n.max_torque, max_front_steer=n.max_front_steer,
+                                           max_rear_steer=n.max_rear_steer))
             return
         if cmd.type.lower() == "mispkg":
             pkgs = self._packages(cmd.name)

@@ -14,7 +14,8 @@ from typing import Any, Callable
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
-from usarsim.sim.outputs import ItemDescription, Output
+from usarsim.robots import drive_class
+from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner, StepRequest
 from usarsim.sim.simulation import Simulation, describe_items
@@ -76,9 +77,11 @@ class SimFacade:
 
     def drive_accepts(self, robot: RobotConfig) -> frozenset[type]:
         """The kinds of DRIVE part (:mod:`usarsim.controls`) the robot's drive applies."""
-        from usarsim.robots import DRIVES
+        return drive_class(robot).ACCEPTS
 
-        return DRIVES.get(robot.drive).ACCEPTS
+    def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
+        """What GETGEO and GETCONF {Type Robot} report of the robot (its drive model's numbers)."""
+        return drive_class(robot).numbers(robot)
 
     @staticmethod
     def canonical_item_type(name: str) -> str:

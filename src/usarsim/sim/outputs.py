@@ -32,3 +32,23 @@ class ItemDescription:
     orientation: tuple[float, float, float]
     mount: str
     conf: tuple[tuple[str, Any], ...]
+
+
+@dataclass(frozen=True)
+class RobotNumbers:
+    """What ``GETGEO`` and ``GETCONF {Type Robot}`` report of a robot class (protocol.md 6.7,
+    6.8): contributed by its drive model (:meth:`usarsim.robots.DriveModel.numbers`)."""
+
+    vehicle_type: str
+    class_name: str
+    steering_type: str
+    mass_kg: float
+    max_speed: float
+    max_torque: float
+    max_front_steer: float
+    max_rear_steer: float
+    dimensions: tuple[float, float, float]
+    cog: tuple[float, float, float]
+    wheel_radius: float | None
+    wheel_separation: float | None
+    wheel_base: float | None

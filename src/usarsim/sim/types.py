@@ -8,9 +8,9 @@ rotation of a USARSim roll, pitch and yaw, for drawing the world).
 from __future__ import annotations
 
 from usarsim.sim.frames import euler_to_mat
-from usarsim.sim.outputs import ItemDescription, Output
+from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_model
 from usarsim.sim.render import Tile, grid_tiles
 
-__all__ = ["ItemDescription", "Link", "Output", "Pair", "RadioModel", "Tile", "euler_to_mat", "grid_tiles",
+__all__ = ["ItemDescription", "Link", "Output", "Pair", "RadioModel", "RobotNumbers", "Tile", "euler_to_mat", "grid_tiles",
            "pair_key", "resolve_model"]
