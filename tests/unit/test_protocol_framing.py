@@ -162,3 +162,109 @@ def test_arbitrary_bytes_never_raise_and_respect_the_limit(chunks: list[bytes], 
         assert buf.dropped_lines >= previous_dropped
         previous_dropped = buf.dropped_lines
         assert buf.pending_bytes <= limit
+
+
+# --------------------------------------------------------------------------- DRIVE floods
+
+SPEEDS = "DRIVE {Left 1} {Right 1}"
+
+
+def drive_buffer() -> LineBuffer:
+    return LineBuffer(drop_repeated_drives=True)
+
+
+def test_a_repeated_drive_is_dropped_and_counted() -> None:
+    buf = drive_buffer()
+    assert buf.feed(f"{SPEEDS}\r\n{SPEEDS}\r\n{SPEEDS}\r\n".encode()) == [SPEEDS]
+    assert buf.repeated_drives == 2
+
+
+def test_a_repeat_across_two_feeds_is_dropped() -> None:
+    buf = drive_buffer()
+    assert buf.feed(f"{SPEEDS}\r\n".encode()) == [SPEEDS]
+    assert buf.feed(f"{SPEEDS}\r\n".encode()) == []
+    assert buf.feed(b"DRIVE {Left 1} ") == []  # a repeat cut in the middle
+    assert buf.feed(b"{Right 1}\r\n") == []
+    assert buf.repeated_drives == 2
+
+
+def test_a_drive_another_line_and_the_same_drive_are_all_kept() -> None:
+    buf = drive_buffer()
+    data = f"{SPEEDS}\r\nGETGEO {{Type Robot}}\r\n{SPEEDS}\r\n".encode()
+    assert buf.feed(data) == [SPEEDS, "GETGEO {Type Robot}", SPEEDS]
+    assert buf.repeated_drives == 0
+
+
+@pytest.mark.parametrize("line", ["DRIVE {Flip True}", "DRIVE {Name Arm} {Value 0.1} {Order 10}",
+                                  "DRIVE {ORDER 1} {Name Arm} {Value 1}", "DRIVE {flip true}"])
+def test_a_drive_with_order_or_flip_is_never_dropped(line: str) -> None:
+    buf = drive_buffer()
+    small = feed_all(buf, [f"{line}\r\n".encode()] * 3)
+    big = buf.feed(f"{line}\r\n".encode() * 1000)  # the bytes-level fast path
+    assert small == [line] * 3 and big == [line] * 1000
+    assert buf.repeated_drives == 0
+
+
+def test_other_lines_and_other_speeds_are_never_dropped() -> None:
+    buf = drive_buffer()
+    lines = ["GETGEO {Type Robot}"] * 2 + [SPEEDS, "DRIVE {Left 2} {Right 2}", SPEEDS]
+    assert buf.feed("".join(f"{x}\r\n" for x in lines).encode()) == lines
+    assert buf.repeated_drives == 0
+
+
+def test_without_the_option_nothing_is_dropped() -> None:
+    assert LineBuffer().feed(f"{SPEEDS}\r\n".encode() * 3) == [SPEEDS] * 3
+
+
+def test_a_flood_in_one_big_read_collapses_to_one_line() -> None:
+    buf = drive_buffer()
+    data = f"{SPEEDS}\r\n".encode() * 100_000 + b"DRIVE {Flip True}\r\n" * 2 + f"{SPEEDS}\n".encode() * 3
+    assert buf.feed(data) == [SPEEDS, "DRIVE {Flip True}", "DRIVE {Flip True}", SPEEDS]
+    assert buf.repeated_drives == 100_000 - 1 + 2
+
+
+def test_a_big_read_that_begins_inside_a_line_keeps_that_line() -> None:
+    """``MISPKG {Name `` held from the read before: the first ``DRIVE}`` of the next read
+    ends that line, and the ``DRIVE}`` after it is a line of its own."""
+    buf = drive_buffer()
+    assert buf.feed(b"MISPKG {Name ") == []
+    assert buf.feed(b"DRIVE}\r\n" * 2 + b"GETGEO {Type Robot}\r\n" * 400) == \
+        ["MISPKG {Name DRIVE}", "DRIVE}"] + ["GETGEO {Type Robot}"] * 400
+
+
+def test_the_fast_path_gives_the_lines_of_the_line_by_line_rule() -> None:
+    from usarsim.protocol.framing import REPEATED_DRIVE
+
+    data = (f"{SPEEDS}\r\n".encode() * 1000 + b"DRIVE {Flip True}\r\n" * 2
+            + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n")
+    assert REPEATED_DRIVE.sub(rb"\1", data) == (
+        f"{SPEEDS}\r\n".encode() + b"DRIVE {Flip True}\r\n" * 2
+        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n")
+
+
+def _reference(lines: list[str]) -> tuple[list[str], int]:
+    """The rule line by line: a repeatable DRIVE the same as the line before it is dropped."""
+    kept: list[str] = []
+    for line in lines:
+        if kept and line == kept[-1] and line.upper().startswith("DRIVE") \
+                and "order" not in line.lower() and "flip" not in line.lower():
+            continue
+        kept.append(line)
+    return kept, len(lines) - len(kept)
+
+
+@settings(max_examples=60)
+@given(
+    runs=st.lists(st.tuples(st.sampled_from([SPEEDS, "DRIVE {Left 2} {Right 2}", "DRIVE {Flip True}",
+                                             "DRIVE {Order 1} {Value 2}", "GETGEO {Type Robot}", "drive {Light True}"]),
+                            st.integers(1, 300)), max_size=8),
+    terminator=st.sampled_from([b"\r\n", b"\n"]),
+    cuts=st.lists(st.integers(min_value=0, max_value=40_000), max_size=6),
+)
+def test_any_split_of_a_flood_gives_the_lines_of_the_rule(runs, terminator: bytes, cuts: list[int]) -> None:
+    lines = [line for line, n in runs for _ in range(n)]
+    data = b"".join(line.encode("ascii") + terminator for line in lines)
+    points = sorted({min(c, len(data)) for c in cuts} | {0, len(data)})
+    buf = drive_buffer()
+    got = feed_all(buf, [data[a:b] for a, b in zip(points, points[1:])])
+    assert (got, buf.repeated_drives) == _reference(lines)

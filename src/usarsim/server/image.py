@@ -14,7 +14,6 @@ cameras (protocol.md 11).
 
 from __future__ import annotations
 
-import asyncio
 import collections
 import io
 import logging
@@ -24,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.server.listener import ReadGate, TcpListener
+from usarsim.server.connection import ServerConnection, peer_address
+from usarsim.server.listener import TcpListener
 from usarsim.sim.types import Tile, grid_tiles
 
 log = logging.getLogger("usarsim.server")
@@ -83,7 +83,7 @@ class CameraBindings:
 
     def lookup(self, ip: str, port: int) -> tuple[str, str] | None:
         with self._lock:
-            return self._by_client.get(f"{ip}:{port}".lower()) or self._by_client.get(ip.lower())
+            return self._by_client.get(peer_address(ip, port).lower()) or self._by_client.get(ip.lower())
 
 
 def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
@@ -101,39 +101,22 @@ def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
     return struct.pack(">BI", image_type, len(payload)) + payload
 
 
-class ImageConnection(asyncio.Protocol):
+class ImageConnection(ServerConnection):
+    what = "image"
+    limit_option = "--max-viewers"
+    max_waiting = MAX_PENDING
+    waiting_note = "more than %d pictures asked for at once: reading paused until they are sent"
+
     def __init__(self, server: "ImageServer"):
-        self.server = server
-        self.transport: asyncio.Transport | None = None
-        self.peer = ("?", 0)
+        super().__init__(server)
         self.buffer = bytearray()
         self.pending: collections.deque[tuple[int, int, int, int] | None] = collections.deque()
         self.busy = False
         self.requests = 0
         self.last: np.ndarray | None = None
-        self._warned: set[str] = set()
-        self.writable = True  # False while the client does not read its pictures
-        self.gate = ReadGate(MAX_PENDING)
 
-    def warn_once(self, key: str, msg: str, *args) -> None:
-        if key not in self._warned:
-            self._warned.add(key)
-            log.warning("image %s:%d: " + msg, *self.peer, *args)
-
-    def connection_made(self, transport) -> None:
-        self.transport = transport
-        peer = transport.get_extra_info("peername")
-        self.peer = (peer[0], peer[1]) if peer else ("?", 0)
-        if len(self.server.connections) >= self.server.max_connections:
-            log.warning("image %s:%d: refused: %d connections already", *self.peer, len(self.server.connections))
-            transport.close()
-            return
-        self.server.connections.add(self)
-        log.info("image %s:%d: connected", *self.peer)
-
-    def connection_lost(self, exc) -> None:
-        self.server.connections.discard(self)
-        self.transport = None
+    def writing_resumed(self) -> None:
+        self._next()
 
     def data_received(self, data: bytes) -> None:
         self.buffer += data
@@ -158,16 +141,7 @@ class ImageConnection(asyncio.Protocol):
 
     def _queue(self, rect) -> None:
         self.pending.append(rect)
-        if self.gate.queued(self.transport, len(self.pending)):
-            self.warn_once("pending", "more than %d pictures asked for at once: reading paused until they "
-                           "are sent", MAX_PENDING)
-
-    def pause_writing(self) -> None:
-        self.writable = False
-
-    def resume_writing(self) -> None:
-        self.writable = True
-        self._next()
+        self.queued(len(self.pending))
 
     def _next(self) -> None:
         # no picture is made for a client that does not read the ones sent: its unread
@@ -175,7 +149,7 @@ class ImageConnection(asyncio.Protocol):
         if self.busy or not self.writable or not self.pending or self.transport is None:
             return
         rect = self.pending.popleft()
-        self.gate.taken(self.transport, len(self.pending))
+        self.taken(len(self.pending))
         settings = self.server.settings
         self.requests += 1
         if self.last is not None and settings.frame_skip > 0 and (self.requests - 1) % (settings.frame_skip + 1):
@@ -183,15 +157,15 @@ class ImageConnection(asyncio.Protocol):
             self._next()
             return
         self.busy = True
-        binding = self.server.bindings.lookup(*self.peer)
+        binding = self.server.bindings.lookup(self.ip, self.port)
         fut = self.server.renderer.render_layout(lambda snap: self.server.layout(snap, binding))
-        loop = self.server.loop
-        fut.add_done_callback(lambda f: loop.call_soon_threadsafe(self._done, f, rect))
+        done = self.server.threadsafe(self._done)
+        fut.add_done_callback(lambda f: done(f, rect))
 
     def _done(self, fut, rect) -> None:
         self.busy = False
         if fut.exception() is not None:
-            self.warn_once("render", "no picture: %s", fut.exception())
+            self.log_once("render", "no picture: %s", fut.exception())
             if self.transport is not None:
                 self.transport.close()
             return
@@ -201,13 +175,13 @@ class ImageConnection(asyncio.Protocol):
 
     def _send(self, picture: np.ndarray, rect) -> None:
         if self.transport is None or self.transport.is_closing():
-            return
+            return  # no picture cut and encoded for nobody
         if rect is not None:  # the asked sub-rectangle, cut to the picture
             x, y, w, h = rect
             ph, pw = picture.shape[:2]
             x0, y0 = min(x, pw), min(y, ph)
             picture = picture[y0:min(y0 + h, ph), x0:min(x0 + w, pw)]
-        self.transport.write(encode_picture(picture, self.server.settings.image_type))
+        self.write(encode_picture(picture, self.server.settings.image_type))
 
 
 class ImageServer(TcpListener):

@@ -1,14 +1,25 @@
-"""One asyncio TCP listener and the connections it accepted (the ground-truth service, the
-image server, the wireless servers): open it, and on stop close it and every connection."""
+"""One asyncio TCP listener and the connections it accepted (the control port, the
+ground-truth service, the image server, the wireless servers): open it, and on stop close
+it and every connection.  The connections themselves share
+:class:`~usarsim.server.connection.ServerConnection`."""
 
 from __future__ import annotations
 
 import asyncio
 
 
+def call_on_loop(loop: asyncio.AbstractEventLoop | None, fn, *args) -> None:
+    """Have ``loop`` call ``fn(*args)``, from any thread; dropped once the loop is closed."""
+    if loop is not None and not loop.is_closed():
+        try:
+            loop.call_soon_threadsafe(fn, *args)
+        except RuntimeError:  # the loop closed meanwhile
+            pass
+
+
 class TcpListener:
     """Subclasses give ``make_protocol()``; their connections add themselves to
-    ``connections`` and have a ``transport``."""
+    ``connections`` (a set, or a dict whose values they are) and have a ``transport``."""
 
     def __init__(self, host: str, port: int):
         self.host = host
@@ -19,6 +30,14 @@ class TcpListener:
 
     def make_protocol(self) -> asyncio.Protocol:
         raise NotImplementedError
+
+    def threadsafe(self, fn):
+        """``fn`` to be called from another thread (the simulation's, the renderer's): it runs
+        on the event loop; dropped once the loop is closed."""
+        def call(*args) -> None:
+            call_on_loop(self.loop, fn, *args)
+
+        return call
 
     async def start(self) -> int:
         """Listen; returns the port (the one picked when asked for port 0)."""
@@ -31,32 +50,9 @@ class TcpListener:
         server, self._server = self._server, None
         if server is not None:
             server.close()
-        for conn in list(self.connections):
+        conns = self.connections
+        for conn in list(conns.values() if isinstance(conns, dict) else conns):
             if conn.transport is not None:
                 conn.transport.close()
         if server is not None:
             await server.wait_closed()
-
-
-class ReadGate:
-    """Backpressure on one connection's requests: its socket is not read while ``limit``
-    requests wait, and is read again once fewer than half of them do.  TCP then slows the
-    sender down; nothing is dropped."""
-
-    def __init__(self, limit: int):
-        self.limit = limit
-        self.reading = True
-
-    def queued(self, transport, waiting: int) -> bool:
-        """After requests were queued: True when this closed the gate (the caller logs it)."""
-        if self.reading and waiting >= self.limit and transport is not None:
-            self.reading = False
-            transport.pause_reading()
-            return True
-        return False
-
-    def taken(self, transport, waiting: int) -> None:
-        """After a request was taken from the queue."""
-        if not self.reading and waiting < self.limit // 2 and transport is not None:
-            self.reading = True
-            transport.resume_reading()

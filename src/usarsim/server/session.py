@@ -19,12 +19,11 @@ from usarsim.errors import ConfigError, ProtocolError
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.protocol.numbers import f4
+from usarsim.server.connection import MAX_LOGGED_KINDS as MAX_LOGGED_KINDS  # kinds logged per connection
+from usarsim.server.connection import LogOnce
 from usarsim.sim.facade import SimFacade
 
 log = logging.getLogger("usarsim.server")
-
-# Kinds of problem logged once per connection at most (see Session.log_once).
-MAX_LOGGED_KINDS = 32
 
 NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
 
@@ -60,7 +59,9 @@ class SessionContext:
 
     ``emit(msg)`` sends a message to the client (on the event loop); ``threadsafe(fn)``
     wraps ``fn`` so that calling it from another thread (the simulation's) runs it on the
-    event loop; ``admit()`` says why one more robot is refused (None: admitted)."""
+    event loop; ``admit()`` says why one more robot is refused (None: admitted);
+    ``log_once`` logs each kind of problem once per connection (shared with the connection;
+    by default one of the session's own)."""
 
     facade: SimFacade
     peer: str
@@ -69,6 +70,11 @@ class SessionContext:
     admit: Callable[[], str | None]
     robot_dirs: tuple[str, ...] = ()  # extra folders of robot files (serve --robot-dir)
     camera_bindings: Any = None  # the image server's CameraBindings
+    log_once: LogOnce | None = None
+
+    def __post_init__(self) -> None:
+        if self.log_once is None:
+            self.log_once = LogOnce(log, self.peer)
 
 
 class Session:
@@ -78,7 +84,6 @@ class Session:
         self.state = NEW
         self.robot: RobotConfig | None = None
         self.robot_name: str | None = None
-        self._logged: set[str] = set()
         self.handlers: dict[type, Callable] = {
             C.Init: self.on_init,
             C.GetStartPoses: self.on_get_start_poses,
@@ -99,21 +104,9 @@ class Session:
         return self.ctx.facade
 
     def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:
-        """Log the first problem of each kind at ``level``, its repetitions at DEBUG; past
-        MAX_LOGGED_KINDS kinds (a client sending ever new garbage) every new kind is
-        repeated at DEBUG too, so that the log and this set stay bounded."""
-        if kind in self._logged:
-            log.debug("%s: " + msg, self.ctx.peer, *args)
-            return
-        if len(self._logged) >= MAX_LOGGED_KINDS:
-            if "(more)" not in self._logged:
-                self._logged.add("(more)")
-                log.warning("%s: more than %d kinds of problem on this connection; further ones are logged at "
-                            "debug level", self.ctx.peer, MAX_LOGGED_KINDS)
-            log.debug("%s: " + msg, self.ctx.peer, *args)
-            return
-        self._logged.add(kind)
-        log.log(level, "%s: " + msg, self.ctx.peer, *args)
+        """Log the first problem of each kind at ``level``, its repetitions at DEBUG, within
+        a bound on the kinds (:class:`~usarsim.server.connection.LogOnce`)."""
+        self.ctx.log_once(kind, msg, *args, level=level)
 
     # Entry point ---------------------------------------------------------------------
     def handle_line(self, line: str) -> None:

@@ -33,6 +33,7 @@ from usarsim import __version__
 from usarsim.errors import ProtocolError, UsarsimError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.grammar import parse_line
+from usarsim.server.connection import peer_address, refuse, write_open
 
 log = logging.getLogger("usarsim.web")
 
@@ -118,8 +119,7 @@ class ControlBridge:
             self.alive = True
 
     def send_line(self, line: str) -> None:
-        if not self.writer.is_closing():
-            self.writer.write(line.encode("ascii", "replace") + b"\r\n")
+        write_open(self.writer, line.encode("ascii", "replace") + b"\r\n")
 
 
 class TruthClient:
@@ -241,8 +241,8 @@ class WebConsole:
         if open_now <= self.max_connections:
             return await handler(request)
         if self.refused == 0 or open_now > self._refused_at:
-            log.warning("console %s: refused %s: %d connections open (limit --max-web-connections %d)",
-                        request.remote, request.path, open_now, self.max_connections)
+            refuse(log, f"console {request.remote}", open_now, self.max_connections, "--max-web-connections",
+                   what=request.path, state="open")
         self.refused += 1
         self._refused_at = open_now
         return web.Response(status=503, text=f"usarsim: more than {self.max_connections} connections to the web "
@@ -396,7 +396,7 @@ class WebConsole:
     async def _bind(self, page: str, client: tuple[str, int], robot: str | None, camera: str) -> dict:
         """Show the image connection at ``client`` a robot camera (None: release it)."""
         bindings = self.app.camera_bindings
-        address = f"{client[0]}:{client[1]}"
+        address = peer_address(*client)
         if robot is None:
             bindings.release(address)
             return {"bound": None}
@@ -462,7 +462,7 @@ class WebConsole:
         finally:
             self._sockets.discard(ws)
             if client[1]:
-                self.app.camera_bindings.release(f"{client[0]}:{client[1]}")
+                self.app.camera_bindings.release(peer_address(*client))
             if frames is not None:
                 frames.cancel()
             if writer is not None:

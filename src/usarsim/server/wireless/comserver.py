@@ -43,6 +43,7 @@ from usarsim.protocol.wireless import (
     parse_wcs_request,
     wcs_request_word,
 )
+from usarsim.server.connection import LogOnce, RelayEnd, write_open
 from usarsim.sim.types import pair_key
 
 from .service import (
@@ -66,7 +67,7 @@ MAX_LINKS = 512
 _OK = WcsOk()
 
 
-class _LinkEnd(asyncio.Protocol):
+class _LinkEnd(RelayEnd):
     """The ComServer's connection to one robot of a link: what the robot sends is framed
     by a :class:`~usarsim.protocol.wireless.SendParser`."""
 
@@ -75,7 +76,7 @@ class _LinkEnd(asyncio.Protocol):
         self.link: WcsLink | None = None
         self.transport: asyncio.Transport | None = None
         self.parser = SendParser()
-        self._warned: set[str] = set()
+        self.log_once = LogOnce(log, f"comserver link to {robot}", " (logged once)")
 
     def connection_made(self, transport) -> None:
         self.transport = transport
@@ -92,24 +93,16 @@ class _LinkEnd(asyncio.Protocol):
             elif isinstance(ev, SendClose):
                 link.close(f"CLOSE from {self.robot}")
                 return
-            elif ev.kind not in self._warned:  # a dropped frame: bounded, one kind each
-                self._warned.add(ev.kind)
-                log.warning("comserver link %s: from %s: %s; dropped (logged once)", link.name, self.robot, ev)
+            else:  # a dropped frame
+                self.log_once(ev.kind, "from %s: %s; dropped", self.robot, ev)
 
     def connection_lost(self, exc) -> None:
         if self.link is not None:
             partial = " in the middle of a message" if self.parser.partial else ""
             self.link.close(f"{self.robot} closed its connection{partial}")
 
-    def pause_writing(self) -> None:
-        other = self.link.other(self) if self.link is not None else None
-        if other is not None and other.transport is not None:
-            other.transport.pause_reading()
-
-    def resume_writing(self) -> None:
-        other = self.link.other(self) if self.link is not None else None
-        if other is not None and other.transport is not None and not other.transport.is_closing():
-            other.transport.resume_reading()
+    def other_end(self) -> _LinkEnd | None:
+        return self.link.other(self) if self.link is not None else None
 
 
 class WcsLink:
@@ -126,6 +119,7 @@ class WcsLink:
         self.relayed = 0
         for end in self.ends:
             end.link = self
+            end.log_once.label = f"comserver link {self.name}"
 
     def start(self) -> None:
         for end in self.ends:
@@ -136,9 +130,7 @@ class WcsLink:
         return self.ends[1] if end is self.ends[0] else self.ends[0]
 
     def relay(self, src: _LinkEnd, payload: bytes) -> None:
-        dst = self.other(src)
-        if self.open and dst.transport is not None and not dst.transport.is_closing():
-            dst.transport.write(payload)
+        if self.open and write_open(self.other(src).transport, payload):
             self.relayed += 1
 
     def close(self, why: str) -> None:
@@ -170,7 +162,7 @@ class WcsConnection(WirelessConnection):
         return out
 
     async def handle(self, text: str) -> None:
-        self.write(format_wcs_reply(await self._answer(text)))
+        self.write_text(format_wcs_reply(await self._answer(text)))
 
     async def _answer(self, text: str) -> WcsReply:
         try:

@@ -39,7 +39,7 @@ class InterfaceConnection(LineConnection):
         req = self.parse(line, parse_interface_request)
         reply = await self._answer(req) if req is not None else None
         if reply is not None:
-            self.write(format_interface_reply(reply))
+            self.write_text(format_interface_reply(reply))
 
     async def _answer(self, req: InterfaceRequest) -> InterfaceReply | None:
         """The reply to ``req``; None: the request is ignored."""

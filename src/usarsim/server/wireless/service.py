@@ -1,6 +1,7 @@
 """What the three wireless servers share (protocol.md 12): the radio links, asked of the
 simulation through the facade and followed as simulated time passes, and the connection
-and listener bases that hold each port's limits, log-once and backpressure.
+and listener bases of the three servers (their limits, log-once and backpressure are
+:class:`~usarsim.server.connection.ServerConnection`'s, as on every port).
 
 Link state follows simulated time: the facade computes the signal on the simulation
 thread from the simulated poses when a link is opened or a relay port allocated
@@ -24,7 +25,9 @@ from usarsim.config.world import WirelessConfig
 from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
-from usarsim.server.listener import ReadGate, TcpListener
+from usarsim.server.connection import MAX_LOGGED_KINDS as MAX_LOGGED_KINDS  # kinds logged per connection
+from usarsim.server.connection import ServerConnection
+from usarsim.server.listener import TcpListener, call_on_loop
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.types import Link, Pair, RadioModel
 
@@ -35,8 +38,6 @@ CONNECT_TIMEOUT_S = 5.0
 MAX_QUEUED = 256
 """Requests of one connection waiting to be answered; beyond them its socket is not read
 until they are answered."""
-MAX_LOGGED_KINDS = 32
-"""Kinds of problem logged once per connection at most."""
 MAX_CONNECTIONS = 64
 """Connections per server at most (``usarsim serve --max-wireless-connections``)."""
 MAX_LINE_BYTES = 4096
@@ -101,12 +102,7 @@ class WirelessService:
 
     def _changes_threadsafe(self, time: float, changes: list[tuple[Pair, bool]]) -> None:
         """The facade's ``on_change`` (simulation thread): handed to the event loop."""
-        loop = self.loop
-        if loop is not None and not loop.is_closed():
-            try:
-                loop.call_soon_threadsafe(self._apply, time, changes)
-            except RuntimeError:  # the loop closed meanwhile
-                pass
+        call_on_loop(self.loop, self._apply, time, changes)
 
     def _apply(self, time: float, changes: list[tuple[Pair, bool]]) -> None:
         for pair, up in changes:
@@ -139,14 +135,7 @@ class WirelessService:
                 else:
                     fut.set_result(result)
 
-        def done(result, error):
-            if not loop.is_closed():
-                try:
-                    loop.call_soon_threadsafe(settle, result, error)
-                except RuntimeError:  # the loop closed meanwhile
-                    pass
-
-        method(*args, on_done=done)
+        method(*args, on_done=lambda result, error: call_on_loop(loop, settle, result, error))
         return await fut
 
     async def check(self, a: str, b: str) -> tuple[float, Link | None]:
@@ -170,58 +159,36 @@ class WirelessService:
         return await self.ask(self.facade.walls_between, start, end)
 
 
-class WirelessConnection(asyncio.Protocol):
+class WirelessConnection(ServerConnection):
     """A client connection of one of the servers, whose requests are answered one after
     another, in order.  Subclasses split the bytes into requests (``split``) and answer
-    one (``handle``); this holds the connection limit, the queue and its backpressure
-    (:class:`~usarsim.server.listener.ReadGate`), the pause while the client does not read
-    its replies, and log-once."""
+    one (``handle``); this holds the queue, and the pause while the client does not read
+    its replies; the connection limit, log-once and the queue's backpressure are the
+    :class:`~usarsim.server.connection.ServerConnection`'s."""
 
     what = "wireless"  # names the server in log lines, before the peer address
+    limit_option = "--max-wireless-connections"
+    logger = log
+    log_suffix = " (logged once per connection)"
+    max_waiting = MAX_QUEUED
 
     def __init__(self, server: WirelessListener):
-        self.server = server
-        self.transport: asyncio.Transport | None = None
-        self.peer = "?"
-        self.ip = ""
+        super().__init__(server)
         self._queue: collections.deque = collections.deque()
         self._task: asyncio.Task | None = None
-        self._warned: set[str] = set()
-        self._writable = asyncio.Event()  # cleared while the client does not read its replies
-        self._writable.set()
-        self._gate = ReadGate(MAX_QUEUED)
+        self._resumed = asyncio.Event()  # set while the client reads its replies
+        self._resumed.set()
 
     @property
     def owner(self):
         """The server (ComServer, WSS, ComServerInterface) this connection serves."""
         return self.server.owner
 
-    def connection_made(self, transport) -> None:
-        self.transport = transport
-        peer = transport.get_extra_info("peername")
-        if isinstance(peer, tuple):
-            self.ip, self.peer = str(peer[0]), f"{peer[0]}:{peer[1]}"
-        limit = self.server.max_connections
-        if len(self.server.connections) >= limit:
-            log.warning("%s %s: refused: %d connections already (limit --max-wireless-connections %d)",
-                        self.what, self.peer, len(self.server.connections), limit)
-            transport.close()
-            return
-        self.server.connections.add(self)
-        log.info("%s %s: connected", self.what, self.peer)
-
     def connection_lost(self, exc) -> None:
-        if self not in self.server.connections:
-            return
-        self.server.connections.discard(self)
         if self._task is not None:
             self._task.cancel()
         self._queue.clear()
-        log.info("%s %s: disconnected", self.what, self.peer)
-        self.closed()
-
-    def closed(self) -> None:
-        """The client went away."""
+        super().connection_lost(exc)
 
     def split(self, data: bytes) -> list[str]:
         """The requests ``data`` completes."""
@@ -232,52 +199,33 @@ class WirelessConnection(asyncio.Protocol):
         raise NotImplementedError
 
     def data_received(self, data: bytes) -> None:
-        if self not in self.server.connections:
+        if not self.accepted:
             return
         self._queue.extend(self.split(data))
-        if self._gate.queued(self.transport, len(self._queue)):
-            self.log_once("flood", "more than %d requests waiting; reading paused until they are answered",
-                          MAX_QUEUED)
+        self.queued(len(self._queue))
         if self._queue and (self._task is None or self._task.done()):
             self._task = asyncio.get_running_loop().create_task(self._work())
 
     def pause_writing(self) -> None:
-        self._writable.clear()
+        super().pause_writing()
+        self._resumed.clear()
 
-    def resume_writing(self) -> None:
-        self._writable.set()
+    def writing_resumed(self) -> None:
+        self._resumed.set()
 
     async def _work(self) -> None:
         while self._queue:
             # a client that does not read its replies is not answered further until it does,
             # so that its unread replies stay bounded (asyncio's high-water mark)
-            await self._writable.wait()
+            await self._resumed.wait()
             req = self._queue.popleft()
-            self._gate.taken(self.transport, len(self._queue))
+            self.taken(len(self._queue))
             try:
                 await self.handle(req)
             except asyncio.CancelledError:
                 raise
             except Exception:  # nothing a client sends may take the server down
-                log.exception("%s %s: error while handling %.200r", self.what, self.peer, req)
-
-    def write(self, text: str) -> None:
-        """Send a formatted reply (ASCII; anything else is replaced)."""
-        if self.transport is not None and not self.transport.is_closing():
-            self.transport.write(text.encode("ascii", "replace"))
-
-    def log_once(self, key: str, fmt: str, *args) -> None:
-        """The first problem of each kind at WARNING, once; past MAX_LOGGED_KINDS kinds (ever
-        new garbage) only a note that more follow, so that the log and this set stay bounded."""
-        if key in self._warned:
-            return
-        if len(self._warned) >= MAX_LOGGED_KINDS:
-            key, fmt, args = "(more)", "more than %d kinds of problem; further ones are not logged", \
-                (MAX_LOGGED_KINDS,)
-            if key in self._warned:
-                return
-        self._warned.add(key)
-        log.warning("%s %s: " + fmt + " (logged once per connection)", self.what, self.peer, *args)
+                log.exception("%s: error while handling %.200r", self.label, req)
 
 
 class LineConnection(WirelessConnection):

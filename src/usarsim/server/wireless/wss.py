@@ -44,6 +44,7 @@ from usarsim.protocol.wireless import (
     format_wss_reply,
     parse_wss_request,
 )
+from usarsim.server.connection import RelayEnd, write_open
 from usarsim.sim.types import Pair, pair_key
 
 from .service import (
@@ -61,7 +62,7 @@ MAX_RELAY_PORTS = 1024
 """Relay ports (listening sockets, one per robot pair and port asked for) at most."""
 
 
-class _PipeEnd(asyncio.Protocol):
+class _PipeEnd(RelayEnd):
     """One socket of a :class:`Pipe`: what arrives is written to the other one, whose
     backpressure pauses this one's reading."""
 
@@ -75,9 +76,8 @@ class _PipeEnd(asyncio.Protocol):
         transport.pause_reading()  # until both ends are connected (Pipe.start)
 
     def data_received(self, data: bytes) -> None:
-        peer = self.peer
-        if peer is not None and peer.transport is not None and not peer.transport.is_closing():
-            peer.transport.write(data)
+        if self.peer is not None:
+            write_open(self.peer.transport, data)
 
     def eof_received(self):
         return False  # closes the pipe: the WSS closes both sockets
@@ -85,13 +85,8 @@ class _PipeEnd(asyncio.Protocol):
     def connection_lost(self, exc) -> None:
         self.pipe.close()
 
-    def pause_writing(self) -> None:
-        if self.peer is not None and self.peer.transport is not None:
-            self.peer.transport.pause_reading()
-
-    def resume_writing(self) -> None:
-        if self.peer is not None and self.peer.transport is not None and not self.peer.transport.is_closing():
-            self.peer.transport.resume_reading()
+    def other_end(self) -> _PipeEnd | None:
+        return self.peer
 
 
 class Pipe:
@@ -264,7 +259,7 @@ class WssConnection(LineConnection):
             self.owner.unregister(self.robot)
 
     async def handle(self, line: str) -> None:
-        self.write(format_wss_reply(await self._answer(self.parse(line, parse_wss_request))))
+        self.write_text(format_wss_reply(await self._answer(self.parse(line, parse_wss_request))))
 
     async def _answer(self, req: WssRequest | None) -> WssReply:
         """The reply to ``req`` (None: a malformed line, logged already)."""
