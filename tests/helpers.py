@@ -11,10 +11,11 @@ import math
 import socket
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 DEFAULT_TIMEOUT = 10.0
 
@@ -124,7 +125,7 @@ class Client:
         self.eof = False
 
     # context manager --------------------------------------------------------------
-    def __enter__(self) -> "Client":
+    def __enter__(self) -> Client:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -150,7 +151,7 @@ class Client:
         self.sock.settimeout(left)
         try:
             data = self.sock.recv(1 << 16)
-        except socket.timeout:
+        except TimeoutError:
             raise WaitTimeout("timed out waiting for data from the server") from None
         except ConnectionResetError:
             data = b""
@@ -269,7 +270,7 @@ class ServerThread:
         asyncio.set_event_loop(self.loop)
         self.loop.run_forever()
 
-    def start(self) -> "ServerThread":
+    def start(self) -> ServerThread:
         self._thread.start()
         asyncio.run_coroutine_threadsafe(self.app.start(), self.loop).result(DEFAULT_TIMEOUT)
         self._started = True
@@ -364,7 +365,7 @@ def write_test_world(directory: Path) -> Path:
     return p
 
 
-@lru_cache(maxsize=None)
+@cache
 def gl_problem() -> str:
     """'' when an offscreen OpenGL context can be made here (pictures can be rendered), else why not."""
     import mujoco

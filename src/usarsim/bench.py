@@ -226,11 +226,12 @@ def run_camera_bench(args) -> int:
             # context), from a snapshot of the same scene
             snap_box = {}
             done = threading.Event()
-            app.facade.call(lambda s: s.cameras.render_snapshot(), on_done=lambda r, e: (snap_box.update(r=r), done.set()))
+            app.facade.call(lambda s: s.cameras.render_snapshot(),
+                            on_done=lambda r, e: (snap_box.update(r=r), done.set()))
             done.wait(30)
             snap = snap_box["r"]
-            jobs: "queue.Queue[int | None]" = queue.Queue()
-            bare_times: "queue.Queue[float]" = queue.Queue()
+            jobs: queue.Queue[int | None] = queue.Queue()
+            bare_times: queue.Queue[float] = queue.Queue()
 
             def bare():
                 import mujoco
@@ -284,7 +285,7 @@ def run_camera_bench(args) -> int:
     return 0
 
 
-def snapshot_state(sim, runner=None) -> "np.ndarray":
+def snapshot_state(sim, runner=None) -> np.ndarray:
     """The full physics state (with the controls) of the running simulation, taken
     from its own thread so that it is consistent."""
     import mujoco
@@ -308,7 +309,7 @@ def snapshot_state(sim, runner=None) -> "np.ndarray":
     return box.get("state")
 
 
-def raw_mujoco_rtf(model, seconds: float, state: "np.ndarray | None" = None) -> float:
+def raw_mujoco_rtf(model, seconds: float, state: np.ndarray | None = None) -> float:
     """Real-time factor of bare ``mj_step`` on ``model``, from ``state`` (the scene the
     benchmark ended with, robots driving as they were) or, without it, from the
     initial state with every wheel turning."""

@@ -324,7 +324,7 @@ def cmd_worlds(args) -> int:
     from usarsim.config.catalog import world_files
     from usarsim.config.world import load_world
 
-    for name, path in world_files().items():
+    for path in world_files().values():
         w = load_world(path)
         print(f"{w.name}  {w.description}")
     return 0
@@ -334,7 +334,7 @@ def cmd_robots(args) -> int:
     from usarsim.config.catalog import robot_files
     from usarsim.config.robot import load_robot
 
-    for name, path in robot_files().items():
+    for path in robot_files().values():
         r = load_robot(path)
         kit = ", ".join(sorted({i.item_type for i in r.items}))
         print(f"{r.class_name}  {r.drive} ({r.steering_type})  {kit}")

@@ -8,7 +8,8 @@ twice is an error (two plugins must never silently replace one another).
 
 from __future__ import annotations
 
-from typing import Callable, TypeVar
+from collections.abc import Callable
+from typing import TypeVar
 
 from usarsim.config.reader import did_you_mean
 from usarsim.errors import PluginNotFoundError

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from helpers import drive_joint, drive_skid
 from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
 from usarsim.config.world import check_world_file, load_world
@@ -20,7 +21,6 @@ from usarsim.protocol.messages import SensorMessage, format_message, parse_messa
 from usarsim.sensors import SENSORS
 from usarsim.sim.builder import robot_model_summary
 from usarsim.sim.simulation import Simulation, describe_items
-from helpers import drive_joint, drive_skid
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
 WORLD_FILES = sorted(WORLDS_DIR.glob("*.yaml"))

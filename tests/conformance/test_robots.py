@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
+from helpers import drive_ackermann, drive_skid, drive_velocities, drive_wheels
 from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
 from usarsim.protocol import messages as M
 from usarsim.sim.simulation import Simulation
-from helpers import drive_ackermann, drive_skid, drive_velocities, drive_wheels
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
 WORLD_FILES = sorted(WORLDS_DIR.glob("*.yaml"))

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from helpers import drive_skid
 from usarsim.config.catalog import resolve_robot
 from usarsim.config.world import load_world
 from usarsim.sim.simulation import Simulation
-from helpers import drive_skid
 
 GUIDE = Path(__file__).resolve().parents[2] / "docs" / "building-worlds.md"
 

@@ -20,8 +20,7 @@ from usarsim.config.catalog import ROBOTS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
 from usarsim.errors import ConfigError
 from usarsim.protocol.messages import SensorMessage, format_message, parse_message
-from usarsim.readings import (ImuReading, OrientationReading, PoseReading, TachometerReading, TouchItem,
-                              TouchReading)
+from usarsim.readings import ImuReading, OrientationReading, PoseReading, TachometerReading, TouchItem, TouchReading
 from usarsim.sensors.base import SENSORS, build_config
 from usarsim.sensors.touch import signed_distance
 from usarsim.sim.simulation import Simulation, describe_items

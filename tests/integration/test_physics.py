@@ -14,9 +14,9 @@ import pytest
 
 from helpers import (
     RIGHT_WALL_FACE_Y,
-    drive_skid,
     WALL_FACE_X,
     angle_diff,
+    drive_skid,
     ground_truth,
     segment_list,
     segments,

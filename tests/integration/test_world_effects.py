@@ -15,15 +15,15 @@ import mujoco
 import numpy as np
 import pytest
 
+from helpers import drive_skid
 from usarsim.config.catalog import ROBOTS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
 from usarsim.readings import RangeReading, RangeScanReading
 from usarsim.sim import builder
 from usarsim.sim.entities import Entities
-from usarsim.sim.simulation import Simulation
 from usarsim.sim.raycaster import RayCaster
-from helpers import drive_skid
+from usarsim.sim.simulation import Simulation
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 REST_Z = -0.1455  # P2AT chassis origin above the floor (Z down)

@@ -16,7 +16,7 @@ import pytest
 from helpers import drive_skid, segments
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
-from usarsim.readings import (RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading)
+from usarsim.readings import RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading
 from usarsim.sim.simulation import Simulation
 
 REST_Z = -0.1455  # P2AT chassis origin above the floor (Z down)

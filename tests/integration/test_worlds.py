@@ -8,9 +8,9 @@ import math
 
 import pytest
 
+from helpers import drive_skid
 from usarsim.config.catalog import resolve_robot, resolve_world
 from usarsim.sim.simulation import Simulation
-from helpers import drive_skid
 
 
 def test_a_p2at_climbs_the_orange_ramp_to_the_upper_level():

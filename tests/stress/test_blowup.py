@@ -8,8 +8,9 @@ from __future__ import annotations
 import logging
 import math
 
-from helpers import ground_truth
 from stress_scale import scaled
+
+from helpers import ground_truth
 
 SECONDS = 4.0
 STEP_S = 0.2

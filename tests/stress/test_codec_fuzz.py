@@ -10,8 +10,8 @@ import random
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from stress_scale import scaled
+
 from usarsim.errors import ProtocolError
 from usarsim.protocol import LineBuffer, parse_command
 

@@ -11,8 +11,9 @@ import struct
 import threading
 import time
 
-from helpers import Client
 from stress_scale import scaled
+
+from helpers import Client
 
 
 def open_fds() -> int:
@@ -202,7 +203,7 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
             first.sendall(b"OK")  # the renderer is made before memory is measured
             assert first.recv(5)
     socks = []
-    for port, unit in floods:
+    for port, _unit in floods:
         s = socket.create_connection(("127.0.0.1", port), timeout=10)
         s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
         if port == srv.app.wireless.wss.port:
@@ -220,7 +221,7 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
             try:
                 s.sendall(chunk)
                 sent[k] += per
-            except socket.timeout:
+            except TimeoutError:
                 pass  # the server reads no more for now: it answers what it has first
             except OSError:
                 return

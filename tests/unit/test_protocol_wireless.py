@@ -287,7 +287,10 @@ def test_any_bytes_give_the_same_events_in_any_split_and_never_raise(parts, size
     """(A dropped frame's text quotes what had arrived of it; its kind does not vary.)"""
     data = b"".join(parts)
     whole = w.SendParser(max_bytes=20).feed(data)
-    kinds = lambda events: [(ev.kind,) if isinstance(ev, w.SendProblem) else ev for ev in events]
+
+    def kinds(events):
+        return [(ev.kind,) if isinstance(ev, w.SendProblem) else ev for ev in events]
+
     assert kinds(feed_all(w.SendParser(max_bytes=20), data, sizes)) == kinds(whole)
     for ev in whole:
         assert isinstance(ev, (bytes, w.SendClose, w.SendProblem))

@@ -10,8 +10,16 @@ import pytest
 
 from usarsim.cli import main as cli_main
 from usarsim.config.catalog import WORLDS_DIR, file_kind
-from usarsim.config.rndf import (FEET_TO_M, check_mdf, load_mdf, load_rndf, parse_mdf, parse_rndf,
-                                 route_file_kind, to_world)
+from usarsim.config.rndf import (
+    FEET_TO_M,
+    check_mdf,
+    load_mdf,
+    load_rndf,
+    parse_mdf,
+    parse_rndf,
+    route_file_kind,
+    to_world,
+)
 from usarsim.config.world import GeoReference
 from usarsim.errors import ConfigError
 from usarsim.sensors.gps import world_to_geographic

@@ -49,7 +49,7 @@ class Page:
         page.on("console", lambda m: self.errors.append(f"console.{m.type}: {m.text}") if m.type == "error" else None)
         page.on("pageerror", lambda e: self.errors.append(f"uncaught: {e}"))
 
-    def open(self) -> "Page":
+    def open(self) -> Page:
         self.page.goto(self.url)
         # the world, the robot classes and the first ground truth have arrived
         self.page.wait_for_function("document.querySelectorAll('#spawn-class option').length > 0"

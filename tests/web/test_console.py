@@ -10,8 +10,8 @@ import time
 
 import pytest
 
-from webtools import gl_problem, truth
 from helpers import wait_for
+from webtools import gl_problem, truth
 
 
 def test_the_page_loads_with_no_console_errors(console_page, console_server):

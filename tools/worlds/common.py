@@ -242,7 +242,7 @@ class World:
         """Every start pose's disc is free of objects that rise above its surface (except the
         surface it stands on), and free of victims, alarms and tags."""
         problems = []
-        for (name, loc, _, _), (x, y, r, h) in zip(self.poses, self.keep_clear):
+        for (name, _loc, _, _), (x, y, r, h) in zip(self.poses, self.keep_clear):
             for kind, o in self.items:
                 if kind != "obj":
                     continue
@@ -270,7 +270,7 @@ class World:
                 if abs(hi - hj) < 0.01 and math.hypot(xi - xj, yi - yj) < ri + rj - 1e-6:
                     problems.append(f"{self.poses[i][0]} and {self.poses[j][0]} discs overlap")
         fc, fs, _ = self.floor
-        for (name, loc, _, _), (x, y, r, h) in zip(self.poses, self.keep_clear):
+        for (name, _loc, _, _), (x, y, r, _h) in zip(self.poses, self.keep_clear):
             if abs(x - fc[0]) + r > fs[0] / 2 or abs(y - fc[1]) + r > fs[1] / 2:
                 problems.append(f"{name}: its disc leaves the floor")
         return problems

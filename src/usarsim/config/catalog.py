@@ -6,7 +6,7 @@ a path to a file of one's own works wherever a name does.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 from usarsim.config.reader import did_you_mean, load_yaml
@@ -48,7 +48,7 @@ def resolve_world(name_or_path: str) -> WorldConfig:
                       "or give the path of a world file", key="--world")
 
 
-@lru_cache(maxsize=None)
+@cache
 def _robot_cached(path: str, mtime: float) -> RobotConfig:
     return load_robot(path)
 

@@ -497,7 +497,8 @@ def load_robot(path: str | Path) -> RobotConfig:
     # what a kind of drive needs of the wheels (sides, steered axles, numbers) is checked by
     # its drive model (usarsim.robots), when the robot is validated or spawned
     if gait is not None:
-        if gait.sway_m > 0.0 and (len(gait.legs) != 2 or abs(abs(gait.legs[0].phase - gait.legs[1].phase) - 0.5) > 1e-6):
+        two_legs_apart = len(gait.legs) == 2 and abs(abs(gait.legs[0].phase - gait.legs[1].phase) - 0.5) <= 1e-6
+        if gait.sway_m > 0.0 and not two_legs_apart:
             raise top.error("gait.sway_m", "only a biped sways: two legs half a period apart (phase 0 and 0.5)")
         for leg in gait.legs:
             for j in leg.joints:

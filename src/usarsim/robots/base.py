@@ -64,10 +64,10 @@ class DriveModel:
         """Raise ConfigError when the robot file lacks what this kind needs."""
 
     @classmethod
-    def build(cls, spec: "mujoco.MjSpec", chassis: "mujoco.MjsBody", robot: RobotConfig, prefix: str) -> None:
+    def build(cls, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, robot: RobotConfig, prefix: str) -> None:
         """Add what the kind needs to the robot's chassis body in the model (rotors)."""
 
-    def resolve(self, model: "mujoco.MjModel", handle: "RobotHandle") -> None:
+    def resolve(self, model: mujoco.MjModel, handle: RobotHandle) -> None:
         """Look the kind's own MuJoCo ids up by name, after every model build."""
 
     def own_actuators(self) -> list[tuple[int, float]]:
@@ -87,10 +87,10 @@ class DriveModel:
         """The angle (rad, positive right) of a steered wheel."""
         return 0.0
 
-    def apply_own(self, ctrl: "np.ndarray", powered: bool) -> None:
+    def apply_own(self, ctrl: np.ndarray, powered: bool) -> None:
         """Write the kind's own controls (not wheels)."""
 
-    def apply(self, r: "SimRobot", ctrl: "np.ndarray") -> None:
+    def apply(self, r: SimRobot, ctrl: np.ndarray) -> None:
         """Write every control of the drive: its own, each steered wheel's angle, each
         driven wheel's speed (a joint order's, else the kind's; 0 without power)."""
         powered = not r.battery_empty
@@ -126,24 +126,24 @@ class DriveModel:
                             dimensions=g.dimensions, cog=g.cog, wheel_radius=g.wheel_radius_m,
                             wheel_separation=g.wheel_separation_m, wheel_base=g.wheel_base_m)
 
-    def steer_angles(self, data: "mujoco.MjData", handle: "RobotHandle") -> tuple[float, float]:
+    def steer_angles(self, data: mujoco.MjData, handle: RobotHandle) -> tuple[float, float]:
         """STA ``FrontSteer`` and ``RearSteer``: the axles' current angles (rad)."""
         return 0.0, 0.0
 
     @property
-    def vessel(self) -> "NauticalSpec | None":
+    def vessel(self) -> NauticalSpec | None:
         """A vessel's hull (buoyancy, drag); None for a robot not built for water."""
         return None
 
-    def propulsion(self, rot: "np.ndarray", lin: "np.ndarray", frac: float) -> tuple[Any, tuple]:
+    def propulsion(self, rot: np.ndarray, lin: np.ndarray, frac: float) -> tuple[Any, tuple]:
         """A vessel's own force and torques in water (its propeller, rudder and planes)."""
         raise NotImplementedError
 
     # Hooks of the simulation --------------------------------------------------------------------
-    def on_spawn(self, sim: "Simulation", r: "SimRobot") -> None:
+    def on_spawn(self, sim: Simulation, r: SimRobot) -> None:
         """Right after the robot was built into the world."""
 
-    def pre_step(self, sim: "Simulation", r: "SimRobot") -> None:
+    def pre_step(self, sim: Simulation, r: SimRobot) -> None:
         """Before a stretch of physics steps (kinds with ``STEP_EVERY``)."""
 
 

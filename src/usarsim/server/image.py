@@ -107,7 +107,7 @@ class ImageConnection(ServerConnection):
     max_waiting = MAX_PENDING
     waiting_note = "more than %d pictures asked for at once: reading paused until they are sent"
 
-    def __init__(self, server: "ImageServer"):
+    def __init__(self, server: ImageServer):
         super().__init__(server)
         self.buffer = bytearray()
         self.pending: collections.deque[tuple[int, int, int, int] | None] = collections.deque()
@@ -193,7 +193,7 @@ class ImageServer(TcpListener):
         self.settings = settings or ImageSettings()
         self.max_connections = max_connections
 
-    def make_protocol(self) -> "ImageConnection":
+    def make_protocol(self) -> ImageConnection:
         return ImageConnection(self)
 
     def layout(self, snap, binding) -> tuple[int, int, list[Tile]]:

@@ -35,7 +35,7 @@ class TruthConnection(ServerConnection):
     max_waiting = MAX_WAITING
     waiting_level = logging.INFO
 
-    def __init__(self, server: "TruthServer"):
+    def __init__(self, server: TruthServer):
         super().__init__(server)
         self.buffer = LineBuffer(max_line_bytes=4096)
         self.waiting: collections.deque = collections.deque()  # parsed requests (None: unparseable)

@@ -23,7 +23,7 @@ class Batteries:
         self._owner: np.ndarray | None = None
         self._count = 1
 
-    def index(self, m: mujoco.MjModel, robots: list["SimRobot"]) -> None:
+    def index(self, m: mujoco.MjModel, robots: list[SimRobot]) -> None:
         """After a model build: the owner of every actuator, and each robot's rated
         mechanical power (every motor at its top speed and torque)."""
         owners = np.zeros(m.nu, dtype=np.intp)
@@ -44,7 +44,7 @@ class Batteries:
         self._owner = owners
         self._count = len(robots) + 1
 
-    def drain(self, m: mujoco.MjModel, d: mujoco.MjData, robots: list["SimRobot"], seconds: float) -> list["SimRobot"]:
+    def drain(self, m: mujoco.MjModel, d: mujoco.MjData, robots: list[SimRobot], seconds: float) -> list[SimRobot]:
         """Drain every battery by ``seconds`` of use: one second per second at rest, up to
         twice as fast at the rated mechanical power of all the robot's motors (the battery
         ran down "faster under load" in UT2004, protocol.md 6.2).  Returns the robots whose

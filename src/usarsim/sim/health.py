@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import TYPE_CHECKING, Iterable
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -42,14 +43,14 @@ class BlowUpGuard:
         self._sane = MAX_SANE_VELOCITY
         self._snapshot: np.ndarray | None = None
 
-    def index(self, robots: Iterable["SimRobot"]) -> None:
+    def index(self, robots: Iterable[SimRobot]) -> None:
         """After a model build: the fastest speed any robot of the world may reach."""
         self._sane = max([MAX_SANE_VELOCITY] + [sane_velocity(r.config) for r in robots])
 
     def mark_good(self, d: mujoco.MjData) -> None:
         self.good_qpos = d.qpos.copy()
 
-    def step(self, m: mujoco.MjModel, d: mujoco.MjData, n: int, robots: Iterable["SimRobot"]) -> None:
+    def step(self, m: mujoco.MjModel, d: mujoco.MjData, n: int, robots: Iterable[SimRobot]) -> None:
         """``n`` physics steps in one call, repaired as needed."""
         size = mujoco.mj_stateSize(m, STATE)
         if self._snapshot is None or self._snapshot.size != size:
@@ -76,7 +77,7 @@ class BlowUpGuard:
             return True
         return float(np.abs(d.qvel).max()) < self._sane and math.isfinite(float(d.qpos.sum()))
 
-    def _repair(self, m: mujoco.MjModel, d: mujoco.MjData, robots: list["SimRobot"]) -> None:
+    def _repair(self, m: mujoco.MjModel, d: mujoco.MjData, robots: list[SimRobot]) -> None:
         """Put every robot whose state is not finite, or whose joints move faster than
         anything real, back where it last was healthy, at rest."""
         good = self.good_qpos if self.good_qpos is not None and len(self.good_qpos) == len(d.qpos) else None
@@ -85,7 +86,8 @@ class BlowUpGuard:
             nq, nv = 7 + len(h.joint_qpos), 6 + len(h.joint_qvel)
             qs, vs = slice(h.root_qpos, h.root_qpos + nq), slice(h.root_qvel, h.root_qvel + nv)
             v = d.qvel[vs]
-            if np.isfinite(v).all() and np.isfinite(d.qpos[qs]).all() and float(np.abs(v).max()) < sane_velocity(r.config):
+            finite = np.isfinite(v).all() and np.isfinite(d.qpos[qs]).all()
+            if finite and float(np.abs(v).max()) < sane_velocity(r.config):
                 continue
             self.resets += 1
             r.resets += 1

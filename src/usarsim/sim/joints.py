@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 ORDERS = (0, 1, 2, 3, 10, 11, 12)
 
 
-def order(sim: "Simulation", r: "SimRobot", name: str, value: float, kind: int = 0) -> bool:
+def order(sim: Simulation, r: SimRobot, name: str, value: float, kind: int = 0) -> bool:
     """A joint order: targets are limited to the joint's range, speeds to MaxSpeed, torques
     to MaxTorque.  False when the robot has no such joint, no power, or the order is
     unknown."""
@@ -70,7 +70,7 @@ def order(sim: "Simulation", r: "SimRobot", name: str, value: float, kind: int =
     return True
 
 
-def apply(m: mujoco.MjModel, d: mujoco.MjData, r: "SimRobot", ln: Link) -> None:
+def apply(m: mujoco.MjModel, d: mujoco.MjData, r: SimRobot, ln: Link) -> None:
     """Set a link's servo for its current order: for an angle, the set point runs at
     MaxSpeed towards the target and stops there; for a speed, it runs at that speed
     (within the joint's range); for a torque, the servo is replaced by that torque.  The
@@ -105,13 +105,13 @@ def apply(m: mujoco.MjModel, d: mujoco.MjData, r: "SimRobot", ln: Link) -> None:
     d.ctrl[a] = math.copysign(ln.max_speed, value - cur) if value != cur else 0.0
 
 
-def apply_all(m: mujoco.MjModel, d: mujoco.MjData, r: "SimRobot") -> None:
+def apply_all(m: mujoco.MjModel, d: mujoco.MjData, r: SimRobot) -> None:
     """Every link's servo (after a rebuild, or when the battery ran out)."""
     for ln in r.config.links:
         apply(m, d, r, ln)
 
 
-def package_state(d: mujoco.MjData, r: "SimRobot", pkg) -> PackageState:
+def package_state(d: mujoco.MjData, r: SimRobot, pkg) -> PackageState:
     """MISSTA: each link of a mission package, its position and torque."""
     h = r.handle
     return PackageState(pkg.name, tuple(

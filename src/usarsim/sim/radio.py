@@ -30,9 +30,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -253,24 +254,24 @@ class RadioNet:
 
     # robots ---------------------------------------------------------------------------
     @staticmethod
-    def positions(sim: "Simulation") -> list[tuple[str, tuple[float, float, float], bool]]:
+    def positions(sim: Simulation) -> list[tuple[str, tuple[float, float, float], bool]]:
         """(name, location in the world frame, battery empty) of every robot."""
         d = sim.data
         return [(r.name, r.handle.location(d), r.battery_empty) for r in sim.robots.values()]
 
     # walls ----------------------------------------------------------------------------
     @staticmethod
-    def _count(sim: "Simulation", pa, pb) -> int:
+    def _count(sim: Simulation, pa, pb) -> int:
         """Walls crossed between two points (MuJoCo frame)."""
         return int(sim.caster.count_walls(np.array([pa], dtype=float), np.array([pb], dtype=float))[0])
 
     @classmethod
-    def walls_between(cls, sim: "Simulation", start, end) -> int:
+    def walls_between(cls, sim: Simulation, start, end) -> int:
         """Walls crossed between two points of the world (USARSim frame)."""
         return cls._count(sim, frames.to_mj_vec(start), frames.to_mj_vec(end))
 
     @classmethod
-    def walls_between_robots(cls, sim: "Simulation", a: str, b: str) -> int:
+    def walls_between_robots(cls, sim: Simulation, a: str, b: str) -> int:
         """Walls between two robots' antennas now (not the links' cached count); -1: no such robot."""
         antennas = cls.antennas(sim)
         pa, pb = antennas.get(a.lower()), antennas.get(b.lower())
@@ -278,7 +279,7 @@ class RadioNet:
             return -1
         return cls._count(sim, pa, pb)
 
-    def _cached_walls(self, sim: "Simulation", pair: Pair, pa: tuple, pb: tuple) -> int:
+    def _cached_walls(self, sim: Simulation, pair: Pair, pa: tuple, pb: tuple) -> int:
         hit = self._walls.get(pair)
         lim = self.model.cache_distance_m
         if hit is not None and math.dist(pa, hit[0]) <= lim and math.dist(pb, hit[1]) <= lim:
@@ -289,7 +290,7 @@ class RadioNet:
 
     # links ----------------------------------------------------------------------------
     @staticmethod
-    def antennas(sim: "Simulation") -> dict[str, tuple[float, float, float]]:
+    def antennas(sim: Simulation) -> dict[str, tuple[float, float, float]]:
         """Where each robot's antenna is (its chassis origin, MuJoCo frame), by lower-case
         name (the first spawned wins a name used twice)."""
         d = sim.data
@@ -300,12 +301,12 @@ class RadioNet:
                 out[key] = tuple(d.xpos[r.handle.body_id].tolist())
         return out
 
-    def _signal(self, sim: "Simulation", pair: Pair, pa: tuple, pb: tuple) -> tuple[float, int]:
+    def _signal(self, sim: Simulation, pair: Pair, pa: tuple, pb: tuple) -> tuple[float, int]:
         m = self.model
         walls = self._cached_walls(sim, pair, pa, pb) if m.counts_walls else 0
         return m.signal_dbm(math.dist(pa, pb), walls), walls
 
-    def link(self, sim: "Simulation", a: str, b: str, antennas: dict | None = None) -> Link | None:
+    def link(self, sim: Simulation, a: str, b: str, antennas: dict | None = None) -> Link | None:
         """The link between the robots named ``a`` and ``b`` now; None when either is not
         in the simulation."""
         antennas = antennas if antennas is not None else self.antennas(sim)
@@ -317,7 +318,7 @@ class RadioNet:
         s, walls = self._signal(sim, pair, pa, pb)
         return Link(s, math.dist(pa, pb), walls, self.model.holds(s))
 
-    def check(self, sim: "Simulation", a: str, b: str) -> Link | None:
+    def check(self, sim: Simulation, a: str, b: str) -> Link | None:
         """``link``, for a link about to be opened on it: a state that differs from the one
         last reported is reported at once, so that every server sees the same."""
         ln = self.link(sim, a, b)
@@ -329,7 +330,7 @@ class RadioNet:
                 self.on_change(sim.time, [(pair, up)])
         return ln
 
-    def evaluate(self, sim: "Simulation") -> None:
+    def evaluate(self, sim: Simulation) -> None:
         """The ``after_advance`` hook: every watched pair's link, changes reported."""
         watched = self.watched
         if not watched and not self._reported:

@@ -27,7 +27,7 @@ class Report:
     """A scheduled report: the robot's status (STA), a mission package's state (MISSTA),
     one sensor, or all packed sensors of a type on the robot."""
 
-    robot: "SimRobot"
+    robot: SimRobot
     sensors: list[Sensor]
     interval: float
     t0: float
@@ -51,7 +51,7 @@ class ReportSchedule:
     def next_due(self) -> float | None:
         return self._heap[0][0] if self._heap else None
 
-    def add_robot(self, r: "SimRobot", now: float) -> None:
+    def add_robot(self, r: SimRobot, now: float) -> None:
         """Every report of ``r`` on its own period, from the first grid instant at or after
         ``now``."""
 

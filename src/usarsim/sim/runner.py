@@ -18,8 +18,9 @@ import logging
 import queue
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from usarsim.errors import UsarsimError
 from usarsim.sim.simulation import Output, Simulation

@@ -11,7 +11,7 @@ if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
 
 
-def truth_rows(sim: "Simulation", class_name: str | None = None, name: str | None = None) -> list[tuple]:
+def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None = None) -> list[tuple]:
     """Everything the ground-truth service knows, now: (name, class, time, location,
     rotation) of every robot (its class and INIT name), victim (``Victim``), RFID tag
     (``RFIDTag``, named by its id), false alarm (``FalseAlarm``) and movable object

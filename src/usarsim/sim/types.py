@@ -12,5 +12,5 @@ from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_model
 from usarsim.sim.render import Tile, grid_tiles
 
-__all__ = ["ItemDescription", "Link", "Output", "Pair", "RadioModel", "RobotNumbers", "Tile", "euler_to_mat", "grid_tiles",
-           "pair_key", "resolve_model"]
+__all__ = ["ItemDescription", "Link", "Output", "Pair", "RadioModel", "RobotNumbers", "Tile", "euler_to_mat",
+           "grid_tiles", "pair_key", "resolve_model"]

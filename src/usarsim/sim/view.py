@@ -7,8 +7,9 @@ them in ``configure``, which runs after every (re)compilation.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -26,14 +27,14 @@ class WorldView:
     model: mujoco.MjModel
     data: mujoco.MjData
     time: float
-    caster: "RayCaster"
-    world: "WorldConfig | None" = None
-    entities: "Entities | None" = None
+    caster: RayCaster
+    world: WorldConfig | None = None
+    entities: Entities | None = None
     # for effecters: drive_joint(name, value, order) on the operating robot's joints
-    drive_joint: "Callable[[str, float, int], bool] | None" = None
+    drive_joint: Callable[[str, float, int], bool] | None = None
 
     @property
-    def geo(self) -> "GeoReference":
+    def geo(self) -> GeoReference:
         from usarsim.config.world import GeoReference
 
         return self.world.geo if self.world is not None else GeoReference()

@@ -142,7 +142,7 @@ class TruthClient:
                 try:
                     rows = await asyncio.wait_for(self._ask(), TRUTH_TIMEOUT_S)
                     break
-                except (OSError, asyncio.IncompleteReadError, ConnectionError, asyncio.TimeoutError):
+                except (TimeoutError, OSError, asyncio.IncompleteReadError, ConnectionError):
                     self.close()
                     if attempt:
                         raise
@@ -315,7 +315,7 @@ class WebConsole:
             self._truth = TruthClient(self.service_host, truth.port)
         try:
             rows = await self._truth.query()
-        except (OSError, ConnectionError, asyncio.IncompleteReadError, asyncio.TimeoutError) as exc:
+        except (TimeoutError, OSError, ConnectionError, asyncio.IncompleteReadError) as exc:
             return web.json_response({"error": f"the ground-truth service did not answer: {exc}", "objects": []},
                                      status=503)
         return web.json_response({"objects": rows})

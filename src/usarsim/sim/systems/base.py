@@ -33,11 +33,11 @@ class System:
     ORDER: ClassVar[int] = 100  # systems run in increasing order
     EVERY_STEPS: ClassVar[int | None] = EXTERNAL_FORCE_STEPS
 
-    def __init__(self, sim: "Simulation"):
+    def __init__(self, sim: Simulation):
         self.sim = sim
 
     @classmethod
-    def wanted(cls, sim: "Simulation") -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         """Whether the world as built now needs this system."""
         return True
 
@@ -53,7 +53,7 @@ class System:
         """Set this system's forces (or motions) for the next stretch of physics steps."""
 
 
-def collect(sim: "Simulation", previous: list[System] = ()) -> list[System]:
+def collect(sim: Simulation, previous: list[System] = ()) -> list[System]:
     """The systems the world needs now, in order; one still wanted keeps its instance (and
     its state) from ``previous``."""
     kept = {type(s): s for s in previous}

@@ -29,7 +29,7 @@ OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from uprig
 UP = np.array([0.0, 0.0, 1.0])
 
 
-def start_righting(sim: "Simulation", r: "SimRobot") -> bool:
+def start_righting(sim: Simulation, r: SimRobot) -> bool:
     """Start righting an overturned robot; False (ignored) when it is upright or has no power."""
     if r.battery_empty:
         return False
