@@ -22,5 +22,7 @@ if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/
       || echo "scripts/test.sh: could not install chromium: the browser tests will be skipped" >&2
   fi
 fi
+# The house style (pyproject.toml [tool.ruff]): a finding fails the run before any test.
+"$USARSIM_PYTHON" -m ruff check src tests tools examples
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
 exec "$USARSIM_PYTHON" -m pytest -q "$@"

@@ -53,8 +53,7 @@ from usarsim.readings import (
     VictimReading,
 )
 
-from .grammar import RawMessage, Segment, format_segment, parse_bool, parse_float, parse_int
-from .grammar import parse_line, parse_vector
+from .grammar import RawMessage, Segment, format_segment, parse_bool, parse_float, parse_int, parse_line, parse_vector
 from .numbers import bool_str, f2, f4, t4, vec2, vec4, vec_angle4, vec_t4
 
 __all__ = [

@@ -74,7 +74,7 @@ class Sensor:
     ALIASES: ClassVar[dict[str, str]] = {}
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {}
 
-    def __init__(self, item: "MountedItem", config: SensorConfig, robot: "RobotConfig", seed: int):
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int):
         self.item = item
         self.name = item.name
         self.config = config
@@ -84,18 +84,18 @@ class Sensor:
         self._upos = 0
 
     # Lifecycle -------------------------------------------------------------------
-    def configure(self, view: "WorldView") -> None:
+    def configure(self, view: WorldView) -> None:
         """Resolve MuJoCo ids by name; called after every model (re)build."""
 
-    def reset(self, view: "WorldView") -> None:
+    def reset(self, view: WorldView) -> None:
         """Start over, e.g. at spawn."""
 
-    def measure(self, view: "WorldView") -> Any:
+    def measure(self, view: WorldView) -> Any:
         """Return a reading (or, for packed sensors, this item's part of one)."""
         raise NotImplementedError
 
     @classmethod
-    def measure_group(cls, sensors: list["Sensor"], view: "WorldView") -> list[Any]:
+    def measure_group(cls, sensors: list[Sensor], view: WorldView) -> list[Any]:
         """Packed sensors: every item's part, measured together (override to batch)."""
         return [s.measure(view) for s in sensors]
 
@@ -104,7 +104,7 @@ class Sensor:
         """Packed sensors: build one reading from every item's part."""
         raise NotImplementedError
 
-    def operate(self, view: "WorldView", opcode: str, params: str | None) -> Any:
+    def operate(self, view: WorldView, opcode: str, params: str | None) -> Any:
         """Handle ``SET {Opcode ...}``: return the RES status (``OK``, ``Failed``), or
         (status, extra key/value pairs), or a ready reading of the result; None if the
         opcode is not supported."""
@@ -144,7 +144,7 @@ class Sensor:
 SENSORS = Registry("sensor")
 
 
-def build_config(cls: type[Sensor], item: "MountedItem", robot_path: str) -> SensorConfig:
+def build_config(cls: type[Sensor], item: MountedItem, robot_path: str) -> SensorConfig:
     """Turn an item's raw keys into its plugin's frozen Config.
 
     Accepts our field names and USARSim's ini names (any case); a ``preset`` key
@@ -206,7 +206,7 @@ def component_seed(world_seed: int, *parts: str) -> int:
     return int(np.random.SeedSequence(words).generate_state(1)[0])
 
 
-def make_sensor(item: "MountedItem", robot: "RobotConfig", world_seed: int, robot_key: str) -> Sensor:
+def make_sensor(item: MountedItem, robot: RobotConfig, world_seed: int, robot_key: str) -> Sensor:
     cls = SENSORS.get(item.item_type)
     config = build_config(cls, item, robot.path)
     return cls(item, config, robot, component_seed(world_seed, robot_key, cls.TYPE, item.name))

@@ -81,7 +81,8 @@ class Odometry(Sensor):
         return None
 
     def conf_fields(self):
-        return (("ScanInterval", self.config.scan_interval_s), ("EncoderResolution", self.config.encoder_resolution_rad))
+        c = self.config
+        return (("ScanInterval", c.scan_interval_s), ("EncoderResolution", c.encoder_resolution_rad))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -134,7 +134,7 @@ class Sonar(RangeSensor):
                 ("BeamAngle", self.config.beam_angle_rad))
 
     @classmethod
-    def measure_group(cls, sensors: list["Sonar"], view) -> list[RangeItem]:
+    def measure_group(cls, sensors: list[Sonar], view) -> list[RangeItem]:
         """All sonars of a robot in one batched cast: every cone ray from its own
         sonar's position, with the mount transforms stacked once per robot."""
         first = sensors[0]

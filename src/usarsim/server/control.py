@@ -65,7 +65,7 @@ class Connection(ServerConnection):
     """A control connection: its lines go to its session, within a time budget; its
     outputs come back, the periodic ones latest-wins while the client does not read."""
 
-    def __init__(self, server: "ControlServer"):
+    def __init__(self, server: ControlServer):
         super().__init__(server)
         self.buffer = LineBuffer(max_line_bytes=server.max_line_bytes, drop_repeated_drives=True)
         self.session: Session | None = None

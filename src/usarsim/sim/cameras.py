@@ -20,14 +20,14 @@ class Cameras:
     """The MultiView's state: how many robot cameras it shows at most (``multiview_cameras``),
     and which."""
 
-    def __init__(self, sim: "Simulation"):
+    def __init__(self, sim: Simulation):
         self.sim = sim
         self._multiview_cameras = 4
         self._multiview: list[tuple[int, str]] | None = None
         self._multiview_robots: set[int] = set()
 
     @staticmethod
-    def cameras_of(r: "SimRobot") -> list[Sensor]:
+    def cameras_of(r: SimRobot) -> list[Sensor]:
         return [s for s in r.sensors if s.item.item_type in builder.CAMERA_TYPES]
 
     @property

@@ -9,7 +9,8 @@ servers import nothing else from the simulation layer but :mod:`usarsim.sim.type
 from __future__ import annotations
 
 import logging
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import StartPose, WorldConfig

@@ -27,8 +27,8 @@ class SimRobot:
     spawn_time: float
     handle: RobotHandle
     sensors: list[Sensor]
-    drive: "DriveModel"
-    reports: list["Report"] = field(default_factory=list)
+    drive: DriveModel
+    reports: list[Report] = field(default_factory=list)
     light: bool = False
     battery_empty: bool = False
     removed: bool = False

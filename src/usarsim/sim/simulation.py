@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -72,7 +72,7 @@ class Simulation:
         self.systems = systems.collect(self)
         # called with the simulation at the end of every ``advance`` (on the simulation
         # thread, at the simulated instant the clock reached): the radio links
-        self._after_advance: list[Callable[["Simulation"], None]] = []
+        self._after_advance: list[Callable[[Simulation], None]] = []
 
     # Clock -------------------------------------------------------------------
     @property
@@ -87,7 +87,7 @@ class Simulation:
     def view(self) -> WorldView:
         return WorldView(self.model, self.data, self.time, self.caster, self.world, self.entities)
 
-    def on_advance(self, fn: Callable[["Simulation"], None]) -> None:
+    def on_advance(self, fn: Callable[[Simulation], None]) -> None:
         """Call ``fn(sim)`` at the end of every :meth:`advance` (before the simulation starts)."""
         self._after_advance.append(fn)
 
