@@ -1,8 +1,11 @@
-"""Typed values that flow from the simulation to the protocol layer.
+"""Typed values that flow from the simulation to the protocol layer, and the typed
+parameters of an operation on a mounted item that flow the other way.
 
-Sensors produce these frozen dataclasses; only :mod:`usarsim.protocol` turns them
-into text.  This module imports the standard library only, so both the simulation
-layer and the sans-IO protocol layer may depend on it.
+Sensors produce these frozen dataclasses; effecters and cameras answer a SET with an
+:class:`OperationResult` (or a :class:`ZoomResult`); only :mod:`usarsim.protocol` turns them
+into text (``OK``/``Failed``, ``OPEN``/``CLOSED``, numbers at their precision).  This module
+imports the standard library only, so both the simulation layer and the sans-IO protocol
+layer may depend on it.
 
 Conventions: metres, radians, seconds of simulated time; vectors and orientations
 in the USARSim frame (X forward, Y right, Z down; roll, pitch, yaw with yaw
@@ -14,6 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 Vec3 = tuple[float, float, float]
+# A typed value of a CONF field or of an RES/EFF item-specific key (protocol.md 6.5-6.7):
+# printed by the protocol layer (True/False, integers as they are, 4 decimals, comma lists).
+FieldValue = bool | int | float | str | tuple[bool | int | float | str, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -226,25 +232,53 @@ class PackageState:
 
 @dataclass(frozen=True, slots=True)
 class EffecterState:
-    """EFF: an effecter's state (``OPEN``/``CLOSED`` for a gripper, protocol.md 6.6)."""
+    """EFF: an effecter's state after an operation (protocol.md 6.6): a gripper's fingers
+    ``closed`` (printed ``{Status CLOSED}``) or open (``{Status OPEN}``)."""
 
     effecter_type: str
     name: str
-    status: str
+    closed: bool
+
+
+@dataclass(frozen=True, slots=True)
+class ItemParams:
+    """The parameters of ``SET {Type T} {Name N} {Opcode op} {Params p}`` (protocol.md 5.4),
+    typed by the protocol layer.
+
+    ``values``: the numbers of ``{Params}`` split on commas and blanks (``0.87``,
+    ``1.0,2.0,-0.5,0,0,0.5``); None when Params was not sent, is empty, or is not a list of
+    finite numbers.  ``text``: Params as sent, for an item whose parameters are text (an RFID
+    write: ``<tagID> <data...>``, the data may contain blanks and commas).
+    """
+
+    values: tuple[float, ...] | None = None
+    text: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class OperationResult:
+    """What an item's operation did (protocol.md 5.4, 6.5): ``ok`` (RES ``{Status OK}``, else
+    ``{Status Failed}``) and item-specific typed (key, value) pairs printed after Status (an
+    RFID read: ``(("ID", 11137), ("Mem", "victim here"))``)."""
+
+    ok: bool
+    extra: tuple[tuple[str, FieldValue], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
 class ZoomResult:
-    """The outcome of ``SET {Type Camera} {Opcode Zoom}``: (name, fov, status) per camera."""
+    """The outcome of ``SET {Type Camera} {Opcode Zoom}`` (protocol.md 5.4): (name, field of
+    view in rad, ok) per camera; not ok when the value was clamped or reset."""
 
-    cameras: tuple[tuple[str, float, str], ...]
+    cameras: tuple[tuple[str, float, bool], ...]
 
 
 @dataclass(frozen=True, slots=True)
 class CommandResult:
-    """The outcome of a SET (an RES line): ``extra`` are item-specific (key, value) pairs."""
+    """The outcome of a SET on a robot's item (an RES line, protocol.md 6.5): ``ok`` and the
+    item-specific typed (key, value) pairs of its :class:`OperationResult`."""
 
     item_type: str
     name: str
-    status: str
-    extra: tuple[tuple[str, str], ...] = ()
+    ok: bool
+    extra: tuple[tuple[str, FieldValue], ...] = ()

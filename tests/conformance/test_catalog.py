@@ -18,7 +18,7 @@ from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
 from usarsim.config.world import check_world_file, load_world
 from usarsim.protocol.messages import SensorMessage, format_message, parse_message
-from usarsim.sensors import SENSORS
+from usarsim.sensors import ITEMS
 from usarsim.sim.builder import robot_model_summary
 from usarsim.sim.simulation import Simulation, describe_items
 
@@ -46,9 +46,9 @@ def test_robot_file_validates_and_compiles(path: Path):
     rotors = 6 if r.drive == "aerial" else 0
     assert f"{sum(w.driven for w in r.wheels) + len(r.links) + steered + rotors} actuators" in summary
     for item in r.items:
-        assert item.item_type in SENSORS, f"{path.name}: {item.item_type} is not a registered sensor type"
+        assert item.item_type in ITEMS, f"{path.name}: {item.item_type} is not a registered sensor type"
     described = describe_items(r)
-    assert [(d.item_type, d.name) for d in described] == [(SENSORS.canonical(i.item_type), i.name) for i in r.items]
+    assert [(d.item_type, d.name) for d in described] == [(ITEMS.canonical(i.item_type), i.name) for i in r.items]
     names = [(d.item_type.lower(), d.name.lower()) for d in described]
     assert len(set(names)) == len(names)
     assert r.total_mass_kg == pytest.approx(r.mass_kg, rel=0.01)
@@ -124,7 +124,7 @@ def _probe_run(tmp_path, sensor_type: str, seed: int, seconds: float):
     return robot, sim, [o for o in sim.take_outputs() if o.key != "STA" and not o.key.startswith("MISSTA")]
 
 
-@pytest.mark.parametrize("sensor_type", SENSORS.names())
+@pytest.mark.parametrize("sensor_type", ITEMS.names())  # sensors, effecters and cameras
 def test_every_registered_sensor_mounts_reports_on_time_and_formats(tmp_path, sensor_type):
     """Every plugin, mounted with its defaults on a copy of the P2AT: CONF has something to
     say, SEN lines come at its ScanInterval of simulated time, the same seed gives the same
@@ -132,7 +132,7 @@ def test_every_registered_sensor_mounts_reports_on_time_and_formats(tmp_path, se
     robot, sim, outs = _probe_run(tmp_path, sensor_type, 0, 2.0)
     (desc,) = describe_items(robot)
     assert desc.item_type == sensor_type
-    cls = SENSORS.get(sensor_type)
+    cls = ITEMS.get(sensor_type)
     if not cls.PERIODIC:  # cameras and effecters send no SEN on the control port
         assert outs == []
         return

@@ -20,6 +20,7 @@ from usarsim.config.catalog import ROBOTS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
 from usarsim.errors import ConfigError
 from usarsim.protocol.messages import SensorMessage, format_message, parse_message
+from usarsim.protocol.outputs import message_for
 from usarsim.readings import ImuReading, OrientationReading, PoseReading, TachometerReading, TouchItem, TouchReading
 from usarsim.sensors.base import SENSORS, build_config
 from usarsim.sensors.touch import signed_distance
@@ -135,9 +136,9 @@ def test_tachometer_wheel_speeds_angles_and_reset(test_world, probe):
     assert v[0] < -0.5 and v[2] < -0.5 and v[1] > 0.5 and v[3] > 0.5
 
     # RESET zeroes the accumulated angles (protocol.md 5.4)
-    res = sim.operate(1, "Tachometer", "TachTest", "RESET", None)
+    res = message_for(sim.operate(1, "Tachometer", "TachTest", "RESET", None), sim.time)  # the RES
     assert res.status == "OK"
-    assert sim.operate(1, "Tachometer", "TachTest", "SCAN", None).status == "Failed"
+    assert message_for(sim.operate(1, "Tachometer", "TachTest", "SCAN", None), sim.time).status == "Failed"
     drive_skid(sim, 1, 0.0, 0.0)
     after = of(run(sim, 0.4), TachometerReading)
     assert max(abs(p) for p in after[0][1].positions_rad) < 0.25  # at most one 0.2 s tick of turning

@@ -29,14 +29,14 @@ def top(modules: set[str], *names: str) -> set[str]:
 
 PROTOCOL_MODULES = ["usarsim.protocol", "usarsim.protocol.commands", "usarsim.protocol.messages",
                     "usarsim.protocol.framing", "usarsim.protocol.grammar", "usarsim.protocol.numbers",
-                    "usarsim.protocol.wireless"]
+                    "usarsim.protocol.outputs", "usarsim.protocol.wireless"]
 
 
 def test_protocol_loads_no_numpy_mujoco_asyncio_sim_or_server():
     mods = loaded_after(PROTOCOL_MODULES)
     assert "usarsim.protocol.commands" in mods  # the probe did import it
     assert top(mods, "mujoco", "numpy", "asyncio") == set()
-    assert top(mods, "usarsim.sim", "usarsim.server", "usarsim.sensors", "usarsim.config") == set()
+    assert top(mods, "usarsim.sim", "usarsim.server", "usarsim.sensors", "usarsim.effecters", "usarsim.config") == set()
 
 
 def test_config_loads_no_mujoco_or_asyncio():
@@ -47,7 +47,7 @@ def test_config_loads_no_mujoco_or_asyncio():
 
 
 @pytest.mark.parametrize("module", ["usarsim.sim.simulation", "usarsim.sim.runner", "usarsim.sim.facade",
-                                    "usarsim.sensors"])
+                                    "usarsim.sensors", "usarsim.effecters"])
 def test_sim_loads_no_asyncio_protocol_or_server(module):
     mods = loaded_after([module])
     assert "mujoco" in top(mods, "mujoco")  # it really is the simulation layer
@@ -58,7 +58,7 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "usarsim"
 # What the servers and the console may import of the simulation layer: its facade and the
 # types that cross it (design.md 2 and 5).
 SIM_DOOR = ("usarsim.sim.facade", "usarsim.sim.types")
-BELOW_THE_DOOR = ("usarsim.sim", "usarsim.sensors", "usarsim.robots", "mujoco")
+BELOW_THE_DOOR = ("usarsim.sim", "usarsim.sensors", "usarsim.effecters", "usarsim.robots", "mujoco")
 
 
 def _imports(path: Path) -> list[tuple[int, str]]:

@@ -4,6 +4,7 @@
 * :mod:`.grammar`: the generic ``TYPE {Key Value} ...`` line grammar and value parsers.
 * :mod:`.commands`: client commands (:func:`parse_command`, :func:`format_command`).
 * :mod:`.messages`: server messages (:func:`format_message`, :func:`parse_message`).
+* :mod:`.outputs`: what the simulation reports, as messages (:func:`~.outputs.message_for`).
 * :mod:`.numbers`: number formatting shared by every message.
 
 This package imports the standard library and :mod:`usarsim.readings` /

@@ -211,8 +211,9 @@ class MultiDrive:
 class Set:
     """``SET``: operate a mounted item (§5.4).
 
-    Values are kept as sent (text): their meaning depends on the item (``params`` is a FOV
-    for a camera, ``<tagID> <data...>`` for an RFID write, ``value,steer`` for a joint).
+    Values are kept as sent (text), so that a command formats back as it came: their meaning
+    depends on the item (``params`` is a FOV for a camera, ``<tagID> <data...>`` for an RFID
+    write, ``value,steer`` for a joint).  :attr:`values` gives the numbers of ``params``.
     The Player driver sends a camera zoom as a bare segment (``{Opcode Zoom} {0.87}``); a
     bare number stands for ``params`` when no ``Params`` key is present.
     ``viewports`` holds ``{ViewportN cam}`` pairs as ``(N, cam)``.  ``segments`` holds the
@@ -234,6 +235,20 @@ class Set:
     def get(self, key: str, default: str | None = None) -> str | None:
         """Value of the first item-specific segment with this key (case-insensitive)."""
         return _segment_value(self.segments, key, default)
+
+    @property
+    def values(self) -> tuple[float, ...] | None:
+        """The numbers of ``params``, split on commas and blanks (``{Params 0.5,0}`` ->
+        ``(0.5, 0.0)``); None when Params was not sent, is empty, or holds anything but
+        finite numbers (an RFID write's text)."""
+        words = (self.params or "").replace(",", " ").split()
+        if not words:
+            return None
+        try:
+            numbers = tuple(parse_float(w) for w in words)
+        except ProtocolError:
+            return None
+        return numbers if all(math.isfinite(x) for x in numbers) else None
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

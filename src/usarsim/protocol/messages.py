@@ -32,6 +32,7 @@ from usarsim.errors import ProtocolError
 from usarsim.readings import (
     EncoderItem,
     EncoderReading,
+    FieldValue,
     GpsReading,
     HumanMotionReading,
     ImuReading,
@@ -94,6 +95,7 @@ __all__ = [
     "ViewportsResult",
     "format_message",
     "format_reading",
+    "format_value",
     "message_from_raw",
     "parse_message",
 ]
@@ -250,18 +252,19 @@ class EmptyGeometry:
 
 @dataclass(frozen=True, slots=True)
 class ItemConf:
-    """Configuration of one item: ``(key, already formatted value)`` pairs in order."""
+    """Configuration of one item: typed ``(key, value)`` pairs in order, printed by
+    :func:`format_value` (a value read back from a line is its text, printed as it is)."""
 
     name: str
-    fields: tuple[tuple[str, str], ...] = ()
+    fields: tuple[tuple[str, FieldValue], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
 class ItemConfiguration:
     """``CONF {Type T} {Name N1} {Key v} ... {Name N2} ...`` (repeated-key groups, §6.7).
 
-    Values are text formatted by the caller with :mod:`usarsim.protocol.numbers`, since
-    every item type has its own keys.  A single item without fields prints exactly like
+    Every item type has its own keys; their typed values are printed by
+    :func:`format_value`.  A single item without fields prints exactly like
     :class:`EmptyConfiguration` with a name, and is read back as one.
     """
 
@@ -355,15 +358,16 @@ class MisPkgStatus:
 class Result:
     """``RES {Time t} {Type T} {Name N} {Status S}`` plus item-specific ``extra`` segments.
 
-    ``extra`` holds ``(key, formatted value)`` pairs printed after Status, e.g. an RFID read
-    ``(("ID", "11137"), ("Mem", "hello"))``.  ``name`` None leaves the Name segment out.
+    ``extra`` holds ``(key, value)`` pairs printed after Status by :func:`format_value`, e.g.
+    an RFID read ``(("ID", 11137), ("Mem", "hello"))``.  ``name`` None leaves the Name
+    segment out.
     """
 
     time: float
     item_type: str
     name: str | None
     status: str = "OK"
-    extra: tuple[tuple[str, str], ...] = ()
+    extra: tuple[tuple[str, FieldValue], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -407,14 +411,15 @@ class ViewportsResult:
 class EffecterStatus:
     """``EFF {Time t} {Type T} {Name N} {Status S}`` plus ``extra`` (§6.6).
 
-    ``extra`` pairs with an empty value print as bare segments (``{On}``).
+    ``extra`` pairs are printed by :func:`format_value`; an empty value prints as a bare
+    segment (``{On}``).
     """
 
     time: float | None
     effecter_type: str
     name: str
     status: str | None = None
-    extra: tuple[tuple[str, str], ...] = ()
+    extra: tuple[tuple[str, FieldValue], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -749,11 +754,31 @@ def _type_and_name(head: str, item_type: str, name: str | None) -> str:
     return "%s {Type %s} {Name %s}\r\n" % (head, item_type, name)
 
 
+def format_value(v: FieldValue) -> str:
+    """A typed CONF field or RES/EFF key value as USARSim printed it (§2.4, §6.7): ``True`` /
+    ``False``, an integer as it is, any other number at 4 decimals, a sequence comma-joined
+    (its numbers at 4 decimals, integers included), text as it is."""
+    if isinstance(v, bool):
+        return bool_str(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f4(v)
+    if isinstance(v, (tuple, list)):
+        return ",".join(format_value(float(x)) if isinstance(x, (int, float)) and not isinstance(x, bool)
+                        else format_value(x) for x in v)
+    return str(v)
+
+
+def _fields(pairs: tuple[tuple[str, FieldValue], ...]) -> list[str]:
+    return [format_segment(k, format_value(v)) for k, v in pairs]
+
+
 def _fmt_item_configuration(m: ItemConfiguration) -> str:
     parts = ["CONF {Type %s}" % m.item_type]
     for item in m.items:
         parts.append("{Name %s}" % item.name)
-        parts.extend(format_segment(k, v) for k, v in item.fields)
+        parts.extend(_fields(item.fields))
     return " ".join(parts) + _CRLF
 
 
@@ -800,7 +825,7 @@ def _fmt_result(m: Result) -> str:
     if m.name is not None:
         parts.append("{Name %s}" % m.name)
     parts.append("{Status %s}" % m.status)
-    parts.extend(format_segment(k, v) for k, v in m.extra)
+    parts.extend(_fields(m.extra))
     return " ".join(parts) + _CRLF
 
 
@@ -830,7 +855,7 @@ def _fmt_effecter(m: EffecterStatus) -> str:
     parts.append("{Type %s} {Name %s}" % (m.effecter_type, m.name))
     if m.status is not None:
         parts.append("{Status %s}" % m.status)
-    parts.extend(format_segment(k, v) for k, v in m.extra)
+    parts.extend(_fields(m.extra))
     return " ".join(parts) + _CRLF
 
 

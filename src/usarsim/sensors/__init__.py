@@ -1,6 +1,16 @@
-"""Sensor plugins; importing this package registers every built-in sensor."""
+"""Mounted-item plugins; importing this package registers every built-in sensor, camera and
+effecter (the effecters are in :mod:`usarsim.effecters`, with their base and registry).
 
-from usarsim.sensors import camera, effecters, gps, inertial, motion, range, rfid, scanner, sound, touch, victim  # noqa: F401  (registration)
-from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, make_sensor
+:func:`make_item` makes the plugin of a robot file's item, its type looked up among the
+three kinds (:data:`ITEMS`): :data:`SENSORS`, :data:`CAMERAS` and ``EFFECTERS``.
+"""
 
-__all__ = ["SENSORS", "Sensor", "SensorConfig", "make_sensor"]
+import usarsim.effecters  # noqa: F401  (registration; it imports this package's base only)
+from usarsim.sensors import camera, gps, inertial, motion, range, rfid, scanner, sound, touch, victim  # noqa: F401
+from usarsim.sensors.base import ITEMS, SENSORS, Item, ItemConfig, Sensor, SensorConfig, make_item
+from usarsim.sensors.camera import CAMERAS, CameraItem
+
+make_sensor = make_item  # the name the simulation's spawn uses
+
+__all__ = ["CAMERAS", "ITEMS", "SENSORS", "CameraItem", "Item", "ItemConfig", "Sensor", "SensorConfig", "make_item",
+           "make_sensor"]

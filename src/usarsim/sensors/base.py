@@ -1,10 +1,15 @@
-"""The sensor plugin framework: base class, typed configs with USARSim ini aliases,
-registration by USARSim type name, seeded noise, scheduling on simulated time.
+"""The plugin framework of a robot's mounted items (design.md 4): a common base
+(:class:`Item`: typed config with USARSim ini aliases, seeded generator, CONF fields, the
+lifecycle), the sensor base and registry (:class:`Sensor`, :data:`SENSORS`), and the
+look-up of an item's type among sensors, effecters (:mod:`usarsim.effecters`) and cameras
+(:mod:`usarsim.sensors.camera`), which have bases and registries of their own.
 
 A sensor measures; it does not format text, open sockets, start threads or draw.
 The framework decides when it measures (its ``scan_interval_s`` of simulated
 time), gives it its own seeded random generator, and hands its reading, a frozen
-dataclass from :mod:`usarsim.readings`, to whoever listens.
+dataclass from :mod:`usarsim.readings`, to whoever listens.  An item operated with SET
+(protocol.md 5.4) gets typed parameters and answers with a typed result; the protocol
+layer prints both.
 """
 
 from __future__ import annotations
@@ -12,23 +17,28 @@ from __future__ import annotations
 import dataclasses
 import math
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 
 from usarsim.config.reader import did_you_mean
-from usarsim.errors import ConfigError
+from usarsim.errors import ConfigError, PluginNotFoundError
+from usarsim.readings import ItemParams, OperationResult, ZoomResult
 from usarsim.registry import Registry
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
     from usarsim.sim.view import WorldView
 
+T = TypeVar("T", bound=type)
+
 
 @dataclass(frozen=True, kw_only=True)
-class SensorConfig:
-    """Settings every sensor has (protocol.md 7.1)."""
+class ItemConfig:
+    """Settings every mounted item accepts (protocol.md 7.1): a robot file may give them to
+    any item of its ``sensors:`` list."""
 
     scan_interval_s: float = 0.2
     with_time_stamp: bool = True
@@ -39,6 +49,11 @@ class SensorConfig:
             raise ValueError(f"scan_interval_s must be > 0, got {self.scan_interval_s}")
         if not (0.0 <= self.noise < 1.0):
             raise ValueError(f"noise must be within [0, 1), got {self.noise}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorConfig(ItemConfig):
+    """Settings every sensor has (protocol.md 7.1)."""
 
 
 def check_range(min_range_m: float, max_range_m: float) -> None:
@@ -56,32 +71,28 @@ COMMON_ALIASES = {
 }
 
 
-class Sensor:
-    """Base class of every sensor plugin.
+class Item:
+    """What every mounted item plugin has: sensors (:class:`Sensor`), effecters
+    (:class:`usarsim.effecters.Effecter`) and cameras (:class:`usarsim.sensors.camera.CameraItem`).
 
-    Subclasses set ``TYPE`` (the canonical USARSim type name), ``Config`` (a frozen
-    dataclass derived from :class:`SensorConfig`), ``ALIASES`` (USARSim ini key ->
-    field name) and optionally ``PRESETS`` (named sets of values, e.g. ``SICK``).
-    ``PACKED`` sensors of one type on one robot are measured together and reported
-    in one line (Sonar, IR, Encoder, Touch).
+    Subclasses set ``Config`` (a frozen dataclass derived from :class:`ItemConfig`),
+    ``ALIASES`` (USARSim ini key -> field name) and optionally ``PRESETS`` (named sets of
+    values, e.g. ``SICK``); registration gives ``TYPE``, the canonical USARSim type name.
     """
 
     TYPE: ClassVar[str] = ""
-    PACKED: ClassVar[bool] = False
     LIVE_CONF: ClassVar[bool] = False  # True when SET operations change what CONF reports
-    PERIODIC: ClassVar[bool] = True  # False for items that never send SEN (effecters such as RFIDReleaser)
-    Config: ClassVar[type] = SensorConfig
+    PERIODIC: ClassVar[bool] = False  # True for items that send SEN lines at their ScanInterval
+    Config: ClassVar[type] = ItemConfig
     ALIASES: ClassVar[dict[str, str]] = {}
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {}
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int):
+    def __init__(self, item: MountedItem, config: ItemConfig, robot: RobotConfig, seed: int):
         self.item = item
         self.name = item.name
         self.config = config
         self.robot = robot
         self.rng = np.random.default_rng(seed)
-        self._ubuf: np.ndarray | None = None
-        self._upos = 0
 
     # Lifecycle -------------------------------------------------------------------
     def configure(self, view: WorldView) -> None:
@@ -89,6 +100,38 @@ class Sensor:
 
     def reset(self, view: WorldView) -> None:
         """Start over, e.g. at spawn."""
+
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | ZoomResult | None:
+        """Handle ``SET {Opcode op} {Params p}`` (protocol.md 5.4): ``params`` are typed by
+        the protocol layer (the numbers of Params, and Params as sent).  Return what the
+        operation did (an :class:`OperationResult`, or a camera's :class:`ZoomResult`);
+        None if the opcode is not supported (RES Failed)."""
+        return None
+
+    def conf_fields(self) -> tuple[tuple[str, Any], ...]:
+        """The typed (key, value) pairs after ``{Name n}`` in this item's CONF reply
+        (protocol.md 6.7); the protocol layer prints them."""
+        return ()
+
+
+class Sensor(Item):
+    """Base class of every sensor plugin: it measures at its ScanInterval of simulated
+    time and sends SEN lines (protocol.md 6.3, 7).
+
+    ``PACKED`` sensors of one type on one robot are measured together and reported
+    in one line (Sonar, IR, Encoder, Touch).
+    """
+
+    PACKED: ClassVar[bool] = False
+    PERIODIC: ClassVar[bool] = True
+    RESETTABLE: ClassVar[bool] = False  # {Opcode RESET} starts it over (Odometry, Encoder, Tachometer)
+    SCANNABLE: ClassVar[bool] = False  # {Opcode SCAN} makes it scan at once (the range scanners)
+    Config: ClassVar[type] = SensorConfig
+
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int):
+        super().__init__(item, config, robot, seed)
+        self._ubuf: np.ndarray | None = None
+        self._upos = 0
 
     def measure(self, view: WorldView) -> Any:
         """Return a reading (or, for packed sensors, this item's part of one)."""
@@ -104,14 +147,18 @@ class Sensor:
         """Packed sensors: build one reading from every item's part."""
         raise NotImplementedError
 
-    def operate(self, view: WorldView, opcode: str, params: str | None) -> Any:
-        """Handle ``SET {Opcode ...}``: return the RES status (``OK``, ``Failed``), or
-        (status, extra key/value pairs), or a ready reading of the result; None if the
-        opcode is not supported."""
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
+        """``{Opcode RESET}`` starts a RESETTABLE sensor over; ``{Opcode SCAN}`` makes a
+        SCANNABLE one scan at once, its SEN line after the RES (protocol.md 5.4)."""
+        op = opcode.upper()
+        if op == "RESET" and self.RESETTABLE:
+            self.reset(view)
+            return OperationResult(ok=True)
+        if op == "SCAN" and self.SCANNABLE:
+            return OperationResult(ok=True)
         return None
 
     def conf_fields(self) -> tuple[tuple[str, Any], ...]:
-        """The (key, value) pairs after ``{Name n}`` in this item's CONF reply."""
         return (("ScanInterval", self.config.scan_interval_s),)
 
     # Noise -----------------------------------------------------------------------
@@ -141,10 +188,75 @@ class Sensor:
         return buf[i:i + k]
 
 
-SENSORS = Registry("sensor")
+class ItemRegistry(Registry):
+    """The plugins of one kind of mounted item (``sensor``, ``effecter``, ``camera``).  The
+    kinds share one name space (:class:`ItemKinds`): a robot file lists every item under
+    ``sensors:``, so a type name registered by two kinds is an error, as one registered twice
+    by one kind is."""
+
+    def __init__(self, kind: str, family: ItemKinds):
+        super().__init__(kind)
+        self.family = family
+
+    def register(self, name: str, *aliases: str) -> Callable[[T], T]:
+        deco = super().register(name, *aliases)
+
+        def checked(cls: T) -> T:
+            for n in (name, *aliases):
+                other = self.family.kind_of(n)
+                if other is not None and other is not self:
+                    raise ValueError(f"item type name '{n}' is registered already as a {other.kind}; choose another "
+                                     f"name for the {self.kind} {cls.__qualname__}")
+            return deco(cls)
+
+        return checked
 
 
-def build_config(cls: type[Sensor], item: MountedItem, robot_path: str) -> SensorConfig:
+class ItemKinds:
+    """The registries of every kind of mounted item, and the look-up of a robot file's item
+    type among them (any case; an unknown name fails with the closest match and the list of
+    valid ones)."""
+
+    def __init__(self) -> None:
+        self.registries: list[ItemRegistry] = []
+
+    def new(self, kind: str) -> ItemRegistry:
+        """A registry for one more kind of item."""
+        registry = ItemRegistry(kind, self)
+        self.registries.append(registry)
+        return registry
+
+    def kind_of(self, name: str) -> ItemRegistry | None:
+        """The registry that has ``name`` (None: none has it); an error if several have it."""
+        found = [r for r in self.registries if name in r]
+        if len(found) > 1:
+            raise PluginNotFoundError(f"item type '{name}' is registered as a "
+                                      f"{' and a '.join(r.kind for r in found)}: rename one of them")
+        return found[0] if found else None
+
+    def names(self) -> list[str]:
+        return sorted({n for r in self.registries for n in r.names()})
+
+    def canonical(self, name: str) -> str | None:
+        registry = self.kind_of(name)
+        return registry.canonical(name) if registry is not None else None
+
+    def get(self, name: str) -> type[Item]:
+        registry = self.kind_of(name)
+        if registry is None:
+            # "sensor": a robot file lists every item under ``sensors:``
+            raise PluginNotFoundError(f"unknown sensor type '{name}'{did_you_mean(name, self.names())}")
+        return registry.get(name)
+
+    def __contains__(self, name: str) -> bool:
+        return self.kind_of(name) is not None
+
+
+ITEMS = ItemKinds()
+SENSORS = ITEMS.new("sensor")
+
+
+def build_config(cls: type[Item], item: MountedItem, robot_path: str) -> ItemConfig:
     """Turn an item's raw keys into its plugin's frozen Config.
 
     Accepts our field names and USARSim's ini names (any case); a ``preset`` key
@@ -206,7 +318,9 @@ def component_seed(world_seed: int, *parts: str) -> int:
     return int(np.random.SeedSequence(words).generate_state(1)[0])
 
 
-def make_sensor(item: MountedItem, robot: RobotConfig, world_seed: int, robot_key: str) -> Sensor:
-    cls = SENSORS.get(item.item_type)
+def make_item(item: MountedItem, robot: RobotConfig, world_seed: int, robot_key: str) -> Item:
+    """The plugin of a robot file's item: its type looked up among sensors, effecters and
+    cameras, its config built and checked, its generator seeded for this robot and item."""
+    cls = ITEMS.get(item.item_type)
     config = build_config(cls, item, robot.path)
     return cls(item, config, robot, component_seed(world_seed, robot_key, cls.TYPE, item.name))

@@ -1,4 +1,4 @@
-"""Cameras on the protocol side (protocol.md 7.11, 6.7, 5.4): CONF, GEO and zoom.
+"""Camera items (protocol.md 7.11, 6.7, 5.4): their base and registry, CONF, GEO and zoom.
 Pictures come from the image server; over the control port a UT2004 camera sends no
 SEN line.  Covers ``Camera`` and the omnidirectional ``OmniCam``."""
 
@@ -7,12 +7,24 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from usarsim.readings import ZoomResult
-from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.readings import ItemParams, ZoomResult
+from usarsim.sensors.base import ITEMS, Item, ItemConfig
+
+
+class CameraItem(Item):
+    """Base class of every camera plugin: a robot camera sends no SEN line over the control
+    port; the image server draws what it sees (protocol.md 7.11, 10) with its current
+    horizontal field of view, ``fov_rad``."""
+
+    PERIODIC = False
+    fov_rad: float
+
+
+CAMERAS = ITEMS.new("camera")
 
 
 @dataclass(frozen=True, kw_only=True)
-class CameraConfig(SensorConfig):
+class CameraConfig(ItemConfig):
     # UT CONF example (protocol.md 6.7): CameraDefFov 0.8727, CameraMinFov 0.3491,
     # CameraMaxFov 1.5708 (the zoom range of the UT test UI, 20 to 90 degrees).
     def_fov_rad: float = 0.8727
@@ -30,11 +42,10 @@ class CameraConfig(SensorConfig):
             raise ValueError("width_px and height_px must be >= 1")
 
 
-@SENSORS.register("Camera")
-class Camera(Sensor):
+@CAMERAS.register("Camera")
+class Camera(CameraItem):
     """A robot camera: its current field of view changes with ``SET {Opcode Zoom}``."""
 
-    PERIODIC = False
     LIVE_CONF = True  # CameraFov follows the zoom
     Config = CameraConfig
     ALIASES = {"CameraDefFov": "def_fov_rad", "CameraMinFov": "min_fov_rad", "CameraMaxFov": "max_fov_rad",
@@ -43,28 +54,26 @@ class Camera(Sensor):
     def reset(self, view) -> None:
         self.fov_rad = self.config.def_fov_rad
 
-    def zoom(self, fov: float) -> tuple[float, str]:
+    def zoom(self, fov: float) -> tuple[float, bool]:
         """Set the field of view: 0 restores the default, others are clamped to
-        [min, max]; the status is Failed when the value was reset or clamped (5.4)."""
+        [min, max]; not ok when the value was reset or clamped (5.4)."""
         c = self.config
         if fov == 0.0:
             self.fov_rad = c.def_fov_rad
-            return self.fov_rad, "Failed"
+            return self.fov_rad, False
         clamped = min(max(fov, c.min_fov_rad), c.max_fov_rad)
         self.fov_rad = clamped
-        return clamped, ("OK" if clamped == fov else "Failed")
+        return clamped, clamped == fov
 
-    def operate(self, view, opcode, params):
+    def operate(self, view, opcode: str, params: ItemParams) -> ZoomResult | None:
+        """``{Opcode Zoom}`` (UDK also ``FOV``), Params the new field of view in rad: a
+        missing, negative or non-numeric value fails and keeps the current one."""
         if opcode.lower() not in ("zoom", "fov"):
             return None
-        try:
-            fov = float(str(params).replace(",", " ").split()[0])
-        except (ValueError, IndexError):
-            return ZoomResult(((self.name, self.fov_rad, "Failed"),))
-        if not math.isfinite(fov) or fov < 0:
-            return ZoomResult(((self.name, self.fov_rad, "Failed"),))
-        value, status = self.zoom(fov)
-        return ZoomResult(((self.name, value, status),))
+        if not params.values or params.values[0] < 0:
+            return ZoomResult(((self.name, self.fov_rad, False),))
+        value, ok = self.zoom(params.values[0])
+        return ZoomResult(((self.name, value, ok),))
 
     def conf_fields(self):
         c = self.config
@@ -80,7 +89,7 @@ class OmniCamConfig(CameraConfig):
     max_fov_rad: float = 2 * math.pi - 1e-6
 
 
-@SENSORS.register("OmniCam", "OmniCamera")
+@CAMERAS.register("OmniCam", "OmniCamera")
 class OmniCam(Camera):
     """The omnidirectional camera of the OmniP2AT/OmniP2DX (protocol.md 9): no zoom."""
 

@@ -57,6 +57,7 @@ class Tachometer(Sensor):
     wheel order; forward rotation is positive (as for Encoder, protocol.md 7.5).
     ``SET {Type Tachometer} {Opcode RESET}`` zeroes the angles (protocol.md 5.4)."""
 
+    RESETTABLE = True
     Config = TachometerConfig
 
     def configure(self, view) -> None:
@@ -76,12 +77,6 @@ class Tachometer(Sensor):
             vel = self.relative_noise(vel)
             pos = self.relative_noise(pos)
         return TachometerReading(self.name, tuple(vel.tolist()), tuple(pos.tolist()))
-
-    def operate(self, view, opcode, params):
-        if opcode.upper() == "RESET":
-            self.reset(view)
-            return "OK"
-        return None
 
 
 # --------------------------------------------------------------------------- IMU

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.readings import EncoderItem, EncoderReading, OdometryReading, PoseReading
+from usarsim.readings import EncoderItem, EncoderReading, ItemParams, OdometryReading, OperationResult, PoseReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim.frames import wrap_2pi, wrap_pi
 
@@ -39,6 +39,7 @@ class Odometry(Sensor):
     EncoderResolution; pose relative to the spawn pose (or the last RESET); positive
     theta is a clockwise (right) turn, as in the Z-down frame."""
 
+    RESETTABLE = True
     Config = OdometryConfig
     ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel"}
 
@@ -74,12 +75,6 @@ class Odometry(Sensor):
         # reported in [0, 2 pi) as UT2004 did (protocol.md 6.3 example: 6.2432)
         return OdometryReading(self.name, self.x, self.y, wrap_2pi(self.theta))
 
-    def operate(self, view, opcode, params):
-        if opcode.upper() == "RESET":
-            self.reset(view)
-            return "OK"
-        return None
-
     def conf_fields(self):
         c = self.config
         return (("ScanInterval", c.scan_interval_s), ("EncoderResolution", c.encoder_resolution_rad))
@@ -106,6 +101,7 @@ class Encoder(Sensor):
     forward rotation counts up."""
 
     PACKED = True
+    RESETTABLE = True
     Config = EncoderConfig
     ALIASES = {"Resolution": "resolution_rad", "Wheel": "wheel", "Joint": "wheel"}
 
@@ -125,12 +121,6 @@ class Encoder(Sensor):
     @classmethod
     def combine(cls, parts):
         return EncoderReading(tuple(parts))
-
-    def operate(self, view, opcode, params):
-        if opcode.upper() == "RESET":
-            self.reset(view)
-            return "OK"
-        return None
 
     def conf_fields(self):
         # printed truncated, as USARSim did (0.01745 -> 0.0174, protocol.md 6.7)
@@ -222,16 +212,15 @@ class INS(Sensor):
         o = tuple(wrap_2pi(float(a)) for a in self.est_ori)
         return PoseReading("INS", self.name, tuple(float(v) for v in self.est_loc), o)
 
-    def operate(self, view, opcode, params):
-        if opcode.upper() == "POSE" and params:
-            try:
-                vals = [float(v) for v in params.replace(",", " ").split()]
-            except ValueError:
-                return "Failed"
-            if len(vals) != 6 or not all(math.isfinite(v) for v in vals):
-                return "Failed"
-            self.est_loc = np.array(vals[:3])
-            self.est_ori = np.array(vals[3:])
-            self._draw_biases()
-            return "OK"
-        return None
+    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+        """``{Opcode POSE} {Params x,y,z,roll,pitch,yaw}`` (UDK, protocol.md 5.4): the
+        estimate starts over from that pose."""
+        if opcode.upper() != "POSE" or not params.text:
+            return None
+        vals = params.values
+        if vals is None or len(vals) != 6:
+            return OperationResult(ok=False)
+        self.est_loc = np.array(vals[:3])
+        self.est_ori = np.array(vals[3:])
+        self._draw_biases()
+        return OperationResult(ok=True)

@@ -1,5 +1,5 @@
-"""RFID: the tag reader (``RFID``, protocol.md 7.10 and 5.4, manual section 10.9) and
-the tag dropper (``RFIDReleaser``, usually named ``Gun``, protocol.md 8).
+"""RFID: the tag reader (``RFID``, protocol.md 7.10 and 5.4, manual section 10.9); the
+tag dropper is an effecter (:mod:`usarsim.effecters.releaser`).
 
 Tags are world entities (the world file's ``rfid_tags``, plus the ones robots drop),
 each with an integer id and a memory that any robot's reader can read and write: the
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.readings import RfidReading, RfidTag
+from usarsim.readings import ItemParams, OperationResult, RfidReading, RfidTag
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames
 
@@ -51,11 +51,15 @@ class RfidConfig(SensorConfig):
                              f"got {self.sensing_mode}")
 
 
-def _tag_id(text: str | None) -> int | None:
+def _tag_and_data(text: str | None) -> tuple[int | None, str]:
+    """The tag id and the data of an RFID operation's Params, ``<tagID> <data...>``
+    (protocol.md 5.4): the data is text and may hold blanks and commas."""
+    words = (text or "").strip().split(None, 1)
     try:
-        return int(str(text).strip().split()[0])
+        tag = int(words[0])
     except (ValueError, IndexError):
-        return None
+        return None, ""
+    return tag, words[1] if len(words) > 1 else ""
 
 
 @SENSORS.register("RFID", "RFIDSensor")
@@ -103,69 +107,27 @@ class RFID(Sensor):
             tags.append(RfidTag(tid, loc, mem if mem else None))
         return RfidReading(self.name, tuple(tags))
 
-    def operate(self, view, opcode, params):
+    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
         """Read, Write and Erase of a tag's memory (protocol.md 5.4; manual 10.9.5-10.9.7):
-        the tag must be sensed now.  Read replies ``{ID id} {Mem data}``."""
+        the tag must be sensed now.  Read replies ``{ID id} {Mem data}``.  The Params are
+        text, ``<tagID> <data...>``."""
         op = opcode.lower()
         if op not in ("read", "write", "erase"):
             return None
-        tid = _tag_id(params)
+        tid, data = _tag_and_data(params.text)
         ents = view.entities
         if tid is None or ents is None or tid not in {t for t, _ in self._detected(view)}:
-            return "Failed"
+            return OperationResult(ok=False)
         tag = ents.tags[tid]
         if op == "read":
-            return "OK", (("ID", str(tid)), ("Mem", tag.memory))
+            return OperationResult(ok=True, extra=(("ID", tid), ("Mem", tag.memory)))
         if op == "erase":
             tag.memory = ""
-            return "OK"
-        data = str(params).strip().split(None, 1)
-        text = data[1] if len(data) > 1 else ""
-        if any(ch in text for ch in "{}\r\n") or len(text) > 1024:
-            return "Failed"
-        tag.memory = text
-        return "OK"
+            return OperationResult(ok=True)
+        if any(ch in data for ch in "{}\r\n") or len(data) > 1024:
+            return OperationResult(ok=False)
+        tag.memory = data
+        return OperationResult(ok=True)
 
     def conf_fields(self):
         return (("ScanInterval", self.config.scan_interval_s), ("MaxRange", self.config.max_range_m))
-
-
-@dataclass(frozen=True, kw_only=True)
-class RfidReleaserConfig(SensorConfig):
-    # The magazine's size was not recovered (protocol.md 8): 10 tags, an estimate.
-    capacity: int = 10
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.capacity < 0:
-            raise ValueError(f"capacity must be >= 0, got {self.capacity}")
-
-
-@SENSORS.register("RFIDReleaser")
-class RFIDReleaser(Sensor):
-    """An effecter: ``SET {Type RFIDReleaser} {Name Gun} {Opcode Release}`` drops a new
-    tag on the ground under the robot (RES OK), or fails when the magazine is empty."""
-
-    PERIODIC = False
-    Config = RfidReleaserConfig
-    ALIASES = {"Capacity": "capacity", "NumberOfTags": "capacity"}
-
-    def reset(self, view) -> None:
-        self.left = self.config.capacity
-
-    def operate(self, view, opcode, params):
-        if opcode.lower() != "release":
-            return None
-        if self.left <= 0 or view.entities is None:
-            return "Failed"
-        d = view.data
-        pos, _ = self.handle.sensor_frame(d, self.item.location, self.item.orientation, self.item.mount)
-        down = np.array([[0.0, 0.0, -1.0]])
-        dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
-        ground = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)
-        view.entities.release_tag(frames.from_mj_vec(ground))
-        self.left -= 1
-        return "OK"
-
-    def conf_fields(self):
-        return ()

@@ -49,6 +49,7 @@ class RangeScannerConfig(SensorConfig):
 
 @SENSORS.register("RangeScanner")
 class RangeScanner(Sensor):
+    SCANNABLE = True
     Config = RangeScannerConfig
     RAY_KIND = "laser"  # which materials the beams pass through (world materials' see_through)
     ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m", "Resolution": "resolution_rad",
@@ -88,11 +89,6 @@ class RangeScanner(Sensor):
         np.clip(values, cfg.min_range_m, cfg.max_range_m, out=values)
         return RangeScanReading(self.TYPE, self.name, trunc4(cfg.resolution_rad), trunc4(cfg.fov_rad),
                                 tuple(values.tolist()))
-
-    def operate(self, view, opcode, params):
-        if opcode.upper() == "SCAN":
-            return "OK"
-        return None
 
     def conf_fields(self):
         c = self.config
@@ -156,6 +152,7 @@ class RangeScanner3D(Sensor):
     at one instant, row-major -- one horizontal line per vertical step, the top row
     first, each row from its rightmost beam to its leftmost, as the 2D scanner."""
 
+    SCANNABLE = True
     Config = RangeScanner3DConfig
     RAY_KIND = "laser"
     ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m",
@@ -185,11 +182,6 @@ class RangeScanner3D(Sensor):
         return RangeScan3DReading(self.name, (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
                                   (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)), tuple(values.tolist()),
                                   sensor_type=self.TYPE)
-
-    def operate(self, view, opcode, params):
-        if opcode.upper() == "SCAN":
-            return "OK"
-        return None
 
     def conf_fields(self):
         c = self.config

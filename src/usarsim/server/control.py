@@ -20,7 +20,7 @@ from typing import Any
 
 from usarsim.protocol import messages as M
 from usarsim.protocol.framing import REPEATED_DRIVE, LineBuffer
-from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus, ZoomResult
+from usarsim.protocol.outputs import message_for
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
 from usarsim.server.session import ALIVE, CLOSED, NEW, SPAWNING, Session, SessionContext
@@ -41,24 +41,8 @@ _REPEATED_DRIVE = REPEATED_DRIVE  # the bytes-level fast path of the DRIVE-flood
 
 
 def output_to_message(o: Output) -> Any:
-    v = o.value
-    if isinstance(v, RobotStatus):
-        if v.vehicle_type == "AerialVehicle":
-            return M.AerialVehicleStatus(time=o.time, light_toggle=v.light_toggle, light_intensity=v.light_intensity,
-                                         battery_s=v.battery_s, view=v.view)
-        return M.GroundVehicleStatus(time=o.time, front_steer=v.front_steer, rear_steer=v.rear_steer, joints=v.joints,
-                                     light_toggle=v.light_toggle, light_intensity=v.light_intensity,
-                                     battery_s=v.battery_s, view=v.view, vehicle_type=v.vehicle_type)
-    if isinstance(v, EffecterState):
-        return M.EffecterStatus(time=o.time, effecter_type=v.effecter_type, name=v.name, status=v.status)
-    if isinstance(v, PackageState):
-        return M.MisPkgStatus(time=o.time, name=v.name,
-                              links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))
-    if isinstance(v, ZoomResult):
-        return M.CameraZoomResult(time=o.time, cameras=tuple(M.CameraZoom(n, f, st) for n, f, st in v.cameras))
-    if isinstance(v, CommandResult):
-        return M.Result(time=o.time, item_type=v.item_type, name=v.name, status=v.status, extra=v.extra)
-    return M.SensorMessage(time=o.time, reading=v)
+    """The protocol message of a simulation output (:func:`usarsim.protocol.outputs.message_for`)."""
+    return message_for(o.value, o.time)
 
 
 class Connection(ServerConnection):

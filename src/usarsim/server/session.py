@@ -19,7 +19,7 @@ from usarsim.controls import JointOrder
 from usarsim.errors import ConfigError, ProtocolError
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
-from usarsim.protocol.numbers import f4
+from usarsim.readings import ItemParams
 from usarsim.server.connection import MAX_LOGGED_KINDS as MAX_LOGGED_KINDS  # kinds logged per connection
 from usarsim.server.connection import LogOnce
 from usarsim.sim.facade import SimFacade
@@ -33,19 +33,6 @@ def _r2(v: float) -> float:
     """The value as GETSTARTPOSES prints it (2 decimals), so that a pose copied from
     the reply spawns a robot exactly where ``{Start name}`` does."""
     return float(f"{v:.2f}")
-
-
-def conf_value(v) -> str:
-    if isinstance(v, bool):
-        return "True" if v else "False"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return f4(v)
-    if isinstance(v, (tuple, list)):
-        return ",".join(conf_value(float(x)) if isinstance(x, (int, float)) and not isinstance(x, bool)
-                        else conf_value(x) for x in v)
-    return str(v)
 
 
 # SET {Type Joint} opcodes (protocol.md 5.4) -> joint orders (5.3f)
@@ -255,7 +242,7 @@ class Session:
             _, tilt, pan = cmd.rotation
             self.facade.drive_joints(self.uid, [JointOrder(pkg.links[0], pan, 0), JointOrder(pkg.links[1], tilt, 0)])
         if cmd.zoom is not None:
-            self.facade.operate(self.uid, "Camera", None, "Zoom", repr(cmd.zoom))
+            self.facade.operate(self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)))
 
     def _items(self, item_type: str, name: str | None):
         assert self.robot is not None
@@ -335,25 +322,25 @@ class Session:
         confs = []
         for d in items:
             fields = self.facade.live_conf(self.uid, d.item_type, d.name) or d.conf
-            confs.append(M.ItemConf(name=d.name, fields=tuple((k, conf_value(v)) for k, v in fields)))
+            confs.append(M.ItemConf(name=d.name, fields=tuple(fields)))
         self.send(M.ItemConfiguration(item_type=items[0].item_type, items=tuple(confs)))
 
     def on_set(self, cmd: C.Set) -> None:
+        """``SET`` (protocol.md 5.4): a joint order, a camera binding, the viewports, or an
+        operation on a mounted item, its Params handed on typed (their numbers, and the text
+        as sent for items whose parameters are text)."""
         if self.state not in (SPAWNING, ALIVE):
             self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
             return
         t = (cmd.type or "").lower()
         if t == "joint":
             order = JOINT_OPCODES.get((cmd.opcode or "0").lower())
-            try:
-                parts = [float(v) for v in (cmd.params or "").replace(",", " ").split()]
-            except ValueError:
-                parts = []
-            if order is None or not parts or not cmd.name:
+            values = cmd.values
+            if order is None or not values or not cmd.name:
                 self.log_once("set-joint", "SET {Type Joint} needs a Name, an Opcode (Angle, Velocity, Torque, "
                                            "RelAngle, RelVelocity, RelTorque or 0/1/2/10/11/12) and a Params value")
                 return
-            self.facade.drive_joints(self.uid, [JointOrder(cmd.name, parts[0], order)])
+            self.facade.drive_joints(self.uid, [JointOrder(cmd.name, values[0], order)])
             return
         if t == "camera" and (cmd.client is not None or cmd.robot is not None):
             self.on_bind_camera(cmd)
@@ -361,7 +348,7 @@ class Session:
         if t == "viewports":
             self.on_viewports(cmd)
             return
-        self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, cmd.params)
+        self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, ItemParams(values=cmd.values, text=cmd.params))
 
     def on_bind_camera(self, cmd: C.Set) -> None:
         """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that

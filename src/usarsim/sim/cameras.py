@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import mujoco
 
-from usarsim.sensors import Sensor
+from usarsim.sensors import CameraItem
 from usarsim.sim import builder
 
 if TYPE_CHECKING:
@@ -27,8 +27,9 @@ class Cameras:
         self._multiview_robots: set[int] = set()
 
     @staticmethod
-    def cameras_of(r: SimRobot) -> list[Sensor]:
-        return [s for s in r.sensors if s.item.item_type in builder.CAMERA_TYPES]
+    def cameras_of(r: SimRobot) -> list[CameraItem]:
+        """The robot's cameras (items of the camera kind), in the robot file's order."""
+        return [s for s in r.sensors if isinstance(s, CameraItem)]
 
     @property
     def multiview_cameras(self) -> int:

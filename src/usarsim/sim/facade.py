@@ -86,11 +86,11 @@ class SimFacade:
 
     @staticmethod
     def canonical_item_type(name: str) -> str:
-        """A mounted item's type in USARSim's spelling (``sonar`` -> ``Sonar``), or ``name``
-        itself when no plugin has it."""
-        from usarsim.sensors import SENSORS
+        """A mounted item's type in USARSim's spelling (``sonar`` -> ``Sonar``), among sensors,
+        effecters and cameras, or ``name`` itself when no plugin has it."""
+        from usarsim.sensors import ITEMS
 
-        return SENSORS.canonical(name) or name
+        return ITEMS.canonical(name) or name
 
     def live_conf(self, uid: int, item_type: str, name: str):
         """CONF fields of a robot's item that changed at run time, or None."""

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from usarsim.config.robot import RobotConfig
-from usarsim.sensors import Sensor, make_sensor
+from usarsim.sensors import Sensor, make_item
 from usarsim.sim.outputs import ItemDescription
 from usarsim.sim.view import RobotHandle
 
@@ -50,10 +50,10 @@ class SimRobot:
 
 
 def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:
-    """The mounted items of a robot class as GETGEO/GETCONF describe them (also
-    validates every sensor's configuration)."""
+    """The mounted items of a robot class (sensors, effecters, cameras) as GETGEO/GETCONF
+    describe them, CONF fields typed (also validates every item's configuration)."""
     out = []
     for item in robot.items:
-        s = make_sensor(item, robot, seed, "describe")
+        s = make_item(item, robot, seed, "describe")
         out.append(ItemDescription(s.TYPE, item.name, item.location, item.orientation, item.mount, s.conf_fields()))
     return out

@@ -25,8 +25,9 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
+from usarsim.effecters import Effecter
 from usarsim.errors import ConfigError, SimulationError
-from usarsim.readings import CommandResult, EffecterState, RobotStatus
+from usarsim.readings import CommandResult, ItemParams, RobotStatus, ZoomResult
 from usarsim.robots import make_drive
 from usarsim.sensors import Sensor, make_sensor
 from usarsim.sim import builder, frames, joints, systems, truth
@@ -229,17 +230,18 @@ class Simulation:
         r.drive.apply(r, self.data.ctrl)
 
     def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
-                params: str | None) -> CommandResult | None:
-        """``SET {Type} {Name} {Opcode} {Params}`` on a mounted item: its RES goes out first,
-        then whatever the operation reported (EFF, a SEN for SCAN); None when the robot is
-        gone or has no power."""
+                params: ItemParams | None) -> CommandResult | ZoomResult | None:
+        """``SET {Type} {Name} {Opcode} {Params}`` on a mounted item (protocol.md 5.4), with
+        the Params typed by the protocol layer: its RES goes out first, then whatever the
+        operation reported (EFF, a SEN for SCAN); None when the robot is gone or has no power."""
         before = len(self.outbox)
-        res = self._operate(uid, item_type, name, opcode, params)
+        res = self._operate(uid, item_type, name, opcode, params or ItemParams())
         if res is not None:
             self.outbox.insert(before, Output(uid, self.time, res, "RES", periodic=False))
         return res
 
-    def _operate(self, uid, item_type, name, opcode, params):
+    def _operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
+                 params: ItemParams) -> CommandResult | ZoomResult | None:
         r = self.robots.get(uid)
         if r is None or r.battery_empty:
             return None
@@ -247,24 +249,20 @@ class Simulation:
         for s in r.sensors:
             if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
                 view = dataclasses.replace(self.view(), drive_joint=lambda n, v, o: joints.order(self, r, n, v, o))
-                status = s.operate(view, opcode or "", params) if opcode else None
-                state = getattr(s, "effecter_state", None)
-                if status is not None and state is not None:
-                    self.outbox.append(Output(uid, self.time, EffecterState(s.TYPE, s.name, state()),
-                                              f"EFF:{s.name}", periodic=False))
+                result = s.operate(view, opcode, params) if opcode else None
+                state = s.state() if result is not None and isinstance(s, Effecter) else None
+                if state is not None:
+                    self.outbox.append(Output(uid, self.time, state, f"EFF:{s.name}", periodic=False))
                 if s.LIVE_CONF:
                     self.live_conf[(uid, s.TYPE, s.name)] = s.conf_fields()
-                if status is None:
-                    return CommandResult(s.TYPE, s.name, "Failed")
-                extra: tuple = ()
-                if isinstance(status, tuple):
-                    status, extra = status
-                elif not isinstance(status, str):
-                    return status  # an item-specific result (e.g. a camera zoom)
-                if status == "OK" and (opcode or "").upper() == "SCAN" and s.PERIODIC:
+                if result is None:
+                    return CommandResult(s.TYPE, s.name, ok=False)
+                if isinstance(result, ZoomResult):
+                    return result  # a camera's RES of its own
+                if result.ok and opcode.upper() == "SCAN" and s.PERIODIC:
                     self._emit(r, [s], f"SEN:{s.TYPE}:{s.name}")
-                return CommandResult(s.TYPE, s.name, status, tuple(extra))
-        return CommandResult(t, name or "", "Failed")
+                return CommandResult(s.TYPE, s.name, result.ok, result.extra)
+        return CommandResult(t, name or "", ok=False)
 
     # Stepping -----------------------------------------------------------------
     def advance(self, seconds: float) -> None:

@@ -1,0 +1,28 @@
+"""The effecter plugin base and registry (design.md 4; protocol.md 5.4, 6.6, 8).
+
+An effecter is a mounted item that acts on the world when a client operates it with
+``SET {Type T} {Name N} {Opcode op} {Params p}``: it gets the typed parameters, acts, and
+answers with an :class:`~usarsim.readings.OperationResult` (the RES line); after an
+operation it may report its state (:class:`~usarsim.readings.EffecterState`, an EFF line).
+It sends no SEN line.  Robot files list effecters with the other items, under ``sensors:``.
+"""
+
+from __future__ import annotations
+
+from usarsim.readings import EffecterState
+from usarsim.sensors.base import ITEMS, Item
+
+__all__ = ["EFFECTERS", "Effecter"]
+
+
+class Effecter(Item):
+    """Base class of every effecter plugin."""
+
+    PERIODIC = False
+
+    def state(self) -> EffecterState | None:
+        """What the EFF line after an operation reports (None: this effecter sends none)."""
+        return None
+
+
+EFFECTERS = ITEMS.new("effecter")

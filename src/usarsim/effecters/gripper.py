@@ -1,0 +1,60 @@
+"""The ``Gripper`` effecter (manual section 11, protocol.md 5.4, 6.6, 8): its fingers are
+links of the robot.  Operated with SET; it answers RES, then reports its state in an EFF
+line."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from usarsim.effecters.base import EFFECTERS, Effecter
+from usarsim.readings import EffecterState, ItemParams, OperationResult
+from usarsim.sensors.base import ItemConfig
+
+
+@dataclass(frozen=True, kw_only=True)
+class GripperConfig(ItemConfig):
+    fingers: tuple = ()  # link names of the fingers (prismatic or revolute joints)
+    open_value: float = 0.04  # joint value of an open finger (m or rad)
+    closed_value: float = -0.02  # beyond touching: the fingers squeeze with their MaxTorque
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.fingers:
+            raise ValueError("a Gripper needs its fingers: the names of its finger links")
+
+
+@EFFECTERS.register("Gripper")
+class Gripper(Effecter):
+    """``SET {Type Gripper} {Name g} {Opcode Open|Close}`` (or ``{Opcode Grip} {Params 1|0}``,
+    1 closing) drives every finger to its open or closed value; a closed gripper holds an
+    object with the fingers' force (their links' MaxTorque).  RES OK, then ``EFF {Status
+    OPEN|CLOSED}``."""
+
+    Config = GripperConfig
+    ALIASES = {"Fingers": "fingers", "Open": "open_value", "Closed": "closed_value"}
+
+    def configure(self, view) -> None:
+        names = {ln.name for ln in self.robot.links}
+        missing = [f for f in self.config.fingers if f not in names]
+        if missing:
+            raise ValueError(f"gripper {self.name}: unknown finger links {missing}")
+
+    def reset(self, view) -> None:
+        self.closed = False
+
+    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+        op = opcode.lower()
+        if op == "grip":
+            if not params.values:
+                return OperationResult(ok=False)
+            op = "close" if int(params.values[0]) else "open"
+        if op not in ("open", "close") or view.drive_joint is None:
+            return None
+        value = self.config.closed_value if op == "close" else self.config.open_value
+        ok = all(view.drive_joint(f, value, 0) for f in self.config.fingers)
+        if ok:
+            self.closed = op == "close"
+        return OperationResult(ok=ok)
+
+    def state(self) -> EffecterState:
+        return EffecterState(self.TYPE, self.name, closed=self.closed)

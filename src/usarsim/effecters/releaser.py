@@ -1,0 +1,51 @@
+"""The ``RFIDReleaser`` effecter, usually named ``Gun`` (protocol.md 5.4, 8): it drops RFID
+tags that every robot's reader (:mod:`usarsim.sensors.rfid`) can sense."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from usarsim.effecters.base import EFFECTERS, Effecter
+from usarsim.readings import ItemParams, OperationResult
+from usarsim.sensors.base import ItemConfig
+from usarsim.sim import frames
+
+
+@dataclass(frozen=True, kw_only=True)
+class RfidReleaserConfig(ItemConfig):
+    # The magazine's size was not recovered (protocol.md 8): 10 tags, an estimate.
+    capacity: int = 10
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.capacity < 0:
+            raise ValueError(f"capacity must be >= 0, got {self.capacity}")
+
+
+@EFFECTERS.register("RFIDReleaser")
+class RFIDReleaser(Effecter):
+    """``SET {Type RFIDReleaser} {Name Gun} {Opcode Release}`` drops a new tag on the ground
+    under the robot (RES OK), or fails when the magazine is empty."""
+
+    Config = RfidReleaserConfig
+    ALIASES = {"Capacity": "capacity", "NumberOfTags": "capacity"}
+
+    def reset(self, view) -> None:
+        self.left = self.config.capacity
+
+    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+        if opcode.lower() != "release":
+            return None
+        if self.left <= 0 or view.entities is None:
+            return OperationResult(ok=False)
+        d = view.data
+        pos, _ = self.handle.sensor_frame(d, self.item.location, self.item.orientation, self.item.mount)
+        down = np.array([[0.0, 0.0, -1.0]])
+        dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
+        ground = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)
+        view.entities.release_tag(frames.from_mj_vec(ground))
+        self.left -= 1
+        return OperationResult(ok=True)
