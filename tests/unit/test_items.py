@@ -8,11 +8,10 @@ import pytest
 
 from usarsim.config.catalog import resolve_robot
 from usarsim.config.robot import MountedItem
-from usarsim.effecters import EFFECTERS, Effecter, Gripper, RFIDReleaser
+from usarsim.effecters import EFFECTERS, Effecter, Gripper, RFIDReleaser, RollerTable
 from usarsim.errors import PluginNotFoundError
 from usarsim.sensors import CAMERAS, ITEMS, SENSORS, CameraItem, Sensor, make_item
 from usarsim.sensors.base import Item, ItemKinds
-from usarsim.sensors.effecters import RollerTable  # the former import path still works
 
 
 def test_each_kind_has_its_registry():

@@ -10,7 +10,4 @@ from usarsim.sensors import camera, gps, inertial, motion, range, rfid, scanner,
 from usarsim.sensors.base import ITEMS, SENSORS, Item, ItemConfig, Sensor, SensorConfig, make_item
 from usarsim.sensors.camera import CAMERAS, CameraItem
 
-make_sensor = make_item  # the name the simulation's spawn uses
-
-__all__ = ["CAMERAS", "ITEMS", "SENSORS", "CameraItem", "Item", "ItemConfig", "Sensor", "SensorConfig", "make_item",
-           "make_sensor"]
+__all__ = ["CAMERAS", "ITEMS", "SENSORS", "CameraItem", "Item", "ItemConfig", "Sensor", "SensorConfig", "make_item"]

@@ -11,6 +11,7 @@ import numpy as np
 
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
+from usarsim.sensors.camera import CAMERAS
 from usarsim.sim import frames
 from usarsim.sim.constants import (
     GROUP_MOVABLE,
@@ -284,15 +285,15 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
             ex = spec.add_exclude()
             ex.bodyname1, ex.bodyname2 = a_name, b_name
     for item in robot.items:
-        if item.item_type in CAMERA_TYPES:
+        if item.item_type in CAMERAS:
             _add_camera(spec, body, item, prefix)
     _add_chase_camera(body, robot, prefix)
     return body
 
 
-# Items the image server renders, and the MuJoCo camera each becomes: it looks along the
-# item's X axis with its Z axis (down in USARSim's frame) at the bottom of the picture.
-CAMERA_TYPES = ("Camera", "OmniCam", "OmniCamera")
+# Items the image server renders (the CAMERAS registry), and the MuJoCo camera each becomes: it
+# looks along the item's X axis with its Z axis (down in USARSim's frame) at the bottom of the
+# picture.
 # a MuJoCo camera looks along its -Z with +Y up and +X to the right; in an item's own
 # MuJoCo-frame axes (forward, left, up) those are: right = -left, up, -forward
 _CAMERA_AXES = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import mujoco
 
 from usarsim.sensors import CameraItem
+from usarsim.sensors.camera import OmniCam
 from usarsim.sim import builder
 
 if TYPE_CHECKING:
@@ -106,7 +107,7 @@ class Cameras:
                 if cid >= 0:
                     snap.cameras[(r.uid, cam.name.lower())] = CameraState(
                         cam_id=cid, fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
-                        omni=cam.item.item_type != "Camera")
+                        omni=isinstance(cam, OmniCam))
             # the chase view behind and above the robot (builder.CHASE_CAMERA)
             cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, builder.chase_camera_name(r.prefix))
             if cid >= 0:

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from usarsim.config.robot import RobotConfig
-from usarsim.sensors import Sensor, make_item
+from usarsim.sensors import Item, make_item
 from usarsim.sim.outputs import ItemDescription
 from usarsim.sim.view import RobotHandle
 
@@ -26,7 +26,7 @@ class SimRobot:
     prefix: str
     spawn_time: float
     handle: RobotHandle
-    sensors: list[Sensor]
+    sensors: list[Item]  # every mounted item: sensors, effecters, cameras
     drive: DriveModel
     reports: list[Report] = field(default_factory=list)
     light: bool = False

@@ -29,7 +29,7 @@ from usarsim.effecters import Effecter
 from usarsim.errors import ConfigError, SimulationError
 from usarsim.readings import CommandResult, ItemParams, RobotStatus, ZoomResult
 from usarsim.robots import make_drive
-from usarsim.sensors import Sensor, make_sensor
+from usarsim.sensors import Sensor, make_item
 from usarsim.sim import builder, frames, joints, systems, truth
 from usarsim.sim.battery import Batteries
 from usarsim.sim.cameras import Cameras
@@ -137,7 +137,7 @@ class Simulation:
             raise SimulationError(f"location z {loc[2]:.2f} is too far from the floor (allowed -100..100 m)")
         try:
             drive = make_drive(robot)
-            sensors = [make_sensor(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
+            sensors = [make_item(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
         except ConfigError as exc:
             raise SimulationError(str(exc)) from exc
         level = abs(rot[0]) < 1e-6 and abs(rot[1]) < 1e-6

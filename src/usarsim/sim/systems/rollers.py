@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from usarsim.sensors.effecters import RollerTable
+from usarsim.effecters import RollerTable
 from usarsim.sim.systems.base import SYSTEMS, System
 
 
