@@ -4,7 +4,10 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
+import sys
+import types
 from pathlib import Path
 
 import pytest
@@ -24,14 +27,15 @@ def doc_plugins():
     """Every example's namespace (each registers its plugin once per test session)."""
     out = {}
     for name, code in examples().items():
-        ns: dict = {"__name__": f"architecture_doc_{name}"}
-        exec(compile(code, f"{DOC}:{name}", "exec"), ns)
-        out[name] = ns
+        module = types.ModuleType(f"architecture_doc_{name}")
+        sys.modules[module.__name__] = module  # dataclasses look their module up
+        exec(compile(code, f"{DOC}:{name}", "exec"), module.__dict__)
+        out[name] = module.__dict__
     return out
 
 
 def test_the_page_has_its_worked_examples():
-    assert {"drive", "system"} <= set(examples())
+    assert {"sensor", "effecter", "drive", "system"} <= set(examples())
 
 
 def test_the_drive_example_drives_a_p2at_in_metres_per_second(doc_plugins, test_world):
@@ -66,3 +70,49 @@ def test_the_system_example_blows_robots_along_in_a_windy_world_only(doc_plugins
     assert abs(drift(test_world)) < 0.01  # a hovering robot holds its place
     # the wind's 3 N against the hover servo's drag: it drifts downwind (+X)
     assert drift(dataclasses.replace(test_world, name="WindyField")) > 0.01
+
+
+def _p2at_with(item_type: str, name: str, **params):
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.config.robot import MountedItem
+
+    p2at = resolve_robot("P2AT")
+    return dataclasses.replace(p2at, items=(*p2at.items, MountedItem(item_type=item_type, name=name,
+                                                                        params=params)))
+
+
+def test_the_sensor_example_reports_the_pose_at_its_rate_within_its_noise(doc_plugins, test_world):
+    from usarsim.protocol.messages import format_message
+    from usarsim.protocol.outputs import message_for
+    from usarsim.sim.simulation import Simulation
+
+    sim = Simulation(test_world, seed=1)
+    sim.spawn(1, _p2at_with("Tracker", "Mocap", Sigma=0.002), "R", (-6.0, 0.0, -0.3), (0.0, 0.0, 0.0))
+    sim.take_outputs()
+    sim.advance(1.0)
+    seen = [o for o in sim.take_outputs() if o.key == "SEN:Tracker:Mocap"]
+    assert len(seen) == 21  # 20 Hz: at 0, 0.05, ..., 1.0 s
+    (x, y, z), _ = sim.pose_of(1)
+    last = seen[-1].value
+    assert all(abs(a - b) <= 0.002 + 1e-9 for a, b in zip(last.location, (x, y, z)))
+    assert last.location != (x, y, z)  # with its noise
+    line = format_message(message_for(last, seen[-1].time))
+    assert line.startswith("SEN {Time 1.0000} {Type Tracker} {Name Mocap} {Location ")
+
+
+def test_the_effecter_example_pans_the_camera_towards_a_point(doc_plugins, test_world):
+    from usarsim.readings import ItemParams
+    from usarsim.sim.simulation import Simulation
+
+    sim = Simulation(test_world, seed=1)
+    sim.spawn(1, _p2at_with("LookAt", "Aim"), "R", (-6.0, 0.0, -0.3), (0.0, 0.0, 0.0))
+    sim.advance(0.5)
+    # a point ahead and to the right (Y right): the camera pans right, a positive angle
+    res = sim.operate(1, "LookAt", "Aim", "Aim", ItemParams(values=(-5.0, 0.5), text="-5,0.5"))
+    assert res.ok
+    sim.advance(4.0)  # the pan joint turns at 0.17 rad/s
+    r = sim.robots[1]
+    pan = float(sim.data.qpos[r.handle.joint_qpos["CameraPanTilt_Link1"]])
+    (x, y, _), (_, _, yaw) = sim.pose_of(1)
+    assert pan == pytest.approx(math.atan2(0.5 - y, -5.0 - x) - yaw, abs=0.02) and pan > 0.3
+    assert not sim.operate(1, "LookAt", "Aim", "Aim", ItemParams(values=(1.0,), text="1")).ok
