@@ -5,10 +5,14 @@ line."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from usarsim.effecters.base import EFFECTERS, Effecter
 from usarsim.readings import EffecterState, ItemParams, OperationResult
 from usarsim.sensors.base import ItemConfig
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -33,16 +37,16 @@ class Gripper(Effecter):
     Config = GripperConfig
     ALIASES = {"Fingers": "fingers", "Open": "open_value", "Closed": "closed_value"}
 
-    def configure(self, view) -> None:
+    def configure(self, view: WorldView) -> None:
         names = {ln.name for ln in self.robot.links}
         missing = [f for f in self.config.fingers if f not in names]
         if missing:
             raise ValueError(f"gripper {self.name}: unknown finger links {missing}")
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self.closed = False
 
-    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         op = opcode.lower()
         if op == "grip":
             if not params.values:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,6 +13,9 @@ from usarsim.effecters.base import EFFECTERS, Effecter
 from usarsim.readings import ItemParams, OperationResult
 from usarsim.sensors.base import ItemConfig
 from usarsim.sim import frames
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -33,10 +37,10 @@ class RFIDReleaser(Effecter):
     Config = RfidReleaserConfig
     ALIASES = {"Capacity": "capacity", "NumberOfTags": "capacity"}
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self.left = self.config.capacity
 
-    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         if opcode.lower() != "release":
             return None
         if self.left <= 0 or view.entities is None:

@@ -5,10 +5,14 @@ Operated with SET; it answers RES.  What lies on it is carried by a world system
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from usarsim.effecters.base import EFFECTERS, Effecter
-from usarsim.readings import ItemParams, OperationResult
+from usarsim.readings import FieldValue, ItemParams, OperationResult
 from usarsim.sensors.base import ItemConfig
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 ROLLER_FRICTION = 0.05  # the table's top between its rollers' pushes
 
@@ -38,7 +42,7 @@ class RollerTable(Effecter):
     Config = RollerTableConfig
     ALIASES = {"Surface": "surface", "MaxSpeed": "max_speed_m_s", "Grip": "grip"}
 
-    def configure(self, view) -> None:
+    def configure(self, view: WorldView) -> None:
         if self.config.surface >= len(self.robot.chassis):
             raise ValueError(f"roller table {self.name}: the robot has no chassis piece {self.config.surface}")
         self.geom = view.model.geom(f"{self.handle.prefix}/chassis{self.config.surface}").id
@@ -46,10 +50,10 @@ class RollerTable(Effecter):
         view.model.geom_friction[self.geom, 0] = ROLLER_FRICTION
         view.model.geom_priority[self.geom] = 2
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self.speed = 0.0
 
-    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         op = opcode.lower()
         if op == "stop":
             self.speed = 0.0
@@ -62,5 +66,5 @@ class RollerTable(Effecter):
         self.speed = max(-self.config.max_speed_m_s, min(self.config.max_speed_m_s, v))
         return OperationResult(ok=True)
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         return (("MaxSpeed", self.config.max_speed_m_s),)

@@ -25,7 +25,7 @@ import numpy as np
 
 from usarsim.config.reader import did_you_mean
 from usarsim.errors import ConfigError, PluginNotFoundError
-from usarsim.readings import ItemParams, OperationResult, ZoomResult
+from usarsim.readings import FieldValue, ItemParams, OperationResult, ZoomResult
 from usarsim.registry import Registry
 
 if TYPE_CHECKING:
@@ -87,7 +87,7 @@ class Item:
     ALIASES: ClassVar[dict[str, str]] = {}
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {}
 
-    def __init__(self, item: MountedItem, config: ItemConfig, robot: RobotConfig, seed: int):
+    def __init__(self, item: MountedItem, config: ItemConfig, robot: RobotConfig, seed: int) -> None:
         self.item = item
         self.name = item.name
         self.config = config
@@ -108,7 +108,7 @@ class Item:
         None if the opcode is not supported (RES Failed)."""
         return None
 
-    def conf_fields(self) -> tuple[tuple[str, Any], ...]:
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         """The typed (key, value) pairs after ``{Name n}`` in this item's CONF reply
         (protocol.md 6.7); the protocol layer prints them."""
         return ()
@@ -128,7 +128,7 @@ class Sensor(Item):
     SCANNABLE: ClassVar[bool] = False  # {Opcode SCAN} makes it scan at once (the range scanners)
     Config: ClassVar[type] = SensorConfig
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int):
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         self._ubuf: np.ndarray | None = None
         self._upos = 0
@@ -158,7 +158,7 @@ class Sensor(Item):
             return OperationResult(ok=True)
         return None
 
-    def conf_fields(self) -> tuple[tuple[str, Any], ...]:
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         return (("ScanInterval", self.config.scan_interval_s),)
 
     # Noise -----------------------------------------------------------------------
@@ -194,7 +194,7 @@ class ItemRegistry(Registry):
     ``sensors:``, so a type name registered by two kinds is an error, as one registered twice
     by one kind is."""
 
-    def __init__(self, kind: str, family: ItemKinds):
+    def __init__(self, kind: str, family: ItemKinds) -> None:
         super().__init__(kind)
         self.family = family
 

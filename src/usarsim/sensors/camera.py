@@ -6,9 +6,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from usarsim.readings import ItemParams, ZoomResult
+from usarsim.readings import FieldValue, ItemParams, ZoomResult
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 
 class CameraItem(Item):
@@ -51,7 +55,7 @@ class Camera(CameraItem):
     ALIASES = {"CameraDefFov": "def_fov_rad", "CameraMinFov": "min_fov_rad", "CameraMaxFov": "max_fov_rad",
                "FOV": "def_fov_rad", "Width": "width_px", "Height": "height_px"}
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self.fov_rad = self.config.def_fov_rad
 
     def zoom(self, fov: float) -> tuple[float, bool]:
@@ -65,7 +69,7 @@ class Camera(CameraItem):
         self.fov_rad = clamped
         return clamped, clamped == fov
 
-    def operate(self, view, opcode: str, params: ItemParams) -> ZoomResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> ZoomResult | None:
         """``{Opcode Zoom}`` (UDK also ``FOV``), Params the new field of view in rad: a
         missing, negative or non-numeric value fails and keeps the current one."""
         if opcode.lower() not in ("zoom", "fov"):
@@ -75,7 +79,7 @@ class Camera(CameraItem):
         value, ok = self.zoom(params.values[0])
         return ZoomResult(((self.name, value, ok),))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("CameraDefFov", c.def_fov_rad), ("CameraMinFov", c.min_fov_rad), ("CameraMaxFov", c.max_fov_rad),
                 ("CameraFov", getattr(self, "fov_rad", c.def_fov_rad)))

@@ -40,12 +40,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from usarsim.config.world import GeoReference
-from usarsim.readings import GpsReading
+from usarsim.readings import FieldValue, GpsReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 # A satellite counts when it is more than 5 degrees above the horizon (protocol.md 7.6;
 # UDK GPSSensor.GetGPS: Elevation(...) > 5).
@@ -134,7 +138,8 @@ class Constellation:
     rotation from ``seed``, and then turning about the celestial pole with ``period_s``.
     """
 
-    def __init__(self, n: int = NUM_SATELLITES, seed: int = CONSTELLATION_SEED, period_s: float = ORBIT_PERIOD_S):
+    def __init__(self, n: int = NUM_SATELLITES, seed: int = CONSTELLATION_SEED,
+                 period_s: float = ORBIT_PERIOD_S) -> None:
         k = np.arange(n) + 0.5
         up = 1.0 - 2.0 * k / n
         ring = np.sqrt(1.0 - up * up)
@@ -203,7 +208,7 @@ class GPS(Sensor):
     Config = GpsConfig
     ALIASES = {"maxNoise": "max_noise_m", "minNoise": "min_noise_m"}
 
-    def visible_satellites(self, view) -> tuple[int, np.ndarray]:
+    def visible_satellites(self, view: WorldView) -> tuple[int, np.ndarray]:
         """The number of satellites in view and the sensor's world position (MuJoCo frame)."""
         geo = getattr(view, "geo", None) or _DEFAULT_GEO
         pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
@@ -215,7 +220,7 @@ class GPS(Sensor):
         dist, _, _ = view.caster.cast(pos, above, LINE_OF_SIGHT_RANGE_M, self.handle.body_id)
         return int(np.count_nonzero(np.isinf(dist))), pos
 
-    def measure(self, view) -> GpsReading:
+    def measure(self, view: WorldView) -> GpsReading:
         n, pos = self.visible_satellites(view)
         if n < MIN_SATELLITES_FOR_FIX:
             return GpsReading(self.name, False, n)
@@ -226,6 +231,6 @@ class GPS(Sensor):
         lat, lon = world_to_geographic(float(pos[0]) + ex, -float(pos[1]) + ey, geo)
         return GpsReading(self.name, True, n, degrees_minutes(lat, "N", "S"), degrees_minutes(lon, "E", "W"))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         # CONF {Type GPS} {Name GPS} {ScanInterval 0.2000} (UDK GPSSensor.GetConfData)
         return (("ScanInterval", self.config.scan_interval_s),)

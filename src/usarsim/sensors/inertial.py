@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -18,6 +19,10 @@ from usarsim.readings import ImuReading, OrientationReading, TachometerReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames
 from usarsim.sim.frames import wrap_2pi
+
+if TYPE_CHECKING:
+    from usarsim.config.robot import MountedItem, RobotConfig
+    from usarsim.sim.view import WorldView
 
 # MuJoCo -> USARSim component signs of a vector: (x, y, z)_usar = (x, -y, -z)_mujoco
 # (protocol.md section 3, usarsim.sim.frames).
@@ -33,7 +38,7 @@ def _vec(v: np.ndarray) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
-def _wrapped(angles) -> tuple[float, float, float]:
+def _wrapped(angles: np.ndarray) -> tuple[float, float, float]:
     """Each angle into [0, 2 pi), as GroundTruth and INS report them (protocol.md section 3)."""
     return (wrap_2pi(float(angles[0])), wrap_2pi(float(angles[1])), wrap_2pi(float(angles[2])))
 
@@ -60,16 +65,16 @@ class Tachometer(Sensor):
     RESETTABLE = True
     Config = TachometerConfig
 
-    def configure(self, view) -> None:
+    def configure(self, view: WorldView) -> None:
         h = self.handle
         names = [w.name for w in self.robot.wheels]
         self._qpos = np.array([h.joint_qpos[n] for n in names], dtype=np.intp)
         self._qvel = np.array([h.joint_qvel[n] for n in names], dtype=np.intp)
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self._zero = view.data.qpos[self._qpos].copy()
 
-    def measure(self, view) -> TachometerReading:
+    def measure(self, view: WorldView) -> TachometerReading:
         d = view.data
         vel = d.qvel[self._qvel].astype(float)
         pos = d.qpos[self._qpos] - self._zero
@@ -137,13 +142,13 @@ class IMU(Sensor):
         "IncludeGravity": "include_gravity",
     }
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
         self._offset_mj = frames.to_mj_vec(self.item.location)  # mount, robot body frame (MuJoCo axes)
         self._mount_mj = frames.usar_euler_to_mj_mat(self.item.orientation)  # sensor axes in body axes
         self._last_time: float | None = None
 
-    def _state(self, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _state(self, view: WorldView) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(world velocity of the sensor point, body rotation, body angular velocity in
         body axes), all in MuJoCo's frame, from the current qpos/qvel."""
         h, d = self.handle, view.data
@@ -158,7 +163,7 @@ class IMU(Sensor):
         v_point = np.array(v[0:3], dtype=float) + rot @ _cross(w_body, self._offset_mj)
         return v_point, rot, w_body
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         v_point, _, w_body = self._state(view)
         self._last_time = view.time
         self._last_v = v_point
@@ -167,7 +172,7 @@ class IMU(Sensor):
     def _gauss(self, sigma: float, k: int = 3) -> np.ndarray | float:
         return self.rng.normal(0.0, sigma, k) if sigma > 0 else 0.0
 
-    def measure(self, view) -> ImuReading:
+    def measure(self, view: WorldView) -> ImuReading:
         c = self.config
         v_point, rot, w_body = self._state(view)
         w_sensor = self._mount_mj.T @ w_body  # sensor axes (MuJoCo-style)
@@ -217,7 +222,7 @@ class INU(Sensor):
     Config = InuConfig
     ALIASES = {"Sigma": "sigma_rad", "Mean": "mean_rad"}
 
-    def measure(self, view) -> OrientationReading:
+    def measure(self, view: WorldView) -> OrientationReading:
         c = self.config
         ori = np.array(self.handle.orientation(view.data), dtype=float)
         if c.sigma_rad > 0:

@@ -5,12 +5,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from usarsim.readings import EncoderItem, EncoderReading, ItemParams, OdometryReading, OperationResult, PoseReading
+from usarsim.readings import (
+    EncoderItem,
+    EncoderReading,
+    FieldValue,
+    ItemParams,
+    OdometryReading,
+    OperationResult,
+    PoseReading,
+)
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim.frames import wrap_2pi, wrap_pi
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -43,7 +55,7 @@ class Odometry(Sensor):
     Config = OdometryConfig
     ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel"}
 
-    def configure(self, view) -> None:
+    def configure(self, view: WorldView) -> None:
         wheels = {w.name: w for w in self.robot.wheels}
         left = self.config.left_wheel or next(w.name for w in self.robot.wheels if w.side == "left")
         right = self.config.right_wheel or next(w.name for w in self.robot.wheels if w.side == "right")
@@ -52,17 +64,17 @@ class Odometry(Sensor):
         # sep = 2 x the lateral offset of the right wheel (protocol.md 7.4)
         self._sep = 2.0 * abs(wheels[right].position[1])
 
-    def _angles(self, view) -> tuple[float, float]:
+    def _angles(self, view: WorldView) -> tuple[float, float]:
         q = view.data.qpos
         res = self.config.encoder_resolution_rad
         return (_quantise(float(q[self.handle.joint_qpos[self._left]]), res),
                 _quantise(float(q[self.handle.joint_qpos[self._right]]), res))
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self.x = self.y = self.theta = 0.0
         self._last = self._angles(view)
 
-    def measure(self, view) -> OdometryReading:
+    def measure(self, view: WorldView) -> OdometryReading:
         left, right = self._angles(view)
         dl, dr = left - self._last[0], right - self._last[1]
         self._last = (left, right)
@@ -75,7 +87,7 @@ class Odometry(Sensor):
         # reported in [0, 2 pi) as UT2004 did (protocol.md 6.3 example: 6.2432)
         return OdometryReading(self.name, self.x, self.y, wrap_2pi(self.theta))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("ScanInterval", c.scan_interval_s), ("EncoderResolution", c.encoder_resolution_rad))
 
@@ -105,24 +117,24 @@ class Encoder(Sensor):
     Config = EncoderConfig
     ALIASES = {"Resolution": "resolution_rad", "Wheel": "wheel", "Joint": "wheel"}
 
-    def configure(self, view) -> None:
+    def configure(self, view: WorldView) -> None:
         self._wheel = self.config.wheel or self.robot.wheels[0].name
         if self._wheel not in {w.name for w in self.robot.wheels}:
             raise ValueError(f"encoder {self.name}: unknown wheel {self._wheel}")
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self._zero = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
 
-    def measure(self, view) -> EncoderItem:
+    def measure(self, view: WorldView) -> EncoderItem:
         angle = float(view.data.qpos[self.handle.joint_qpos[self._wheel]]) - self._zero
         noisy = self.relative_noise_scalar(angle)
         return EncoderItem(self.name, int(round(noisy / self.config.resolution_rad)))
 
     @classmethod
-    def combine(cls, parts):
+    def combine(cls, parts: list[EncoderItem]) -> EncoderReading:
         return EncoderReading(tuple(parts))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         # printed truncated, as USARSim did (0.01745 -> 0.0174, protocol.md 6.7)
         return (("Resolution", math.trunc(self.config.resolution_rad * 1e4) / 1e4),)
 
@@ -139,7 +151,7 @@ class GroundTruth(Sensor):
 
     Config = GroundTruthConfig
 
-    def measure(self, view) -> PoseReading:
+    def measure(self, view: WorldView) -> PoseReading:
         d = view.data
         r, p, y = self.handle.orientation(d)
         return PoseReading("GroundTruth", self.name, self.handle.location(d), (wrap_2pi(r), wrap_2pi(p), wrap_2pi(y)))
@@ -170,11 +182,11 @@ class INS(Sensor):
     Config = InsConfig
     ALIASES = {"Sigma": "sigma", "Mean": "mean", "Precision": "precision", "Drifting": "drifting"}
 
-    def _true(self, view):
+    def _true(self, view: WorldView) -> tuple[np.ndarray, np.ndarray]:
         d = view.data
         return np.array(self.handle.location(d)), np.array(self.handle.orientation(d))
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         loc, ori = self._true(view)
         self.est_loc = loc.copy()
         self.est_ori = ori.copy()
@@ -192,7 +204,7 @@ class INS(Sensor):
             self._mean_rot = np.full(3, c.mean)
             self._mean_pos = np.full(3, c.mean)
 
-    def measure(self, view) -> PoseReading:
+    def measure(self, view: WorldView) -> PoseReading:
         c = self.config
         loc, ori = self._true(view)
         dloc = loc - self._last_loc
@@ -212,7 +224,7 @@ class INS(Sensor):
         o = tuple(wrap_2pi(float(a)) for a in self.est_ori)
         return PoseReading("INS", self.name, tuple(float(v) for v in self.est_loc), o)
 
-    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         """``{Opcode POSE} {Params x,y,z,roll,pitch,yaw}`` (UDK, protocol.md 5.4): the
         estimate starts over from that pose."""
         if opcode.upper() != "POSE" or not params.text:

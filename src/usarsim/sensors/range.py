@@ -6,13 +6,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from usarsim.readings import RangeItem, RangeReading
+from usarsim.readings import FieldValue, RangeItem, RangeReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sim import frames
 from usarsim.sim.view import unit_dirs_yaw_pitch
+
+if TYPE_CHECKING:
+    from usarsim.config.robot import MountedItem, RobotConfig
+    from usarsim.sim.view import WorldView
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -40,13 +45,13 @@ class RangeSensor(Sensor):
     def _directions(self) -> np.ndarray:
         return np.array([[1.0, 0.0, 0.0]])
 
-    def _true_range(self, view) -> float:
+    def _true_range(self, view: WorldView) -> float:
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs = self._directions() @ rot.T
         dist, _, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
         return float(dist.min())
 
-    def measure(self, view) -> RangeItem:
+    def measure(self, view: WorldView) -> RangeItem:
         cfg = self.config
         r = self._true_range(view)
         if math.isinf(r):
@@ -60,7 +65,7 @@ class RangeSensor(Sensor):
     def combine(cls, parts: list[RangeItem]) -> RangeReading:
         return RangeReading(cls.TYPE, tuple(parts))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         return (("MaxRange", self.config.max_range_m), ("MinRange", self.config.min_range_m))
 
 
@@ -98,8 +103,8 @@ class Sonar(RangeSensor):
                "maxAngleOfIncidence": "max_angle_of_incidence_rad", "numberOfCones": "number_of_cones",
                "tracesPerCone": "traces_per_cone"}
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
         cfg = self.config
         yaws, pitches = [0.0], [0.0]
         half = cfg.beam_angle_rad / 2.0
@@ -115,7 +120,7 @@ class Sonar(RangeSensor):
     def _directions(self) -> np.ndarray:
         return self._dirs
 
-    def _true_range(self, view) -> float:
+    def _true_range(self, view: WorldView) -> float:
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs = self._dirs @ rot.T
         dist, nrm, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True,
@@ -129,12 +134,12 @@ class Sonar(RangeSensor):
             return math.inf
         return float(dist[ok].min())
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         return (("MaxRange", self.config.max_range_m), ("MinRange", self.config.min_range_m),
                 ("BeamAngle", self.config.beam_angle_rad))
 
     @classmethod
-    def measure_group(cls, sensors: list[Sonar], view) -> list[RangeItem]:
+    def measure_group(cls, sensors: list[Sonar], view: WorldView) -> list[RangeItem]:
         """All sonars of a robot in one batched cast: every cone ray from its own
         sonar's position, with the mount transforms stacked once per robot."""
         first = sensors[0]

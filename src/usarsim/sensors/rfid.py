@@ -20,12 +20,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from usarsim.readings import ItemParams, OperationResult, RfidReading, RfidTag
+from usarsim.readings import FieldValue, ItemParams, OperationResult, RfidReading, RfidTag
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -69,7 +73,7 @@ class RFID(Sensor):
     ALIASES = {"MaxRange": "max_range_m", "SensingMode": "sensing_mode", "ObstacleLoss": "obstacle_loss_db",
                "Threshold": "threshold_dbm"}
 
-    def _detected(self, view) -> list[tuple[int, tuple[float, float, float]]]:
+    def _detected(self, view: WorldView) -> list[tuple[int, tuple[float, float, float]]]:
         """(tag id, tag position in the sensor frame) of every tag the reader senses now."""
         ents = view.entities
         if ents is None or not ents.tags:
@@ -99,7 +103,7 @@ class RFID(Sensor):
             out.append((ids[i], frames.from_mj_vec(local)))
         return out
 
-    def measure(self, view) -> RfidReading:
+    def measure(self, view: WorldView) -> RfidReading:
         ents = view.entities
         tags = []
         for tid, loc in self._detected(view):
@@ -107,7 +111,7 @@ class RFID(Sensor):
             tags.append(RfidTag(tid, loc, mem if mem else None))
         return RfidReading(self.name, tuple(tags))
 
-    def operate(self, view, opcode: str, params: ItemParams) -> OperationResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         """Read, Write and Erase of a tag's memory (protocol.md 5.4; manual 10.9.5-10.9.7):
         the tag must be sensed now.  Read replies ``{ID id} {Mem data}``.  The Params are
         text, ``<tagID> <data...>``."""
@@ -129,5 +133,5 @@ class RFID(Sensor):
         tag.memory = data
         return OperationResult(ok=True)
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         return (("ScanInterval", self.config.scan_interval_s), ("MaxRange", self.config.max_range_m))

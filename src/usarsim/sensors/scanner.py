@@ -6,12 +6,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from usarsim.readings import RangeScan3DReading, RangeScanReading
+from usarsim.readings import FieldValue, RangeScan3DReading, RangeScanReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sim.view import unit_dirs_yaw_pitch
+
+if TYPE_CHECKING:
+    from usarsim.config.robot import MountedItem, RobotConfig
+    from usarsim.sim.view import WorldView
 
 
 def trunc4(x: float) -> float:
@@ -67,8 +72,8 @@ class RangeScanner(Sensor):
                           "fov_rad": 4.189, "scan_interval_s": 0.3},
     }
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
         cfg = self.config
         n = cfg.beam_count
         offsets = cfg.fov_rad / 2.0 - cfg.resolution_rad * np.arange(n)  # rightmost (+yaw) first
@@ -77,7 +82,7 @@ class RangeScanner(Sensor):
         else:
             self._dirs = unit_dirs_yaw_pitch(offsets, np.zeros(n))
 
-    def measure(self, view) -> RangeScanReading:
+    def measure(self, view: WorldView) -> RangeScanReading:
         cfg = self.config
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id,
@@ -90,7 +95,7 @@ class RangeScanner(Sensor):
         return RangeScanReading(self.TYPE, self.name, trunc4(cfg.resolution_rad), trunc4(cfg.fov_rad),
                                 tuple(values.tolist()))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("MaxRange", c.max_range_m), ("MinRange", c.min_range_m), ("Resolution", trunc4(c.resolution_rad)),
                 ("Fov", trunc4(c.fov_rad)), ("Paning", c.panning), ("Tilting", c.tilting))
@@ -161,8 +166,8 @@ class RangeScanner3D(Sensor):
                "bYaw": "panning", "bPitch": "tilting", "Paning": "panning", "Panning": "panning",
                "Tilting": "tilting"}
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
         c = self.config
         rows, cols = c.counts
         pitches = c.vertical_fov_rad / 2.0 - c.vertical_resolution_rad * np.arange(rows)  # top row first
@@ -170,7 +175,7 @@ class RangeScanner3D(Sensor):
         pp, yy = np.meshgrid(pitches, yaws, indexing="ij")
         self._dirs = unit_dirs_yaw_pitch(yy.reshape(-1), pp.reshape(-1))
 
-    def measure(self, view) -> RangeScan3DReading:
+    def measure(self, view: WorldView) -> RangeScan3DReading:
         c = self.config
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, c.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
@@ -183,7 +188,7 @@ class RangeScanner3D(Sensor):
                                   (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)), tuple(values.tolist()),
                                   sensor_type=self.TYPE)
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("MaxRange", c.max_range_m), ("MinRange", c.min_range_m),
                 ("Resolution", (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad))),

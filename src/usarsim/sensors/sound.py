@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import zlib
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,14 +26,19 @@ from usarsim.readings import HumanMotionReading, SoundReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames, victims
 
+if TYPE_CHECKING:
+    from usarsim.config.world import Victim
+    from usarsim.sim.view import WorldView
 
-def _walls_between(view, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str, stop_at_first: bool = False) -> int:
+
+def _walls_between(view: WorldView, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str,
+                   stop_at_first: bool = False) -> int:
     """Walls on the segment (``RayCaster.count_walls``); the target's own surface does not count."""
     return int(view.caster.count_walls(pos_mj[None, :], target_mj[None, :], kind=kind, end_margin=0.05,
                                        stop_at_first=stop_at_first)[0])
 
 
-def _victim_point(victim, local) -> np.ndarray:
+def _victim_point(victim: Victim, local: tuple[float, float, float]) -> np.ndarray:
     """A point of a victim (its own frame, posture applied) in the world, MuJoCo frame."""
     c = victims.victim_part_pose(victim.posture, local, None, None)[0]
     world = np.array(victim.location, dtype=float) + frames.euler_to_mat(*victim.rotation) @ np.array(c)
@@ -60,7 +66,7 @@ class Sound(Sensor):
     Config = SoundConfig
     ALIASES = {"Threshold": "threshold_db", "WallLoss": "wall_loss_db", "Sigma": "sigma_db"}
 
-    def measure(self, view) -> SoundReading:
+    def measure(self, view: WorldView) -> SoundReading:
         c = self.config
         world, ents = view.world, view.entities
         best = (0.0, 0.0)
@@ -104,7 +110,7 @@ class HumanMotion(Sensor):
     RAY_KIND = "camera"
     ALIASES = {"MaxRange": "max_range_m", "FOV": "fov_rad", "Sigma": "sigma"}
 
-    def measure(self, view) -> HumanMotionReading:
+    def measure(self, view: WorldView) -> HumanMotionReading:
         c = self.config
         world = view.world
         best = 0.0

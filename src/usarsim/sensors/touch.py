@@ -18,12 +18,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from usarsim.readings import TouchItem, TouchReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+
+if TYPE_CHECKING:
+    from usarsim.config.robot import MountedItem, RobotConfig
+    from usarsim.sim.view import WorldView
 
 _PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
 _SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
@@ -91,11 +96,11 @@ class Touch(Sensor):
     Config = TouchConfig
     ALIASES = {"Diameter": "diameter_m"}
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
         self._radius = self.config.diameter_m / 2.0
 
-    def configure(self, view) -> None:
+    def configure(self, view: WorldView) -> None:
         m = view.model
         own = m.body_rootid[m.geom_bodyid] == self.handle.body_id
         collides = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
@@ -105,7 +110,7 @@ class Touch(Sensor):
         self._solids = cand[~is_plane]
         self._reach = m.geom_rbound[self._solids] + self._radius
 
-    def touching(self, view) -> bool:
+    def touching(self, view: WorldView) -> bool:
         m, d = view.model, view.data
         h = self.handle
         centre, _ = h.sensor_frame(d, self.item.location, (0.0, 0.0, 0.0), self.item.mount)
@@ -122,7 +127,7 @@ class Touch(Sensor):
                     return True
         return False
 
-    def measure(self, view) -> TouchItem:
+    def measure(self, view: WorldView) -> TouchItem:
         return TouchItem(self.name, self.touching(view))
 
     @classmethod

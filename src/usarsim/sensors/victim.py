@@ -15,13 +15,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from usarsim.readings import VictimPart, VictimReading
+from usarsim.readings import FieldValue, VictimPart, VictimReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames
 from usarsim.sim.view import unit_dirs_yaw_pitch
+
+if TYPE_CHECKING:
+    from usarsim.config.robot import MountedItem, RobotConfig
+    from usarsim.sim.view import WorldView
 
 SUBGRIDS = 4  # interleaved sub-grids, one traced per ScanInterval (protocol.md 7.9)
 
@@ -57,8 +62,8 @@ class VictSensor(Sensor):
                "VerticalFOV": "vertical_fov_rad", "HorizontalStep": "horizontal_step_rad",
                "VerticalStep": "vertical_step_rad", "Sigma": "sigma", "Mean": "mean"}
 
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
         c = self.config
         nh = int(math.floor(c.horizontal_fov_rad / c.horizontal_step_rad + 1e-6)) + 1
         nv = int(math.floor(c.vertical_fov_rad / c.vertical_step_rad + 1e-6)) + 1
@@ -75,11 +80,11 @@ class VictSensor(Sensor):
         self._tick = 0
         self._found: list[VictimPart] = []
 
-    def reset(self, view) -> None:
+    def reset(self, view: WorldView) -> None:
         self._tick = 0
         self._found = []
 
-    def measure(self, view) -> VictimReading | None:
+    def measure(self, view: WorldView) -> VictimReading | None:
         c = self.config
         ents = view.entities
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
@@ -113,7 +118,7 @@ class VictSensor(Sensor):
         found, self._found = self._found, []
         return VictimReading(self.name, tuple(found))
 
-    def conf_fields(self):
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("MaxRange", c.max_range_m), ("HorizontalFOV", c.horizontal_fov_rad),
                 ("VerticalFOV", c.vertical_fov_rad))
