@@ -144,3 +144,19 @@ def test_the_battery_drains_faster_under_load_and_then_only_sta_flows(test_world
     late = [o for o in outs if o.time is not None and o.time > sim.time - 1.0]
     assert late and {o.key for o in late} == {"STA"}
     assert all(o.value.battery_s == 0 for o in late)
+
+
+def test_lockstep_steps_add_up_below_one_physics_step(server_factory):
+    """Ten STEP {Time 0.01} run exactly 0.1 s of simulated time (issue: 0.08 before, the part
+    below one 4 ms physics step was dropped each time)."""
+    srv = server_factory()
+    c = srv.connect()
+    c.nfo()
+    times = []
+    for _ in range(10):
+        lines = c.step(0.01)
+        times.append(float(segments(lines[-1].text)["Time"]))
+    assert times[-1] == pytest.approx(0.1, abs=1e-9)
+    assert all(0.0079 < b - a < 0.0121 for a, b in zip([0.0, *times], times))  # 2 or 3 steps of 4 ms
+    c.step(0.004)
+    assert float(segments(c.step(0.6)[-1].text)["Time"]) == pytest.approx(0.704, abs=1e-9)

@@ -15,6 +15,7 @@ Modes (``--speed``/``--lockstep``):
 from __future__ import annotations
 
 import logging
+import math
 import queue
 import threading
 import time
@@ -26,6 +27,10 @@ from usarsim.errors import UsarsimError
 from usarsim.sim.simulation import Output, Simulation
 
 log = logging.getLogger("usarsim.sim")
+
+# A STEP whose time is a whole number of physics steps up to this fraction of a step runs
+# exactly that many (0.6 s / 4 ms is 149.99999999999997 in floating point).
+STEP_EPS = 1e-6
 
 
 @dataclass
@@ -72,6 +77,7 @@ class SimulationRunner:
         self.error: BaseException | None = None
         self._lag_lost = 0.0
         self._lag_logged = 0.0
+        self._owed = 0.0  # lock-step: simulated time asked for and not yet run (< one step)
 
     # Thread-safe API ---------------------------------------------------------------
     def submit(self, req: Request | StepRequest) -> None:
@@ -126,7 +132,7 @@ class SimulationRunner:
                 pending, self._pending = self._pending, []
                 for req in pending:
                     self._execute(req)
-                self.sim.advance(item.seconds)
+                self.sim.advance(self._whole_steps(item.seconds))
                 self._flush()
                 item.on_done(self.sim.time)
             elif item.immediate:
@@ -134,6 +140,16 @@ class SimulationRunner:
                 self._flush()
             else:
                 self._pending.append(item)
+
+    def _whole_steps(self, seconds: float) -> float:
+        """The simulated time of the whole physics steps a STEP of ``seconds`` runs: what is
+        left below one physics step is carried to the next STEP, so that STEPs add up (ten
+        STEP {Time 0.01} run 0.1 s: 2, 3, 2, 3... steps of 4 ms)."""
+        dt = self.sim.dt
+        owed = self._owed + max(0.0, seconds)
+        n = max(0, math.floor(owed / dt + STEP_EPS))
+        self._owed = owed - n * dt
+        return n * dt
 
     def _run_clocked(self) -> None:
         sim = self.sim
