@@ -139,3 +139,26 @@ def test_a_locked_link_stays_put_and_says_so_in_conf(server_factory, test_world)
     c.send("MISPKG {Name CameraPanTilt} {Link 1} {Value 1.0} {Link 2} {Value -0.5}")
     pan, tilt = pantilt(c.step(4.0))[-1]
     assert abs(pan) < 1e-3 and tilt == pytest.approx(-0.5, abs=0.01)
+
+
+def test_a_free_turning_pan_reports_its_angle_wrapped(server_factory, test_world):
+    """The P2AT's pan turns without end (MinRange > MaxRange): after more than a whole turn
+    MISSTA reports its angle within [-pi, pi], not 7 rad."""
+    srv = server_factory(world=test_world, seed=3)
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.P2AT} {Name R} {Location -6,0,-0.3} {Rotation 0,0,0}")
+    c.step(0.4)
+    c.send("MISPKG {Name CameraPanTilt} {Link 1} {Value 0} {Order 1}")  # hold where it is
+    c.step(0.2)
+
+    def turn(sim):  # a turn and a half ago, as if it had been panned round and round
+        r = sim.robots[1]
+        sim.data.qpos[r.handle.joint_qpos["CameraPanTilt_Link1"]] = 2 * math.pi + 0.5
+        sim.data.act[sim.model.actuator_actadr[r.handle.actuator["CameraPanTilt_Link1"]]] = 2 * math.pi + 0.5
+
+    srv.on_sim(turn)
+    lines = c.step(0.4)
+    missta = [ln.text for ln in lines if ln.text.startswith("MISSTA")][-1]
+    pan = float(missta.split("{Link 1} {Value ", 1)[1].split("}", 1)[0])
+    assert pan == pytest.approx(0.5, abs=0.05)

@@ -126,3 +126,16 @@ def test_wrap_pi_range(a):
     r = frames.wrap_pi(a)
     assert -math.pi <= r < math.pi
     assert math.isclose(math.sin(r), math.sin(a), abs_tol=1e-7)
+
+
+@pytest.mark.parametrize("angle", [-1e-9, -3e-5, 2 * math.pi - 1e-7, -2 * math.pi - 1e-9])
+def test_an_angle_a_hair_below_zero_reads_zero_not_two_pi(angle):
+    """A level robot whose pitch is -1e-9 rad reads 0.0000, not 6.2832 (ground truth, INS)."""
+    assert frames.wrap_2pi(angle) == 0.0
+    assert f"{frames.wrap_2pi(angle):.4f}" == "0.0000"
+
+
+def test_wrapping_keeps_every_other_angle():
+    assert frames.wrap_2pi(-0.001) == pytest.approx(2 * math.pi - 0.001)
+    assert frames.wrap_2pi(7.0) == pytest.approx(7.0 - 2 * math.pi)
+    assert frames.wrap_2pi(math.pi) == math.pi

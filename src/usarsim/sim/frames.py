@@ -82,12 +82,18 @@ def usar_euler_to_mj_quat(rpy) -> np.ndarray:
     return mat_to_quat(usar_euler_to_mj_mat(rpy))
 
 
+# An angle this close below 2 pi is reported as 0: a level robot's pitch of -1e-9 rad would
+# otherwise read 6.2832 (the protocol prints 4 decimals; 2 pi - 5e-5 is the first value that
+# rounds to 6.2832 or prints as 6.2831 only by rounding down).
+WRAP_SNAP_RAD = 5e-5
+
+
 def wrap_2pi(a: float) -> float:
-    """Angle into [0, 2 pi)."""
+    """Angle into [0, 2 pi), with a hair below 2 pi (WRAP_SNAP_RAD) reported as 0."""
     r = math.fmod(a, TWO_PI)
     if r < 0:
         r += TWO_PI
-    if r >= TWO_PI:
+    if r >= TWO_PI - WRAP_SNAP_RAD:
         r = 0.0
     return r
 

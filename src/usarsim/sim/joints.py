@@ -111,9 +111,16 @@ def apply_all(m: mujoco.MjModel, d: mujoco.MjData, r: SimRobot) -> None:
         apply(m, d, r, ln)
 
 
+def position(d: mujoco.MjData, r: SimRobot, name: str) -> float:
+    """A link's position as reported (STA, MISSTA): a free-turning joint's angle wrapped into
+    [-pi, pi], however many turns it has made."""
+    q = float(d.qpos[r.handle.joint_qpos[name]])
+    ln = r.config.link(name)
+    return math.remainder(q, 2.0 * math.pi) if ln is not None and not ln.limited else q
+
+
 def package_state(d: mujoco.MjData, r: SimRobot, pkg) -> PackageState:
     """MISSTA: each link of a mission package, its position and torque."""
     h = r.handle
     return PackageState(pkg.name, tuple(
-        (i + 1, float(d.qpos[h.joint_qpos[n]]), float(d.actuator_force[h.actuator[n]]))
-        for i, n in enumerate(pkg.links)))
+        (i + 1, position(d, r, n), float(d.actuator_force[h.actuator[n]])) for i, n in enumerate(pkg.links)))

@@ -333,7 +333,7 @@ class Simulation:
     def status_of(self, r: SimRobot) -> RobotStatus:
         left = r.battery_left()
         front, rear = r.drive.steer_angles(self.data, r.handle)
-        joint_angles = tuple((n, float(self.data.qpos[r.handle.joint_qpos[n]])) for n in r.config.status_joints)
+        joint_angles = tuple((n, joints.position(self.data, r, n)) for n in r.config.status_joints)
         return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
                            front_steer=front, rear_steer=rear, joints=joint_angles, light_toggle=r.light,
                            light_intensity=100 if r.light else 0, view=self.cameras.view_index(r.uid))
