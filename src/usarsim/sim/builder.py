@@ -51,7 +51,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     o.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
     o.gravity = [0.0, 0.0, -world.gravity_m_s2]
     # A blow-up must not reset the whole world: the simulation resets only the robot
-    # concerned (Simulation._check_health).
+    # concerned (usarsim.sim.health.BlowUpGuard).
     o.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     s.visual.global_.offwidth = MAX_PICTURE_WIDTH
     s.visual.global_.offheight = MAX_PICTURE_HEIGHT

@@ -331,7 +331,8 @@ class RadioNet:
         return ln
 
     def evaluate(self, sim: Simulation) -> None:
-        """The ``after_advance`` hook: every watched pair's link, changes reported."""
+        """Run after every advance of the clock (``Simulation.on_advance``): every watched pair's link,
+        changes reported."""
         watched = self.watched
         if not watched and not self._reported:
             return
