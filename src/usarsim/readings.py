@@ -271,6 +271,7 @@ class ZoomResult:
     view in rad, ok) per camera; not ok when the value was clamped or reset."""
 
     cameras: tuple[tuple[str, float, bool], ...]
+    camera_type: str = "Camera"  # the item type of the RES line: Camera or OmniCam
 
 
 @dataclass(frozen=True, slots=True)

@@ -381,11 +381,13 @@ class CameraZoom:
 class CameraZoomResult:
     """``RES {Time t} {Type Camera} {Name cam} {FOV f} {Status OK|Failed}``.
 
-    One Name/FOV/Status triple per camera.
+    One Name/FOV/Status triple per camera; ``camera_type`` is the zoomed item's type
+    (``Camera``, or ``OmniCam`` for an omnidirectional camera).
     """
 
     time: float
     cameras: tuple[CameraZoom, ...] = ()
+    camera_type: str = "Camera"
 
 
 @dataclass(frozen=True, slots=True)
@@ -833,7 +835,7 @@ def _fmt_camera_zoom(m: CameraZoomResult) -> str:
     cams = "".join(
         " {Name %s} {FOV %s} {Status %s}" % (c.name, f4(c.fov), c.status) for c in m.cameras
     )
-    return "RES {Time %s} {Type Camera}%s\r\n" % (f2(m.time), cams)
+    return "RES {Time %s} {Type %s}%s\r\n" % (f2(m.time), m.camera_type, cams)
 
 
 def _fmt_viewports(m: ViewportsResult) -> str:
@@ -1391,14 +1393,14 @@ def _parse_res(r: _Reader) -> Message:
     raw = r.raw
     time = r.req_float("Time")
     item_type = r.text("Type")
-    if item_type == "Camera" and raw.has("FOV"):
+    if item_type in ("Camera", "OmniCam") and raw.has("FOV"):
         cams = []
         for g in _groups(raw.segments, "Name"):
             gr = _Reader(RawMessage(raw.type, tuple(g)), r.what)
             cams.append(
                 CameraZoom(name=g[0].value, fov=gr.req_float("FOV"), status=gr.text("Status"))
             )
-        return CameraZoomResult(time=time, cameras=tuple(cams))
+        return CameraZoomResult(time=time, cameras=tuple(cams), camera_type=item_type)
     if item_type == "Viewports":
         views = []
         segs = raw.segments

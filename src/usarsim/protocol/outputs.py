@@ -47,7 +47,7 @@ def message_for(value, time: float | None) -> M.Message:
                               links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))
     if isinstance(v, ZoomResult):
         return M.CameraZoomResult(time=time, cameras=tuple(M.CameraZoom(n, f, status_word(ok))
-                                                           for n, f, ok in v.cameras))
+                                                           for n, f, ok in v.cameras), camera_type=v.camera_type)
     if isinstance(v, CommandResult):
         return M.Result(time=time, item_type=v.item_type, name=v.name, status=status_word(v.ok), extra=v.extra)
     return M.SensorMessage(time=time, reading=v)

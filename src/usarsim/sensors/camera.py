@@ -75,9 +75,9 @@ class Camera(CameraItem):
         if opcode.lower() not in ("zoom", "fov"):
             return None
         if not params.values or params.values[0] < 0:
-            return ZoomResult(((self.name, self.fov_rad, False),))
+            return ZoomResult(((self.name, self.fov_rad, False),), self.TYPE)
         value, ok = self.zoom(params.values[0])
-        return ZoomResult(((self.name, value, ok),))
+        return ZoomResult(((self.name, value, ok),), self.TYPE)
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
