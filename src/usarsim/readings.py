@@ -275,6 +275,15 @@ class ZoomResult:
 
 
 @dataclass(frozen=True, slots=True)
+class Refusal:
+    """A request the simulation could not carry out (``command`` its word, ``reason`` why),
+    answered with the protocol's ERROR line instead of silence."""
+
+    command: str
+    reason: str
+
+
+@dataclass(frozen=True, slots=True)
 class CommandResult:
     """The outcome of a SET on a robot's item (an RES line, protocol.md 6.5): ``ok`` and the
     item-specific typed (key, value) pairs of its :class:`OperationResult`."""

@@ -117,8 +117,9 @@ def test_wrap_2pi(a, expected):
 def test_wrap_2pi_range(a):
     r = frames.wrap_2pi(a)
     assert 0.0 <= r < 2 * math.pi
-    assert math.isclose(math.cos(r), math.cos(a), abs_tol=1e-7)
-    assert math.isclose(math.sin(r), math.sin(a), abs_tol=1e-7)
+    # the same angle, but for a hair below 2 pi that reads 0 (frames.WRAP_SNAP_RAD)
+    assert math.isclose(math.cos(r), math.cos(a), abs_tol=1e-7 + frames.WRAP_SNAP_RAD)
+    assert math.isclose(math.sin(r), math.sin(a), abs_tol=1e-7 + frames.WRAP_SNAP_RAD)
 
 
 @given(st.floats(min_value=-1e4, max_value=1e4))

@@ -478,6 +478,8 @@ GOLDEN = [
     # §6.9, §18
     (m.Die(killer="World", damage_type="Fell"), "DIE {Killer World} {DamageType Fell}"),
     (m.Stepped(time=12.34), "STEPPED {Time 12.3400}"),
+    (m.error_reply("init", "unknown start pose 'Nowhere' {known: PlayerStart1}\r\n"),
+     "ERROR {Command INIT} {Reason unknown start pose 'Nowhere' (known: PlayerStart1)}"),
     (
         m.UnknownMessage(type="ASTA", segments=(Segment("Time", "1.00"), Segment("Name", "arm"))),
         "ASTA {Time 1.00} {Name arm}",
@@ -795,10 +797,12 @@ MESSAGE_STRATEGIES = {
     ),
     m.Die: st.builds(m.Die, killer=_texts, damage_type=_texts),
     m.Stepped: st.builds(m.Stepped, time=_time4),
+    m.ErrorReply: st.builds(m.ErrorReply, command=_names.map(str.upper), reason=_texts),
     m.UnknownMessage: st.builds(
         m.UnknownMessage,
         type=_names.map(str.upper).filter(
-            lambda t: t not in {"NFO", "STA", "SEN", "GEO", "CONF", "MISSTA", "RES", "EFF", "DIE", "STEPPED"}
+            lambda t: t not in {"NFO", "STA", "SEN", "GEO", "CONF", "MISSTA", "RES", "EFF", "DIE", "STEPPED",
+                                "ERROR"}
         ),
         segments=_tuples(st.builds(Segment, _names, st.just("") | _texts), 0, 4),
     ),

@@ -89,6 +89,8 @@ __all__ = [
     "StartPose",
     "StartPoses",
     "Stepped",
+    "ErrorReply",
+    "error_reply",
     "UnknownMessage",
     "Vec3",
     "ViewportState",
@@ -440,6 +442,25 @@ class Stepped:
 
 
 @dataclass(frozen=True, slots=True)
+class ErrorReply:
+    """``ERROR {Command c} {Reason r}``: the request ``c`` (its command word) could not be
+    carried out, and why.  An extension of this project, like STEPPED: an INIT that spawns
+    nothing, a query before INIT, a bad STEP, a SET to a robot without power get it instead
+    of silence; clients that do not know it skip it as an unknown message.  The reason names
+    the problem and what is allowed; braces and line breaks in it are sent as parentheses
+    and spaces (:func:`error_reply`)."""
+
+    command: str
+    reason: str
+
+
+def error_reply(command: str, reason: str) -> ErrorReply:
+    """An :class:`ErrorReply` whose reason is safe on the wire (no braces, no line breaks)."""
+    safe = reason.replace("{", "(").replace("}", ")").replace("\r", " ").replace("\n", " ")
+    return ErrorReply(command=command.upper(), reason=" ".join(safe.split()))
+
+
+@dataclass(frozen=True, slots=True)
 class UnknownMessage:
     """A line :func:`parse_message` does not know; formatted back as it was."""
 
@@ -470,6 +491,7 @@ Message = (
     | EffecterStatus
     | Die
     | Stepped
+    | ErrorReply
     | UnknownMessage
 )
 
@@ -888,6 +910,7 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     EffecterStatus: _fmt_effecter,
     Die: lambda m: "DIE {Killer %s} {DamageType %s}\r\n" % (m.killer, m.damage_type),
     Stepped: lambda m: "STEPPED {Time %s}\r\n" % f4(m.time),
+    ErrorReply: lambda m: "ERROR {Command %s} {Reason %s}\r\n" % (m.command, m.reason),
     UnknownMessage: _fmt_unknown,
 }
 
@@ -1466,6 +1489,7 @@ _MESSAGE_PARSERS: dict[str, Callable[[_Reader], Message]] = {
     "EFF": _parse_eff,
     "DIE": lambda r: Die(killer=r.text("Killer"), damage_type=r.text("DamageType")),
     "STEPPED": lambda r: Stepped(time=r.req_float("Time")),
+    "ERROR": lambda r: ErrorReply(command=r.text("Command"), reason=r.text("Reason")),
 }
 
 

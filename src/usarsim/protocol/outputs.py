@@ -11,7 +11,7 @@ value a robot's client receives (:mod:`usarsim.readings`) into its message.
 
 from __future__ import annotations
 
-from usarsim.readings import CommandResult, EffecterState, PackageState, RobotStatus, ZoomResult
+from usarsim.readings import CommandResult, EffecterState, PackageState, Refusal, RobotStatus, ZoomResult
 
 from . import messages as M
 
@@ -50,4 +50,6 @@ def message_for(value, time: float | None) -> M.Message:
                                                            for n, f, ok in v.cameras), camera_type=v.camera_type)
     if isinstance(v, CommandResult):
         return M.Result(time=time, item_type=v.item_type, name=v.name, status=status_word(v.ok), extra=v.extra)
+    if isinstance(v, Refusal):
+        return M.error_reply(v.command, v.reason)
     return M.SensorMessage(time=time, reading=v)

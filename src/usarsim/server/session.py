@@ -28,6 +28,10 @@ log = logging.getLogger("usarsim.server")
 
 NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
 
+NO_ROBOT = "no robot on this connection: send INIT first"
+# Commands a client waits for an answer to: a malformed one is answered with an ERROR.
+ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES")
+
 
 def _r2(v: float) -> float:
     """The value as GETSTARTPOSES prints it (2 decimals), so that a pose copied from
@@ -101,7 +105,11 @@ class Session:
         try:
             cmd = C.parse_command(line)
         except ProtocolError as exc:
-            self.log_once("malformed", "ignored a malformed line (%s): %.200r", exc, line)
+            word = line.strip().split(" ", 1)[0].upper()
+            if word in ANSWERED:
+                self.refuse(word, "malformed", str(exc))
+            else:
+                self.log_once("malformed", "ignored a malformed line (%s): %.200r", exc, line)
             return
         handler = self.handlers.get(type(cmd))
         if handler is None:
@@ -116,6 +124,12 @@ class Session:
     def send(self, msg) -> None:
         self.ctx.emit(msg)
 
+    def refuse(self, command: str, kind: str, reason: str, level: int = logging.WARNING) -> None:
+        """Answer a request that cannot be carried out with ``ERROR {Command c} {Reason r}`` (the
+        client would otherwise wait for a reply that never comes), logged once per kind."""
+        self.log_once(kind, "%s refused: %s", command, reason, level=level)
+        self.send(M.error_reply(command, reason))
+
     # Handlers ------------------------------------------------------------------------
     def on_get_start_poses(self, cmd: C.GetStartPoses) -> None:
         poses = tuple(M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
@@ -124,21 +138,22 @@ class Session:
 
     def on_init(self, cmd: C.Init) -> None:
         if self.state != NEW:
-            self.log_once("init-twice", "a second INIT on the same connection is ignored (one robot per connection)")
+            self.refuse("INIT", "init-twice", "this connection has its robot already (one robot per connection: "
+                        "open another connection for another robot)")
             return
         if not cmd.class_name:
-            self.log_once("init", "INIT without ClassName ignored")
+            self.refuse("INIT", "init", "INIT needs {ClassName USARBot.<class>}")
             return
         try:
             robot = resolve_robot(cmd.class_name, extra_dirs=self.ctx.robot_dirs)
         except ConfigError as exc:
-            self.log_once("init", "INIT ignored: %s", exc)
+            self.refuse("INIT", "init", str(exc))
             return
         if cmd.start:
             pose = next((p for p in self.facade.start_poses if p.name.lower() == cmd.start.lower()), None)
             if pose is None:
                 names = ", ".join(p.name for p in self.facade.start_poses)
-                self.log_once("init", "INIT ignored: unknown start pose %r (known: %s)", cmd.start, names)
+                self.refuse("INIT", "init", f"unknown start pose {cmd.start!r} (known: {names})")
                 return
             location = tuple(_r2(v) for v in pose.location)
             rotation = tuple(_r2(v) for v in pose.rotation)
@@ -152,18 +167,18 @@ class Session:
         else:
             poses = self.facade.start_poses
             if not poses:
-                self.log_once("init", "INIT ignored: no Location and the world has no start pose")
+                self.refuse("INIT", "init", "no {Location x,y,z} and the world has no start pose")
                 return
             location = tuple(_r2(v) for v in poses[0].location)
             rotation = tuple(_r2(v) for v in poses[0].rotation)
             set_down = True
             log.info("%s: INIT without Location or Start: using start pose %s", self.ctx.peer, poses[0].name)
         if not all(math.isfinite(v) for v in (*location, *rotation)):
-            self.log_once("init", "INIT ignored: location and rotation must be finite")
+            self.refuse("INIT", "init", "location and rotation must be finite numbers")
             return
         refused = self.ctx.admit()
         if refused is not None:
-            self.log_once("init", "INIT refused: %s", refused)
+            self.refuse("INIT", "init", refused)
             return
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
@@ -178,6 +193,7 @@ class Session:
             self.state = NEW
             self.robot = None
             log.warning("%s: INIT failed: %s", self.ctx.peer, error)
+            self.send(M.error_reply("INIT", str(error)))
             return
         self.state = ALIVE
 
@@ -262,7 +278,7 @@ class Session:
 
     def on_get_geo(self, cmd: C.GetGeo) -> None:
         if self.robot is None:
-            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            self.refuse("GETGEO", "before-init-query", NO_ROBOT, level=logging.INFO)
             return
         if not cmd.type:
             self.send(M.EmptyGeometry(item_type="", name=cmd.name))
@@ -292,7 +308,7 @@ class Session:
 
     def on_get_conf(self, cmd: C.GetConf) -> None:
         if self.robot is None:
-            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            self.refuse("GETCONF", "before-init-query", NO_ROBOT, level=logging.INFO)
             return
         if not cmd.type:
             self.send(M.EmptyConfiguration(item_type="", name=cmd.name))
@@ -330,7 +346,7 @@ class Session:
         operation on a mounted item, its Params handed on typed (their numbers, and the text
         as sent for items whose parameters are text)."""
         if self.state not in (SPAWNING, ALIVE):
-            self.log_once("before-init", "commands before the robot exists are ignored", level=logging.INFO)
+            self.refuse("SET", "before-init-query", NO_ROBOT, level=logging.INFO)
             return
         t = (cmd.type or "").lower()
         if t == "joint":

@@ -27,7 +27,7 @@ from usarsim.config.world import WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.effecters import Effecter
 from usarsim.errors import ConfigError, SimulationError
-from usarsim.readings import CommandResult, ItemParams, RobotStatus, ZoomResult
+from usarsim.readings import CommandResult, ItemParams, Refusal, RobotStatus, ZoomResult
 from usarsim.robots import make_drive
 from usarsim.sensors import Sensor, make_item
 from usarsim.sim import builder, frames, joints, systems, truth
@@ -230,10 +230,11 @@ class Simulation:
         r.drive.apply(r, self.data.ctrl)
 
     def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
-                params: ItemParams | None) -> CommandResult | ZoomResult | None:
+                params: ItemParams | None) -> CommandResult | ZoomResult | Refusal | None:
         """``SET {Type} {Name} {Opcode} {Params}`` on a mounted item (protocol.md 5.4), with
         the Params typed by the protocol layer: its RES goes out first, then whatever the
-        operation reported (EFF, a SEN for SCAN); None when the robot is gone or has no power."""
+        operation reported (EFF, a SEN for SCAN); a Refusal (an ERROR line) when the robot has no
+        power; None when it is gone."""
         before = len(self.outbox)
         res = self._operate(uid, item_type, name, opcode, params or ItemParams())
         if res is not None:
@@ -241,10 +242,12 @@ class Simulation:
         return res
 
     def _operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
-                 params: ItemParams) -> CommandResult | ZoomResult | None:
+                 params: ItemParams) -> CommandResult | ZoomResult | Refusal | None:
         r = self.robots.get(uid)
-        if r is None or r.battery_empty:
+        if r is None:
             return None
+        if r.battery_empty:
+            return Refusal("SET", f"robot '{r.name}' has no power: its battery is empty")
         t = item_type or ""
         for s in r.sensors:
             if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
