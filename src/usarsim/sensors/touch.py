@@ -25,6 +25,7 @@ import numpy as np
 
 from usarsim.readings import TouchItem, TouchReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sim import frames
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
@@ -109,26 +110,56 @@ class Touch(Sensor):
         self._planes = cand[is_plane]
         self._solids = cand[~is_plane]
         self._reach = m.geom_rbound[self._solids] + self._radius
+        # the sphere's centre on its mount (a wheel or link it follows, else the chassis)
+        mount = self.item.mount
+        self._body = self.handle.body_id if mount == "HARD" else self.handle.part_body.get(mount, self.handle.body_id)
+        self._offset = frames.to_mj_vec(self.item.location)
 
-    def touching(self, view: WorldView) -> bool:
+    def _centre(self, view: WorldView) -> np.ndarray:
+        d = view.data
+        return d.xpos[self._body] + d.xmat[self._body].reshape(3, 3) @ self._offset
+
+    def touching(self, view: WorldView, near: np.ndarray | None = None, centre: np.ndarray | None = None) -> bool:
+        """Whether the sphere touches anything; ``near`` (the candidates within reach) and
+        ``centre`` when the caller has them already."""
         m, d = view.model, view.data
-        h = self.handle
-        centre, _ = h.sensor_frame(d, self.item.location, (0.0, 0.0, 0.0), self.item.mount)
+        if centre is None:
+            centre = self._centre(view)
         r = self._radius
         for g in self._planes:
             local = d.geom_xmat[g].reshape(3, 3).T @ (centre - d.geom_xpos[g])
             if local[2] <= r:
                 return True
-        if len(self._solids):
+        if near is None and len(self._solids):
             gap = np.linalg.norm(d.geom_xpos[self._solids] - centre, axis=1)
-            for g in self._solids[gap <= self._reach]:
-                local = d.geom_xmat[g].reshape(3, 3).T @ (centre - d.geom_xpos[g])
-                if signed_distance(int(m.geom_type[g]), m.geom_size[g], m.geom_aabb[g], local) <= r:
-                    return True
+            near = self._solids[gap <= self._reach]
+        for g in near if near is not None else ():
+            local = d.geom_xmat[g].reshape(3, 3).T @ (centre - d.geom_xpos[g])
+            if signed_distance(int(m.geom_type[g]), m.geom_size[g], m.geom_aabb[g], local) <= r:
+                return True
         return False
 
     def measure(self, view: WorldView) -> TouchItem:
         return TouchItem(self.name, self.touching(view))
+
+    @classmethod
+    def measure_group(cls, sensors: list[Sensor], view: WorldView) -> list[TouchItem]:
+        """Every touch sensor of a robot at once: they share their candidates (everything but
+        the robot), so the distances to all of them are one array operation."""
+        first = sensors[0]
+        if not len(first._solids):
+            return [s.measure(view) for s in sensors]
+        d = view.data
+        centres = np.array([s._centre(view) for s in sensors])
+        delta = d.geom_xpos[first._solids][None, :, :] - centres[:, None, :]
+        gap2 = np.einsum("ijk,ijk->ij", delta, delta)
+        radii = np.array([s._radius for s in sensors])
+        within = gap2 <= (first._reach[None, :] - first._radius + radii[:, None]) ** 2
+        out = []
+        for i, s in enumerate(sensors):
+            near = first._solids[within[i]]
+            out.append(TouchItem(s.name, s.touching(view, near, centres[i])))
+        return out
 
     @classmethod
     def combine(cls, parts: list[TouchItem]) -> TouchReading:
