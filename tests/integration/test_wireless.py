@@ -206,6 +206,10 @@ def wcs(radio):
         assert w.ask(f"REGISTER {name} 127.0.0.1;") == "OK;"
     yield w
     w.close()
+    # the names belong to this connection until the server has seen it close
+    cs = radio.app.wireless.comserver
+    wait_for(lambda: radio.on_loop(lambda: not any(n in cs.registered for n in STATIONS)),
+             what="the ComServer to forget the stations")
 
 
 @pytest.fixture
@@ -350,6 +354,85 @@ def test_the_wss_relay_carries_a_megabyte_both_ways_binary_safe(radio, sockets):
         pump(a, b, up, "up")
         t.join(DEFAULT_TIMEOUT)
         assert got["up"] == up and got["down"] == down
+    finally:
+        ca.close()
+        cb.close()
+
+
+def test_a_registered_name_belongs_to_its_connection_until_it_closes(radio, wcs):
+    """REGISTER of a name another connection holds fails, whatever the address (USARSim's
+    ComServer; protocol.md 12.1): no controller takes over another's robot.  The name is
+    free again once its connection closes, and its LISTEN entries go with it."""
+    cs = radio.app.wireless.comserver
+    other = Wcs(cs.port)
+    try:
+        assert other.ask("REGISTER A0 127.0.0.1;") == "Fail: Robot with name A0 already registered;"
+        assert other.ask("register A0 10.9.9.9;") == "Fail: Robot with name A0 already registered;"
+        assert wcs.ask("REGISTER A0 127.0.0.1;") == "OK;"  # the holder saying it again
+        assert other.ask("REGISTER Roamer 127.0.0.1;") == "OK;"
+        assert other.ask("LISTEN Roamer 4000;") == "OK;"
+        assert wcs.ask("REGISTER Roamer 127.0.0.1;") == "Fail: Robot with name Roamer already registered;"
+    finally:
+        other.close()
+    wait_for(lambda: radio.on_loop(lambda: "Roamer" not in cs.registered), what="the ComServer to forget Roamer")
+    again = Wcs(cs.port)
+    try:
+        assert again.ask("REGISTER Roamer 127.0.0.1;") == "OK;"  # the robot reconnected
+        assert again.ask("OPEN A0 4001 Roamer 4000;") == "Fail: Roamer not listening on port 4000;"
+        assert wcs.ask("REGISTER Roamer 127.0.0.1;") == "Fail: Robot with name Roamer already registered;"
+    finally:
+        again.close()
+
+
+def test_reversedns_names_the_caller_at_once_after_accept(radio, sockets):
+    """The receiver asks REVERSEDNS with the peer port of the connection it has just
+    accepted, before anything was sent: the WSS knows that port before the connection can
+    be seen (it used to answer UnknownOrIllegalPort about one time in two)."""
+    la, lb = sockets(listener(), listener())
+    ca, cb, relay = wss_dns(radio, "A0", "B0", la, lb)
+    try:
+        for attempt in range(30):
+            a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
+            b, peer = lb.accept()
+            try:
+                assert cb.ask(f"REVERSEDNS {{Port {peer[1]}}}", "REVERSEDNSREPLY").text == \
+                    f"REVERSEDNSREPLY {{Port {peer[1]}}} {{Robot A0}}", attempt
+            finally:
+                a.close()
+                b.close()
+    finally:
+        ca.close()
+        cb.close()
+
+
+def test_wss_init_accepts_port_0_as_no_listening_port(radio, sockets):
+    """``INIT {Robot r} {Port 0,...}`` is accepted, as by the reference WSS, which reads the
+    list as unsigned integers (protocol.md 12.2).  0 is no port a robot listens on: DNS
+    skips it for the default port, and a robot that declared only 0 is not listening."""
+    wss = radio.app.wireless.wss
+    lb = sockets(listener())
+    wait_for(lambda: radio.on_loop(lambda: "A0" not in wss.robots and "B0" not in wss.robots),
+             what="the WSS to forget")
+    ca, cb = Client(wss.port), Client(wss.port)
+    try:
+        assert ca.ask("INIT {Robot A0} {Port 0}", "INITREPLY").text == "INITREPLY {Status OK}"
+        assert cb.ask(f"INIT {{Robot B0}} {{Port 0,{port_of(lb)}}}", "INITREPLY").text == "INITREPLY {Status OK}"
+        # to A0, which listens on no port
+        for line in ("DNS {Robot A0}", "DNS {Robot A0} {Port 0}"):
+            assert cb.ask(line, "DNSREPLY").text == \
+                "DNSREPLY {Robot A0} {Port -1} {Error RobotDoesNotListenOnThisPort}", line
+        # to B0: its first port that is not 0, also when asked {Port 0} (the default)
+        relay = int(segments(ca.ask("DNS {Robot B0}", "DNSREPLY").text)["Port"])
+        assert relay > 0
+        assert ca.ask("DNS {Robot B0} {Port 0}", "DNSREPLY").text == f"DNSREPLY {{Robot B0}} {{Port {relay}}}"
+        assert ca.ask(f"DNS {{Robot B0}} {{Port {port_of(lb)}}}", "DNSREPLY").text == \
+            f"DNSREPLY {{Robot B0}} {{Port {relay}}}"
+        a = sockets(socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT))
+        b, _ = lb.accept()
+        sockets(b)
+        b.settimeout(DEFAULT_TIMEOUT)
+        a.sendall(b"from a robot on port 0")
+        assert recv_exact(b, 22) == b"from a robot on port 0"
     finally:
         ca.close()
         cb.close()

@@ -42,7 +42,7 @@ WCS_REPLIES = st.one_of(st.just(w.WcsOk()), st.builds(w.WcsSignal, CENTI_DBM),
 UPPER_WORD = st.from_regex(r"X[A-Z0-9]{0,8}", fullmatch=True)  # never a known request word
 SEGMENTS = st.lists(st.builds(Segment, WORD, st.one_of(st.just(""), VALUE)), max_size=3).map(tuple)
 WSS_REQUESTS = st.one_of(
-    st.builds(w.WssInit, VALUE, st.lists(PORT, max_size=4).map(tuple)),
+    st.builds(w.WssInit, VALUE, st.lists(st.integers(0, 65535), max_size=4).map(tuple)),  # 0: not listening
     st.builds(w.WssGetSS, VALUE),
     st.builds(w.WssDns, VALUE, st.one_of(st.none(), PORT)),
     st.builds(w.WssReverseDns, PORT),
@@ -320,13 +320,19 @@ def test_wss_requests_parse_and_format_exactly(line, req):
 @pytest.mark.parametrize("line, req", [
     ("init {robot A0} {port 5, 6 ,7}", w.WssInit("A0", (5, 6, 7))),
     ("INIT {Robot A0} {Port 5,,6,}", w.WssInit("A0", (5, 6))),
+    # the reference WSS reads INIT's list as unsigned integers: 0 is accepted (protocol.md 12.2)
+    ("INIT {Robot r} {Port 0}", w.WssInit("r", (0,))),
+    ("INIT {Robot r} {Port 0,5}", w.WssInit("r", (0, 5))),
+    ("INIT {Robot r} {Port 65536}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
+    ("INIT {Robot r} {Port -1}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
+    ("DNS {Robot B0} {Port 0}", w.WssDns("B0")),  # 0: the default port, as the reference reads it
     ("INIT {Robot H1} {Port a,b}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
     ("INIT {Robot} {Port 1}", w.WssInvalid("INIT", w.REASON_EMPTY_NAME)),
     ("INIT {Port x}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),  # the ports are checked first
     ("GETSS {Robot}", w.WssInvalid("GETSS", w.REASON_EMPTY_NAME)),
     ("GETSS", w.WssInvalid("GETSS", w.REASON_EMPTY_NAME)),
     ("DNS {Robot H2} {Port x}", w.WssInvalid("DNS", w.REASON_PORT_NOT_INTEGER)),
-    ("DNS {Port 0}", w.WssInvalid("DNS", w.REASON_PORT_NOT_INTEGER)),
+    ("DNS {Port 0}", w.WssInvalid("DNS", w.REASON_EMPTY_NAME)),  # port 0 is valid (the default)
     ("DNS {Port 7}", w.WssInvalid("DNS", w.REASON_EMPTY_NAME)),
     ("REVERSEDNS {Port -3}", w.WssInvalid("REVERSEDNS", w.REASON_PORT_NOT_INTEGER)),
     ("REVERSEDNS", w.WssInvalid("REVERSEDNS", w.REASON_PORT_NOT_INTEGER)),
@@ -341,7 +347,7 @@ def test_malformed_wss_lines_raise_protocol_error(line):
         w.parse_wss_request(line)
 
 
-@pytest.mark.parametrize("req", [w.WssGetSS("a}"), w.WssGetSS(" a"), w.WssDns("", 5), w.WssInit("A", (0,)),
+@pytest.mark.parametrize("req", [w.WssGetSS("a}"), w.WssGetSS(" a"), w.WssDns("", 5), w.WssInit("A", (70000,)),
                                  w.WssReverseDns(70000), w.WssUnknown("A B")])
 def test_wss_requests_that_cannot_be_read_back_are_not_formatted(req):
     with pytest.raises(ProtocolError):

@@ -20,20 +20,23 @@ def shorten(text: str) -> str:
     return repr(text if len(text) <= _SHOWN else text[:_SHOWN] + "...")
 
 
-def parse_port(text: str, what: str = "port") -> int:
-    """A TCP port 1-65535 written in ASCII digits (blanks around it allowed); anything else
-    raises :class:`~usarsim.errors.ProtocolError` naming ``what``."""
+def parse_port(text: str, what: str = "port", *, zero: bool = False) -> int:
+    """A TCP port 1-65535 (0-65535 with ``zero``, where the protocol gives 0 a meaning)
+    written in ASCII digits (blanks around it allowed); anything else raises
+    :class:`~usarsim.errors.ProtocolError` naming ``what``."""
     t = text.strip()
-    if t.isascii() and t.isdigit() and len(t) <= 5 and 0 < int(t) <= MAX_PORT:
+    low = 0 if zero else 1
+    if t.isascii() and t.isdigit() and len(t) <= 5 and low <= int(t) <= MAX_PORT:
         return int(t)
-    raise ProtocolError(f"{what} must be a TCP port 1 to {MAX_PORT}, got {shorten(text)}")
+    raise ProtocolError(f"{what} must be a TCP port {low} to {MAX_PORT}, got {shorten(text)}")
 
 
-def check_port(port: int, what: str = "port") -> str:
-    """``port`` written for a client to send, when it is a TCP port 1-65535; otherwise
-    :class:`~usarsim.errors.ProtocolError`."""
-    if isinstance(port, bool) or not isinstance(port, int) or not 0 < port <= MAX_PORT:
-        raise ProtocolError(f"cannot send {what} {port!r}: it must be a TCP port 1 to {MAX_PORT}")
+def check_port(port: int, what: str = "port", *, zero: bool = False) -> str:
+    """``port`` written for a client to send, when it is a TCP port 1-65535 (or 0, with
+    ``zero``); otherwise :class:`~usarsim.errors.ProtocolError`."""
+    low = 0 if zero else 1
+    if isinstance(port, bool) or not isinstance(port, int) or not low <= port <= MAX_PORT:
+        raise ProtocolError(f"cannot send {what} {port!r}: it must be a TCP port {low} to {MAX_PORT}")
     return str(port)
 
 

@@ -109,7 +109,8 @@ _CRLF = "\r\n"
 @dataclass(frozen=True, slots=True)
 class WssInit:
     """``INIT {Robot r} {Port p,...}``: this connection is robot ``robot``, which accepts
-    connections on ``ports`` (the first is the one DNS gives by default)."""
+    connections on ``ports`` (the first is the one DNS gives by default).  A port 0 in the
+    list, which the reference WSS accepts, is no listening port: the WSS skips it."""
 
     type: ClassVar[str] = "INIT"
     robot: str
@@ -127,7 +128,7 @@ class WssGetSS:
 @dataclass(frozen=True, slots=True)
 class WssDns:
     """``DNS {Robot r} [{Port p}]``: the relay port that reaches ``robot`` on ``port``
-    (None: its first declared port)."""
+    (None: its first declared port; ``{Port 0}`` reads as None)."""
 
     type: ClassVar[str] = "DNS"
     robot: str
@@ -167,11 +168,14 @@ def _robot(raw: RawMessage) -> str:
 
 
 def _parse_init(raw: RawMessage) -> WssRequest:
+    # Port 0 is accepted in INIT's list, as the reference WSS reads the list as unsigned
+    # integers (protocol.md 12.2): controllers that only connect out send {Port 0}.  It is
+    # kept here as sent; to the server 0 is no listening port (see WssServer.dns).
     ports = []
     for p in (raw.get("Port") or "").replace(" ", "").split(","):
         if p:
             try:
-                ports.append(parse_port(p))
+                ports.append(parse_port(p, zero=True))
             except ProtocolError:
                 return WssInvalid("INIT", REASON_PORTS_NOT_INTEGER)
     name = _robot(raw)
@@ -186,10 +190,12 @@ def _parse_getss(raw: RawMessage) -> WssRequest:
 
 
 def _parse_dns(raw: RawMessage) -> WssRequest:
+    # {Port 0} asks for the default port, as no Port at all: the reference WSS reads 0 as
+    # "not given" (protocol.md 12.2)
     port = None
     if raw.has("Port"):
         try:
-            port = parse_port(raw.get("Port") or "")
+            port = parse_port(raw.get("Port") or "", zero=True) or None
         except ProtocolError:
             return WssInvalid("DNS", REASON_PORT_NOT_INTEGER)
     name = _robot(raw)
@@ -229,7 +235,7 @@ def format_wss_request(req: WssRequest) -> str:
     if isinstance(req, WssInit):
         parts = ["INIT", format_segment("Robot", check_value(req.robot, "robot name"))]
         if req.ports:
-            parts.append(format_segment("Port", ",".join(check_port(p) for p in req.ports)))
+            parts.append(format_segment("Port", ",".join(check_port(p, zero=True) for p in req.ports)))
     elif isinstance(req, WssGetSS):
         parts = ["GETSS", format_segment("Robot", check_value(req.robot, "robot name"))]
     elif isinstance(req, WssDns):

@@ -153,6 +153,10 @@ class WcsConnection(WirelessConnection):
     def __init__(self, server):
         super().__init__(server)
         self._commands = CommandSplitter(MAX_COMMAND_BYTES)
+        self.robots: set[str] = set()  # the names this connection REGISTERed
+
+    def closed(self) -> None:
+        self.owner.unregister(self)
 
     def split(self, data: bytes) -> list[str]:
         before = self._commands.dropped_commands
@@ -175,7 +179,7 @@ class WcsConnection(WirelessConnection):
             return FAIL_UNKNOWN_MESSAGE
         srv: ComServer = self.owner
         if isinstance(cmd, WcsRegister):
-            return srv.register(cmd.name, cmd.ip)
+            return srv.register(cmd.name, cmd.ip, self)
         if isinstance(cmd, WcsListen):
             return srv.listen(cmd.name, cmd.port)
         if isinstance(cmd, WcsOpen):
@@ -192,6 +196,7 @@ class ComServer(WirelessServer):
                  max_connections: int = MAX_CONNECTIONS):
         super().__init__(service, host, port, max_connections)
         self.registered: dict[str, str] = {}  # robot name -> the IP its client listens on
+        self.holders: dict[str, WcsConnection | None] = {}  # robot name -> the connection that registered it
         self.listening: dict[tuple[str, int], None] = {}  # (robot, port) waiting for a link, in order
         self.links: set[WcsLink] = set()
         service.subscribers.append(self._on_pair)
@@ -208,16 +213,39 @@ class ComServer(WirelessServer):
             link.close(f"signal below the cutoff at t={time:.3f}")
 
     # commands ---------------------------------------------------------------------------
-    def register(self, name: str, ip: str) -> WcsReply:
+    def register(self, name: str, ip: str, conn: WcsConnection | None = None) -> WcsReply:
+        """REGISTER name ip from ``conn``.  A name belongs to the connection that registered
+        it until that connection closes: from any other connection, whatever the address,
+        REGISTER of it fails as in USARSim's ComServer (``Fail: Robot with name <n> already
+        registered;``, protocol.md 12.1), so that no controller takes over another's robot.
+        The holder saying it again with the same address is answered ``OK;``."""
         known = self.registered.get(name)
-        if known is not None and known != ip:
+        if known is not None:
+            if self.holders.get(name) is conn and known == ip:
+                return _OK
             return WcsFail.already_registered(name)
-        if known is None and len(self.registered) >= MAX_REGISTERED:
+        if len(self.registered) >= MAX_REGISTERED:
             log.warning("comserver: REGISTER %.80s refused: %d robots registered already", name, MAX_REGISTERED)
             return FAIL_TOO_MANY_REGISTERED
         self.registered[name] = ip
+        self.holders[name] = conn
+        if conn is not None:
+            conn.robots.add(name)
         self.service.event("comserver: %s registered at %s", name, ip)
         return _OK
+
+    def unregister(self, conn: WcsConnection) -> None:
+        """``conn`` closed: the names it registered are free again, and their LISTEN entries
+        go with them (links already open keep running on their own sockets)."""
+        gone = {name for name in conn.robots if self.holders.get(name) is conn}
+        conn.robots.clear()
+        if not gone:
+            return
+        for name in gone:
+            del self.registered[name]
+            del self.holders[name]
+        self.listening = {key: None for key in self.listening if key[0] not in gone}
+        self.service.event("comserver: %s unregistered (connection closed)", ", ".join(sorted(gone)))
 
     def listen(self, name: str, port: int) -> WcsReply:
         if name not in self.registered:
@@ -252,6 +280,11 @@ class ComServer(WirelessServer):
                 svc.event("comserver: %s - %s out of range (%s)", a, b, "no such robot" if ln is None else
                           f"{ln.signal_dbm:.2f} dBm, {ln.walls} walls, {ln.distance_m:.2f} m")
                 return WcsFail.cannot_connect(b)
+            # a robot's registration ends with its connection, which may close meanwhile
+            if (b, pb) not in self.listening:
+                return WcsFail.not_listening(b, pb)
+            if a not in self.registered:
+                return WcsFail.not_registered(a)
             ends = await self._connect((a, self.registered[a], pa), (b, self.registered[b], pb))
             if ends is None:
                 return FAIL_NO_CONNECTION

@@ -98,7 +98,8 @@ class Pipe:
         self.sock = sock  # the accepted connection, until its transport takes it
         self.ends: list[_PipeEnd] = []
         self.closed = False
-        self.out_port = 0
+        self.out_sock: socket.socket | None = None  # the socket to the destination, while it connects
+        self.out_port = 0  # its local port: the peer port the destination sees
 
     async def start(self, dst_ip: str, dst_port: int) -> None:
         loop = asyncio.get_running_loop()
@@ -111,10 +112,27 @@ class Pipe:
         if self.closed:
             src.transport.close()
             return
+        # The server's own socket to the destination is bound first and its port recorded
+        # in ``outgoing`` before it connects: the destination may accept the connection and
+        # ask REVERSEDNS with its peer port before this coroutine runs again, and must then
+        # be told who is calling (protocol.md 12.2).
         try:
-            dst_t, dst = await asyncio.wait_for(loop.create_connection(lambda: _PipeEnd(self), dst_ip, dst_port),
-                                                CONNECT_TIMEOUT_S)
+            sock = self._bound_socket(dst_ip)
+        except OSError as exc:
+            self.port.server.service.event("wss: no socket to connect to %s: %s", self.port.dst, exc)
+            self.close()
+            return
+        self.out_sock = sock
+        self.out_port = sock.getsockname()[1]
+        self.port.server.outgoing[self.out_port] = self
+        try:
+            await asyncio.wait_for(loop.sock_connect(sock, (dst_ip, dst_port)), CONNECT_TIMEOUT_S)
+            if self.closed:
+                return
+            self.out_sock = None  # the transport takes it
+            dst_t, dst = await loop.create_connection(lambda: _PipeEnd(self), sock=sock)
         except (TimeoutError, OSError) as exc:
+            sock.close()
             self.port.server.service.event("wss: cannot connect to %s at %s:%d: %s", self.port.dst, dst_ip,
                                            dst_port, exc)
             self.close()
@@ -123,11 +141,21 @@ class Pipe:
         if self.closed:
             dst_t.close()
             return
-        self.out_port = dst_t.get_extra_info("sockname")[1]
-        self.port.server.outgoing[self.out_port] = self.port
         src.peer, dst.peer = dst, src
         src.transport.resume_reading()
         dst_t.resume_reading()
+
+    @staticmethod
+    def _bound_socket(ip: str) -> socket.socket:
+        """A non-blocking TCP socket for ``ip``'s family, bound to a port of its own."""
+        sock = socket.socket(socket.AF_INET6 if ":" in ip else socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            sock.setblocking(False)
+            sock.bind(("", 0))
+        except OSError:
+            sock.close()
+            raise
+        return sock
 
     def close(self) -> None:
         if self.closed:
@@ -135,12 +163,15 @@ class Pipe:
         self.closed = True
         if not self.ends:
             self.sock.close()
+        if self.out_sock is not None:
+            self.out_sock.close()
+            self.out_sock = None
         for end in self.ends:
             if end.transport is not None:
                 end.transport.close()
         self.port.pipes.discard(self)
-        if self.out_port:
-            self.port.server.outgoing.pop(self.out_port, None)
+        if self.port.server.outgoing.get(self.out_port) is self:
+            del self.port.server.outgoing[self.out_port]
 
 
 class RelayPort:
@@ -290,9 +321,11 @@ class WssConnection(LineConnection):
         srv: WssServer = self.owner
         if req.robot in srv.robots:
             return WssError(REASON_ROBOT_EXISTS)
-        self.robot = WssRobot(req.robot, self.ip, req.ports, self)
+        # 0 in the list (accepted, protocol.md 12.2) is not a listening port: see dns()
+        ports = tuple(dict.fromkeys(p for p in req.ports if p))
+        self.robot = WssRobot(req.robot, self.ip, ports, self)
         srv.robots[req.robot] = self.robot
-        srv.service.event("wss: %s registered at %s, ports %s", req.robot, self.ip, list(req.ports))
+        srv.service.event("wss: %s registered at %s, ports %s", req.robot, self.ip, list(ports))
         return WssInitReply()
 
 
@@ -307,7 +340,7 @@ class WssServer(WirelessServer):
         self.robots: dict[str, WssRobot] = {}
         self.ports: dict[tuple[str, str, int], RelayPort] = {}
         self.by_number: dict[int, RelayPort] = {}
-        self.outgoing: dict[int, RelayPort] = {}  # the server's own end of each pipe -> its relay port
+        self.outgoing: dict[int, Pipe] = {}  # the local port of the server's own end of each pipe -> the pipe
         self.tasks: set[asyncio.Task] = set()  # pipes being connected
         service.subscribers.append(self._on_pair)
 
@@ -351,7 +384,15 @@ class WssServer(WirelessServer):
             return WssDnsReply(other, -1, DNS_NO_ROBOT)
         if req.port is not None and req.port not in dst.ports:
             return WssDnsReply(other, -1, DNS_NOT_LISTENING)
-        port = await self.relay_port(me, other, req.port or (dst.ports[0] if dst.ports else 0))
+        # Port 0 in an INIT list (accepted as the reference WSS does, protocol.md 12.2) is no
+        # port a robot listens on: dst.ports holds only the others, and the default port is
+        # the first of them.  A robot that declared none (only 0, or no Port) gets
+        # RobotDoesNotListenOnThisPort at once, where the reference would hand out a relay
+        # port whose every connection it closes (it would connect to port 0).
+        dst_port = req.port or (dst.ports[0] if dst.ports else 0)
+        if not dst_port:
+            return WssDnsReply(other, -1, DNS_NOT_LISTENING)
+        port = await self.relay_port(me, other, dst_port)
         return WssError(REASON_NO_RELAY_PORT) if port is None else WssDnsReply(other, port)
 
     async def relay_port(self, src: str, dst: str, dst_port: int) -> int | None:
@@ -393,9 +434,9 @@ class WssServer(WirelessServer):
     def reverse_dns(self, me: str, port: int) -> str | None:
         """The robot at the other end of ``port``: the server's end of a pipe into ``me``
         (the peer port of a connection ``me`` accepted), or a relay port of ``me``."""
-        rp = self.outgoing.get(port)
-        if rp is not None and rp.dst == me:
-            return rp.src
+        pipe = self.outgoing.get(port)
+        if pipe is not None and pipe.port.dst == me:
+            return pipe.port.src
         rp = self.by_number.get(port)
         if rp is not None and me in (rp.src, rp.dst):
             return rp.dst if rp.src == me else rp.src
