@@ -25,4 +25,12 @@ fi
 # The house style (pyproject.toml [tool.ruff]): a finding fails the run before any test.
 "$USARSIM_PYTHON" -m ruff check src tests tools examples
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
+# The virtual environment's bin folder first on PATH, as '. .venv/bin/activate' would put it, so
+# that the tests find the 'usarsim' console script pip installed there (a Python that is no
+# virtual environment installs it on PATH already).
+venv_bin="$(dirname "$USARSIM_PYTHON")"
+if [[ "$USARSIM_PYTHON" == */* && -f "$venv_bin/../pyvenv.cfg" ]]; then
+  PATH="$(cd "$venv_bin" && pwd):$PATH"
+  export PATH
+fi
 exec "$USARSIM_PYTHON" -m pytest -q "$@"

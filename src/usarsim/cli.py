@@ -47,6 +47,52 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+# The ports ``usarsim serve`` listens on when none is given, by option; ``--port-offset N``
+# adds N to each (a second server beside the first needs nothing else).
+DEFAULT_PORTS = {"port": 3000, "truth_port": 3989, "image_port": 5003, "web_port": 8080,
+                 "wcs_port": 5874, "wss_port": 50000, "cominterface_port": 7435}
+
+
+def resolve_ports(given: dict[str, int | None], offset: int = 0,
+                  from_file: dict[str, int | None] | None = None) -> dict[str, int]:
+    """Every listener's port: the one given on the command line, else the one of the
+    --wireless-config file (ComServer, ComServerInterface), else the default plus ``offset``.
+    A port given explicitly (0 included) keeps its value.  ValueError names the option whose
+    default the offset puts beyond 65535 (or below 1)."""
+    from_file = from_file or {}
+    ports = {}
+    for name, default in DEFAULT_PORTS.items():
+        value = given.get(name)
+        if value is None:
+            value = from_file.get(name)
+        if value is None:
+            value = default + offset
+            if not 1 <= value <= 65535:
+                option = "--" + name.replace("_", "-")
+                raise ValueError(f"--port-offset {offset} puts the default of {option} ({default}) at {value}, "
+                                 "outside 1..65535")
+        ports[name] = value
+    return ports
+
+
+def _port_offset(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number 0..{65535 - 50000}, got {text!r}") from None
+    if not 0 <= v <= 65535 - 50000:
+        raise argparse.ArgumentTypeError(f"expected a number 0..{65535 - 50000} (the WSS port is 50000 + N), "
+                                         f"got {text!r}")
+    return v
+
+
+_VERBOSE_HELP = "more log output: -v logs connections, spawns and removals, -vv everything (debug)"
+
+
+def _add_verbose(parser: argparse.ArgumentParser, dest: str) -> None:
+    parser.add_argument("-v", "--verbose", action="count", default=0, dest=dest, help=_VERBOSE_HELP)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from usarsim.config.world import WIRELESS_MODELS
 
@@ -56,7 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "connect on TCP port 3000 and drive simulated robots unmodified.",
         epilog="Run 'usarsim COMMAND --help' for the options of a command.")
     p.add_argument("--version", action="version", version=f"usarsim {__version__}")
-    p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)")
+    _add_verbose(p, "verbose")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
 
     s = sub.add_parser("serve", help="run the simulator and its servers",
@@ -66,7 +112,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default: %(default)s, this machine only; 0.0.0.0 exposes the "
                         "simulator to the network)")
-    s.add_argument("--port", type=_port, default=3000, help="control port (default: %(default)s; 0 picks a free port)")
+    s.add_argument("--port", type=_port, default=None, help="control port (default: 3000; 0 picks a free port)")
+    s.add_argument("--port-offset", type=_port_offset, default=0, metavar="N",
+                   help="add N to the default of every port (control 3000, ground truth 3989, image 5003, web "
+                        "8080, ComServer 5874, WSS 50000, ComServerInterface 7435), to run a second server beside "
+                        "the first: --port-offset 100 listens on 3100, 4089...; a port given explicitly keeps its "
+                        "value (default: %(default)s)")
     s.add_argument("--seed", type=int, default=0, help="seed of every random generator (default: %(default)s)")
     s.add_argument("--speed", type=_speed, default=1.0, metavar="FACTOR|max",
                    help="simulated seconds per wall-clock second: 1 is real time (default), 4 runs four times "
@@ -93,11 +144,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-web-connections", type=int, default=64, metavar="N",
                    help="open connections at most on the web console port; a request beyond them is answered "
                         "503 and logged (default: %(default)s)")
-    s.add_argument("--truth-port", type=_port, default=3989,
-                   help="ground-truth service port (default: %(default)s; 0 picks a free port): "
+    s.add_argument("--truth-port", type=_port, default=None,
+                   help="ground-truth service port (default: 3989; 0 picks a free port): "
                         "'{Class c} {Name n}' -> where every matching robot, victim, tag... is")
-    s.add_argument("--image-port", type=_port, default=5003,
-                   help="image server port (default: %(default)s; 0 picks a free port): clients send 'OK' for a "
+    s.add_argument("--image-port", type=_port, default=None,
+                   help="image server port (default: 5003; 0 picks a free port): clients send 'OK' for a "
                         "picture of the MultiView or of the robot camera bound to them")
     s.add_argument("--no-image", action="store_true", help="do not serve pictures (no image server, no rendering)")
     s.add_argument("--image-type", default="normal", choices=["raw", "superb", "good", "normal", "fair", "bad"],
@@ -119,8 +170,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--wcs-port", type=_port, default=None, metavar="P",
                    help="wireless ComServer port (default: 5874, or ListenPort of --wireless-config; 0 picks a "
                         "free port): REGISTER, LISTEN, OPEN, GETSS; links relayed while the radio signal holds")
-    s.add_argument("--wss-port", type=_port, default=50000, metavar="P",
-                   help="Wireless Simulation Server control port (default: %(default)s; 0 picks a free port): "
+    s.add_argument("--wss-port", type=_port, default=None, metavar="P",
+                   help="Wireless Simulation Server control port (default: 50000; 0 picks a free port): "
                         "INIT, GETSS, DNS, REVERSEDNS and relay ports per robot pair")
     s.add_argument("--cominterface-port", type=_port, default=None, metavar="P",
                    help="ComServerInterface port (default: 7435, or iListenPort of --wireless-config; 0 picks a "
@@ -138,21 +189,25 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--robot-dir", action="append", default=[], metavar="DIR",
                    help="a folder of robot files of your own (one YAML file per class, named after the class); "
                         "clients INIT them by class name like the shipped robots; may be repeated")
-    s.add_argument("--web-port", type=_port, default=8080, metavar="P",
-                   help="operator console port (default: %(default)s; 0 picks a free port): open "
+    s.add_argument("--web-port", type=_port, default=None, metavar="P",
+                   help="operator console port (default: 8080; 0 picks a free port): open "
                         "http://HOST:P/ in a browser to watch the world, spawn and drive robots with their video "
                         "and sensors, and send any command")
     s.add_argument("--no-web", action="store_true", help="do not serve the operator console")
 
     v = sub.add_parser("validate", help="check a world, robot, RNDF or MDF file",
-                       description="Load a world or robot file, build its MuJoCo model and print a one-line "
+                       description="Load a world or robot file (or a shipped world or robot class by name, "
+                                   "as 'usarsim worlds' and 'usarsim robots' list them), build its MuJoCo model "
+                                   "and print a one-line "
                                    "summary, or the error with the file, the key and what is allowed. A DARPA "
                                    "route network (.rndf) or mission (.mdf) file is checked the same way (an MDF "
                                    "against the RNDF beside it); its errors name the line.")
-    v.add_argument("path", help="path of a .yaml world or robot file, or of a .rndf or .mdf file")
+    v.add_argument("path", metavar="PATH|NAME",
+                   help="path of a .yaml world or robot file, or of a .rndf or .mdf file; or the name of a "
+                        "shipped world (DM-USAR_yellow) or robot class (P2AT)")
 
-    sub.add_parser("worlds", help="list the worlds that come with usarsim")
-    sub.add_parser("robots", help="list the robot classes that come with usarsim")
+    w = sub.add_parser("worlds", help="list the worlds that come with usarsim")
+    r = sub.add_parser("robots", help="list the robot classes that come with usarsim")
 
     b = sub.add_parser("bench", help="measure the real-time factor with N robots",
                        description="Spawn N P2ATs with their full sensor kit, each driven by its own TCP client "
@@ -168,6 +223,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
                    help="with --cameras: picture sizes (default: 320x240 640x480)")
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
+    for command in (s, v, w, r, b):  # -v and -vv after the command too: 'usarsim serve -v'
+        _add_verbose(command, "verbose_after")
     return p
 
 
@@ -204,8 +261,6 @@ def cmd_serve(args) -> int:
     except UsarsimError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
-    if args.verbose == 0:
-        logging.getLogger("usarsim").setLevel(logging.INFO)
     for d in args.robot_dir:
         if not os.path.isdir(d):
             print(f"usarsim: error: --robot-dir {d}: no such folder", file=sys.stderr)
@@ -226,9 +281,8 @@ def cmd_serve(args) -> int:
                           wide_mode=max(0, args.multiview_columns), tile_width=args.multiview_tile[0],
                           tile_height=args.multiview_tile[1], frame_skip=max(0, args.frame_skip),
                           max_fps=args.max_fps)
-    wireless = None
+    wireless = wfile = None
     if not args.no_wireless:
-        from usarsim.server.wireless import INTERFACE_PORT, WCS_PORT, WirelessOptions
         from usarsim.sim.radio import load_wireless_file, resolve_model
 
         try:
@@ -238,20 +292,26 @@ def cmd_serve(args) -> int:
         except UsarsimError as exc:
             print(f"usarsim: error: {exc}", file=sys.stderr)
             return 1
-
-        def port_of(given, from_file, default):
-            return given if given is not None else from_file if from_file is not None else default
+    try:
+        ports = resolve_ports({name: getattr(args, name) for name in DEFAULT_PORTS}, args.port_offset,
+                              {"wcs_port": wfile.listen_port, "cominterface_port": wfile.interface_port}
+                              if wfile is not None else None)
+    except ValueError as exc:
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
+    if not args.no_wireless:
+        from usarsim.server.wireless import WirelessOptions
 
         wireless = WirelessOptions(
-            wcs_port=port_of(args.wcs_port, wfile and wfile.listen_port, WCS_PORT), wss_port=args.wss_port,
-            interface_port=port_of(args.cominterface_port, wfile and wfile.interface_port, INTERFACE_PORT),
+            wcs_port=ports["wcs_port"], wss_port=ports["wss_port"], interface_port=ports["cominterface_port"],
             model=args.wireless_model, config=layer, debug=bool(wfile and wfile.debug),
             max_connections=max(1, args.max_wireless_connections))
-    app = Application(world, host=args.host, port=args.port, seed=args.seed, speed=args.speed,
+    control_port = ports["port"]
+    app = Application(world, host=args.host, port=control_port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
-                      robot_dirs=tuple(args.robot_dir), truth_port=args.truth_port,
-                      image_port=None if args.no_image else args.image_port, image=image, wireless=wireless,
-                      web_port=None if args.no_web else args.web_port, max_robots=args.max_robots,
+                      robot_dirs=tuple(args.robot_dir), truth_port=ports["truth_port"],
+                      image_port=None if args.no_image else ports["image_port"], image=image, wireless=wireless,
+                      web_port=None if args.no_web else ports["web_port"], max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections))
 
@@ -265,7 +325,7 @@ def cmd_serve(args) -> int:
         try:
             await app.start()
         except OSError as exc:
-            which = getattr(exc, "usarsim_listener", f"the control port {args.port} (--port)")
+            which = getattr(exc, "usarsim_listener", f"the control port {control_port} (--port)")
             print(f"usarsim: error: cannot listen on {args.host}, {which}: {exc.strerror}", file=sys.stderr)
             raise SystemExit(1) from exc
         for service, host, port in app.listeners():
@@ -287,21 +347,42 @@ def cmd_serve(args) -> int:
     return 0
 
 
+def validate_target(text: str) -> str:
+    """What ``usarsim validate`` checks: ``text`` itself when it is a file (or looks like a
+    path), else the shipped world or robot class of that name (any case; ``USARBot.P2AT``
+    too), as ``serve --world`` and INIT find them."""
+    from usarsim.config.catalog import robot_files, world_files
+    from usarsim.config.reader import did_you_mean
+    from usarsim.errors import ConfigError
+
+    p = Path(text)
+    if p.exists() or p.suffix.lower() in (".yaml", ".yml", ".rndf", ".mdf") or os.sep in text:
+        return text
+    bare = text.split(".", 1)[1] if text.lower().startswith("usarbot.") else text
+    for name, files in ((text, world_files()), (bare, robot_files())):
+        for stem, path in files.items():
+            if stem.lower() == name.lower():
+                return str(path)
+    known = {**world_files(), **robot_files()}
+    raise ConfigError(f"'{text}' is no file, shipped world or robot class{did_you_mean(bare, known)}")
+
+
 def cmd_validate(args) -> int:
     from usarsim.config.catalog import file_kind
     from usarsim.errors import UsarsimError
 
     try:
-        kind = file_kind(args.path)
+        path = validate_target(args.path)
+        kind = file_kind(path)
         if kind in ("rndf", "mdf"):
             from usarsim.config.rndf import describe_route_file
 
-            print(describe_route_file(args.path))
+            print(describe_route_file(path))
         elif kind == "world":
             from usarsim.config.world import check_world_file
             from usarsim.sim.simulation import Simulation
 
-            w = check_world_file(args.path)
+            w = check_world_file(path)
             sim = Simulation(w)
             print(f"ok: world {w.name}: {len(w.objects)} objects, {len(w.start_poses)} start poses, "
                   f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms")
@@ -310,7 +391,7 @@ def cmd_validate(args) -> int:
             from usarsim.sim.builder import robot_model_summary
             from usarsim.sim.simulation import describe_items
 
-            r = load_robot(args.path)
+            r = load_robot(path)
             items = describe_items(r)
             print(f"ok: robot {r.class_name}: {r.steering_type}, {r.mass_kg:g} kg, {len(items)} sensors, "
                   f"MuJoCo model with {robot_model_summary(r)}")
@@ -350,6 +431,7 @@ def cmd_bench(args) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.verbose += getattr(args, "verbose_after", 0)  # 'usarsim -v serve' and 'usarsim serve -v' alike
     _setup_logging(args.verbose)
     if args.command is None:
         parser.print_help()

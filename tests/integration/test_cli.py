@@ -20,6 +20,7 @@ from helpers import Client, sensor_lines
 NFO_ON_CONNECT = b"NFO {Gametype BotDeathMatch} {Level DM-USAR_yellow} {TimeLimit 0}\r\n"
 LISTENING = re.compile(r"usarsim: control listening on 127\.0\.0\.1:(\d+)")
 SHIPPED = Path(__import__("usarsim").__file__).parent / "data"
+ROOT = Path(__file__).resolve().parents[2]
 # every listener beside the control port, on a free port
 PORT_OPTIONS = ("--truth-port", "--image-port", "--wcs-port", "--wss-port", "--cominterface-port", "--web-port")
 FREE_PORTS = tuple(x for opt in PORT_OPTIONS for x in (opt, "0"))
@@ -107,6 +108,12 @@ def test_serve_help_lists_the_options():
     assert "DM-USAR_yellow" in out.stdout  # the default world is named
 
 
+def test_serve_help_lists_verbose():
+    out = usarsim("serve", "--help")
+    assert out.returncode == 0
+    assert "-v, --verbose" in out.stdout and "-vv" in out.stdout
+
+
 def test_console_script_is_installed():
     exe = shutil.which("usarsim")
     if exe is None:
@@ -131,6 +138,57 @@ def test_no_command_prints_help_and_exits_2():
     assert "serve" in out.stdout
 
 
+def _fake_python(folder: Path, venv: bool) -> Path:
+    """A stand-in for the Python scripts/test.sh installs into: it accepts pip and ruff, and
+    for ``-m pytest`` prints the PATH it was given and where 'usarsim' is found on it."""
+    (folder / "bin").mkdir(parents=True)
+    if venv:
+        (folder / "pyvenv.cfg").write_text("home = /usr/bin\n")
+    python = folder / "bin" / "python"
+    python.write_text('#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then echo "PATH=$PATH"; '
+                      'echo "usarsim=$(command -v usarsim)"; fi\nexit 0\n')
+    script = folder / "bin" / "usarsim"
+    script.write_text("#!/bin/sh\necho usarsim 0\n")
+    for f in (python, script):
+        f.chmod(0o755)
+    return python
+
+
+@pytest.mark.parametrize("venv", [True, False], ids=["venv", "not-a-venv"])
+def test_test_script_puts_the_venv_bin_folder_first_on_path(tmp_path, venv):
+    """scripts/test.sh runs pytest with the virtual environment's bin folder first on PATH,
+    so that the 'usarsim' console script is found (test_console_script_is_installed runs)."""
+    python = _fake_python(tmp_path / "env", venv)
+    tools = tmp_path / "tools"  # a chromium, so that the script does not try to install one
+    tools.mkdir()
+    (tools / "chromium").write_text("#!/bin/sh\nexit 0\n")
+    (tools / "chromium").chmod(0o755)
+    path = os.pathsep.join([str(tools)] + [d for d in os.environ.get("PATH", "").split(os.pathsep)
+                                           if d and not (Path(d) / "usarsim").exists()])
+    env = {**os.environ, "PATH": path, "USARSIM_PYTHON": str(python)}
+    out = subprocess.run(["bash", str(ROOT / "scripts" / "test.sh")], capture_output=True, text=True,
+                         timeout=60, check=False, env=env, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    given = re.search(r"^PATH=(.*)$", out.stdout, re.M).group(1)
+    found = re.search(r"^usarsim=(.*)$", out.stdout, re.M).group(1)
+    if venv:
+        assert given.split(os.pathsep)[0] == str(python.parent)
+        assert found == str(python.parent / "usarsim")
+    else:
+        assert given == path and found == ""
+
+
+def test_readme_says_how_to_get_the_command_after_the_first_two():
+    lines = (ROOT / "README.md").read_text().splitlines()
+    assert lines[2:6] == [
+        "```bash",
+        "bash scripts/serve.sh    # install, then start the simulator on DM-USAR_yellow (control port 3000)",
+        "bash scripts/test.sh     # install with the test dependencies, then run the whole test suite",
+        "```"]
+    after = next(ln for ln in lines[6:] if ln.strip())
+    assert ". .venv/bin/activate" in after and "usarsim" in after
+
+
 # --------------------------------------------------------------------------- validate
 
 
@@ -142,6 +200,26 @@ def test_validate_shipped_files():
         assert out.stdout.startswith(prefix)
         assert out.stdout.count("\n") == 1
         assert out.stderr == ""
+
+
+@pytest.mark.parametrize("name, prefix", [
+    ("DM-USAR_yellow", "ok: world DM-USAR_yellow: "),
+    ("dm-usar_red", "ok: world DM-USAR_red: "),
+    ("P2AT", "ok: robot P2AT: "),
+    ("USARBot.P2DX", "ok: robot P2DX: "),
+])
+def test_validate_a_shipped_world_or_robot_by_name(name, prefix):
+    out = usarsim("validate", name)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith(prefix) and out.stdout.count("\n") == 1
+    assert out.stderr == ""
+
+
+def test_validate_unknown_name_exits_1_with_the_known_ones():
+    out = usarsim("validate", "P2ATT")
+    assert out.returncode == 1 and out.stdout == ""
+    assert "'P2ATT' is no file, shipped world or robot class (did you mean 'P2AT'?)" in out.stderr
+    assert "DM-USAR_yellow" in out.stderr
 
 
 def test_validate_bad_file_exits_1_with_the_reason_on_stderr(tmp_path):
@@ -187,6 +265,71 @@ def test_serve_lockstep_with_seed(serve):
         assert more[-1].text == "STEPPED {Time 0.8000}"
     s.proc.send_signal(signal.SIGTERM)
     assert s.proc.wait(5) == 0
+
+
+@pytest.mark.parametrize("verbose", [(), ("-v",), ("-vv",)], ids=["quiet", "-v", "-vv"])
+def test_connections_are_logged_with_v_after_the_command_and_not_without(serve, verbose):
+    s = serve("--port", "0", *verbose)
+    port = s.port()
+    with Client(port) as c:
+        c.nfo()
+        c.send("INIT {ClassName P2AT} {Name R1} {Start PlayerStart1}")
+        c.wait_line(lambda ln: ln.text.startswith("SEN"))
+    s.proc.send_signal(signal.SIGTERM)
+    assert s.proc.wait(5) == 0, s.stderr()
+    err = s.stderr()
+    logged = re.search(r"INFO usarsim[\w.]*: .*: connected", err) is not None
+    assert logged == bool(verbose), err
+    assert ("spawned P2AT 'R1'" in err) == bool(verbose)
+    assert (" DEBUG " in err) == (verbose == ("-vv",))
+
+
+def _free_offset() -> int:
+    """An offset that puts every default port on a free one (on 127.0.0.1, just now)."""
+    from usarsim.cli import DEFAULT_PORTS
+
+    for offset in range(1013, 65535 - 50000, 97):
+        socks = []
+        try:
+            for port in DEFAULT_PORTS.values():
+                sock = socket.socket()
+                socks.append(sock)
+                sock.bind(("127.0.0.1", port + offset))
+            return offset
+        except OSError:
+            continue
+        finally:
+            for sock in socks:
+                sock.close()
+    pytest.skip("no offset with every default port free")
+
+
+def test_serve_port_offset_moves_every_default_port(tmp_path):
+    offset = _free_offset()
+    s = Serve("--port-offset", str(offset), "--image-port", "0", stderr_path=tmp_path / "serve.err")
+    try:
+        lines = [s.read_line() for _ in range(7)]
+        ports = {}
+        for line in lines:
+            m = re.fullmatch(r"usarsim: (\w+) listening on 127\.0\.0\.1:(\d+)", line)
+            assert m, line
+            ports[m.group(1)] = int(m.group(2))
+        expected = {"control": 3000, "truth": 3989, "comserver": 5874, "wss": 50000, "cominterface": 7435,
+                    "web": 8080}
+        assert {k: v for k, v in ports.items() if k != "image"} == {k: v + offset for k, v in expected.items()}
+        assert ports["image"] not in (5003, 5003 + offset)  # given explicitly (0): a free port, no offset
+        assert s.read_line() == f"usarsim: operator console at http://127.0.0.1:{8080 + offset}/"
+        with Client(ports["control"]) as c:
+            assert c.next_line().raw == NFO_ON_CONNECT
+        s.proc.send_signal(signal.SIGTERM)
+        assert s.proc.wait(5) == 0, s.stderr()
+    finally:
+        s.close()
+
+
+def test_serve_port_offset_beyond_the_last_port_is_refused():
+    out = usarsim("serve", "--port-offset", "20000")
+    assert out.returncode == 2 and "--port-offset" in out.stderr and "expected a number 0..15535" in out.stderr
 
 
 def test_unknown_world_exits_1_listing_the_known_ones():

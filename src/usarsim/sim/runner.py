@@ -76,7 +76,7 @@ class SimulationRunner:
         self._pending: list[Request] = []
         self.error: BaseException | None = None
         self._lag_lost = 0.0
-        self._lag_logged = 0.0
+        self._lag_logged: float | None = None  # when the lag warning was last given
         self._owed = 0.0  # lock-step: simulated time asked for and not yet run (< one step)
 
     # Thread-safe API ---------------------------------------------------------------
@@ -151,6 +151,21 @@ class SimulationRunner:
         self._owed = owed - n * dt
         return n * dt
 
+    def _note_lag(self, skipped: float, now: float) -> None:
+        """Count ``skipped`` simulated seconds let go to keep up with the wall clock; warn at
+        most every 10 s, and only when what was skipped since the last warning shows as more
+        than 0.00 s (a skip of microseconds is the scheduler's jitter, not lag)."""
+        self._lag_lost += max(0.0, skipped)
+        if round(self._lag_lost, 2) <= 0.0 or (self._lag_logged is not None and now - self._lag_logged <= 10.0):
+            return
+        if self._lag_logged is not None:
+            log.warning("simulation behind real time: %.2f simulated s skipped in the last %.0f s "
+                        "(the clock does not catch up in bursts)", self._lag_lost, now - self._lag_logged)
+        else:
+            log.warning("simulation behind real time: %.2f simulated s skipped "
+                        "(the clock does not catch up in bursts)", self._lag_lost)
+        self._lag_logged, self._lag_lost = now, 0.0
+
     def _run_clocked(self) -> None:
         sim = self.sim
         wall0 = time.perf_counter()
@@ -179,14 +194,9 @@ class SimulationRunner:
             if ahead > max_lag:
                 # behind the wall clock (a stall, or more robots than the machine can run
                 # in real time): do not catch up in a burst, let the excess go
-                self._lag_lost += ahead - max_lag
+                self._note_lag(ahead - max_lag, now)
                 sim0, wall0 = sim.time + max_lag, now
                 ahead = max_lag
-                if now - self._lag_logged > 10.0:
-                    log.warning("simulation behind real time: %.2f simulated s skipped in the last %.0f s "
-                                "(the clock does not catch up in bursts)", self._lag_lost,
-                                min(now - self._lag_logged, 10.0) if self._lag_logged else 0.0)
-                    self._lag_logged, self._lag_lost = now, 0.0
             if ahead >= sim.dt:
                 sim.advance(min(ahead, self.CHUNK_S))
                 self._flush()
