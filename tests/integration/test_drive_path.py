@@ -146,3 +146,17 @@ def test_a_robot_file_is_checked_by_its_drive_model(tmp_path):
     p.write_text(UNICYCLE_ROBOT.replace("drive: unicycle", "drive: skidd"))
     with pytest.raises(ConfigError, match=r"unknown drive type 'skidd'.*skid"):
         robot_model_summary(load_robot(p))
+
+
+def test_an_init_of_a_robot_whose_drive_is_not_registered_is_refused(server_factory, test_world, tmp_path):
+    robots = tmp_path / "robots"
+    robots.mkdir()
+    (robots / "HoverBot.yaml").write_text(UNICYCLE_ROBOT.replace("class_name: UniBot", "class_name: HoverBot")
+                                          .replace("drive: unicycle", "drive: hover"))
+    srv = server_factory(world=test_world, seed=3, robot_dirs=(str(robots),))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.HoverBot} {Location -6,0,-0.5}")
+    reply = c.ask("GETCONF {Type Robot}", "ERROR")  # the INIT's ERROR comes first
+    assert reply.text.startswith("ERROR {Command INIT} {Reason ") and "unknown drive type 'hover'" in reply.text
+    assert c.ask("GETCONF {Type Robot}", "ERROR").text.endswith("send INIT first}")

@@ -50,11 +50,6 @@ def _smooth(x: float) -> float:
     return 0.5 - 0.5 * math.cos(math.pi * min(1.0, max(0.0, x)))
 
 
-def _smooth(x: float) -> float:
-    """0 to 1 over x in [0, 1], with zero slope at both ends."""
-    return 0.5 - 0.5 * math.cos(math.pi * min(1.0, max(0.0, x)))
-
-
 @DRIVES.register("legged")
 class Legged(DriveModel):
     """The gait of a walking robot, and the velocities it walks at."""
@@ -136,7 +131,7 @@ class Legged(DriveModel):
         tops = (g.max_linear_m_s, g.max_lateral_m_s, g.max_yaw_rate_rad_s)
         if self.gait_amp >= 1.0:  # under way: the walking speed follows the command
             self.gait_vel = tuple(cur + max(-top * dt / half, min(top * dt / half, c - cur))
-                               for cur, c, top in zip(self.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops))
+                                  for cur, c, top in zip(self.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops))
         at_rest = not any(self.gait_vel) and all(abs(x) < 1e-4 for f in self.feet for x in f)
         if moving:
             self.gait_amp = min(1.0, self.gait_amp + dt / half)

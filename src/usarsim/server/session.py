@@ -146,6 +146,7 @@ class Session:
             return
         try:
             robot = resolve_robot(cmd.class_name, extra_dirs=self.ctx.robot_dirs)
+            self.facade.drive_accepts(robot)  # its drive is known (a plugin's drive may be missing)
         except ConfigError as exc:
             self.refuse("INIT", "init", str(exc))
             return

@@ -100,9 +100,11 @@ class Pipe:
         self.closed = False
         self.out_sock: socket.socket | None = None  # the socket to the destination, while it connects
         self.out_port = 0  # its local port: the peer port the destination sees
+        self._task: asyncio.Task | None = None  # start(), while it runs
 
     async def start(self, dst_ip: str, dst_port: int) -> None:
         loop = asyncio.get_running_loop()
+        self._task = asyncio.current_task()
         try:
             _, src = await loop.connect_accepted_socket(lambda: _PipeEnd(self), self.sock)
         except OSError:
@@ -131,6 +133,9 @@ class Pipe:
                 return
             self.out_sock = None  # the transport takes it
             dst_t, dst = await loop.create_connection(lambda: _PipeEnd(self), sock=sock)
+        except asyncio.CancelledError:  # closed while connecting (close()): the connect has let go of it
+            sock.close()
+            raise
         except (TimeoutError, OSError) as exc:
             sock.close()
             self.port.server.service.event("wss: cannot connect to %s at %s:%d: %s", self.port.dst, dst_ip,
@@ -164,7 +169,14 @@ class Pipe:
         if not self.ends:
             self.sock.close()
         if self.out_sock is not None:
-            self.out_sock.close()
+            # a connect may still wait on it: it is cancelled, and start() closes the socket once
+            # asyncio has let go of its descriptor (closed now, the descriptor could be reused
+            # by another socket while asyncio still watches it)
+            task = self._task
+            if task is not None and not task.done() and task is not asyncio.current_task():
+                task.cancel()
+            else:
+                self.out_sock.close()
             self.out_sock = None
         for end in self.ends:
             if end.transport is not None:

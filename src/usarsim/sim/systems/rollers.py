@@ -20,6 +20,7 @@ class RollerTables(System):
     def __init__(self, sim):
         super().__init__(sim)
         self._pushed: set[int] = set()
+        self._model = sim.model  # body ids are the model's: they change with a rebuild
 
     @staticmethod
     def _tables(sim) -> list[RollerTable]:
@@ -32,6 +33,8 @@ class RollerTables(System):
     def pre_step(self) -> None:
         sim = self.sim
         m, d = sim.model, sim.data
+        if m is not self._model:  # rebuilt: the ids pushed before name other bodies now
+            self._pushed, self._model = set(), m
         pushed: set[int] = set()
         tables = {t.geom: t for t in self._tables(sim)}
         if tables:
