@@ -131,7 +131,7 @@ def test_the_truth_and_image_ports_shrug_off_garbage(witness_server):
 
 
 def test_repeated_drive_lines_collapse_but_actions_and_joint_orders_do_not():
-    from usarsim.server.control import _REPEATED_DRIVE
+    from usarsim.protocol.framing import REPEATED_DRIVE as _REPEATED_DRIVE
 
     data = (b"DRIVE {Left 1} {Right 1}\r\n" * 1000 + b"DRIVE {Flip True}\r\n" * 2
             + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n")
@@ -331,7 +331,7 @@ def test_ever_new_garbage_is_logged_within_bounds(witness_server, caplog):
     note that more follow) and keeps answering."""
     import logging
 
-    from usarsim.server.session import MAX_LOGGED_KINDS
+    from usarsim.server.connection import MAX_LOGGED_KINDS
 
     srv = witness_server
     junk = b"".join(b"NOSUCH%d {A 1}\r\n" % i for i in range(3000))

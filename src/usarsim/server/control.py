@@ -19,7 +19,7 @@ from collections import deque
 from typing import Any
 
 from usarsim.protocol import messages as M
-from usarsim.protocol.framing import REPEATED_DRIVE, LineBuffer
+from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.outputs import message_for
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
@@ -37,7 +37,6 @@ REPLY_CAP_FACTOR = 4
 # its socket is not read, so that one client flooding the port slows only itself (TCP pushes
 # back on it) and never the event loop, the other clients or the physics.
 LINE_BUDGET_S = 0.002
-_REPEATED_DRIVE = REPEATED_DRIVE  # the bytes-level fast path of the DRIVE-flood rule (protocol.framing)
 
 
 def output_to_message(o: Output) -> Any:

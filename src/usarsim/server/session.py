@@ -20,7 +20,6 @@ from usarsim.errors import ConfigError, ProtocolError
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.readings import ItemParams
-from usarsim.server.connection import MAX_LOGGED_KINDS as MAX_LOGGED_KINDS  # kinds logged per connection
 from usarsim.server.connection import LogOnce
 from usarsim.sim.facade import SimFacade
 

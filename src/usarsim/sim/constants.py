@@ -23,3 +23,6 @@ WHEEL_CONTYPE, WHEEL_CONAFFINITY = 2, 0
 # 2 s (the manual's victims wave an arm to draw attention, section 3.2.1).
 WAVE_AMPLITUDE_RAD = 0.6
 WAVE_PERIOD_S = 2.0
+
+# The world's up direction in MuJoCo's frame (Z up), for the systems that right robots.
+UP = np.array([0.0, 0.0, 1.0])

@@ -25,7 +25,6 @@ from usarsim.config.world import WirelessConfig
 from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
-from usarsim.server.connection import MAX_LOGGED_KINDS as MAX_LOGGED_KINDS  # kinds logged per connection
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener, call_on_loop
 from usarsim.sim.facade import SimFacade

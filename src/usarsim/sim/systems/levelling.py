@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
 
 # N m per rad of tilt per kg: hovering robots right themselves (and a vessel's hull, by
 # its weight hanging below its buoyancy, in roll: systems.water).
 AERIAL_LEVEL_STIFFNESS = 20.0
-UP = np.array([0.0, 0.0, 1.0])
 
 
 @SYSTEMS.register("levelling")

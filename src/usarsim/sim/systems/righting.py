@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
@@ -26,7 +27,6 @@ log = logging.getLogger("usarsim.sim")
 FLIP_TIME_S = 3.0
 FLIP_MARGIN = 2.0
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
-UP = np.array([0.0, 0.0, 1.0])
 
 
 def start_righting(sim: Simulation, r: SimRobot) -> bool:

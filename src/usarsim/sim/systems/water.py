@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 
 from usarsim.sim import frames
+from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
 from usarsim.sim.systems.levelling import AERIAL_LEVEL_STIFFNESS
 
@@ -16,7 +17,6 @@ log = logging.getLogger("usarsim.sim")
 
 HULL_CROSS_DRAG = 10.0  # a vessel's drag across its hull, relative to along it
 HULL_PITCH_RIGHTING = 0.05  # its pitch righting, relative to its roll righting
-UP = np.array([0.0, 0.0, 1.0])
 
 
 @SYSTEMS.register("water")
