@@ -481,8 +481,31 @@ GOLDEN = [
     (m.error_reply("init", "unknown start pose 'Nowhere' {known: PlayerStart1}\r\n"),
      "ERROR {Command INIT} {Reason unknown start pose 'Nowhere' (known: PlayerStart1)}"),
     (
-        m.UnknownMessage(type="ASTA", segments=(Segment("Time", "1.00"), Segment("Name", "arm"))),
-        "ASTA {Time 1.00} {Name arm}",
+        m.UnknownMessage(type="ACTSTA", segments=(Segment("Time", "1.00"), Segment("Name", "arm"))),
+        "ACTSTA {Time 1.00} {Name arm}",
+    ),
+    # UDK actuator API (§5.8, §6.4, §6.7, §6.8)
+    (
+        m.ActuatorStatus(time=1.5, name="arm", links=(m.LinkState(1, 0.5, -2.0), m.LinkState(2, -0.25, 0.0)),
+                         gripper=1),
+        "ASTA {Time 1.5000} {Name arm} {Link 1} {Value 0.5000} {Torque -2.0000} {Link 2} {Value -0.2500} "
+        "{Torque 0.0000} {Gripper 1}",
+    ),
+    (
+        m.ActuatorConfiguration(actuators=(m.ActuatorConfig("arm", (
+            m.ActuatorLinkConfiguration(1, "Revolute", 50.0, -1.5, 1.5),
+            m.ActuatorLinkConfiguration(2, "Prismatic", 20.0, 0.0, 0.3))), m.ActuatorConfig("pt", ()))),
+        "CONF {Type Actuator} {Name arm} {Link 1} {JointType Revolute} {MaxTorque 50.0000} {MinValue -1.5000} "
+        "{MaxValue 1.5000} {Link 2} {JointType Prismatic} {MaxTorque 20.0000} {MinValue 0.0000} {MaxValue 0.3000} "
+        "{Name pt}",
+    ),
+    (
+        m.ActuatorGeometry(actuators=(m.ActuatorPose("arm", (0.1, 0.0, -0.2), (0.0, 0.0, 3.1416), "P3AT", (
+            m.ActuatorLinkGeometry(1, -1, (0.0, 0.0, 0.1), (0.0, 0.0, 0.0)),
+            m.ActuatorLinkGeometry(2, 0, (0.3, 0.0, 0.0), (0.0, 1.5708, 0.0)))),)),
+        "GEO {Type Actuator} {Name arm} {Location 0.1000,0.0000,-0.2000} {Orientation 0.0000,0.0000,3.1416} "
+        "{Mount P3AT} {Link 1} {Parent -1} {Location 0.0000,0.0000,0.1000} {Orientation 0.0000,0.0000,0.0000} "
+        "{Link 2} {Parent 0} {Location 0.3000,0.0000,0.0000} {Orientation 0.0000,1.5708,0.0000}",
     ),
 ]
 
@@ -556,7 +579,7 @@ def test_parse_unknown_sensor_and_message_types() -> None:
     parsed = parse_message(line)
     assert isinstance(parsed, m.UnknownMessage) and parsed.type == "SEN"
     assert format_message(parsed) == line + "\r\n"
-    assert parse_message("ASTA {Name arm}") == m.UnknownMessage(type="ASTA", segments=(Segment("Name", "arm"),))
+    assert parse_message("ACTSTA {Name arm}") == m.UnknownMessage(type="ACTSTA", segments=(Segment("Name", "arm"),))
 
 
 @pytest.mark.parametrize(
@@ -774,6 +797,39 @@ MESSAGE_STRATEGIES = {
     m.MisPkgStatus: st.builds(
         m.MisPkgStatus, time=_time2, name=_names,
         links=_tuples(st.builds(m.LinkState, link=st.integers(1, 20), value=_f4, torque=_f4)),
+    ),
+    m.ActuatorConfiguration: st.builds(
+        m.ActuatorConfiguration,
+        actuators=_tuples(
+            st.builds(
+                m.ActuatorConfig,
+                name=_names,
+                links=_tuples(
+                    st.builds(m.ActuatorLinkConfiguration, link=st.integers(1, 20),
+                              joint_type=st.sampled_from(["Revolute", "Prismatic"]),
+                              max_torque=_f4, min_value=_f4, max_value=_f4), 1, 4,
+                ),
+            ),
+            1, 3,
+        ),
+    ),
+    m.ActuatorGeometry: st.builds(
+        m.ActuatorGeometry,
+        actuators=_tuples(
+            st.builds(
+                m.ActuatorPose, name=_names, location=_v4, orientation=_v4, mount=_names,
+                links=_tuples(
+                    st.builds(m.ActuatorLinkGeometry, link=st.integers(1, 20), parent=st.integers(-1, 20),
+                              location=_v4, orientation=_v4), 0, 4,
+                ),
+            ),
+            1, 3,
+        ),
+    ),
+    m.ActuatorStatus: st.builds(
+        m.ActuatorStatus, time=_time4, name=_names,
+        links=_tuples(st.builds(m.LinkState, link=st.integers(1, 20), value=_f4, torque=_f4)),
+        gripper=st.none() | st.integers(0, 1),
     ),
     m.Result: st.builds(
         m.Result, time=_time2, item_type=_names.filter(lambda n: n not in {"Camera", "Viewports"}),

@@ -58,6 +58,13 @@ from .grammar import RawMessage, Segment, format_segment, parse_bool, parse_floa
 from .numbers import bool_str, f2, f4, t4, vec2, vec4, vec_angle4, vec_t4
 
 __all__ = [
+    "ActuatorConfig",
+    "ActuatorConfiguration",
+    "ActuatorGeometry",
+    "ActuatorLinkConfiguration",
+    "ActuatorLinkGeometry",
+    "ActuatorPose",
+    "ActuatorStatus",
     "AerialVehicleStatus",
     "CameraZoom",
     "CameraZoomResult",
@@ -334,6 +341,75 @@ class MisPkgConfiguration:
     packages: tuple[PackageConfiguration, ...] = ()
 
 
+# --------------------------------------------------------------------------- Actuator (UDK)
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorLinkConfiguration:
+    """One link of an actuator CONF (UDK API): joint type, torque limit and the range of
+    its Value (rad or m)."""
+
+    link: int
+    joint_type: str
+    max_torque: float
+    min_value: float
+    max_value: float
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorConfig:
+    name: str
+    links: tuple[ActuatorLinkConfiguration, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorConfiguration:
+    """``CONF {Type Actuator} {Name arm} {Link 1} {JointType Revolute} {MaxTorque t}
+    {MinValue a} {MaxValue b} ...`` (§6.7, UDK); several actuators follow each other."""
+
+    actuators: tuple[ActuatorConfig, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorLinkGeometry:
+    """One link of an actuator GEO: its joint's pose relative to its parent; ``parent`` is
+    the parent link's index counted from 0, -1 when the link sits on the actuator's base
+    (as the UDK server numbered them)."""
+
+    link: int
+    parent: int
+    location: Vec3
+    orientation: Vec3
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorPose:
+    name: str
+    location: Vec3
+    orientation: Vec3
+    mount: str
+    links: tuple[ActuatorLinkGeometry, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorGeometry:
+    """``GEO {Type Actuator} {Name arm} {Location x,y,z} {Orientation r,p,y} {Mount Robot}
+    {Link 1} {Parent -1} {Location ...} {Orientation ...} ...`` (§6.8, UDK)."""
+
+    actuators: tuple[ActuatorPose, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class ActuatorStatus:
+    """``ASTA {Time t} {Name arm} {Link 1} {Value v} {Torque q} ... [{Gripper g}]`` (§6.4,
+    UDK): an actuator's links every status period; Time with 4 decimals as UDK wrote it."""
+
+    time: float
+    name: str
+    links: tuple[LinkState, ...] = ()
+    gripper: int | None = None
+
+
 # --------------------------------------------------------------------------- MISSTA
 
 
@@ -485,6 +561,9 @@ Message = (
     | MisPkgGeometry
     | MisPkgConfiguration
     | MisPkgStatus
+    | ActuatorConfiguration
+    | ActuatorGeometry
+    | ActuatorStatus
     | Result
     | CameraZoomResult
     | ViewportsResult
@@ -844,6 +923,39 @@ def _fmt_mispkg_status(m: MisPkgStatus) -> str:
     return "MISSTA {Time %s} {Name %s}%s\r\n" % (f2(m.time), m.name, links)
 
 
+def _fmt_actuator_configuration(m: ActuatorConfiguration) -> str:
+    parts = ["CONF {Type Actuator}"]
+    for act in m.actuators:
+        parts.append("{Name %s}" % act.name)
+        parts.extend(
+            "{Link %d} {JointType %s} {MaxTorque %s} {MinValue %s} {MaxValue %s}"
+            % (k.link, k.joint_type, f4(k.max_torque), f4(k.min_value), f4(k.max_value))
+            for k in act.links
+        )
+    return " ".join(parts) + _CRLF
+
+
+def _fmt_actuator_geometry(m: ActuatorGeometry) -> str:
+    parts = ["GEO {Type Actuator}"]
+    for act in m.actuators:
+        parts.append("{Name %s} {Location %s} {Orientation %s} {Mount %s}"
+                     % (act.name, vec4(act.location), vec4(act.orientation), act.mount))
+        parts.extend(
+            "{Link %d} {Parent %d} {Location %s} {Orientation %s}"
+            % (k.link, k.parent, vec4(k.location), vec4(k.orientation))
+            for k in act.links
+        )
+    return " ".join(parts) + _CRLF
+
+
+def _fmt_actuator_status(m: ActuatorStatus) -> str:
+    links = "".join(
+        " {Link %d} {Value %s} {Torque %s}" % (k.link, f4(k.value), f4(k.torque)) for k in m.links
+    )
+    gripper = "" if m.gripper is None else " {Gripper %d}" % m.gripper
+    return "ASTA {Time %s} {Name %s}%s%s\r\n" % (f4(m.time), m.name, links, gripper)
+
+
 def _fmt_result(m: Result) -> str:
     parts = ["RES {Time %s} {Type %s}" % (f2(m.time), m.item_type)]
     if m.name is not None:
@@ -904,6 +1016,9 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     MisPkgGeometry: _fmt_mispkg_geometry,
     MisPkgConfiguration: _fmt_mispkg_configuration,
     MisPkgStatus: _fmt_mispkg_status,
+    ActuatorConfiguration: _fmt_actuator_configuration,
+    ActuatorGeometry: _fmt_actuator_geometry,
+    ActuatorStatus: _fmt_actuator_status,
     Result: _fmt_result,
     CameraZoomResult: _fmt_camera_zoom,
     ViewportsResult: _fmt_viewports,
@@ -1314,6 +1429,8 @@ def _parse_geo(r: _Reader) -> Message:
             wheel_separation=r.opt_float("WheelSeparation"),
             wheel_base=r.opt_float("WheelBase"),
         )
+    if item_type.lower() == "actuator":
+        return _parse_actuator_geometry(r)
     if item_type.lower() == "mispkg":
         packages = []
         for group in _groups(raw.segments, "Name"):
@@ -1370,6 +1487,8 @@ def _parse_conf(r: _Reader) -> Message:
             max_front_steer=r.opt_float("MaxFrontSteer") or 0.0,
             max_rear_steer=r.opt_float("MaxRearSteer") or 0.0,
         )
+    if item_type.lower() == "actuator":
+        return _parse_actuator_configuration(r)
     if item_type.lower() == "mispkg":
         packages = []
         for group in _groups(raw.segments, "Name"):
@@ -1393,6 +1512,49 @@ def _parse_conf(r: _Reader) -> Message:
         for g in _groups(raw.segments, "Name")
     )
     return ItemConfiguration(item_type=item_type, items=items)
+
+
+def _parse_actuator_geometry(r: _Reader) -> ActuatorGeometry:
+    raw = r.raw
+    actuators = []
+    for group in _groups(raw.segments, "Name"):
+        links = _groups(tuple(group[1:]), "Link")
+        head = _Reader(RawMessage(raw.type, tuple(group[1:len(group) - sum(len(g) for g in links)])), r.what)
+        parsed = []
+        for link in links:
+            lr = _Reader(RawMessage(raw.type, tuple(link)), r.what)
+            parsed.append(ActuatorLinkGeometry(link=lr.req_int("Link"), parent=lr.req_int("Parent"),
+                                               location=lr.req_vec3("Location"),
+                                               orientation=lr.req_vec3("Orientation")))
+        actuators.append(ActuatorPose(name=group[0].value, location=head.req_vec3("Location"),
+                                      orientation=head.req_vec3("Orientation"), mount=head.text("Mount"),
+                                      links=tuple(parsed)))
+    return ActuatorGeometry(actuators=tuple(actuators))
+
+
+def _parse_actuator_configuration(r: _Reader) -> ActuatorConfiguration:
+    actuators = []
+    for group in _groups(r.raw.segments, "Name"):
+        links = []
+        for link in _groups(tuple(group[1:]), "Link"):
+            lr = _Reader(RawMessage(r.raw.type, tuple(link)), r.what)
+            links.append(ActuatorLinkConfiguration(link=lr.req_int("Link"), joint_type=lr.text("JointType"),
+                                                   max_torque=lr.req_float("MaxTorque"),
+                                                   min_value=lr.req_float("MinValue"),
+                                                   max_value=lr.req_float("MaxValue")))
+        actuators.append(ActuatorConfig(name=group[0].value, links=tuple(links)))
+    return ActuatorConfiguration(actuators=tuple(actuators))
+
+
+def _parse_asta(r: _Reader) -> Message:
+    links = []
+    for group in _groups(r.raw.segments, "Link"):
+        lr = _Reader(RawMessage(r.raw.type, tuple(s for s in group if s.key.lower() != "gripper")), r.what)
+        links.append(LinkState(link=lr.req_int("Link"), value=lr.req_float("Value"),
+                               torque=lr.opt_float("Torque") or 0.0))
+    gripper = r.raw.get("Gripper")
+    return ActuatorStatus(time=r.req_float("Time"), name=r.text("Name"), links=tuple(links),
+                          gripper=None if gripper is None else r.req_int("Gripper"))
 
 
 def _parse_missta(r: _Reader) -> Message:
@@ -1485,6 +1647,7 @@ _MESSAGE_PARSERS: dict[str, Callable[[_Reader], Message]] = {
     "GEO": _parse_geo,
     "CONF": _parse_conf,
     "MISSTA": _parse_missta,
+    "ASTA": _parse_asta,
     "RES": _parse_res,
     "EFF": _parse_eff,
     "DIE": lambda r: Die(killer=r.text("Killer"), damage_type=r.text("DamageType")),

@@ -21,6 +21,7 @@ from typing import Any
 from usarsim.protocol import messages as M
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.outputs import message_for
+from usarsim.readings import PackageState
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
 from usarsim.server.session import ALIVE, CLOSED, NEW, SPAWNING, Session, SessionContext
@@ -42,6 +43,14 @@ LINE_BUDGET_S = 0.002
 def output_to_message(o: Output) -> Any:
     """The protocol message of a simulation output (:func:`usarsim.protocol.outputs.message_for`)."""
     return message_for(o.value, o.time)
+
+
+def actuator_status(o: Output) -> M.ActuatorStatus:
+    """The ASTA line of a mission package's state (UDK actuator API), sent after its MISSTA to
+    clients that use that API."""
+    v: PackageState = o.value
+    return M.ActuatorStatus(time=o.time, name=v.name,
+                            links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))
 
 
 class Connection(ServerConnection):
@@ -200,6 +209,8 @@ class ControlServer(TcpListener):
             except Exception:
                 log.exception("cannot format %r", o)
                 continue
+            if isinstance(o.value, PackageState) and conn.session is not None and conn.session.actuator_api:
+                data += M.format_message(actuator_status(o)).encode("ascii", "replace")
             if o.periodic and not conn.writable:
                 conn.send_periodic(o.key, data)  # held, latest-wins
             else:

@@ -32,10 +32,10 @@ NO_ROBOT = "no robot on this connection: send INIT first"
 ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES")
 
 
-def _r2(v: float) -> float:
-    """The value as GETSTARTPOSES prints it (2 decimals), so that a pose copied from
-    the reply spawns a robot exactly where ``{Start name}`` does."""
-    return float(f"{v:.2f}")
+def _copied(sent, exact) -> bool:
+    """Whether ``sent`` is ``exact`` as GETSTARTPOSES prints it (2 decimals): a pose copied
+    from the reply spawns a robot exactly where ``{Start name}`` does."""
+    return all(abs(a - float(f"{b:.2f}")) < 0.006 for a, b in zip(sent, exact))
 
 
 # SET {Type Joint} opcodes (protocol.md 5.4) -> joint orders (5.3f)
@@ -86,7 +86,11 @@ class Session:
             C.MultiDrive: self.on_multidrive,
             C.MisPkg: self.on_mispkg,
             C.Camera: self.on_camera,
+            C.Act: self.on_act,
         }
+        # the client speaks the UDK actuator API (ACT, or a query of {Type Actuator}): its
+        # robot's mission packages are reported as ASTA too, each status period
+        self.actuator_api = False
         self._spawn_done = ctx.threadsafe(self.spawn_done)
         self._stepped = ctx.threadsafe(lambda t: self.send(M.Stepped(time=t)))
 
@@ -155,22 +159,25 @@ class Session:
                 names = ", ".join(p.name for p in self.facade.start_poses)
                 self.refuse("INIT", "init", f"unknown start pose {cmd.start!r} (known: {names})")
                 return
-            location = tuple(_r2(v) for v in pose.location)
-            rotation = tuple(_r2(v) for v in pose.rotation)
+            location, rotation = pose.location, pose.rotation  # exactly as the world file has it
             set_down = True
         elif cmd.location is not None:
             location = cmd.location
             rotation = cmd.rotation or (0.0, 0.0, 0.0)
-            # a location copied from GETSTARTPOSES is that start pose (MOAST spawns this way)
-            set_down = any(all(abs(a - _r2(b)) < 0.006 for a, b in zip(location, p.location))
-                           for p in self.facade.start_poses)
+            # a location copied from GETSTARTPOSES (2 decimals) is that start pose (MOAST spawns
+            # this way): it spawns exactly where {Start name} does, with the rotation copied too
+            copied = next((p for p in self.facade.start_poses if _copied(location, p.location)), None)
+            set_down = copied is not None
+            if copied is not None:
+                location = copied.location
+                if cmd.rotation is not None and _copied(cmd.rotation, copied.rotation):
+                    rotation = copied.rotation
         else:
             poses = self.facade.start_poses
             if not poses:
                 self.refuse("INIT", "init", "no {Location x,y,z} and the world has no start pose")
                 return
-            location = tuple(_r2(v) for v in poses[0].location)
-            rotation = tuple(_r2(v) for v in poses[0].rotation)
+            location, rotation = poses[0].location, poses[0].rotation
             set_down = True
             log.info("%s: INIT without Location or Start: using start pose %s", self.ctx.peer, poses[0].name)
         if not all(math.isfinite(v) for v in (*location, *rotation)):
@@ -260,6 +267,80 @@ class Session:
         if cmd.zoom is not None:
             self.facade.operate(self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)))
 
+    def on_act(self, cmd: C.Act) -> None:
+        """``ACT {Name arm} {Link k} {Value v} [{Order o}] ...`` and ``ACT {Name arm} {Gripper 1|0}``
+        (UDK actuator API, protocol.md 5.8): the links of the mission package named, the
+        gripper whose fingers are on it (or the robot's only gripper).  No reply; a gripper
+        answers as ``SET {Type Gripper}`` does (RES, then EFF)."""
+        if not self._alive():
+            return
+        self.actuator_api = True
+        assert self.robot is not None
+        packages = self.robot.mission_packages
+        pkg = self.robot.package(cmd.name) if cmd.name else (packages[0] if len(packages) == 1 else None)
+        if pkg is None:
+            known = ", ".join(p.name for p in packages) or "none"
+            self.log_once(f"act:{cmd.name}", "ACT for an unknown actuator %r (this robot's: %s); ignored",
+                          cmd.name, known, level=logging.INFO)
+            return
+        orders = []
+        for lc in cmd.links:
+            if not 1 <= lc.link <= len(pkg.links):
+                self.log_once(f"act-link:{lc.link}", "ACT %s has no link %d (links 1..%d); ignored", pkg.name,
+                              lc.link, len(pkg.links))
+                continue
+            orders.append(JointOrder(pkg.links[lc.link - 1], lc.value, lc.order))
+        if orders:
+            self.facade.drive_joints(self.uid, orders)
+        if cmd.gripper is not None:
+            gripper = self._gripper_of(pkg)
+            if gripper is None:
+                self.log_once("act-gripper", "ACT {Gripper}: actuator %s has no gripper; ignored", pkg.name)
+            else:
+                self.facade.operate(self.uid, "Gripper", gripper, "Close" if cmd.gripper else "Open",
+                                    ItemParams())
+        if cmd.sequence is not None:
+            self.log_once("act-sequence", "ACT {Sequence %d}: no stored sequences; ignored", cmd.sequence,
+                          level=logging.INFO)
+
+    def _gripper_of(self, pkg) -> str | None:
+        """The gripper whose fingers are links of ``pkg``, else the robot's only gripper."""
+        assert self.robot is not None
+        grippers = [it for it in self.robot.items if it.item_type.lower() == "gripper"]
+        for it in grippers:
+            fingers = it.params.get("fingers") or it.params.get("Fingers") or ()
+            if any(f in pkg.links for f in fingers):
+                return it.name
+        return grippers[0].name if len(grippers) == 1 else None
+
+    def _actuator_configuration(self, pkgs) -> M.ActuatorConfiguration:
+        """CONF {Type Actuator}: each link's joint type, torque and value range (a joint
+        without limits turns through -pi..pi, the range its Value is reported in)."""
+        out = []
+        for p in pkgs:
+            links = []
+            for i, ln in enumerate(self.robot.link(n) for n in p.links):
+                lo, hi = (ln.min_range, ln.max_range) if ln.limited else (-math.pi, math.pi)
+                links.append(M.ActuatorLinkConfiguration(
+                    link=i + 1, joint_type="Revolute" if ln.joint == "revolute" else "Prismatic",
+                    max_torque=ln.max_torque, min_value=lo, max_value=hi))
+            out.append(M.ActuatorConfig(name=p.name, links=tuple(links)))
+        return M.ActuatorConfiguration(actuators=tuple(out))
+
+    def _actuator_geometry(self, pkgs) -> M.ActuatorGeometry:
+        """GEO {Type Actuator}: the actuator's base at the robot's origin (mounted on the
+        robot, named by its class), each link's joint pose relative to its parent link."""
+        out = []
+        for p in pkgs:
+            links = []
+            for i, ln in enumerate(self.robot.link(n) for n in p.links):
+                parent = p.links.index(ln.parent) if ln.parent in p.links else -1
+                links.append(M.ActuatorLinkGeometry(link=i + 1, parent=parent, location=ln.location,
+                                                    orientation=ln.orientation))
+            out.append(M.ActuatorPose(name=p.name, location=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0),
+                                      mount=self.robot.class_name, links=tuple(links)))
+        return M.ActuatorGeometry(actuators=tuple(out))
+
     def _items(self, item_type: str, name: str | None):
         assert self.robot is not None
         t = item_type.lower()
@@ -288,6 +369,11 @@ class Session:
             self.send(M.RobotGeometry(vehicle_type=n.vehicle_type, class_name=n.class_name, dimensions=n.dimensions,
                                       cog=n.cog, wheel_radius=n.wheel_radius, wheel_separation=n.wheel_separation,
                                       wheel_base=n.wheel_base))
+            return
+        if cmd.type.lower() == "actuator":
+            self.actuator_api = True
+            pkgs = self._packages(cmd.name)
+            self.send(self._actuator_geometry(pkgs) if pkgs else M.EmptyGeometry(item_type=cmd.type, name=cmd.name))
             return
         if cmd.type.lower() == "mispkg":
             pkgs = self._packages(cmd.name)
@@ -319,6 +405,12 @@ class Session:
                                            steering_type=n.steering_type, mass_kg=n.mass_kg, max_speed=n.max_speed,
                                            max_torque=n.max_torque, max_front_steer=n.max_front_steer,
                                            max_rear_steer=n.max_rear_steer))
+            return
+        if cmd.type.lower() == "actuator":
+            self.actuator_api = True
+            pkgs = self._packages(cmd.name)
+            self.send(self._actuator_configuration(pkgs) if pkgs
+                      else M.EmptyConfiguration(item_type=cmd.type, name=cmd.name))
             return
         if cmd.type.lower() == "mispkg":
             pkgs = self._packages(cmd.name)
