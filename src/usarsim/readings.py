@@ -57,13 +57,20 @@ class RangeScanReading:
 
 @dataclass(frozen=True, slots=True)
 class RangeScan3DReading:
-    """A 3D sweep, row-major: one horizontal line per vertical step."""
+    """A 3D sweep, row-major: one horizontal line per vertical step.
+
+    ``frames``: the sweep's rows, the SEN lines it is sent in when one line would be too long
+    (None: not known, always one line).  ``frame``: this value holds one row only, the
+    ``frame``-th of ``frames`` (0 = the top row), as read from such a line.
+    """
 
     name: str
     resolution_rad: tuple[float, float]  # vertical, horizontal
     fov_rad: tuple[float, float]  # vertical, horizontal
     ranges_m: tuple[float, ...]
     sensor_type: str = "RangeScanner3D"
+    frames: int | None = None
+    frame: int | None = None
 
 
 @dataclass(frozen=True, slots=True)

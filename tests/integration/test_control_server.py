@@ -258,8 +258,8 @@ def test_range_scanner_conf_and_geo(robot):
     ("GETGEO {Type Odometry}",
      "GEO {Type Odometry} {Name Odometry Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount HARD}"),
     ("GETGEO {Type Encoder}",
-     "GEO {Type Encoder} {Name ECLeft Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount HARD} "
-     "{Name ECRight Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount HARD}"),
+     "GEO {Type Encoder} {Name ECLeft Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount LeftFWheel} "
+     "{Name ECRight Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount RightFWheel}"),
 ])
 def test_other_items_geo_and_conf(robot, query, reply):
     assert robot.ask(query, query[3:7]).text == reply

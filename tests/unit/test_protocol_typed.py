@@ -92,7 +92,7 @@ def test_an_operation_result_becomes_an_res_line():
     assert line_of(CommandResult("Foo", "Bar", ok=False)) == "RES {Time 20.10} {Type Foo} {Name Bar} {Status Failed}\r\n"
     read = line_of(CommandResult("RFID", "RFID", ok=True, extra=(("ID", 11137), ("Mem", "victim here"))))
     assert read == "RES {Time 20.10} {Type RFID} {Name RFID} {Status OK} {ID 11137} {Mem victim here}\r\n"
-    assert line_of(CommandResult("RFID", "RFID", ok=True, extra=(("ID", 7), ("Mem", "")))).endswith("{ID 7} {Mem}\r\n")
+    assert line_of(CommandResult("RFID", "RFID", ok=True, extra=(("ID", 7), ("Mem", "")))).endswith("{ID 7} {Mem }\r\n")
 
 
 def test_res_words_read_back():

@@ -79,6 +79,7 @@ __all__ = [
     "ItemConfiguration",
     "ItemGeometry",
     "ItemPose",
+    "LINE_LIMIT",
     "LinkConfiguration",
     "LinkGeometry",
     "LinkState",
@@ -579,6 +580,11 @@ Message = (
 
 _CRLF = "\r\n"
 
+# Lines are kept shorter than this many bytes, CR LF included (protocol.md 1: the Player
+# driver reads a line into a 4096-byte buffer); a 3D sweep that would not fit in one line is
+# sent one row per line (:func:`format_reading`).
+LINE_LIMIT = 4096
+
 
 def _poses(poses: tuple[StartPose, ...]) -> str:
     return " ".join(
@@ -656,13 +662,26 @@ def _sen_scan(r: RangeScanReading) -> str:
 
 
 def _sen_scan3d(r: RangeScan3DReading) -> str:
-    return "{Type %s} {Name %s} {Resolution %s} {FOV %s} %s" % (
+    # a line holding one row names it like the RangeImager's frames (protocol.md 6.3)
+    frame = "" if r.frame is None else "{Frames %d} {Frame %d} " % (r.frames or 0, r.frame)
+    return "{Type %s} {Name %s} %s{Resolution %s} {FOV %s} %s" % (
         r.sensor_type,
         r.name,
+        frame,
         vec_t4(r.resolution_rad),
         vec_t4(r.fov_rad),
         _range_list(r.ranges_m),
     )
+
+
+def _scan3d_rows(r: RangeScan3DReading) -> list[RangeScan3DReading] | None:
+    """The rows of a whole 3D sweep, each a reading of its own (None: it has no known rows)."""
+    rows = r.frames
+    if r.frame is not None or not rows or rows < 2 or len(r.ranges_m) % rows:
+        return None
+    n = len(r.ranges_m) // rows
+    return [RangeScan3DReading(r.name, r.resolution_rad, r.fov_rad, r.ranges_m[k * n:(k + 1) * n],
+                               sensor_type=r.sensor_type, frames=rows, frame=k) for k in range(rows)]
 
 
 def _sen_odometry(r: OdometryReading) -> str:
@@ -795,14 +814,21 @@ _SEN_BODIES: dict[type, Callable[[Any], str]] = {
 
 
 def format_reading(reading: Reading, time: float | None = None) -> str:
-    """The SEN line for a reading (same as ``format_message(SensorMessage(...))``)."""
+    """The SEN line for a reading (same as ``format_message(SensorMessage(...))``).
+
+    A whole 3D sweep whose line would reach :data:`LINE_LIMIT` is written as one line per
+    row instead, top row first, each with ``{Frames rows} {Frame k}`` and the same Time."""
     try:
         body = _SEN_BODIES[type(reading)](reading)
     except KeyError:
         raise TypeError(f"not a sensor reading: {reading!r}") from None
-    if time is None:
-        return "SEN " + body + _CRLF
-    return "SEN {Time %s} %s\r\n" % (f4(time), body)
+    head = "SEN " if time is None else "SEN {Time %s} " % f4(time)
+    line = head + body + _CRLF
+    if len(line) >= LINE_LIMIT and isinstance(reading, RangeScan3DReading):
+        rows = _scan3d_rows(reading)
+        if rows is not None:
+            return "".join([head + _sen_scan3d(row) + _CRLF for row in rows])
+    return line
 
 
 def _fmt_sensor(m: SensorMessage) -> str:
@@ -961,7 +987,9 @@ def _fmt_result(m: Result) -> str:
     if m.name is not None:
         parts.append("{Name %s}" % m.name)
     parts.append("{Status %s}" % m.status)
-    parts.extend(_fields(m.extra))
+    # {key value} even when the value is empty: a blank tag reads {Mem } (protocol.md 5.4,
+    # "{Mem <data>}" with no data), which a client looking for "{Mem " still finds
+    parts.extend(["{%s %s}" % (k, format_value(v)) for k, v in m.extra])
     return " ".join(parts) + _CRLF
 
 
@@ -1031,7 +1059,8 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
 
 
 def format_message(msg: Message) -> str:
-    """The exact line for ``msg``, including the trailing CR LF."""
+    """The exact line for ``msg``, including the trailing CR LF (a 3D sweep too long for one
+    line: one line per row, see :func:`format_reading`)."""
     try:
         formatter = _FORMATTERS[type(msg)]
     except KeyError:
@@ -1229,12 +1258,15 @@ def _sen_parse_scan(r: _Reader, t: str) -> Reading:
 
 
 def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
+    frame = r.raw.get("Frame")
     return RangeScan3DReading(
         sensor_type=t,
         name=r.text("Name"),
         resolution_rad=r.vector("Resolution", r.text("Resolution"), 2),  # type: ignore[arg-type]
         fov_rad=r.vector("FOV", r.text("FOV"), 2),  # type: ignore[arg-type]
         ranges_m=r.vector("Range", r.text("Range"), None),
+        frames=None if frame is None else r.req_int("Frames"),
+        frame=None if frame is None else r.int(Segment("Frame", frame)),
     )
 
 

@@ -27,6 +27,7 @@ from usarsim.config.reader import did_you_mean
 from usarsim.errors import ConfigError, PluginNotFoundError
 from usarsim.readings import FieldValue, ItemParams, OperationResult, ZoomResult
 from usarsim.registry import Registry
+from usarsim.sim.outputs import ItemDescription
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
@@ -112,6 +113,18 @@ class Item:
         """The typed (key, value) pairs after ``{Name n}`` in this item's CONF reply
         (protocol.md 6.7); the protocol layer prints them."""
         return ()
+
+    def geo_mount(self) -> str:
+        """The mount GETGEO reports (protocol.md 6.8): ``HARD`` for the chassis, else the
+        robot part the item rides on, its location and orientation relative to that part.
+        The robot file's ``mount``; an item that rides on a part by nature (an encoder on
+        its wheel) names that part."""
+        return self.item.mount
+
+    def describe(self) -> ItemDescription:
+        """What GETGEO and GETCONF report of this item (protocol.md 6.7, 6.8)."""
+        i = self.item
+        return ItemDescription(self.TYPE, i.name, i.location, i.orientation, self.geo_mount(), self.conf_fields())
 
 
 class Sensor(Item):

@@ -138,6 +138,14 @@ class Encoder(Sensor):
         # printed truncated, as USARSim did (0.01745 -> 0.0174, protocol.md 6.7)
         return (("Resolution", math.trunc(self.config.resolution_rad * 1e4) / 1e4),)
 
+    def geo_mount(self) -> str:
+        """An encoder rides on the wheel it counts: GEO names that wheel as its mount
+        (protocol.md 6.8, a robot part such as RightFWheel), its pose relative to the wheel;
+        a mount written in the robot file wins."""
+        if self.item.mount != "HARD" or not self.robot.wheels:
+            return self.item.mount
+        return self.config.wheel or self.robot.wheels[0].name
+
 
 @dataclass(frozen=True, kw_only=True)
 class GroundTruthConfig(SensorConfig):

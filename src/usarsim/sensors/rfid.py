@@ -108,13 +108,15 @@ class RFID(Sensor):
         tags = []
         for tid, loc in self._detected(view):
             mem = ents.tags[tid].memory
-            tags.append(RfidTag(tid, loc, mem if mem else None))
+            tags.append(RfidTag(tid, loc, mem if mem else None))  # a blank tag: no {Mem}
         return RfidReading(self.name, tuple(tags))
 
     def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         """Read, Write and Erase of a tag's memory (protocol.md 5.4; manual 10.9.5-10.9.7):
-        the tag must be sensed now.  Read replies ``{ID id} {Mem data}``.  The Params are
-        text, ``<tagID> <data...>``."""
+        the tag must be sensed now.  Read replies ``{ID id} {Mem data}``; a blank tag (never
+        written, or erased) has the empty text as its data, printed ``{Mem }``, and its SEN
+        pair carries no Mem (protocol.md 6.3: only tags written with data add one).  The
+        Params are text, ``<tagID> <data...>``."""
         op = opcode.lower()
         if op not in ("read", "write", "erase"):
             return None

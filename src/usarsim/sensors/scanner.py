@@ -118,6 +118,13 @@ class IRScanner(RangeScanner):
     PRESETS = {}
 
 
+# Bytes of range values one SEN line of a 3D scanner may carry: old clients read a line into
+# a 4096-byte buffer (protocol.md 1, "keep single lines below 4096 bytes"); the rest of the
+# line (Time, Type, Name, Frames, Frame, Resolution, FOV, braces, CR LF) stays well under
+# the 512 bytes left.
+ROW_BYTES = 4096 - 512
+
+
 @dataclass(frozen=True, kw_only=True)
 class RangeScanner3DConfig(SensorConfig):
     # RangeScanner3D (protocol.md 7.3, UT Tarantula/Ardabot configs): MaxRange 1000
@@ -141,8 +148,16 @@ class RangeScanner3DConfig(SensorConfig):
                                (self.vertical_resolution_rad, self.vertical_fov_rad, "vertical")):
             if not (0.0 < res <= fov <= 2 * math.pi):
                 raise ValueError(f"need 0 < {what} resolution <= {what} fov <= 2 pi, got {res}, {fov}")
-        if self.counts[0] * self.counts[1] > 100_000:
-            raise ValueError(f"{self.counts[0]} x {self.counts[1]} beams is more than 100000 per scan")
+        rows, cols = self.counts
+        if rows * cols > 100_000:
+            raise ValueError(f"{rows} x {cols} beams is more than 100000 per scan")
+        # one row must fit in one SEN line (see RangeScanner3D): its values, each at most
+        # len("%.4f" % max_range_m) characters and a comma, within ROW_BYTES
+        width = len("%.4f" % self.max_range_m) + 1
+        if cols * width > ROW_BYTES:
+            raise ValueError(f"a row of {cols} beams up to {self.max_range_m:g} m is {cols * width} bytes, too long "
+                             f"for one SEN line (at most {ROW_BYTES // width} beams a row at this MaxRange): "
+                             f"choose a coarser horizontal_resolution_rad or a narrower horizontal_fov_rad")
 
     @property
     def counts(self) -> tuple[int, int]:
@@ -154,8 +169,29 @@ class RangeScanner3DConfig(SensorConfig):
 @SENSORS.register("RangeScanner3D", "3DRangeScanner")
 class RangeScanner3D(Sensor):
     """A 3D laser (a tilting or panning 2D scanner, as on Kurt3D): all beams of a sweep
-    at one instant, row-major -- one horizontal line per vertical step, the top row
-    first, each row from its rightmost beam to its leftmost, as the 2D scanner."""
+    at one instant, every ScanInterval of simulated time, row-major -- one horizontal line
+    per vertical step, the top row first, each row from its rightmost beam to its leftmost,
+    as the 2D scanner.
+
+    On the wire (protocol.md 6.3) a sweep is one SEN line when that line stays under the
+    4096 bytes old clients can read (protocol.md 1)::
+
+        SEN {Time t} {Type RangeScanner3D} {Name n} {Resolution vres,hres} {FOV vfov,hfov} {Range r1,r2,...}
+
+    A longer sweep (the 51 x 31 beams of USARSim's configuration make about 11 kB) is sent
+    as one line per row instead, all with the sweep's Time, the top row first, each naming
+    its row the way the RangeImager names its frames (protocol.md 6.3)::
+
+        SEN {Time t} {Type RangeScanner3D} {Name n} {Frames rows} {Frame k}
+            {Resolution vres,hres} {FOV vfov,hfov} {Range r1,...,r_cols}
+
+    (one line on the wire, broken here for reading).
+
+    ``Frames`` is the number of rows (= lines) of the sweep and ``Frame`` the row this line
+    holds, 0 for the top row up to rows - 1; Resolution and FOV are the whole sweep's, so
+    row k looks ``vfov / 2 - k * vres`` up.  A row never needs more than one line: the
+    configuration refuses rows too long for one.
+    """
 
     SCANNABLE = True
     Config = RangeScanner3DConfig
@@ -186,7 +222,7 @@ class RangeScanner3D(Sensor):
         np.clip(values, c.min_range_m, c.max_range_m, out=values)
         return RangeScan3DReading(self.name, (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
                                   (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)), tuple(values.tolist()),
-                                  sensor_type=self.TYPE)
+                                  sensor_type=self.TYPE, frames=c.counts[0])
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config

@@ -52,8 +52,4 @@ class SimRobot:
 def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:
     """The mounted items of a robot class (sensors, effecters, cameras) as GETGEO/GETCONF
     describe them, CONF fields typed (also validates every item's configuration)."""
-    out = []
-    for item in robot.items:
-        s = make_item(item, robot, seed, "describe")
-        out.append(ItemDescription(s.TYPE, item.name, item.location, item.orientation, item.mount, s.conf_fields()))
-    return out
+    return [make_item(item, robot, seed, "describe").describe() for item in robot.items]
