@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import faulthandler
 import logging
 import os
 import signal
@@ -199,7 +200,11 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Load a world or robot file (or a shipped world or robot class by name, "
                                    "as 'usarsim worlds' and 'usarsim robots' list them), build its MuJoCo model "
                                    "and print a one-line "
-                                   "summary, or the error with the file, the key and what is allowed. A DARPA "
+                                   "summary, or the error with the file, the key (and the object it is in), "
+                                   "what is allowed and, for a misspelt key, the closest valid one. It also "
+                                   "refuses a start pose inside a solid, a robot file whose class_name is not "
+                                   "its file name, a Gripper whose fingers are not links of the robot and a "
+                                   "RollerTable whose surface is no chassis piece. A DARPA "
                                    "route network (.rndf) or mission (.mdf) file is checked the same way (an MDF "
                                    "against the RNDF beside it); its errors name the line.")
     v.add_argument("path", metavar="PATH|NAME",
@@ -367,10 +372,48 @@ def validate_target(text: str) -> str:
     raise ConfigError(f"'{text}' is no file, shipped world or robot class{did_you_mean(bare, known)}")
 
 
+def check_robot_items(robot) -> None:
+    """What ``usarsim validate`` checks of a robot's items beyond their own settings: each
+    type is a registered plugin, a Gripper's ``fingers`` are links of the robot and a
+    RollerTable's ``surface`` is the index of one of its chassis pieces (both checked when
+    the robot is spawned, too late for the author of the file).  Raises ConfigError."""
+    from usarsim.config.reader import did_you_mean
+    from usarsim.effecters.gripper import Gripper
+    from usarsim.effecters.roller_table import RollerTable
+    from usarsim.errors import ConfigError, PluginNotFoundError
+    from usarsim.sensors import make_item
+
+    def key_of(item, plugin, field_name: str) -> str:  # the setting as written: surface, Surface
+        names = {field_name.lower(), *(a.lower() for a, f in type(plugin).ALIASES.items() if f == field_name)}
+        raw = next((str(k) for k in item.params if str(k).lower() in names), None)
+        return f"{item.key_path}.{raw}" if raw is not None else item.key_path
+
+    links = [ln.name for ln in robot.links]
+    for item in robot.items:
+        try:
+            plugin = make_item(item, robot, 0, "validate")
+        except PluginNotFoundError as exc:
+            raise ConfigError(str(exc), path=robot.path, key=f"{item.key_path}.type") from None
+        if isinstance(plugin, Gripper):
+            fingers = plugin.config.fingers
+            for f in [fingers] if isinstance(fingers, str) else fingers:
+                if f not in links:
+                    hint = did_you_mean(str(f), links) if links else "; this robot has no links"
+                    raise ConfigError(f"unknown finger link '{f}': a Gripper's fingers are links of the robot{hint}",
+                                      path=robot.path, key=key_of(item, plugin, "fingers"))
+        if isinstance(plugin, RollerTable) and plugin.config.surface >= len(robot.chassis):
+            n = len(robot.chassis)
+            raise ConfigError(f"surface {plugin.config.surface} is out of range: it is the index of the chassis "
+                              f"piece that is the table's top, and this robot has {n} (chassis[0] to "
+                              f"chassis[{n - 1}])", path=robot.path, key=key_of(item, plugin, "surface"))
+
+
 def cmd_validate(args) -> int:
     from usarsim.config.catalog import file_kind
-    from usarsim.errors import UsarsimError
+    from usarsim.config.reader import load_yaml, name_entries
+    from usarsim.errors import ConfigError, UsarsimError
 
+    path = args.path
     try:
         path = validate_target(args.path)
         kind = file_kind(path)
@@ -387,15 +430,25 @@ def cmd_validate(args) -> int:
             print(f"ok: world {w.name}: {len(w.objects)} objects, {len(w.start_poses)} start poses, "
                   f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms")
         else:
-            from usarsim.config.robot import load_robot
+            from usarsim.config.robot import class_name_problem, load_robot
             from usarsim.sim.builder import robot_model_summary
             from usarsim.sim.simulation import describe_items
 
             r = load_robot(path)
+            check_robot_items(r)
             items = describe_items(r)
+            summary = robot_model_summary(r)
+            problem = class_name_problem(r)  # last: what is wrong inside the file comes first
+            if problem is not None:
+                raise ConfigError(problem, path=path, key="class_name")
             print(f"ok: robot {r.class_name}: {r.steering_type}, {r.mass_kg:g} kg, {len(items)} sensors, "
-                  f"MuJoCo model with {robot_model_summary(r)}")
+                  f"MuJoCo model with {summary}")
     except UsarsimError as exc:
+        if isinstance(exc, ConfigError) and exc.path == path:
+            try:  # an error about an entry of a list names it (sensors[3] (RangeScanner 'Scanner1'))
+                name_entries(exc, load_yaml(path))
+            except UsarsimError:
+                pass
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
     return 0
@@ -429,6 +482,10 @@ def cmd_bench(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # a crash in native code (MuJoCo, the GL driver, numba's kernels) prints the Python side of
+    # every thread's stack on stderr instead of dying silently
+    if not faulthandler.is_enabled():
+        faulthandler.enable()
     parser = build_parser()
     args = parser.parse_args(argv)
     args.verbose += getattr(args, "verbose_after", 0)  # 'usarsim -v serve' and 'usarsim serve -v' alike

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from usarsim.config.reader import did_you_mean, load_yaml
 from usarsim.config.rndf import route_file_kind
-from usarsim.config.robot import RobotConfig, load_robot
+from usarsim.config.robot import RobotConfig, class_name_problem, load_robot
 from usarsim.config.world import WorldConfig, load_world
 from usarsim.errors import ConfigError
 
@@ -69,7 +69,11 @@ def resolve_robot(class_name: str, *, allow_path: bool = False, extra_dirs=()) -
     files = robot_files(extra_dirs)
     for stem, path in reversed(list(files.items())):
         if stem.lower() == bare.lower():
-            return _robot_cached(str(path), path.stat().st_mtime)
+            robot = _robot_cached(str(path), path.stat().st_mtime)
+            problem = class_name_problem(robot)  # the class asked for must be the class served
+            if problem is not None:
+                raise ConfigError(problem, path=str(path), key="class_name")
+            return robot
     raise ConfigError(f"unknown robot class '{class_name}'{did_you_mean(bare, files)}")
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import re
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -30,6 +31,12 @@ def load_yaml(path: str | Path) -> dict:
     if not isinstance(data, dict):
         raise ConfigError("the file must hold a mapping of keys (name: ..., ...)", path=str(p))
     return data
+
+
+# How alike (difflib's ratio) a key found must be to a required key that is missing to be
+# reported as its misspelling: 'centre' and 'center' score 0.83, 'sise' and 'size' 0.75,
+# two different keys such as 'step_run' and 'step_rise' 0.71.
+MISSPELLING_CUTOFF = 0.75
 
 
 def did_you_mean(word: str, allowed: Iterable[str]) -> str:
@@ -95,8 +102,21 @@ class Section:
         if name in self.data:
             return self.data[name]
         if required or default is ...:
+            typo = self.misspelling_of(name)
+            if typo is not None:
+                raise self.error(typo, f"unknown key '{typo}' (did you mean '{name}'?); '{name}' is required")
             raise self.error(name, "required key is missing")
         return default
+
+    def misspelling_of(self, name: str) -> str | None:
+        """The key of this mapping that looks like a misspelling of the missing key ``name``:
+        one nothing has read yet, as close to it as difflib finds 'centre' to 'center'."""
+        unread = [str(k) for k in self.data if k not in self._used]
+        by_lower = {k.lower(): k for k in unread}
+        if name.lower() in by_lower:
+            return by_lower[name.lower()]
+        close = difflib.get_close_matches(name.lower(), list(by_lower), n=1, cutoff=MISSPELLING_CUTOFF)
+        return by_lower[close[0]] if close else None
 
     def str(self, name: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:
         v = self.raw(name, default)
@@ -190,3 +210,65 @@ def check_vec(v: Any, n: int, path: str, key: str, *, positive: bool = False) ->
     if positive and any(x <= 0 for x in out):
         raise ConfigError(f"every value must be > 0, got {list(out)}", path=path, key=key)
     return out
+
+
+# What an entry of a list of a world or robot file is called in an error: the key that gives
+# its kind (a box, a RangeScanner) and the word used when that key is absent.
+ENTRY_KINDS = {"objects": ("shape", "object"), "sensors": ("type", "item"), "chassis": ("shape", "box"),
+               "shapes": ("shape", "box"), "wheels": (None, "wheel"), "links": (None, "link"),
+               "start_poses": (None, "start pose"), "victims": (None, "victim"),
+               "false_alarms": (None, "false alarm"), "rfid_tags": (None, "RFID tag"), "water": (None, "water volume"),
+               "lights": (None, "light"), "mission_packages": (None, "mission package"), "legs": (None, "leg")}
+_KEY_TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
+
+
+def describe_entry(entry: Any, list_key: str) -> str | None:
+    """How an error names an entry of the list ``list_key``: ``box 'wall_north'``,
+    ``RangeScanner 'Scanner1'``, ``start pose 'Start1'``, ``a box`` (no name); None when the
+    entry is no mapping."""
+    if not isinstance(entry, dict):
+        return None
+    kind_key, word = ENTRY_KINDS.get(list_key, ("type", "entry"))
+    kind = entry.get(kind_key) if kind_key else None
+    kind = kind if isinstance(kind, str) and kind.strip() else word
+    name = entry.get("name", entry.get("id") if list_key == "rfid_tags" else None)
+    if isinstance(name, (str, int)) and not isinstance(name, bool) and str(name).strip():
+        return f"{kind} '{name}'"
+    return f"a {kind}"
+
+
+def name_entries(err: ConfigError, data: Any) -> ConfigError:
+    """Name the list entries along ``err.key`` (the file's mapping is ``data``), so that an
+    error deep in a list says which object it is about, not only its index:
+    ``objects[12].centre: unknown key ... (objects[12] is box 'wall_north')``, or
+    ``sensors[3] (RangeScanner 'Scanner1'): ...`` when the key is the entry itself.  Changes
+    the text of ``err`` only (its key and message stay); returns it."""
+    if not err.key or getattr(err, "entries_named", False):
+        return err
+    node, path, list_key, named = data, "", "", []
+    for m in _KEY_TOKEN.finditer(err.key):
+        word, index = m.group(1), m.group(2)
+        if word is not None:
+            node = node.get(word) if isinstance(node, dict) else None
+            path, list_key = (f"{path}.{word}" if path else word), word
+        else:
+            if not isinstance(node, list) or int(index) >= len(node):
+                break
+            node, path = node[int(index)], f"{path}[{index}]"
+            desc = describe_entry(node, list_key)
+            if desc is not None and not (desc.endswith("'") and desc[desc.index("'"):] in err.message):
+                named.append((path, desc))  # (unless the message names it already)
+    if not named:
+        return err
+    where = f"{err.path}: " if err.path else ""
+    last_path, last_desc = named[-1]
+    if last_path == err.key:  # the error is about the entry itself
+        named.pop()
+        text = f"{where}{err.key} ({last_desc}): {err.message}"
+    else:
+        text = f"{where}{err.key}: {err.message}"
+    if named:
+        text += " (" + "; ".join(f"{p} is {d}" for p, d in named) + ")"
+    err.args = (text,)
+    err.entries_named = True
+    return err

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml
+from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml, name_entries
 from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
@@ -439,8 +439,17 @@ def _items(top: Section, mounts: list[str]) -> list[MountedItem]:
 
 def load_robot(path: str | Path) -> RobotConfig:
     path = str(path)
+    data = load_yaml(path)
+    try:
+        return _robot(data, path)
+    except ConfigError as exc:
+        name_entries(exc, data)
+        raise
+
+
+def _robot(data: dict, path: str) -> RobotConfig:
     d = FieldDefaults(RobotConfig)
-    top = Section(load_yaml(path), path=path)
+    top = Section(data, path=path)
     class_name = top.str("class_name")
     if any(c in class_name for c in "{} \t."):
         raise top.error("class_name", f"a class name may not contain spaces, dots or braces, got {class_name!r}")
@@ -538,3 +547,15 @@ def load_robot(path: str | Path) -> RobotConfig:
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
                        mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints,
                        nautical=nautical, gait=gait)
+
+
+def class_name_problem(cfg: RobotConfig) -> str | None:
+    """Why a robot file's ``class_name`` does not fit its file name, or None: a client asks
+    for a robot class by name (``INIT {ClassName USARBot.P2AT}``), and the server finds the
+    file of that name, so P2AT.yaml must say ``class_name: P2AT``."""
+    p = Path(cfg.path)
+    if cfg.class_name == p.stem:
+        return None
+    return (f"class_name is '{cfg.class_name}' but the file is {p.name}: INIT finds a robot class by its file's "
+            f"name, so the two must agree; rename the file {cfg.class_name}{p.suffix} or write "
+            f"class_name: {p.stem}")

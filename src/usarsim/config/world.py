@@ -7,10 +7,12 @@ metres and radians; the floor's top surface is the plane z = 0.
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 
-from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml
+from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml, name_entries
 from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
@@ -37,6 +39,9 @@ VICTIM_POSTURES = ("lying", "sitting")
 # protocol.md 12.2): the Wall Attenuation Factor model with the manual's constants, the
 # same with the later USARSim code's, distance only, a perfect link.
 WIRELESS_MODELS = ("waf", "waf2009", "distance", "perfect")
+# How deep inside a solid a point must lie to be in it (metres, WorldConfig.solid_at): a
+# start pose set on a floor or a platform, up to 1 cm into it, is on it, not inside.
+SOLID_MARGIN_M = 0.01
 # The ComConnection keys of USARSim's USARComServer.ini (manual 3.2.4.2), as the world's
 # ``wireless`` section and ``--wireless-config`` take them, and the setting each gives.
 WIRELESS_KEYS = {"ePdo": "pd0_dbm", "eDo": "d0_m", "eN": "path_loss_exponent", "eCutoff": "cutoff_dbm",
@@ -227,6 +232,36 @@ class WorldConfig:
                 return p
         return None
 
+    def solid_at(self, point, *, margin_m: float = SOLID_MARGIN_M, movable: bool = True) -> str | None:
+        """What solid of the world holds ``point`` (USARSim frame, metres) more than
+        ``margin_m`` deep, or None when the point is free: ``"box 'wall_north'"``,
+        ``"cylinder 'pipe'"``, ``"ramp 'r1'"``, ``"stairs 'st' (step 2)"``, ``"false alarm
+        'fa'"``, ``"the floor"`` (below its top surface, z > 0).  A point on a surface, or
+        less than ``margin_m`` into it, is free: a start pose resting on the floor or on a
+        platform is fine.  Boxes and cylinders count with their rotation; a mesh counts as
+        the closed surface its file draws.  Movable objects count where the file puts them
+        unless ``movable`` is False (they may have been pushed away since)."""
+        x, y, z = (float(c) for c in point)
+        if z > margin_m:
+            return "the floor"
+        for obj in self.objects:
+            if obj.mass_kg > 0 and not movable:
+                continue
+            local = _to_local((x, y, z), obj.center, obj.rotation)
+            if obj.shape == "box":
+                inside = _in_box(local, obj.size, margin_m)
+            elif obj.shape == "cylinder":
+                inside = (math.hypot(local[0], local[1]) < obj.radius_m - margin_m
+                          and abs(local[2]) < obj.length_m / 2.0 - margin_m)
+            else:
+                inside = _mesh_depth(obj.mesh_file, obj.scale, local) > margin_m
+            if inside:
+                return _describe_object(obj)
+        for a in self.false_alarms:
+            if _in_box(_to_local((x, y, z), a.center, a.rotation), a.size, margin_m):
+                return f"false alarm '{a.name}'"
+        return None
+
 
 # --------------------------------------------------------------------------- UTM
 # Universal Transverse Mercator on the WGS84 ellipsoid, with the series of J. P. Snyder,
@@ -321,6 +356,148 @@ def utm_to_latlon(utm: UtmCoordinate) -> tuple[float, float]:
     return math.degrees(phi), (lon + 180.0) % 360.0 - 180.0
 
 
+# --------------------------------------------------------------------------- solids
+def _rotation(rpy) -> tuple[tuple[float, float, float], ...]:
+    """The rotation matrix of (roll, pitch, yaw) applied yaw, then pitch, then roll (the
+    USARSim frame's convention, docs/world-files.md): object axes -> world axes."""
+    cr, sr = math.cos(rpy[0]), math.sin(rpy[0])
+    cp, sp = math.cos(rpy[1]), math.sin(rpy[1])
+    cy, sy = math.cos(rpy[2]), math.sin(rpy[2])
+    return ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
+            (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
+            (-sp, cp * sr, cp * cr))
+
+
+def _to_local(point, center, rotation) -> Vec3:
+    """``point`` (world) in the frame of an object at ``center`` turned by ``rotation``."""
+    d = (point[0] - center[0], point[1] - center[1], point[2] - center[2])
+    m = _rotation(rotation)
+    return (m[0][0] * d[0] + m[1][0] * d[1] + m[2][0] * d[2],
+            m[0][1] * d[0] + m[1][1] * d[1] + m[2][1] * d[2],
+            m[0][2] * d[0] + m[1][2] * d[1] + m[2][2] * d[2])
+
+
+def _in_box(local, size, margin: float) -> bool:
+    return all(abs(c) < e / 2.0 - margin for c, e in zip(local, size))
+
+
+def _describe_object(obj: StaticObject) -> str:
+    if obj.part_of and obj.name != obj.part_of:  # a step of a flight of stairs
+        return f"stairs '{obj.part_of}' (step {obj.name.rsplit('step', 1)[-1]})"
+    if obj.part_of:
+        return f"ramp '{obj.part_of}'"
+    return f"{obj.shape} '{obj.name}'" + (" (movable)" if obj.mass_kg > 0 else "")
+
+
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def _dot(a, b) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@cache
+def _mesh_triangles(mesh_file: str, scale: Vec3, mtime: float) -> tuple:
+    """The triangles of an OBJ (its faces, fanned) or binary STL file, scaled, in the
+    object's frame; empty when the file cannot be read.  (``mtime``: read again when the
+    file changes.)"""
+    p = Path(mesh_file)
+    tris = []
+    try:
+        if p.suffix.lower() == ".obj":
+            verts: list[Vec3] = []
+            for line in p.read_text(errors="replace").splitlines():
+                parts = line.split()
+                if parts[:1] == ["v"] and len(parts) >= 4:
+                    verts.append(tuple(float(v) * k for v, k in zip(parts[1:4], scale)))
+                elif parts[:1] == ["f"] and len(parts) >= 4:
+                    idx = [int(t.split("/")[0]) for t in parts[1:]]
+                    idx = [i - 1 if i > 0 else len(verts) + i for i in idx]
+                    tris += [(verts[idx[0]], verts[idx[k]], verts[idx[k + 1]]) for k in range(1, len(idx) - 1)]
+        else:
+            data = p.read_bytes()
+            (count,) = struct.unpack_from("<I", data, 80)
+            for t in range(count):
+                v = struct.unpack_from("<9f", data, 84 + 50 * t + 12)
+                tris.append(tuple(tuple(v[3 * i + j] * scale[j] for j in range(3)) for i in range(3)))
+    except (OSError, ValueError, IndexError, struct.error):
+        return ()
+    return tuple(tris)
+
+
+def _closest_on_triangle(p, a, b, c):
+    """The point of triangle abc closest to p (C. Ericson, Real-Time Collision Detection,
+    2005, section 5.1.5)."""
+    ab, ac, ap = _sub(b, a), _sub(c, a), _sub(p, a)
+    d1, d2 = _dot(ab, ap), _dot(ac, ap)
+    if d1 <= 0 and d2 <= 0:
+        return a
+    bp = _sub(p, b)
+    d3, d4 = _dot(ab, bp), _dot(ac, bp)
+    if d3 >= 0 and d4 <= d3:
+        return b
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0 and d1 >= 0 and d3 <= 0:
+        v = d1 / (d1 - d3)
+        return (a[0] + v * ab[0], a[1] + v * ab[1], a[2] + v * ab[2])
+    cp = _sub(p, c)
+    d5, d6 = _dot(ab, cp), _dot(ac, cp)
+    if d6 >= 0 and d5 <= d6:
+        return c
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0 and d2 >= 0 and d6 <= 0:
+        w = d2 / (d2 - d6)
+        return (a[0] + w * ac[0], a[1] + w * ac[1], a[2] + w * ac[2])
+    va = d3 * d6 - d5 * d4
+    if va <= 0 and (d4 - d3) >= 0 and (d5 - d6) >= 0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return (b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2]))
+    denom = 1.0 / (va + vb + vc)
+    v, w = vb * denom, vc * denom
+    return (a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w)
+
+
+# A direction no mesh edge or face of a hand-made file is likely to be parallel to, for the
+# inside test's ray.
+_RAY = (0.5773, 0.5781, 0.5766)
+
+
+def _mesh_depth(mesh_file: str, scale: Vec3, local) -> float:
+    """How deep ``local`` (the object's frame) lies inside the closed surface of a mesh file:
+    the distance to its nearest triangle when a ray from it crosses the surface an odd
+    number of times (Moeller and Trumbore's ray-triangle test), else negative."""
+    try:
+        mtime = Path(mesh_file).stat().st_mtime
+    except OSError:
+        return -1.0
+    tris = _mesh_triangles(mesh_file, tuple(scale), mtime)
+    if not tris:
+        return -1.0
+    crossings, nearest = 0, math.inf
+    for a, b, c in tris:
+        q = _closest_on_triangle(local, a, b, c)
+        nearest = min(nearest, math.dist(local, q))
+        e1, e2 = _sub(b, a), _sub(c, a)
+        h = _cross(_RAY, e2)
+        det = _dot(e1, h)
+        if abs(det) < 1e-12:
+            continue
+        sv = _sub(local, a)
+        u = _dot(sv, h) / det
+        qv = _cross(sv, e1)
+        v = _dot(_RAY, qv) / det
+        if u < 0 or v < 0 or u + v > 1:
+            continue
+        if _dot(e2, qv) / det > 0:
+            crossings += 1
+    return nearest if crossings % 2 else -nearest
+
+
 def _unique_name(s: Section, taken: set[str], what: str = "name") -> str:
     """The entry's ``name``, refused when ``taken`` has it already (then it has it)."""
     name = s.str("name")
@@ -332,8 +509,17 @@ def _unique_name(s: Section, taken: set[str], what: str = "name") -> str:
 
 def load_world(path: str | Path) -> WorldConfig:
     path = str(path)
+    data = load_yaml(path)
+    try:
+        return _world(data, path)
+    except ConfigError as exc:
+        name_entries(exc, data)
+        raise
+
+
+def _world(data: dict, path: str) -> WorldConfig:
     d = FieldDefaults(WorldConfig)
-    top = Section(load_yaml(path), path=path)
+    top = Section(data, path=path)
     name = top.str("name")
     if any(c in name for c in "{} \t"):
         raise top.error("name", f"a world name may not contain spaces or braces, got {name!r}")
@@ -655,7 +841,18 @@ def _utm(u: Section) -> UtmCoordinate:
 
 
 def check_world_file(path: str | Path) -> WorldConfig:
+    """Load a world file and check what a world must have to be served (``usarsim
+    validate``): at least one start pose, none inside a solid (WorldConfig.solid_at)."""
     cfg = load_world(path)
     if not cfg.start_poses:
         raise ConfigError("a world needs at least one start pose", path=str(path), key="start_poses")
+    for i, pose in enumerate(cfg.start_poses):
+        solid = cfg.solid_at(pose.location)
+        if solid is not None:
+            where = ", ".join(f"{c:g}" for c in pose.location)
+            err = ConfigError(f"start pose '{pose.name}' at [{where}] lies inside {solid} (more than "
+                              f"{SOLID_MARGIN_M * 100:g} cm deep): move it into free space or onto a surface (z is "
+                              f"down; the floor is z = 0)",
+                              path=str(path), key=f"start_poses[{i}].location")
+            raise name_entries(err, load_yaml(path))
     return cfg
