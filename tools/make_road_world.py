@@ -69,6 +69,18 @@ SCALE_LAT = round(math.pi / 180 * _A * (1 - _E2) / (1 - _E2 * _S2) ** 1.5, 1)
 SCALE_LON = round(math.pi / 180 * _A * math.cos(math.radians(LAT0)) / math.sqrt(1 - _E2 * _S2), 1)
 GEO = GeoReference(latitude_deg=LAT0, longitude_deg=LON0, scale_latitude_m=SCALE_LAT, scale_longitude_m=SCALE_LON)
 
+# Daylight.  The sun of an equinox noon (NOAA, "General Solar Position Calculations": the
+# noon zenith angle is the latitude minus the declination, 0 at the equinoxes) stands
+# 90 - LAT0 degrees above the southern horizon; its light travels north (+X) and down (+Z).
+SUN_ELEVATION_DEG = 90.0 - LAT0
+_EL = math.radians(SUN_ELEVATION_DEG)
+SUN_DIRECTION = (math.cos(_EL), 0.0, math.sin(_EL))
+# The renderer's levels (estimates): the sun's diffuse light and the sky's ambient light, a
+# fraction of full white each; the asphalt (reflectance 0.22 here) shows mid-grey in a
+# camera picture, and walls facing away from the sun stay visible.
+SUN_INTENSITY = 0.8
+SKY_AMBIENT = 0.35
+
 AVENUES = ("Avenue_A", "Avenue_B", "Avenue_C", "Avenue_D")  # north-south, west to east: segments 1-4
 STREET_NAMES = ("First_Street", "Second_Street", "Third_Street", "Fourth_Street")  # east-west, south to north: 5-8
 LOT_BLOCK = (1, 2)  # (row from the south, column from the west): the parking lot, zone 9
@@ -449,6 +461,12 @@ HEADER = f"""\
 #   [4] WGS84 ellipsoid (a = 6378137 m, f = 1/298.257223563): metres per degree
 #       of latitude and of longitude at the geo_reference latitude
 #       ({SCALE_LAT:g} and {SCALE_LON:g} m), the scales of the GPS sensor here.
+#   [5] NOAA Global Monitoring Laboratory, "General Solar Position
+#       Calculations" (https://gml.noaa.gov/grad/solcalc/solareqns.PDF): the
+#       sun's zenith angle at solar noon is the latitude minus the solar
+#       declination, and the declination is 0 at the equinoxes; at
+#       {LAT0:g} N the noon sun of an equinox stands {SUN_ELEVATION_DEG:.1f} degrees above the
+#       southern horizon: the direction of the sun light below.
 #
 # Estimates (no exact numbers from the sources)
 #   * Blocks of {STREETS[1] - STREETS[0] - ROAD:.1f} m kerb to kerb (street centre lines every
@@ -460,6 +478,13 @@ HEADER = f"""\
 #   * Parking spots 10 ft wide; speed limits 25 mph on the streets, 10 mph
 #     in the lot (the MDF); the mission is a tour of the town with two stops
 #     in parking spots.
+#
+# Lighting: daylight over the whole town, a sun (a directional light, from [5])
+# and the sky's light (the ambient light), so that cameras see every street lit
+# wherever they are. The levels are estimates for the renderer: the sun {SUN_INTENSITY:g}
+# of full white, the sky {SKY_AMBIENT:g} grey, enough to show the dark asphalt and the
+# walls facing away from the sun. The sun casts no shadows: one shadow map over
+# a town 300 m across would be too coarse to show them.
 #
 # Route network and world agree: every RNDF waypoint, mapped through the
 # geo_reference (x = (lat - latitude_deg) * scale_latitude_m, y = (lon -
@@ -497,6 +522,10 @@ def write_world(objs, poses, path: Path) -> None:
              f"  longitude_deg: {LON0}",
              f"  scale_latitude_m: {SCALE_LAT}",
              f"  scale_longitude_m: {SCALE_LON}",
+             f"ambient_light: {vec((SKY_AMBIENT,) * 3)}",
+             "lights:",
+             f"  - {{name: sun, type: directional, direction: {vec(SUN_DIRECTION)}, color: [1.0, 1.0, 1.0], "
+             f"intensity: {fmt(SUN_INTENSITY)}, cast_shadows: false}}",
              "materials:",
              "  ground: {rgba: [0.72, 0.63, 0.48, 1.0], friction: 0.8}      # desert soil around the town",
              "  asphalt: {rgba: [0.22, 0.22, 0.24, 1.0], friction: 1.0}     # dry asphalt",

@@ -82,10 +82,17 @@ def footprint_radius(robot) -> float:
     return math.hypot(length, width) / 2.0
 
 
+def in_water(world, location) -> bool:
+    return any(wv.depth_of(location) > 0.0 for wv in world.water)
+
+
 def assert_lands(world, robot, poses, settle_s: float) -> None:
     """Dropped at each of ``poses`` (one robot at each, all at once: start poses leave
     room between them), after ``settle_s`` every robot is level, resting at its height on
-    the surface below its pose, and still (no jitter, no creep), with no physics reset."""
+    the surface below its pose, and still (no jitter, no creep), with no physics reset.
+    At a pose under water a vessel floats level where it was put (slightly buoyant, it
+    may drift up a little); a walking robot, not built for water, loses its battery
+    there and folds, so it is not checked."""
     sim = Simulation(world, seed=0)
     grounds = [sim._ground_below(p.location) for p in poses]
     for uid, pose in enumerate(poses, start=1):
@@ -97,6 +104,12 @@ def assert_lands(world, robot, poses, settle_s: float) -> None:
         (x0, y0, z0), (roll, pitch, _) = before[uid]
         (x1, y1, z1), _ = sim.pose_of(uid)
         where = f"{robot.class_name} at {pose.name}"
+        if in_water(world, pose.location) and robot.drive in ("nautical", "legged"):
+            if robot.drive == "nautical":
+                assert abs(math.remainder(roll, 2 * math.pi)) < 0.1, where
+                assert abs(math.remainder(pitch, 2 * math.pi)) < 0.1, where
+                assert math.dist((x1, y1, z1), pose.location) < 0.2, where
+            continue
         assert abs(math.remainder(roll, 2 * math.pi)) < 0.1 and abs(math.remainder(pitch, 2 * math.pi)) < 0.1, where
         assert z0 == pytest.approx(rest_z(robot, pose.location[2], ground), abs=0.03), where
         assert math.dist((x0, y0, z0), (x1, y1, z1)) < 0.005, where

@@ -39,7 +39,9 @@ HEADER = """\
 #   [1] USARSim manual v3.1.3, sec. 3.2.1 "Environment simulation": besides
 #       the USAR arenas, outdoor areas and simulated collapsed buildings were
 #       modelled; victims wave, groan and lie in the rubble.
-#       (/work/shared/reference/usarsim-manual-3.1.3.txt)
+#       (J. Wang, ed. S. Balakirsky, "USARSim V3.1.3: A Game-based Simulation
+#       of Mobile Robots", NIST; in the USARSim release files at
+#       http://sourceforge.net/projects/usarsim)
 #   [2] UK Fire and Rescue national guidance, "Structural defect or further
 #       collapse" (https://www.ukfrs.com/guidance/subsurface-height-
 #       structures-and-confined-spaces?bundle=hazard&id=13542&parent=13555):

@@ -37,7 +37,9 @@ HEADER = """\
 #       arena with more challenging physical obstacles such as stairs and a
 #       ramp; the floor is covered with debris including paper, pipes and
 #       cinder blocks; bricks, pipes and rubble are movable obstacles.
-#       (/work/shared/reference/usarsim-manual-3.1.3.txt)
+#       (J. Wang, ed. S. Balakirsky, "USARSim V3.1.3: A Game-based Simulation
+#       of Mobile Robots", NIST; in the USARSim release files at
+#       http://sourceforge.net/projects/usarsim)
 #   [2] R. Murphy, J. Casper, M. Micire, J. Hyams, "Assessment of the NIST
 #       Standard Test Bed for Urban Search and Rescue", AAAI Tech. Report
 #       WS-00-09, 2000 (https://studylib.net/doc/13662779/): the orange

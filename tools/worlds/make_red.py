@@ -31,7 +31,10 @@ HEADER = """\
 #       Fig. 6 and 7 (the real and the simulated red arena): rubble piles,
 #       cement blocks, slabs and debris on the floor; fewer perceptual
 #       difficulties, maximal demand on locomotion; rubble, bricks and pipes
-#       are movable obstacles. (/work/shared/reference/usarsim-manual-3.1.3.txt)
+#       are movable obstacles.
+#       (J. Wang, ed. S. Balakirsky, "USARSim V3.1.3: A Game-based Simulation
+#       of Mobile Robots", NIST; in the USARSim release files at
+#       http://sourceforge.net/projects/usarsim)
 #   [2] R. Murphy, J. Casper, M. Micire, J. Hyams, "Assessment of the NIST
 #       Standard Test Bed for Urban Search and Rescue", AAAI Tech. Report
 #       WS-00-09, 2000 (https://studylib.net/doc/13662779/): the red section,

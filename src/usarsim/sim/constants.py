@@ -11,6 +11,9 @@ GROUP_ROBOT = 1  # robot bodies (chassis)
 GROUP_MOVABLE = 2  # movable obstacles
 GROUP_WHEEL = 3  # wheels and other small moving parts: not seen by range sensors
 RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
+GROUP_WATER = 4  # water volumes: seen by cameras only
+# What a robot set down at a start pose lands on: everything but water
+GROUND_GROUPS = np.array([1, 1, 1, 1, 0, 1], dtype=np.uint8)
 
 # Collision classes (MuJoCo contype/conaffinity bits): world geometry and chassis
 # collide with everything; wheels collide with world geometry and chassis but not

@@ -33,6 +33,11 @@ from usarsim.sim.builder import camera_fovy_deg
 
 log = logging.getLogger("usarsim.render")
 
+# The near clipping plane of every picture (m).  MuJoCo puts it at 1 % of the model's extent,
+# which in a large world cuts away everything close to the camera: 5 m in a town 300 m
+# across, where a road robot's camera then sees the sky through the road ahead of it.
+NEAR_CLIP_M = 0.02
+
 
 @dataclass(frozen=True)
 class Tile:
@@ -201,6 +206,7 @@ class RenderService:
 
     def _view(self, snap: Snapshot, cam: CameraState, width: int, height: int) -> np.ndarray:
         model, data = snap.model, snap.data
+        model.vis.map.znear = NEAR_CLIP_M / max(float(model.stat.extent), 1e-6)
         if not cam.omni:
             model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, width, height)
             r = self._renderer(model, width, height)

@@ -33,6 +33,7 @@ from usarsim.sensors import Sensor, make_item
 from usarsim.sim import builder, frames, joints, systems, truth
 from usarsim.sim.battery import Batteries
 from usarsim.sim.cameras import Cameras
+from usarsim.sim.constants import GROUND_GROUPS
 from usarsim.sim.entities import Entities
 from usarsim.sim.health import BlowUpGuard
 from usarsim.sim.outputs import Output
@@ -180,7 +181,7 @@ class Simulation:
         """The USARSim z of the first surface straight below ``loc`` (None: nothing)."""
         start = frames.to_mj_vec(loc)
         geom = np.array([-1], dtype=np.int32)
-        dist = mujoco.mj_ray(self.model, self.data, start, np.array([0.0, 0.0, -1.0]), None, 1, -1, geom)
+        dist = mujoco.mj_ray(self.model, self.data, start, np.array([0.0, 0.0, -1.0]), GROUND_GROUPS, 1, -1, geom)
         return None if dist < 0 else loc[2] + dist
 
     def remove(self, uid: int) -> None:
