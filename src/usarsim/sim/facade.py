@@ -41,12 +41,29 @@ class SimFacade:
         self.runner = SimulationRunner(self.sim, self._on_outputs, speed=speed, lockstep=lockstep)
         self._descriptions: dict[str, list[ItemDescription]] = {}
         self._radio: RadioNet | None = None
+        self._watchers: tuple[Callable[[list[Output]], None], ...] = ()
 
     def set_deliver(self, deliver: Callable[[list[Output]], None]) -> None:
         self._deliver = deliver
 
     def _on_outputs(self, outs: list[Output]) -> None:
         self._deliver(outs)
+        for watcher in self._watchers:
+            try:
+                watcher(outs)
+            except Exception:  # an observer must not stop the world: it is dropped
+                log.exception("an output watcher failed and was removed")
+                self.remove_output_watcher(watcher)
+
+    def add_output_watcher(self, watcher: Callable[[list[Output]], None]) -> None:
+        """Also hand every batch of outputs to ``watcher``, after the servers' delivery, on the
+        simulation thread: a read-only observer (the operator console showing a robot that
+        another client drives).  It must return quickly and must not change the list; one
+        that raises is logged and removed."""
+        self._watchers = (*self._watchers, watcher)
+
+    def remove_output_watcher(self, watcher: Callable[[list[Output]], None]) -> None:
+        self._watchers = tuple(w for w in self._watchers if w != watcher)  # a bound method is a new object each time
 
     # Lifecycle ---------------------------------------------------------------------
     def start(self) -> None:

@@ -11,8 +11,14 @@ over one of the page's control connections, asks with ``OK`` and forwards each J
 as a binary WebSocket message.  The world view polls the ground-truth service
 (``/api/truth``) and draws the world's static geometry (``/api/world``).
 
+A robot that another client drives is watched, never operated (``/ws/watch?robot=name``):
+the page receives the lines the simulation sends that robot's client (its status and sensor
+lines, the results of its commands), a description of its mounted items (GEO and CONF
+lines, as GETGEO and GETCONF would answer) and, when the robot leaves the world, a last
+message that says so.  Nothing the page sends on that socket goes anywhere.
+
 Routes: ``/`` the page, ``/static/*`` its files, ``/api/info``, ``/api/world``,
-``/api/classes``, ``/api/truth``, ``/ws/control``, ``/ws/video``.
+``/api/classes``, ``/api/truth``, ``/ws/control``, ``/ws/video``, ``/ws/watch``.
 """
 
 from __future__ import annotations
@@ -25,15 +31,20 @@ import re
 import socket
 import struct
 import time
+from collections import deque
 from pathlib import Path
 
 from aiohttp import WSMsgType, web
 
 from usarsim import __version__
 from usarsim.errors import ProtocolError, UsarsimError
+from usarsim.protocol import messages as M
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.grammar import parse_line
 from usarsim.server.connection import peer_address, refuse, write_open
+from usarsim.server.control import output_to_message
+from usarsim.server.listener import call_on_loop
+from usarsim.server.session import ALIVE, SPAWNING
 
 log = logging.getLogger("usarsim.web")
 
@@ -47,6 +58,9 @@ BIND_WAIT_S = 1.0  # how long a camera binding sent over a control connection ma
 CLOSE_TIMEOUT_S = 2.0  # how long a closing WebSocket waits for the browser's answer
 MAX_CONNECTIONS = 64  # open connections on the web port at most (``usarsim serve --max-web-connections``)
 NAME_RE = re.compile(r"[A-Za-z0-9_.\-]{1,64}\Z")  # robot and camera names the page may bind to
+WATCH_FIND_S = 3.0  # how long a watch waits for a robot that is still being spawned
+WATCH_CHECK_S = 0.2  # how often a watch checks that its robot is still in the world
+WATCH_MAX_PENDING = 512  # lines waiting for a slow page, beyond which only the latest of each stream is kept
 
 
 def _loopback(host: str) -> str:
@@ -122,6 +136,37 @@ class ControlBridge:
         write_open(self.writer, line.encode("ascii", "replace") + b"\r\n")
 
 
+class RobotWatch:
+    """A page watching a robot that another connection drives: the outputs the simulation
+    sends that robot's client, read-only.  While the page reads slowly, the status and sensor
+    lines wait latest-wins per stream, as for a slow client."""
+
+    def __init__(self, uid: int, name: str, conn):
+        self.uid = uid
+        self.name = name
+        self.conn = conn  # the control connection of the robot's controller
+        self.pending: deque = deque()
+        self.ready = asyncio.Event()
+
+    def put(self, outs: list) -> None:
+        self.pending.extend(o for o in outs if o.uid == self.uid)
+        if len(self.pending) > WATCH_MAX_PENDING:
+            self._compact()
+        if self.pending:
+            self.ready.set()
+
+    def _compact(self) -> None:
+        latest = {o.key: o for o in self.pending if o.periodic}
+        kept = [o for o in self.pending if not o.periodic or latest[o.key] is o]
+        self.pending = deque(kept[-WATCH_MAX_PENDING:])
+
+    def take(self) -> list:
+        out = list(self.pending)
+        self.pending.clear()
+        self.ready.clear()
+        return out
+
+
 class TruthClient:
     """A connection to the ground-truth service, shared by every page: one request at a
     time, answers shared for ``TRUTH_MAX_AGE_S``."""
@@ -190,6 +235,9 @@ class WebConsole:
         self._bridges: set[ControlBridge] = set()
         self._tasks: set[asyncio.Task] = set()
         self._truth: TruthClient | None = None
+        self._watches: set[RobotWatch] = set()
+        self._watched: frozenset[int] = frozenset()  # uids of the watched robots (read on the simulation thread)
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._world_json: dict | None = None
         self._classes: list[dict] | None = None
 
@@ -204,6 +252,7 @@ class WebConsole:
         web_app.router.add_get("/api/truth", self._truth_json)
         web_app.router.add_get("/ws/control", self._control_ws)
         web_app.router.add_get("/ws/video", self._video_ws)
+        web_app.router.add_get("/ws/watch", self._watch_ws)
         web_app.router.add_static("/static/", STATIC_DIR)
         web_app.on_response_prepare.append(self._no_cache)
         self._runner = web.AppRunner(web_app, access_log=None, shutdown_timeout=1.0)
@@ -216,9 +265,12 @@ class WebConsole:
             self._runner = None
             raise
         self.port = self._runner.addresses[0][1]
+        self._loop = asyncio.get_running_loop()
+        self.app.facade.add_output_watcher(self._outputs_seen)
         return self.port
 
     async def stop(self) -> None:
+        self.app.facade.remove_output_watcher(self._outputs_seen)
         await asyncio.gather(*(ws.close(code=1001, message=b"the simulator is shutting down")
                                for ws in list(self._sockets)), return_exceptions=True)
         for task in list(self._tasks):
@@ -378,6 +430,130 @@ class WebConsole:
             return
         if not ws.closed:
             await ws.close(code=1000, message=b"the simulator closed the connection")
+
+    # watching another controller's robot -----------------------------------------------------
+    def _find_robot(self, name: str):
+        """(uid, control connection) of the robot called ``name`` (exactly, else ignoring
+        case), None if no connection has one."""
+        found = None
+        for uid, conn in list(self.app.control.connections.items()):
+            s = conn.session
+            if s is None or s.state not in (SPAWNING, ALIVE) or not s.robot_name:
+                continue
+            if s.robot_name == name:
+                return uid, conn
+            if found is None and s.robot_name.lower() == name.lower():
+                found = uid, conn
+        return found
+
+    def _present(self, w: RobotWatch) -> bool:
+        """Whether the watched robot is still in the world: its controller's connection is open."""
+        conn = self.app.control.connections.get(w.uid)
+        return conn is w.conn and conn.session is not None and conn.session.state in (SPAWNING, ALIVE)
+
+    def _describe(self, uid: int, robot) -> list[str]:
+        """GEO and CONF lines of every mounted item of the robot, as GETGEO and GETCONF of its
+        controller would answer them (the page draws its range sensors with them)."""
+        facade = self.app.facade
+        by_type: dict[str, list] = {}
+        for d in facade.describe(robot):
+            by_type.setdefault(d.item_type, []).append(d)
+        lines = []
+        for item_type, items in by_type.items():
+            geo = M.ItemGeometry(item_type=item_type, items=tuple(
+                M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount) for d in items))
+            conf = M.ItemConfiguration(item_type=item_type, items=tuple(
+                M.ItemConf(name=d.name, fields=tuple(facade.live_conf(uid, d.item_type, d.name) or d.conf))
+                for d in items))
+            lines += [M.format_message(geo).rstrip("\r\n"), M.format_message(conf).rstrip("\r\n")]
+        return lines
+
+    def _set_watched(self) -> None:
+        self._watched = frozenset(w.uid for w in self._watches)
+
+    def _outputs_seen(self, outs: list) -> None:
+        """Every batch of outputs, on the simulation thread: those of watched robots go to
+        the event loop; nothing else is done here."""
+        watched = self._watched
+        if not watched:
+            return
+        mine = [o for o in outs if o.uid in watched]
+        if mine:
+            call_on_loop(self._loop, self._fan_out, mine)
+
+    def _fan_out(self, outs: list) -> None:
+        for w in self._watches:
+            w.put(outs)
+
+    async def _watch_ws(self, request: web.Request) -> web.WebSocketResponse:
+        """A robot another client drives, watched read-only: see the module's description."""
+        ws = web.WebSocketResponse(max_msg_size=MAX_PAGE_MESSAGE, timeout=CLOSE_TIMEOUT_S)
+        await ws.prepare(request)
+        self._sockets.add(ws)
+        name = request.query.get("robot", "")
+        watch = None
+        pump = None
+        try:
+            if not NAME_RE.match(name):
+                await ws.send_json({"error": f"not a robot name: {name!r}"})
+                return ws
+            found = self._find_robot(name)
+            deadline = time.monotonic() + WATCH_FIND_S
+            while found is None and time.monotonic() < deadline and not ws.closed:
+                await asyncio.sleep(0.05)
+                found = self._find_robot(name)
+            if found is None:
+                await ws.send_json({"error": f"no robot called {name} in the world"})
+                return ws
+            uid, conn = found
+            session = conn.session
+            watch = RobotWatch(uid, session.robot_name, conn)
+            self._watches.add(watch)
+            self._set_watched()
+            robot = session.robot
+            await ws.send_json({"watching": watch.name, "class": robot.class_name if robot is not None else None,
+                                "controller": conn.peer, "time": round(self.app.facade.time, 3),
+                                "describe": self._describe(uid, robot) if robot is not None else []})
+            log.info("console %s: watching robot %s of %s", request.remote, watch.name, conn.peer)
+            pump = self._spawn(self._relay_watch(ws, watch))
+            async for _ in ws:
+                pass  # read-only: nothing the page sends here reaches the robot or its controller
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self._sockets.discard(ws)
+            if watch is not None:
+                self._watches.discard(watch)
+                self._set_watched()
+            if pump is not None:
+                pump.cancel()
+            if not ws.closed:
+                await ws.close()
+        return ws
+
+    async def _relay_watch(self, ws: web.WebSocketResponse, w: RobotWatch) -> None:
+        """The watched robot's lines, one WebSocket message each, then ``{"left": name}`` and
+        the end of the socket once the robot has left the world."""
+        try:
+            while True:
+                try:
+                    await asyncio.wait_for(w.ready.wait(), WATCH_CHECK_S)
+                except TimeoutError:
+                    pass
+                for o in w.take():
+                    try:
+                        text = M.format_message(output_to_message(o)).rstrip("\r\n")
+                    except Exception:
+                        log.exception("cannot format %r", o)
+                        continue
+                    await ws.send_str(text)
+                if not self._present(w):
+                    await ws.send_json({"left": w.name, "time": round(self.app.facade.time, 3),
+                                        "reason": "its controller's connection closed"})
+                    await ws.close(code=1000, message=b"the robot left the world")
+                    return
+        except (ConnectionError, OSError, RuntimeError):
+            return
 
     # pictures ------------------------------------------------------------------------------
     def _bridge_for(self, page: str, robot: str) -> ControlBridge | None:

@@ -1,6 +1,7 @@
 // The operator console: the spectator (world view), robot operation (video, range
 // sensors, sensor tree, wheels, camera, light) and the command console (spawn, any
-// protocol line, the log of every message received).
+// protocol line, the log of every message received).  A robot that another controller
+// drives is watched read-only: its sensors, range view and log, never its controls.
 
 import { cleanName, parseLine, splitSegment } from "./protocol.js";
 import { RobotSession } from "./robot.js";
@@ -23,6 +24,7 @@ class Console {
     this.info = null;
     this.truthRows = [];
     this.attached = null; // { robot, camera, view: "camera" | "chase" }
+    this.watching = null; // the watch session of another controller's robot, if any
     this.log = [];
     this.logQueue = [];
     this.logSeq = 0;
@@ -32,7 +34,7 @@ class Console {
       robotClicked: (name) => this.robotClicked(name),
       detach: () => this.detach(),
       picked: (x, y) => this.picked(x, y),
-      isOwn: (name) => this.sessions.some((s) => s.name === name && !s.closed),
+      isOwn: (name) => !!this.ownSession(name),
       classOf: (name) => this.classOf(name),
     });
     this.video = new Video($("video"), {
@@ -70,6 +72,10 @@ class Console {
 
   status(text) {
     $("status").textContent = text || "";
+  }
+
+  ownSession(name) {
+    return this.sessions.find((s) => s.name === name && !s.closed && !s.watch) || null;
   }
 
   classOf(name) {
@@ -114,7 +120,7 @@ class Console {
       li.dataset.name = o.name;
       li.className = this.map.handlers.isOwn(o.name) ? "own" : "other";
       if (this.attached && this.attached.robot === o.name) li.classList.add("attached");
-      li.title = `Attach to the camera of ${o.name}`;
+      li.title = this.map.handlers.isOwn(o.name) ? `Attach to ${o.name}` : `Watch ${o.name} (read-only)`;
       li.append(o.name + " ");
       const cls = document.createElement("span");
       cls.className = "cls";
@@ -204,15 +210,46 @@ class Console {
     if (this.selected === s) {
       this.renderSessions();
       this.updateControls();
-      if (s.name) this.attach(s.name); // a robot just spawned: its camera
+      if (s.name && !s.watch) this.attach(s.name); // a robot just spawned: its camera
     }
   }
 
   sessionClosed(s, reason) {
+    if (s.watch) {
+      if (!s.left) {
+        s.left = { time: null, reason: reason || "the console's server closed the connection" };
+        this.robotLeft(s);
+      }
+      return;
+    }
     this.note(s, `connection closed${reason ? ": " + reason : ""}`);
     if (this.attached && this.attached.robot === s.name) this.detach();
     this.renderSessions();
     this.updateControls();
+    this.updateBanner();
+  }
+
+  // a watched robot left the world (or could not be watched): the panes keep its last
+  // readings under a banner that says so; its video ends
+  robotLeft(s) {
+    const l = s.left || {};
+    this.note(s, l.time !== null && l.time !== undefined
+      ? `${s.name} left the world at ${Number(l.time).toFixed(1)} s${l.reason ? " (" + l.reason + ")" : ""}`
+      : `cannot watch ${s.name}${l.reason ? ": " + l.reason : ""}`);
+    if (this.attached && this.attached.robot === s.name) {
+      this.attached = null;
+      this.map.attached = null;
+      this.map.dirty = true;
+      $("video-robot").textContent = "";
+      $("video-camera").replaceChildren();
+      this.video.detach();
+      this.video.message(`${s.name} left the world.`);
+      this.robotSig = "";
+      this.updateRobotList();
+    }
+    this.renderSessions();
+    this.updateControls();
+    this.updateBanner();
   }
 
   select(s) {
@@ -220,12 +257,60 @@ class Console {
     this.tree.show(s);
     this.renderSessions();
     this.updateControls();
+    this.updateBanner();
+  }
+
+  // what the operation panel shows: a watched robot (read-only), or one that has left
+  updateBanner() {
+    const s = this.selected;
+    const el = $("robot-banner");
+    let text = "";
+    let kind = "";
+    if (s && s.watch && s.left) {
+      const l = s.left;
+      kind = "gone";
+      text = l.time !== null && l.time !== undefined
+        ? `Robot ${s.name} left the world at ${Number(l.time).toFixed(1)} s (${l.reason || "its controller disconnected"}). ` +
+          "The readings below are the last it sent."
+        : `Cannot watch ${s.name}: ${l.reason}`;
+    } else if (s && s.watch) {
+      kind = "watch";
+      text = `Watching ${s.name}${s.controller ? ", driven by " + s.controller : ""}: read-only.`;
+    } else if (s && s.closed && s.name) {
+      kind = "gone";
+      text = `Robot ${s.name} left the world: its connection closed. The readings below are the last it sent.`;
+    }
+    el.textContent = text;
+    el.hidden = !text;
+    el.className = "banner " + kind;
+    $("operation").classList.toggle("stale", kind === "gone");
+  }
+
+  // watch another controller's robot: its sensors, range view and log, read-only
+  watchRobot(name) {
+    const w = this.watching;
+    if (w && w.name === name && !w.closed) {
+      if (this.selected !== w) this.select(w);
+      return;
+    }
+    this.stopWatching();
+    const row = this.map.robots.get(name);
+    const s = new RobotSession(this, { name, cls: row ? this.classOf(row.class) : null, watch: true });
+    this.watching = s;
+    this.sessions.push(s);
+    this.select(s);
+  }
+
+  stopWatching() {
+    if (this.watching) this.closeSession(this.watching);
   }
 
   closeSession(s) {
     s.close();
+    if (s === this.watching) this.watching = null;
     this.sessions = this.sessions.filter((x) => x !== s);
-    if (this.selected === s) this.select(this.sessions[this.sessions.length - 1] || null);
+    if (s.watch && this.attached && this.attached.robot === s.name) this.detach();
+    if (this.selected === s) this.select(this.sessions.filter((x) => !x.watch).pop() || null);
     this.renderSessions();
   }
 
@@ -235,13 +320,14 @@ class Console {
       const b = document.createElement("button");
       b.type = "button";
       b.setAttribute("role", "tab");
-      b.className = (s === this.selected ? "selected " : "") + (s.closed ? "dead" : "");
-      b.textContent = s.label;
-      b.title = s.closed ? "Connection closed" : `Operate ${s.label}`;
+      b.className = (s === this.selected ? "selected " : "") + (s.closed || s.left ? "dead " : "") + (s.watch ? "watch" : "");
+      b.textContent = s.watch ? `${s.label} · ${s.left ? "left" : "watching"}` : s.label;
+      b.title = s.watch ? (s.left ? `${s.label} has left the world` : `Watching ${s.label} (read-only)`)
+        : s.closed ? "Connection closed" : `Operate ${s.label}`;
       const x = document.createElement("span");
       x.className = "x";
       x.textContent = "×";
-      x.title = "Close this connection (removes the robot)";
+      x.title = s.watch ? "Stop watching (the robot stays)" : "Close this connection (removes the robot)";
       x.addEventListener("click", (ev) => {
         ev.stopPropagation();
         this.closeSession(s);
@@ -249,11 +335,18 @@ class Console {
       b.append(x);
       b.addEventListener("click", () => {
         this.select(s);
-        if (s.alive && s.name) this.attach(s.name);
+        if (s.alive && s.name && !(this.attached && this.attached.robot === s.name)) this.attach(s.name);
       });
       return b;
     }));
-    $("command-target").textContent = this.selected && !this.selected.closed ? this.selected.label : "a new connection";
+    const t = this.commandSession();
+    $("command-target").textContent = t ? t.label : "a new connection";
+  }
+
+  // the session the command box and the controls speak for: the selected robot of this page
+  commandSession() {
+    const s = this.selected;
+    return s && !s.closed && !s.watch ? s : null;
   }
 
   readingsChanged(s) {
@@ -266,7 +359,7 @@ class Console {
 
   updateControls() {
     const s = this.selected;
-    const live = !!(s && s.alive && !s.closed);
+    const live = !!(s && s.alive && !s.closed && !s.watch);
     $("wheels").disabled = !live || s.drive === "static";
     $("camera-group").disabled = !live || !(s.cls && s.cls.cameras.length);
     $("light-group").disabled = !live;
@@ -300,13 +393,19 @@ class Console {
     sel.value = cam;
     $("video-robot").textContent = robot;
     this.video.attach(robot, cam);
-    const own = this.sessions.find((x) => x.name === robot && !x.closed);
-    if (own && own !== this.selected) this.select(own);
+    const own = this.ownSession(robot);
+    if (own) {
+      if (this.watching) this.stopWatching();
+      if (own !== this.selected) this.select(own);
+    } else {
+      this.watchRobot(robot); // another controller's robot: watched, never operated
+    }
     this.robotSig = "";
     this.updateRobotList();
   }
 
   detach() {
+    this.stopWatching();
     this.attached = null;
     this.map.attached = null;
     this.map.dirty = true;
@@ -362,7 +461,7 @@ class Console {
   sendCommand(text) {
     const line = text.trim();
     if (!line) return;
-    let s = this.selected && !this.selected.closed ? this.selected : null;
+    let s = this.commandSession();
     if (!s) {
       // a new connection, as USAR_UI's Connect: the line (an INIT, say) goes out on it
       s = this.openSession({ name: "", cls: null, initLine: line });
@@ -449,7 +548,7 @@ class Console {
 
   // buttons and keys -----------------------------------------------------------------
   act(name) {
-    const s = this.selected;
+    const s = this.commandSession();
     if (name === "trace") return this.setTrace(!this.map.showTrace);
     if (!s || !s.alive) return;
     const cam = this.attached && this.attached.robot === s.name ? this.attached.camera : null;
@@ -493,7 +592,7 @@ class Console {
     if (t && (t.tagName === "INPUT" || t.tagName === "TEXTAREA" || t.tagName === "SELECT" || t.isContentEditable)) return;
     if ($("message-dialog").open) return;
     if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
-    const s = this.selected;
+    const s = this.commandSession();
     const driveKeys = ["ArrowUp", "ArrowDown", "ArrowLeft", "ArrowRight", "PageUp", "PageDown"];
     if (driveKeys.includes(ev.key)) {
       ev.preventDefault();
@@ -564,9 +663,10 @@ class Console {
     window.addEventListener("keyup", (ev) => this.onKey(ev, false));
     window.addEventListener("blur", () => {
       // keys released while the page had no focus: stop a robot driven by the keyboard
-      if (this.keysDown.size && this.selected && this.selected.alive) {
+      const s = this.commandSession();
+      if (this.keysDown.size && s && s.alive) {
         this.keysDown.clear();
-        this.selected.setMotion(this.keyMotion());
+        s.setMotion(this.keyMotion());
       }
     });
     window.addEventListener("beforeunload", () => this.sessions.forEach((s) => s.close()));

@@ -2,6 +2,10 @@
 // the control port.  Lines go out as typed; every line the simulator sends comes back.
 // The session keeps what the operation panel shows (latest readings, status, geometry)
 // and turns the wheel, camera and light buttons into protocol commands.
+//
+// A watch session (watch: true) shows a robot that another controller drives: /ws/watch
+// brings the lines the simulator sends that controller, read-only.  It sends nothing, and
+// says when the robot has left the world.
 
 import { fields, items, parseLine, vec } from "./protocol.js";
 
@@ -9,10 +13,13 @@ const DEG10 = 0.1745; // 10 degrees, the camera group's step (SimpleUI)
 const RANGE_TYPES = new Set(["Sonar", "IR", "RangeSensor", "RangeScanner", "IRScanner"]);
 
 export class RobotSession {
-  constructor(console_, { name, cls, initLine }) {
+  constructor(console_, { name, cls, initLine, watch = false }) {
     this.console = console_;
     this.name = name || "";
     this.cls = cls || null; // the class description from /api/classes, when known
+    this.watch = watch; // another controller's robot, watched read-only
+    this.controller = ""; // a watched robot's controller (its address)
+    this.left = null; // a watched robot that left the world: { time, reason }
     this.alive = false;
     this.closed = false;
     this.readings = new Map(); // tree key -> { title, time, head, named }
@@ -29,12 +36,19 @@ export class RobotSession {
     this.tilt = 0;
     this.ptSent = {}; // pan-tilt link -> { value, at } last sent
     const proto = location.protocol === "https:" ? "wss" : "ws";
-    this.ws = new WebSocket(`${proto}://${location.host}/ws/control?page=${console_.pageId}`);
+    const path = watch ? `/ws/watch?robot=${encodeURIComponent(this.name)}&page=${console_.pageId}`
+      : `/ws/control?page=${console_.pageId}`;
+    this.ws = new WebSocket(`${proto}://${location.host}${path}`);
     this.ws.onopen = () => {
-      if (initLine) this.send(initLine);
+      if (initLine && !watch) this.send(initLine);
     };
     this.ws.onmessage = (ev) => {
-      for (const line of String(ev.data).split("\n")) if (line) this.receive(line);
+      const text = String(ev.data);
+      if (watch && text.startsWith("{")) {
+        this.watchEvent(JSON.parse(text));
+        return;
+      }
+      for (const line of text.split("\n")) if (line) this.receive(line);
     };
     this.ws.onclose = (ev) => {
       this.closed = true;
@@ -47,11 +61,31 @@ export class RobotSession {
     return this.name || "(unnamed)";
   }
 
+  // what /ws/watch says besides the robot's lines: whom it watches, that it left, or why not
+  watchEvent(msg) {
+    if (msg.watching) {
+      this.name = msg.watching;
+      this.controller = msg.controller || "";
+      if (!this.cls && msg.class) this.cls = this.console.classOf(msg.class);
+      for (const line of msg.describe || []) this.keepDescription(parseLine(line).type, line);
+      this.console.note(this, `watching ${this.name}${this.controller ? ", driven by " + this.controller : ""} (read-only)`);
+      this.console.updateBanner();
+    } else if (msg.left) {
+      this.left = { time: msg.time, reason: msg.reason || "" };
+      this.alive = false;
+      this.console.robotLeft(this);
+    } else if (msg.error) {
+      this.left = { time: null, reason: msg.error };
+      this.console.robotLeft(this);
+    }
+  }
+
   get drive() {
     return this.cls ? this.cls.drive : "skid";
   }
 
   send(line) {
+    if (this.watch) return false; // nothing reaches a watched robot
     if (this.ws.readyState !== WebSocket.OPEN) return false;
     const text = String(line).trim();
     if (!text) return false;

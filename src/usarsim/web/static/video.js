@@ -58,6 +58,7 @@ export class Video {
     if (this.ws && this.ws.readyState === WebSocket.OPEN) this.ws.send(JSON.stringify({ bind: null }));
     this.message("Spawn a robot or click one in the world view to see its camera.");
     this.ctx.clearRect(0, 0, this.canvas.width, this.canvas.height);
+    this.times = [];
     this.els.fps.textContent = "0.0";
   }
 

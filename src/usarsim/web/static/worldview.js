@@ -30,6 +30,10 @@ export class WorldView {
     this.attached = null;
     this.selected = null;
     this.scan = null; // { name, points: [[x, y, colour]] } of the selected robot, world frame
+    this.showStartLabels = true;
+    // the start poses' names as last drawn: { name, x, y, w, h } of each name's box and the
+    // marker it names ([x, y]), in CSS pixels of the canvas
+    this.startLabels = [];
     this.view = { cx: 0, cy: 0, scale: 30 };
     this.dirty = true;
     this.drag = null;
@@ -216,6 +220,47 @@ export class WorldView {
     ctx.fillText(text, sx, sy + dy);
   }
 
+  // Each start pose's name beside its marker: on its right, else on its left, below or
+  // above, wherever it covers no other marker or name (the first place when none is free).
+  drawStartLabels(poses) {
+    const ctx = this.ctx;
+    const labels = [];
+    if (this.showStartLabels) {
+      ctx.font = "10px system-ui, sans-serif";
+      const h = 11;
+      const r = Math.max(5, 0.3 * this.view.scale); // how far the marker reaches from its pose
+      const markers = poses.map((p) => {
+        const [sx, sy] = this.toScreen(p.location[0], p.location[1]);
+        return { x: sx - r, y: sy - r, w: 2 * r, h: 2 * r };
+      });
+      const overlaps = (a, b) => a.x < b.x + b.w + 2 && b.x < a.x + a.w + 2 && a.y < b.y + b.h + 2 && b.y < a.y + a.h + 2;
+      poses.forEach((p, i) => {
+        const m = markers[i];
+        const sx = m.x + r;
+        const sy = m.y + r;
+        const w = ctx.measureText(p.name).width;
+        const places = [[sx + r + 3, sy - h / 2], [sx - r - 3 - w, sy - h / 2], [sx - w / 2, sy + r + 2],
+          [sx - w / 2, sy - r - 2 - h]].map(([x, y]) => ({ x, y, w, h }));
+        const free = places.find((b) => !markers.some((o, j) => j !== i && overlaps(b, o))
+          && !labels.some((o) => overlaps(b, o))) || places[0];
+        labels.push({ name: p.name, ...free, marker: [sx, sy] });
+      });
+      ctx.textAlign = "left";
+      ctx.textBaseline = "top";
+      ctx.lineWidth = 3;
+      for (const l of labels) {
+        ctx.strokeStyle = "rgba(0,0,0,.75)";
+        ctx.strokeText(l.name, l.x, l.y);
+        ctx.fillStyle = "rgba(255,255,255,.7)";
+        ctx.fillText(l.name, l.x, l.y);
+      }
+      ctx.textBaseline = "alphabetic";
+    }
+    this.startLabels = labels;
+    const names = labels.map((l) => l.name).join(" ");
+    if (this.canvas.dataset.startLabels !== names) this.canvas.dataset.startLabels = names;
+  }
+
   // a shape given in a body's own frame (forward, right, metres), at x, y turned by yaw
   inFrame(x, y, yaw, draw) {
     const ctx = this.ctx;
@@ -250,7 +295,7 @@ export class WorldView {
       const k = 0.55 + 0.45 * Math.min(1, Math.max(0, o.top) / 1.5); // higher is lighter
       this.poly(o.poly, rgba(shade(o.rgba, k)), rgba(shade(o.rgba, k * 0.6)));
     }
-    // start poses
+    // start poses: a marker each, its name beside it
     for (const p of world.start_poses) {
       const [x, y] = p.location;
       this.inFrame(x, y, p.rotation[2], (c, tr) => {
@@ -260,8 +305,8 @@ export class WorldView {
         c.beginPath(); c.moveTo(...a); c.lineTo(...b); c.lineTo(...d); c.closePath();
         c.strokeStyle = "rgba(255,255,255,.35)"; c.lineWidth = 1; c.stroke();
       });
-      if (this.view.scale > 18) this.label(p.name, x, y, "rgba(255,255,255,.45)", 16);
     }
+    this.drawStartLabels(world.start_poses);
     const truth = { Victim: [], RFIDTag: [], FalseAlarm: [], MovableObject: [] };
     for (const o of this.objects) if (truth[o.class]) truth[o.class].push(o);
     // movable objects where they are now
