@@ -78,6 +78,7 @@ class SimulationRunner:
         self._lag_lost = 0.0
         self._lag_logged: float | None = None  # when the lag warning was last given
         self._owed = 0.0  # lock-step: simulated time asked for and not yet run (< one step)
+        self._stopping = threading.Event()  # set by stop(): queued requests are dropped
 
     # Thread-safe API ---------------------------------------------------------------
     def submit(self, req: Request | StepRequest) -> None:
@@ -86,10 +87,27 @@ class SimulationRunner:
     def start(self) -> None:
         self._thread.start()
 
-    def stop(self, timeout: float = 5.0) -> None:
-        stop = _Stop()
-        self.queue.put(stop)
-        self._thread.join(timeout)
+    # Waiting for the thread at stop: it finishes at most one chunk of physics (CHUNK_S) or one
+    # request; a model build of hundreds of robots takes a few seconds on a slow machine.
+    STOP_TIMEOUT_S = 120.0
+
+    def stop(self, timeout: float | None = None) -> None:
+        """Stop the simulation thread and wait until it has ended.
+
+        Requests still queued (the removals of every robot whose client the server just
+        closed, say) are dropped rather than run: rebuilding the model once per removed robot
+        is work nobody will see.  The thread must have ended before the interpreter finalises:
+        a daemon thread still inside MuJoCo (a model compiling) when Python exits is unwound
+        by force through native frames, and the process dies with a segmentation fault after
+        its work is done."""
+        self._stopping.set()
+        self.queue.put(_Stop())
+        if not self._thread.is_alive():
+            return
+        self._thread.join(self.STOP_TIMEOUT_S if timeout is None else timeout)
+        if self._thread.is_alive():
+            log.error("the simulation thread did not stop within %.0f s", self.STOP_TIMEOUT_S
+                      if timeout is None else timeout)
 
     @property
     def alive(self) -> bool:
@@ -107,6 +125,8 @@ class SimulationRunner:
             log.exception("the simulation thread stopped on an unexpected error")
 
     def _execute(self, req: Request) -> None:
+        if self._stopping.is_set():
+            return  # shutting down: nobody waits for it (see stop)
         result, error = None, None
         try:
             result = req.action(self.sim)
@@ -128,6 +148,8 @@ class SimulationRunner:
             item = self.queue.get()
             if isinstance(item, _Stop):
                 return
+            if self._stopping.is_set():
+                continue
             if isinstance(item, StepRequest):
                 pending, self._pending = self._pending, []
                 for req in pending:
