@@ -168,7 +168,7 @@ def test_the_arm_ui_reads_the_conf_as_the_very_next_line(server_factory, attempt
     (the robot's status lines start as soon as it stands in the world)."""
     srv = server_factory(lockstep=False)
     with Client(srv.port) as c:
-        c.send("INIT {ClassName USARBot.Talon} {Location 4.5,1.9,1.8} {Rotation 0,0,0}")
+        c.send("INIT {ClassName USARBot.Talon} {Location -9.5,4.0,-0.3} {Rotation 0,0,0}")
         assert c.next_line().text.startswith("NFO {Gametype")
         c.send("GETCONF {Type Actuator}")
         conf = c.next_line().text

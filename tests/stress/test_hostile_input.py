@@ -86,7 +86,8 @@ def test_a_robot_put_inside_a_wall_does_not_disturb_the_others(witness_server):
     c = srv.connect()
     c.nfo()
     c.send("INIT {ClassName USARBot.P2AT} {Name Walled} {Location 0.0,-7.2,-0.3}")  # in the west outer wall
-    c.step(1.0)
+    refused = [ln.text for ln in c.step(1.0) if ln.text.startswith("ERROR")]
+    assert refused and "is inside box 'outer_w'" in refused[0], refused
     assert_alive(c)
     after = ground_truth(srv.witness.step(0.1))[-1][1]
     assert math.dist(before, after) < 0.05  # the witness stood still, untouched

@@ -183,6 +183,14 @@ class Session:
         if not all(math.isfinite(v) for v in (*location, *rotation)):
             self.refuse("INIT", "init", "location and rotation must be finite numbers")
             return
+        if not set_down:
+            solid = self._solid_at(robot, location, rotation)
+            if solid is not None:
+                x, y, z = location
+                self.refuse("INIT", "init", f"location {x:.2f},{y:.2f},{z:.2f} is inside {solid} of "
+                            f"{self.facade.world_name}: choose a free place (GETSTARTPOSES lists where "
+                            f"robots may start)")
+                return
         refused = self.ctx.admit()
         if refused is not None:
             self.refuse("INIT", "init", refused)
@@ -192,6 +200,16 @@ class Session:
         self.state = SPAWNING
         self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self._spawn_done,
                           set_down=set_down)
+
+    def _solid_at(self, robot: RobotConfig, location, rotation) -> str | None:
+        """The solid of the world (not a movable object, which may have been pushed away) that
+        the robot's origin would be inside; a level robot put into the floor is lifted onto it
+        (as the simulation does when it spawns), so only what is there counts."""
+        x, y, z = location
+        level = abs(rotation[0]) < 1e-6 and abs(rotation[1]) < 1e-6
+        if level and z > -robot.lowest_point_m:
+            z = -robot.lowest_point_m - 0.005
+        return self.facade.world.solid_at((x, y, z), movable=False)
 
     def spawn_done(self, result, error) -> None:
         if self.state == CLOSED:
