@@ -271,11 +271,15 @@ def cmd_serve(args) -> int:
             print(f"usarsim: error: --robot-dir {d}: no such folder", file=sys.stderr)
             return 1
     try:
-        from usarsim.config.robot import load_robot
+        from usarsim.config.robot import class_name_problem, load_robot
 
         for d in args.robot_dir:
             for path in sorted(Path(d).glob("*.yaml")):
-                load_robot(path)  # a broken robot file is reported now, not when a client asks for it
+                # a broken robot file is reported now, not when a client asks for it
+                problem = class_name_problem(load_robot(path))
+                if problem is not None:
+                    print(f"usarsim: error: {path}: {problem}", file=sys.stderr)
+                    return 1
     except UsarsimError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1

@@ -387,3 +387,13 @@ def test_bench_reports_real_time_factors_as_json():
 def test_bench_refuses_nonsense():
     out = usarsim("bench", "--robots", "0", "--seconds", "2")
     assert out.returncode == 2 and "--robots" in out.stderr
+
+
+def test_serve_refuses_a_robot_dir_file_named_unlike_its_class(tmp_path):
+    # INIT finds a class by its file's name: a file that declares another class is refused at
+    # start-up (a client asking for it would otherwise be refused at INIT, much later)
+    src = (ROOT / "src" / "usarsim" / "data" / "robots" / "P2AT.yaml").read_text()
+    (tmp_path / "MyBot.yaml").write_text(src)
+    out = usarsim("serve", "--port", "0", "--robot-dir", str(tmp_path), "--no-web", "--no-image", timeout=60)
+    assert out.returncode == 1, out
+    assert "MyBot.yaml" in out.stderr and "class_name is 'P2AT'" in out.stderr, out.stderr
