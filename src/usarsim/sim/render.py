@@ -117,8 +117,13 @@ class RenderService:
         with self._lock:
             thread, self._thread = self._thread, None
         if thread is not None:
+            # the thread ends after the picture it is drawing (a snapshot waits up to 30 s for
+            # the simulation) and closes its GL contexts itself: it must have ended before the
+            # interpreter finalises, or its native frames are unwound by force
             self._queue.put(None)
-            thread.join(timeout=5.0)
+            thread.join(timeout=60.0)
+            if thread.is_alive():
+                log.error("the render thread did not stop within 60 s")
 
     # the render thread -------------------------------------------------------------
     def _run(self) -> None:
