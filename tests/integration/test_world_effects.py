@@ -246,7 +246,7 @@ def test_a_grid_fence_lets_its_porosity_through_repeatably(world, probe):
     passed = [np.array(s.ranges_m[30:151]) > split for s in scans]  # beams within 60 degrees
     for p in passed[1:]:
         np.testing.assert_array_equal(p, passed[0])
-    assert 0.25 < passed[0].mean() < 0.55
+    assert 0.25 < passed[0].mean() < 0.6  # some beams pass, most are stopped (121 beams: coarse)
     assert np.mean(sonar) == pytest.approx(2.985 - (x0 + PROBE_X), abs=0.02)
 
 

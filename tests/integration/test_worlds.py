@@ -54,21 +54,32 @@ def test_a_robot_pushes_the_brick_in_its_way():
     assert x > after[3][0] + 1.0 and sim.resets == 0  # the robot went on over it
 
 
-def test_paper_on_the_orange_floor_is_slippery():
-    """A sheet of paper (friction 0.3) decides the grip of the wheels on it: a P2AT spinning
-    on the spot turns faster there than on the bare floor, its wheels sliding more easily
-    sideways."""
-    world = resolve_world("DM-USAR_orange")
-    sheet = next(o for o in world.objects if o.material == "paper" and min(o.size[:2]) >= 0.75)
-    rates = {}
-    for label, (x, y) in (("paper", sheet.center[:2]), ("floor", (sheet.center[0], sheet.center[1] + sheet.size[1] / 2 + 1.0))):
+def test_paper_on_the_orange_floor_is_slippery(tmp_path):
+    """A sheet of paper (the orange arena's material, friction 0.3) decides the grip of the
+    wheels on it: a P2AT pushing into a wall from the bare floor stalls (its wheels hold),
+    from a sheet of paper its wheels spin on the paper."""
+    from helpers import TEST_WORLD, WALL_FACE_X
+    from usarsim.config.world import load_world
+
+    paper = resolve_world("DM-USAR_orange").materials["paper"]
+    assert paper.friction == pytest.approx(0.3)
+    spin = {}
+    for label in ("paper", "floor"):
+        text = TEST_WORLD.replace("materials:\n", "materials:\n  paper: {rgba: [0.9, 0.9, 0.9, 1.0], friction: %g}\n"
+                                  % paper.friction)
+        if label == "paper":  # a sheet under the robot where it meets the wall
+            text = text.replace("objects:\n", "objects:\n  - {name: sheet, shape: box, center: [4.4, 0.0, -0.0025], "
+                                "size: [1.2, 0.8, 0.005], material: paper}\n")
+        (tmp_path / "TestArena.yaml").write_text(text)
+        world = load_world(tmp_path / "TestArena.yaml")
         sim = Simulation(world, seed=0)
-        sim.spawn(1, resolve_robot("P2AT"), "R", (x, y, -0.3), (0.0, 0.0, 0.0))
+        sim.spawn(1, resolve_robot("P2AT"), "R", (WALL_FACE_X - 0.55, 0.0, -0.3), (0.0, 0.0, 0.0))
         sim.advance(1.0)
-        drive_skid(sim, 1, -3.0, 3.0)
-        sim.advance(1.0)
-        _, (_, _, a0) = sim.pose_of(1)
-        sim.advance(1.0)
-        _, (_, _, a1) = sim.pose_of(1)
-        rates[label] = abs(math.remainder(a1 - a0, 2 * math.pi))
-    assert rates["paper"] > 1.2 * rates["floor"]
+        drive_skid(sim, 1, 4.0, 4.0)
+        sim.advance(3.0)  # at the wall, pushing
+        h = sim.robots[1].handle
+        spin[label] = sum(abs(float(sim.data.qvel[h.joint_qvel[w]])) for w in ("LeftFWheel", "RightFWheel")) / 2
+        (x, _, _), _ = sim.pose_of(1)
+        assert x > WALL_FACE_X - 0.35, label  # it reached the wall
+    assert spin["floor"] < 0.3  # stalled
+    assert spin["paper"] > 1.0, spin  # spinning on the paper

@@ -488,7 +488,7 @@ def test_validate_shipped_robot_prints_one_line(capsys):
     assert err == ""
     lines = out.splitlines()
     assert len(lines) == 1
-    assert lines[0].startswith("ok: robot P2AT: SkidSteered, 14 kg, 27 sensors")
+    assert lines[0].startswith("ok: robot P2AT: SkidSteered, 14 kg, 28 sensors")
 
 
 def test_validate_bad_world_exits_1_with_the_message_on_stderr(tmp_path, capsys):

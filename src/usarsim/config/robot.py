@@ -212,6 +212,9 @@ class RobotConfig:
     links: tuple[Link, ...] = ()
     mission_packages: tuple[MissionPackage, ...] = ()
     wheel_friction: float = 1.0
+    # skid steering: the wheels of each side turn together, through a chain or a track (False:
+    # each wheel has its own motor; see usarsim/robots/skid.py)
+    chained: bool = True
     wheel_gain: float = 20.0
     wheel_torque_nm: float | None = None
     steer_torque_nm: float = 50.0  # steering servo torque of each steered wheel
@@ -468,6 +471,7 @@ def _robot(data: dict, path: str) -> RobotConfig:
     status_interval = top.float("status_interval_s", d.status_interval_s, min=0.01, max=10.0)
     spawn_clearance = top.float("spawn_clearance_m", d.spawn_clearance_m, min=0.0, max=2.0)
     wheel_friction = top.float("wheel_friction", d.wheel_friction, min=0.0, max=10.0)
+    chained = top.bool("chained", d.chained)
     wheel_gain = top.float("wheel_gain", d.wheel_gain, min=0.0, min_exclusive=True)
     wheel_torque = top.float("wheel_torque_nm", d.wheel_torque_nm, min=0.0, min_exclusive=True)
     steer_torque = top.float("steer_torque_nm", d.steer_torque_nm, min=0.0, min_exclusive=True)
@@ -543,7 +547,7 @@ def _robot(data: dict, path: str) -> RobotConfig:
                        battery_s=battery, status_interval_s=status_interval, spawn_clearance_m=spawn_clearance,
                        geometry=geometry,
                        chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
-                       wheel_friction=wheel_friction, wheel_gain=wheel_gain,
+                       wheel_friction=wheel_friction, chained=chained, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
                        mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints,
                        nautical=nautical, gait=gait)

@@ -12,6 +12,7 @@ with ``@DRIVES.register("name")``, plus robot files that say ``drive: name``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from usarsim.config.robot import RobotConfig, Wheel
@@ -30,6 +31,17 @@ if TYPE_CHECKING:
     from usarsim.sim.view import RobotHandle
 
 DRIVES = Registry("drive")
+
+
+@dataclass(frozen=True)
+class Treads:
+    """How a robot's wheels meet the floor when it turns by skidding them sideways (tracks
+    and the tyres of skid-steered robots): the tread's friction across its rolling direction
+    as a fraction of the friction along it, and the drivetrain's inertia reflected to the
+    wheel's rim, as a mass (kg: a wheel's rotor inertia is this times its radius squared)."""
+
+    lateral_ratio: float
+    drive_inertia_kg: float
 
 
 class DriveModel:
@@ -67,6 +79,12 @@ class DriveModel:
     def build(cls, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, robot: RobotConfig, prefix: str) -> None:
         """Add what the kind needs to the robot's chassis body in the model (rotors)."""
 
+    @classmethod
+    def treads(cls, robot: RobotConfig) -> Treads | None:
+        """The treads of a robot that skids its wheels sideways to turn (the model builder
+        gives its wheels direction-dependent friction on the floor); None for the others."""
+        return None
+
     def resolve(self, model: mujoco.MjModel, handle: RobotHandle) -> None:
         """Look the kind's own MuJoCo ids up by name, after every model build."""
 
@@ -82,6 +100,10 @@ class DriveModel:
     def wheel_target(self, w: Wheel) -> float:
         """The spin speed (rad/s) of a driven wheel no joint order has taken."""
         return 0.0
+
+    def ordered_speed(self, w: Wheel) -> float | None:
+        """The spin speed (rad/s) a joint order gave a driven wheel, or None."""
+        return self.wheel_speed.get(w.name)
 
     def steer_target(self, w: Wheel) -> float:
         """The angle (rad, positive right) of a steered wheel."""
@@ -102,10 +124,11 @@ class DriveModel:
             if not w.driven:
                 continue
             a = handle.actuator[w.name]
+            ordered = self.ordered_speed(w) if powered else None
             if not powered:
                 ctrl[a] = 0.0
-            elif w.name in self.wheel_speed:
-                ctrl[a] = self.wheel_speed[w.name]
+            elif ordered is not None:
+                ctrl[a] = ordered
             else:
                 ctrl[a] = self.wheel_target(w)
 

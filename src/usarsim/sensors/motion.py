@@ -22,6 +22,7 @@ from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim.frames import wrap_2pi, wrap_pi
 
 if TYPE_CHECKING:
+    from usarsim.config.robot import MountedItem, RobotConfig
     from usarsim.sim.view import WorldView
 
 
@@ -32,11 +33,19 @@ class OdometryConfig(SensorConfig):
     encoder_resolution_rad: float = 0.0099
     left_wheel: str = ""
     right_wheel: str = ""
+    # The effective track width (m) the heading is worked out with; 0: the wheels' own
+    # separation (protocol.md 7.4).  A skid-steered robot's wheels slip sideways as it
+    # turns, so its wheel angles overstate its turns; the Pioneer's controller corrects
+    # that with a calibrated RevCount (encoder ticks per half turn of the robot, Pioneer 3
+    # Operations Manual, ARCOS FLASH parameters), this with a wider track.
+    track_width_m: float = 0.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.encoder_resolution_rad < 0:
             raise ValueError(f"encoder_resolution_rad must be >= 0, got {self.encoder_resolution_rad}")
+        if not (self.track_width_m >= 0 and math.isfinite(self.track_width_m)):
+            raise ValueError(f"track_width_m must be >= 0, got {self.track_width_m}")
 
 
 def _quantise(angle: float, resolution: float) -> float:
@@ -49,11 +58,22 @@ def _quantise(angle: float, resolution: float) -> float:
 class Odometry(Sensor):
     """Differential dead reckoning from the left and right wheel angles, quantised by
     EncoderResolution; pose relative to the spawn pose (or the last RESET); positive
-    theta is a clockwise (right) turn, as in the Z-down frame."""
+    theta is a clockwise (right) turn, as in the Z-down frame.
+
+    The heading changes by r (dl - dr) / TrackWidth: the wheels' separation unless the
+    robot file gives ``TrackWidth`` or a client sets it (``SET {Type Odometry} {Name n}
+    {Opcode TrackWidth} {Params w}``, w in metres; 0 goes back to the file's value), the
+    calibration a skid-steered robot needs: its wheels slip as it turns, and their angles
+    count more turn than the robot made."""
 
     RESETTABLE = True
     Config = OdometryConfig
-    ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel"}
+    ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel",
+               "TrackWidth": "track_width_m"}
+
+    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+        super().__init__(item, config, robot, seed)
+        self._set_track = 0.0  # a client's TrackWidth (m; 0: none), kept across model rebuilds
 
     def configure(self, view: WorldView) -> None:
         wheels = {w.name: w for w in self.robot.wheels}
@@ -62,7 +82,16 @@ class Odometry(Sensor):
         self._left, self._right = left, right
         self._radius = wheels[left].radius_m
         # sep = 2 x the lateral offset of the right wheel (protocol.md 7.4)
-        self._sep = 2.0 * abs(wheels[right].position[1])
+        self._wheel_sep = 2.0 * abs(wheels[right].position[1])
+
+    @property
+    def _sep(self) -> float:
+        return self._set_track or self.config.track_width_m or self._wheel_sep
+
+    @property
+    def track_width_m(self) -> float:
+        """The track width the heading is worked out with now (m)."""
+        return self._sep
 
     def _angles(self, view: WorldView) -> tuple[float, float]:
         q = view.data.qpos
@@ -87,6 +116,17 @@ class Odometry(Sensor):
         # reported in [0, 2 pi) as UT2004 did (protocol.md 6.3 example: 6.2432)
         return OdometryReading(self.name, self.x, self.y, wrap_2pi(self.theta))
 
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
+        """``{Opcode RESET}`` (protocol.md 5.4) and ``{Opcode TrackWidth} {Params w}``: the
+        effective track width from now on (m; 0: the robot file's)."""
+        if opcode.upper() != "TRACKWIDTH":
+            return super().operate(view, opcode, params)
+        vals = params.values
+        if vals is None or len(vals) != 1 or not vals[0] >= 0:
+            return OperationResult(ok=False)
+        self._set_track = float(vals[0])
+        return OperationResult(ok=True)
+
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("ScanInterval", c.scan_interval_s), ("EncoderResolution", c.encoder_resolution_rad))
@@ -109,8 +149,10 @@ class EncoderConfig(SensorConfig):
 
 @SENSORS.register("Encoder")
 class Encoder(Sensor):
-    """Tick = round(accumulated wheel angle x (1 + U(-Noise, Noise)) / Resolution);
-    forward rotation counts up."""
+    """Tick = round(accumulated wheel angle / Resolution), forward rotation counting up;
+    the noise is the counting's: each reading's change of angle is scaled by (1 + U(-Noise,
+    Noise)) before it is added (protocol.md 7.5 scales the whole angle), so that a wheel at
+    rest keeps its count, as a real encoder does, however far it has turned."""
 
     PACKED = True
     RESETTABLE = True
@@ -123,12 +165,15 @@ class Encoder(Sensor):
             raise ValueError(f"encoder {self.name}: unknown wheel {self._wheel}")
 
     def reset(self, view: WorldView) -> None:
-        self._zero = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
+        self._last = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
+        self._counted = 0.0  # the angle counted so far, with its noise (rad)
 
     def measure(self, view: WorldView) -> EncoderItem:
-        angle = float(view.data.qpos[self.handle.joint_qpos[self._wheel]]) - self._zero
-        noisy = self.relative_noise_scalar(angle)
-        return EncoderItem(self.name, int(round(noisy / self.config.resolution_rad)))
+        angle = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
+        step, self._last = angle - self._last, angle
+        if step != 0.0:
+            self._counted += self.relative_noise_scalar(step)
+        return EncoderItem(self.name, int(round(self._counted / self.config.resolution_rad)))
 
     @classmethod
     def combine(cls, parts: list[EncoderItem]) -> EncoderReading:

@@ -4,14 +4,16 @@ together in one packed SEN line (protocol.md 6.3: ``{Name Touch Touch False}``).
 
 Model: the sphere (``Diameter`` 0.01 m, protocol.md 7.2) touches a geom when the
 distance from its centre to that geom's surface is at most its radius, or when the
-centre is inside the geom.  The distance is computed analytically in the geom's own
-frame (signed distance functions of MuJoCo's plane, sphere, capsule, ellipsoid,
-cylinder and box); other shapes (meshes, height fields) are taken as their local
-bounding box.  Candidates are every collidable geom (contype or conaffinity set) that
-does not belong to the robot itself: world geometry, the floor plane, victims and other
-robots, wheels included (ray casts would miss wheels, which sit in a geom group rays do
-not see, and a centre already inside a solid).  A bounding-sphere test first leaves only
-the geoms within reach, so a measurement costs a few vector operations.
+centre is inside the geom.  MuJoCo finds that itself: the model builder puts the sphere at
+the sensor's mount as a probe geom, whose contacts MuJoCo detects with everything
+collidable but its own robot (world geometry, the floor, victims, other robots and their
+wheels) while they overlap, and never acts on: its margin is far negative, so that its
+contacts stay inactive ("in the gap", MuJoCo's contact gap), they push nothing.  A
+measurement, at the sensor's ScanInterval only, looks the probe up among the contacts of
+the last physics step: no geometry of its own, whatever the shapes (meshes included).
+Without a probe (a model built otherwise) the sensor measures the distances itself:
+signed distance functions of MuJoCo's plane, sphere, capsule, ellipsoid, cylinder and box
+in the geom's own frame, other shapes as their local bounding box.
 """
 
 from __future__ import annotations
@@ -37,6 +39,18 @@ _CAPSULE = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
 _ELLIPSOID = int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)
 _CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
 _BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
+
+# The probe geom (usarsim.sim.builder adds one per Touch item): the sensor's sphere (built
+# at the default Diameter, given the sensor's own when it is configured), whose contacts
+# MuJoCo detects while it overlaps anything (its gap makes up for its margin) and acts on
+# only at a penetration deeper than -PROBE_MARGIN_M, which nothing reaches.
+PROBE_RADIUS_M = 0.005  # protocol.md 7.2: Diameter 0.01 m
+PROBE_MARGIN_M = -1.0
+
+
+def probe_name(prefix: str, item_name: str) -> str:
+    """The probe geom of the robot ``prefix``'s Touch item ``item_name``."""
+    return f"{prefix}/touch/{item_name}"
 
 
 def _box_sd(p: np.ndarray, half: np.ndarray) -> float:
@@ -103,6 +117,15 @@ class Touch(Sensor):
 
     def configure(self, view: WorldView) -> None:
         m = view.model
+        self._probe = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, probe_name(self.handle.prefix, self.name))
+        if self._probe >= 0:
+            # the probe is the sensor's sphere: its contacts are detected while it overlaps
+            # (distance below margin + gap = 0)
+            g = self._probe
+            m.geom_size[g, 0] = m.geom_rbound[g] = self._radius
+            m.geom_aabb[g, 3:] = self._radius
+            m.geom_gap[g] = -m.geom_margin[g]
+            return
         own = m.body_rootid[m.geom_bodyid] == self.handle.body_id
         collides = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
         cand = np.flatnonzero(collides & ~own)
@@ -139,15 +162,37 @@ class Touch(Sensor):
                 return True
         return False
 
+    # the geoms in the gap contacts of the last physics step (the probes' contacts among
+    # them), worked out once for every robot's touch sensors at one instant: ((data, time,
+    # contacts), geom ids), replaced as a whole (simulations in other threads see either)
+    _gap_geoms: tuple[tuple[int, float, int], frozenset[int]] = ((0, -1.0, -1), frozenset())
+
+    @classmethod
+    def _touched(cls, view: WorldView) -> frozenset[int]:
+        d = view.data
+        key = (id(d), view.time, d.ncon)
+        cached = cls._gap_geoms
+        if cached[0] == key:
+            return cached[1]
+        n = d.ncon
+        gap = d.contact.exclude[:n] == 1
+        geoms = frozenset(d.contact.geom[:n][gap].ravel().tolist())
+        cls._gap_geoms = (key, geoms)
+        return geoms
+
     def measure(self, view: WorldView) -> TouchItem:
+        if self._probe >= 0:
+            return TouchItem(self.name, self._probe in self._touched(view))
         return TouchItem(self.name, self.touching(view))
 
     @classmethod
     def measure_group(cls, sensors: list[Sensor], view: WorldView) -> list[TouchItem]:
-        """Every touch sensor of a robot at once: they share their candidates (everything but
-        the robot), so the distances to all of them are one array operation."""
+        """Every touch sensor of a robot at once: with probes, each looks itself up among the
+        last step's contacts (gathered once an instant for every robot); else they share
+        their candidates (everything but the robot), so the distances to all of them are one
+        array operation."""
         first = sensors[0]
-        if not len(first._solids):
+        if any(s._probe >= 0 for s in sensors) or not len(first._solids):
             return [s.measure(view) for s in sensors]
         d = view.data
         centres = np.array([s._centre(view) for s in sensors])

@@ -12,6 +12,7 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.sensors.camera import CAMERAS
+from usarsim.sensors.touch import PROBE_MARGIN_M, PROBE_RADIUS_M, probe_name
 from usarsim.sim import frames
 from usarsim.sim.constants import (
     GROUP_MOVABLE,
@@ -34,6 +35,15 @@ from usarsim.sim.victims import add_victim
 SLIPPERY_PRIORITY = 2
 SPIN_FRICTION = 0.005
 ROLL_FRICTION = 0.0001
+
+# Treads (usarsim.robots.skid): a skid-steered robot's wheels meet the floor through a
+# tread contact of their own, whose friction is direction-dependent (MuJoCo gives that
+# to explicit contact pairs only, in the contact frame of the collider: a capsule lying
+# along the axle has its first tangent along the axle).  The floor carries a collision bit
+# of its own so that the wheel's cylinder, which still meets everything else (ramps,
+# steps, walls, other robots), skips it.
+FLOOR_CONTYPE = 8
+TREAD_WHEEL_CONTYPE, TREAD_WHEEL_CONAFFINITY = 0, SOLID_CONTYPE
 
 
 # The largest picture the image server renders (the offscreen buffer the model reserves).
@@ -78,7 +88,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     if floor_mat.friction < 1.0:
         g.priority = SLIPPERY_PRIORITY
     g.group = GROUP_STATIC
-    g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+    g.contype, g.conaffinity = FLOOR_CONTYPE, SOLID_CONAFFINITY
 
     for obj in world.objects:
         mat = world.materials[obj.material]
@@ -219,9 +229,10 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     lamp.castshadow = False
     lamp.active = False
     bodies = {"chassis": body}
+    treads = drive.treads(robot)
     for w in robot.wheels:
         if w.parent == "chassis":
-            _add_wheel(spec, body, w, robot, prefix)
+            _add_wheel(spec, body, w, robot, prefix, treads)
     for ln in robot.links:
         lb = bodies[ln.parent].add_body()
         lb.name = f"{prefix}/{ln.name}"
@@ -267,7 +278,7 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
         bodies[ln.name] = lb
     for w in robot.wheels:
         if w.parent != "chassis":
-            _add_wheel(spec, bodies[w.parent], w, robot, prefix)
+            _add_wheel(spec, bodies[w.parent], w, robot, prefix, treads)
     # a robot's parts do not collide with each other (MuJoCo filters parent and child only)
     # parent -> child pairs are filtered by MuJoCo already; every other pair of the robot's
     # jointed bodies (chassis, links, wheels on links) is excluded
@@ -287,6 +298,8 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     for item in robot.items:
         if item.item_type in CAMERAS:
             _add_camera(spec, body, item, prefix)
+        elif item.item_type.lower() == "touch":
+            _add_touch_probe(spec, body, item, prefix)
     _add_chase_camera(body, robot, prefix)
     return body
 
@@ -315,6 +328,26 @@ def _add_camera(spec, chassis, item, prefix: str) -> None:
     cam.pos = frames.to_mj_vec(item.location).tolist()
     cam.quat = frames.mat_to_quat(frames.usar_euler_to_mj_mat(item.orientation) @ _CAMERA_AXES).tolist()
     cam.fovy = camera_fovy_deg(math.radians(50.0), 4, 3)  # set from the camera's zoom at each picture
+
+
+def _add_touch_probe(spec, chassis, item, prefix: str) -> None:
+    """A Touch sensor's probe (usarsim.sensors.touch): its sphere at its mount, whose contacts
+    MuJoCo finds, never acting on them (a far negative margin).  It collides with what a
+    solid does; its robot's own bodies are filtered out as the robot's parts are (same body,
+    parent and child, the robot's exclusions)."""
+    parent = chassis if item.mount == "HARD" else (spec.body(f"{prefix}/{item.mount}") or chassis)
+    g = parent.add_geom()
+    g.name = probe_name(prefix, item.name)
+    g.type = mujoco.mjtGeom.mjGEOM_SPHERE
+    g.size = [PROBE_RADIUS_M, 0.0, 0.0]
+    g.pos = frames.to_mj_vec(item.location).tolist()
+    g.mass = 0.0
+    g.density = 0.0
+    g.margin = PROBE_MARGIN_M
+    g.gap = -PROBE_MARGIN_M  # detected while it overlaps: distance below margin + gap = 0
+    g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+    g.group = GROUP_WHEEL  # not seen by range sensors
+    g.rgba = [0.0, 0.0, 0.0, 0.0]
 
 
 # The chase view (the spectator's view over a robot, manual 5.1: key C): a camera on the
@@ -376,8 +409,9 @@ def joint_travel(ln) -> tuple[float, float]:
 STEER_BAND_RAD = 0.05
 
 
-def _add_wheel(spec, parent, w, robot, prefix: str) -> None:
-    """A wheel on its parent body, with a steering knuckle in between when it is steered."""
+def _add_wheel(spec, parent, w, robot, prefix: str, treads=None) -> None:
+    """A wheel on its parent body, with a steering knuckle in between when it is steered;
+    with ``treads`` (usarsim.robots.base.Treads) it meets the floor through its tread."""
     # wheel cylinders lie along MuJoCo's Y axis (the axle)
     axle_quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]
     holder = parent
@@ -425,6 +459,11 @@ def _add_wheel(spec, parent, w, robot, prefix: str) -> None:
     g.rgba = [0.1, 0.1, 0.1, 1.0]
     g.group = GROUP_WHEEL
     g.contype, g.conaffinity = WHEEL_CONTYPE, WHEEL_CONAFFINITY
+    if treads is not None:
+        g.contype, g.conaffinity = TREAD_WHEEL_CONTYPE, TREAD_WHEEL_CONAFFINITY
+        _add_tread(spec, wb, w, robot, prefix, treads)
+        if w.driven:
+            j.armature = max(j.armature, treads.drive_inertia_kg * w.radius_m ** 2)
     if w.driven:
         a = spec.add_actuator()
         a.name = f"{prefix}/{w.name}"
@@ -433,6 +472,37 @@ def _add_wheel(spec, parent, w, robot, prefix: str) -> None:
         a.set_to_velocity(kv=robot.wheel_gain)
         a.forcelimited = 1
         a.forcerange = [-robot.wheel_torque_limit_nm, robot.wheel_torque_limit_nm]
+
+
+def tread_name(prefix: str, wheel_name: str) -> str:
+    return f"{prefix}/{wheel_name}/tread"
+
+
+def _add_tread(spec, wheel_body, w, robot, prefix: str, treads) -> None:
+    """The wheel's tread contact with the floor: an invisible capsule of the wheel's radius
+    along the axle, as wide as the wheel (it touches the floor at the two edges of the
+    tread, as the cylinder does), in an explicit contact pair with the floor whose friction
+    is the contact's usual one (the larger of the two, or the slippery floor's) along the
+    rolling direction and ``treads.lateral_ratio`` of it across."""
+    g = wheel_body.add_geom()
+    g.name = tread_name(prefix, w.name)
+    g.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+    g.size = [w.radius_m, w.width_m / 2.0, 0.0]
+    g.quat = [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0]  # along the axle (Y)
+    g.mass = 0.0
+    g.density = 0.0
+    g.contype = g.conaffinity = 0  # it meets the floor through its pair only
+    g.group = GROUP_WHEEL
+    g.rgba = [0.0, 0.0, 0.0, 0.0]
+    floor = spec.geom("floor")
+    mu = float(floor.friction[0]) if floor.priority > 0 else max(float(floor.friction[0]), robot.wheel_friction)
+    p = spec.add_pair()
+    p.name = g.name
+    p.geomname1 = "floor"
+    p.geomname2 = g.name
+    p.condim = 3
+    # the capsule's contact frame: first tangent along its axis (across the tread)
+    p.friction = [mu * treads.lateral_ratio, mu, SPIN_FRICTION, ROLL_FRICTION, ROLL_FRICTION]
 
 
 def _add_piece(body, name: str, piece, robot) -> None:
@@ -468,6 +538,12 @@ def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
     for a in list(spec.actuators):
         if a.name.startswith(prefix + "/"):
             spec.delete(a)
+    for p in list(spec.pairs):
+        if p.name.startswith(prefix + "/"):
+            spec.delete(p)
+    for e in list(spec.equalities):
+        if e.name.startswith(prefix + "/"):
+            spec.delete(e)
     for ex in list(spec.excludes):
         if ex.bodyname1 == prefix or ex.bodyname1.startswith(prefix + "/"):
             spec.delete(ex)
