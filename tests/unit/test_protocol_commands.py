@@ -544,6 +544,7 @@ COMMAND_STRATEGIES = {
     "GetClosestPathNode": st.builds(c.GetClosestPathNode, location=_opt(_vec3)),
     "Test": st.builds(c.Test, segments=_extra_segments(set())),
     "Step": st.builds(c.Step, time_s=_positive),
+    "Ping": st.builds(c.Ping, id=_opt(_names)),
     "UnknownCommand": st.builds(
         c.UnknownCommand,
         type=_names.map(str.upper).filter(lambda t: t not in c._PARSERS),

@@ -478,6 +478,8 @@ GOLDEN = [
     # §6.9, §18
     (m.Die(killer="World", damage_type="Fell"), "DIE {Killer World} {DamageType Fell}"),
     (m.Stepped(time=12.34), "STEPPED {Time 12.3400}"),
+    (m.Pong(id="7", time=1.5), "PONG {Id 7} {Time 1.5000}"),
+    (m.Pong(), "PONG"),
     (m.error_reply("init", "unknown start pose 'Nowhere' {known: PlayerStart1}\r\n"),
      "ERROR {Command INIT} {Reason unknown start pose 'Nowhere' (known: PlayerStart1)}"),
     (
@@ -853,6 +855,7 @@ MESSAGE_STRATEGIES = {
     ),
     m.Die: st.builds(m.Die, killer=_texts, damage_type=_texts),
     m.Stepped: st.builds(m.Stepped, time=_time4),
+    m.Pong: st.builds(m.Pong, id=st.none() | _names, time=st.none() | _time4),
     m.ErrorReply: st.builds(m.ErrorReply, command=_names.map(str.upper), reason=_texts),
     m.UnknownMessage: st.builds(
         m.UnknownMessage,

@@ -56,6 +56,7 @@ __all__ = [
     "GetGeo",
     "GetPathNodes",
     "GetStartPoses",
+    "Ping",
     "Goto",
     "Init",
     "JOINT_ORDERS",
@@ -390,6 +391,17 @@ class Step:
 
 
 @dataclass(frozen=True, slots=True)
+class Ping:
+    """``PING [{Id text}]``: answered ``PONG [{Id text}] {Time t}`` (an extension) once every
+    request sent before it was carried out (an INIT's spawn or its ERROR) and every message
+    produced so far was written to this connection: a client that waits for it has read
+    everything (usarsim.client does after INIT and after each lock-step STEP)."""
+
+    keyword: ClassVar[str] = "PING"
+    id: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
 class UnknownCommand:
     """A line whose command word is not known; servers ignore it.  ``type`` is upper-cased."""
 
@@ -415,6 +427,7 @@ Command = (
     | GetClosestPathNode
     | Test
     | Step
+    | Ping
     | UnknownCommand
 )
 
@@ -829,6 +842,7 @@ _PARSERS: dict[str, Callable[[RawMessage], Command]] = {
     "GETCLOSESTPATHNODE": _parse_get_closest_path_node,
     "TEST": _parse_test,
     "STEP": _parse_step,
+    "PING": lambda raw: Ping(id=raw.get("Id")),
 }
 
 
@@ -1034,6 +1048,7 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     GetClosestPathNode: lambda c: _Line("GETCLOSESTPATHNODE").vector("Location", c.location).end(),
     Test: lambda c: _Line("TEST").segments(c.segments).end(),
     Step: lambda c: _Line("STEP").number("Time", c.time_s).end(),
+    Ping: lambda c: _Line("PING").text("Id", c.id).end(),
     UnknownCommand: lambda c: _Line(_word(c.type, "command word")).segments(c.segments).end(),
 }
 

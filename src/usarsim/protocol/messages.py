@@ -90,6 +90,7 @@ __all__ = [
     "PackageConfiguration",
     "PackageGeometry",
     "PathNodes",
+    "Pong",
     "Result",
     "RobotConfiguration",
     "RobotGeometry",
@@ -519,6 +520,16 @@ class Stepped:
 
 
 @dataclass(frozen=True, slots=True)
+class Pong:
+    """``PONG [{Id text}] [{Time t}]``: the answer to ``PING`` (an extension), after every
+    request sent before it was carried out and everything it produced was written; ``time``
+    the simulated time then (4 decimals)."""
+
+    id: str | None = None
+    time: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
 class ErrorReply:
     """``ERROR {Command c} {Reason r}``: the request ``c`` (its command word) could not be
     carried out, and why.  An extension of this project, like STEPPED: an INIT that spawns
@@ -571,6 +582,7 @@ Message = (
     | EffecterStatus
     | Die
     | Stepped
+    | Pong
     | ErrorReply
     | UnknownMessage
 )
@@ -1053,6 +1065,8 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     EffecterStatus: _fmt_effecter,
     Die: lambda m: "DIE {Killer %s} {DamageType %s}\r\n" % (m.killer, m.damage_type),
     Stepped: lambda m: "STEPPED {Time %s}\r\n" % f4(m.time),
+    Pong: lambda m: "PONG%s%s\r\n" % ("" if m.id is None else " {Id %s}" % m.id,
+                                      "" if m.time is None else " {Time %s}" % f4(m.time)),
     ErrorReply: lambda m: "ERROR {Command %s} {Reason %s}\r\n" % (m.command, m.reason),
     UnknownMessage: _fmt_unknown,
 }
@@ -1684,6 +1698,7 @@ _MESSAGE_PARSERS: dict[str, Callable[[_Reader], Message]] = {
     "EFF": _parse_eff,
     "DIE": lambda r: Die(killer=r.text("Killer"), damage_type=r.text("DamageType")),
     "STEPPED": lambda r: Stepped(time=r.req_float("Time")),
+    "PONG": lambda r: Pong(id=r.raw.get("Id"), time=r.opt_float("Time")),
     "ERROR": lambda r: ErrorReply(command=r.text("Command"), reason=r.text("Reason")),
 }
 

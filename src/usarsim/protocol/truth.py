@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from usarsim.errors import ProtocolError
 
-from .grammar import parse_line
+from .grammar import parse_float, parse_line, parse_vector
 from .numbers import f4, vec4
 
 END = "{End}\r\n"
@@ -56,3 +56,29 @@ def parse_truth_request(line: str) -> TruthRequest:
 def format_truth_object(o: TruthObject) -> str:
     return "{Name %s} {Class %s} {Time %s} {Location %s} {Rotation %s}\r\n" % (
         o.name, o.class_name, f4(o.time), vec4(o.location), vec4(o.rotation))
+
+
+def format_truth_request(class_name: str | None = None, name: str | None = None) -> str:
+    """A client's request line: ``{Class c} {Name n}`` (either left out: any)."""
+    parts = []
+    if class_name:
+        parts.append("{Class %s}" % class_name)
+    if name:
+        parts.append("{Name %s}" % name)
+    return " ".join(parts or ["{Class}"]) + "\r\n"
+
+
+def parse_truth_object(line: str) -> TruthObject | None:
+    """One object line of a reply (None for the closing ``{End}``); a line that is not one
+    raises :class:`usarsim.errors.ProtocolError`."""
+    text = line.strip()
+    if text == END.strip():
+        return None
+    raw = parse_line("TRUTH " + text)
+    fields = {seg.key.lower(): seg.value for seg in raw.segments}
+    try:
+        return TruthObject(name=fields["name"], class_name=fields["class"], time=parse_float(fields["time"]),
+                           location=parse_vector(fields["location"], 3),  # type: ignore[arg-type]
+                           rotation=parse_vector(fields["rotation"], 3))  # type: ignore[arg-type]
+    except KeyError as exc:
+        raise ProtocolError(f"a ground-truth object line lacks {{{exc.args[0].title()} ...}}: {text[:120]!r}") from None

@@ -87,6 +87,7 @@ class Session:
             C.MisPkg: self.on_mispkg,
             C.Camera: self.on_camera,
             C.Act: self.on_act,
+            C.Ping: self.on_ping,
         }
         # the client speaks the UDK actuator API (ACT, or a query of {Type Actuator}): its
         # robot's mission packages are reported as ASTA too, each status period
@@ -221,6 +222,15 @@ class Session:
             self.send(M.error_reply("INIT", str(error)))
             return
         self.state = ALIVE
+
+    def on_ping(self, cmd: C.Ping) -> None:
+        """``PING [{Id x}]`` -> ``PONG [{Id x}] {Time t}`` (an extension) once the simulation has
+        carried out every request sent before it (an INIT's spawn, or its ERROR) and every
+        message it produced so far is written to this connection."""
+        def done(t, error):
+            self.send(M.Pong(id=cmd.id, time=t if error is None else None))
+
+        self.facade.barrier(self.ctx.threadsafe(done))
 
     def on_drive(self, cmd: C.Drive) -> None:
         # SPAWNING too: the spawn request is ahead of this one in the simulation's queue

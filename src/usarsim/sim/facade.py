@@ -119,6 +119,12 @@ class SimFacade:
         self.runner.submit(Request(lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down),
                                    immediate=True, on_done=on_done))
 
+    def barrier(self, on_done: Done) -> None:
+        """``on_done(simulated time, None)`` once every request submitted before it has been
+        carried out and its outputs handed to the server (an immediate request: in lock-step
+        it does not wait for a STEP)."""
+        self.runner.submit(Request(lambda sim: sim.time, immediate=True, on_done=on_done))
+
     def remove(self, uid: int) -> None:
         self.runner.submit(Request(lambda sim: sim.remove(uid), immediate=True))
 

@@ -1,0 +1,360 @@
+"""The blocking client: a :class:`World` (one control connection, for STEP and queries) and a
+:class:`Robot` per spawned robot (its own connection, as USARSim has one robot per
+connection).  Every wait has a timeout and raises :class:`ClientTimeout` naming what did not
+arrive; a server that closes the connection raises :class:`ClientError`."""
+
+from __future__ import annotations
+
+import selectors
+import socket
+import time
+from collections.abc import Callable
+from typing import Any
+
+from usarsim.protocol import messages as M
+from usarsim.protocol.truth import TruthObject, format_truth_request, parse_truth_object
+
+from .core import (
+    DEFAULT_TIMEOUT_S,
+    ClientError,
+    ClientTimeout,
+    ConnectionState,
+    Scan,
+    accepts_reply,
+    drive_line,
+    first_scan_name,
+    init_line,
+    max_range_of,
+    odometry_of,
+    pose_of,
+    query_line,
+    scan_of,
+    set_line,
+    victims_of,
+)
+
+
+class _Connection:
+    """A socket and what was received on it."""
+
+    def __init__(self, host: str, port: int, timeout: float, what: str):
+        self.what = what
+        self.timeout = timeout
+        try:
+            self.sock = socket.create_connection((host, port), timeout=timeout)
+        except OSError as exc:
+            raise ClientError(f"cannot connect to the simulator at {host}:{port} ({exc}); is "
+                              f"'usarsim serve' running there?") from exc
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.state = ConnectionState()
+
+    def send(self, line: str) -> None:
+        if self.state.closed:
+            raise ClientError(f"{self.what}: the connection is closed")
+        try:
+            self.sock.sendall(line.encode("ascii"))
+        except OSError as exc:
+            self.state.closed = True
+            raise ClientError(f"{self.what}: the server closed the connection ({exc})") from exc
+
+    def read(self, wait: float) -> bool:
+        """Read what arrives within ``wait`` seconds (0: only what is there); False at EOF."""
+        if self.state.closed:
+            return False
+        self.sock.settimeout(wait if wait > 0 else 0.0)
+        try:
+            data = self.sock.recv(1 << 18)
+        except (BlockingIOError, TimeoutError):
+            return True
+        except OSError:
+            data = b""
+        if not data:
+            self.close()  # the server closed it
+            return False
+        self.state.feed(data)
+        return True
+
+    def wait_for(self, accept: Callable[[Any], bool], what: str, command: str | None,
+                 timeout: float | None = None) -> Any:
+        """The first reply ``accept`` takes, reading until it comes; an ERROR about
+        ``command`` raises :class:`ServerError`."""
+        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
+        while True:
+            msg = self.state.claim(accept, command)
+            if msg is not None:
+                return msg
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise ClientTimeout(f"{self.what}: no {what} from the server within "
+                                    f"{self.timeout if timeout is None else timeout:g} s")
+            if not self.read(left):
+                msg = self.state.claim(accept, command)
+                if msg is not None:
+                    return msg
+                raise ClientError(f"{self.what}: the server closed the connection while waiting for {what}")
+
+    def ping(self, timeout: float | None = None, command: str | None = None) -> M.Pong:
+        """PING, and wait for its PONG: everything sent before it has been handled and every
+        message produced so far has been read."""
+        pid = self.state.next_ping()
+        self.send(f"PING {{Id {pid}}}\r\n")
+        return self.wait_for(lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", command,
+                             timeout)
+
+    def close(self) -> None:
+        self.state.closed = True
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+
+
+class Robot:
+    """One robot in the world, on its own connection.  Its latest readings update whenever
+    the client reads (:meth:`World.step`, :meth:`World.wait`, :meth:`update`)."""
+
+    def __init__(self, world: World, conn: _Connection, class_name: str, name: str):
+        self.world = world
+        self._conn = conn
+        self.class_name = class_name
+        self.name = name
+        self._max_ranges: dict[str, float | None] = {}
+
+    # what it knows ----------------------------------------------------------------------
+    @property
+    def readings(self) -> dict[str, Any]:
+        """The latest reading of each sensor, by name (packed sensors by type: ``Sonar``)."""
+        return self._conn.state.readings
+
+    @property
+    def status(self):
+        """The latest STA (typed: battery, steer angles, ...), or None."""
+        return self._conn.state.status
+
+    @property
+    def time(self) -> float | None:
+        """The simulated time of the latest message received for this robot."""
+        return self._conn.state.time
+
+    @property
+    def messages(self) -> list[Any]:
+        """Every message received since :meth:`take_messages` was last called."""
+        return self._conn.state.messages
+
+    def take_messages(self) -> list[Any]:
+        return self._conn.state.take_messages()
+
+    def reading(self, name: str) -> Any:
+        return self.readings.get(name)
+
+    def scan(self, name: str | None = None) -> Scan | None:
+        """The latest laser sweep (the first RangeScanner when no name is given), or None."""
+        name = name or first_scan_name(self.readings)
+        r = self.readings.get(name) if name else None
+        if r is None or not hasattr(r, "resolution_rad") or isinstance(r.resolution_rad, tuple):
+            return None
+        if name not in self._max_ranges:
+            self._max_ranges[name] = max_range_of(self.conf(r.sensor_type, name), name)
+        return scan_of(self._conn.state.reading_times.get(name), r, self._max_ranges[name])
+
+    def odometry(self) -> tuple[float, float, float] | None:
+        """The Odometry sensor's (x, y, yaw) (USARSim frame, yaw clockwise), or None."""
+        return odometry_of(self.readings)
+
+    def ground_truth(self) -> tuple[tuple, tuple] | None:
+        """The GroundTruth sensor's (location, orientation), or None."""
+        return pose_of(self.readings, "GroundTruth")
+
+    def victims(self) -> list:
+        """The victim parts the VictSensor sees now (``part_name``, ``location`` robot frame)."""
+        return victims_of(self.readings)
+
+    # commands ---------------------------------------------------------------------------
+    def drive(self, **keys: Any) -> None:
+        """``DRIVE``: ``drive(left=2, right=2)``; see :func:`usarsim.client.core.drive_line`."""
+        self._conn.send(drive_line(**keys))
+
+    def send(self, line: str) -> None:
+        """A raw protocol line (CR LF added when missing)."""
+        self._conn.send(line if line.endswith("\n") else line + "\r\n")
+
+    def geo(self, type: str = "Robot", name: str | None = None) -> Any:  # noqa: A002 (the protocol's key)
+        self._conn.send(query_line("GETGEO", type, name))
+        return self._conn.wait_for(accepts_reply("GETGEO", type), f"GEO of {type}", "GETGEO")
+
+    def conf(self, type: str = "Robot", name: str | None = None) -> Any:  # noqa: A002
+        self._conn.send(query_line("GETCONF", type, name))
+        return self._conn.wait_for(accepts_reply("GETCONF", type), f"CONF of {type}", "GETCONF")
+
+    def set(self, type: str, name: str | None = None, opcode: str | None = None,  # noqa: A002
+            params: Any = None) -> M.Result | None:
+        """``SET``.  In real time, waits for and returns its RES; in lock-step the server
+        carries it out at the next STEP and the RES arrives then (in :attr:`messages`)."""
+        self._conn.send(set_line(type, name, opcode, params))
+        if self.world.lockstep:
+            return None
+        return self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}",
+                                   "SET")
+
+    def update(self, wait: float = 0.0) -> None:
+        """Read what has arrived (waiting up to ``wait`` seconds for something)."""
+        if not self._conn.read(wait) and not self._conn.state.messages:
+            raise ClientError(f"robot {self.name}: the server closed the connection")
+
+    def close(self) -> None:
+        """Close the connection: the robot leaves the world."""
+        self._conn.close()
+        self.world._robots.pop(self.name, None)
+
+
+class World:
+    """A simulator to talk to: start poses, spawning robots, lock-step STEPs, ground truth."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False,
+                 truth_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S):
+        self.host, self.port, self.lockstep, self.timeout = host, port, lockstep, timeout
+        self.truth_port = truth_port if truth_port is not None else port + 989  # 3000 -> 3989
+        self._conn = _Connection(host, port, timeout, "world")
+        try:
+            info = self._conn.wait_for(lambda m: isinstance(m, M.GameInfo), "NFO greeting", None)
+        except BaseException:
+            self._conn.close()
+            raise
+        self.level: str = info.level
+        self._robots: dict[str, Robot] = {}
+        self._start_poses: list[M.StartPose] | None = None
+        self.time = 0.0
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    @property
+    def robots(self) -> dict[str, Robot]:
+        return dict(self._robots)
+
+    @property
+    def start_poses(self) -> list[M.StartPose]:
+        if self._start_poses is None:
+            self._conn.send("GETSTARTPOSES\r\n")
+            reply = self._conn.wait_for(lambda m: isinstance(m, M.StartPoses), "NFO {StartPoses}", "GETSTARTPOSES")
+            self._start_poses = list(reply.poses)
+        return list(self._start_poses)
+
+    def spawn(self, class_name: str, name: str | None = None, *, start: str | None = None, location=None,
+              rotation=None, timeout: float | None = None) -> Robot:
+        """A robot of ``class_name`` (``P2AT`` or ``USARBot.P2AT``) at start pose ``start``, or
+        at ``location``/``rotation``, or at the world's first start pose.  Returns once it
+        stands in the world; raises :class:`ServerError` with the server's reason if not."""
+        name = name or f"Robot{len(self._robots) + 1}"
+        if name in self._robots:
+            raise ClientError(f"this client has a robot named {name!r} already")
+        conn = _Connection(self.host, self.port, self.timeout if timeout is None else timeout, f"robot {name}")
+        try:
+            conn.wait_for(lambda m: isinstance(m, M.GameInfo), "NFO greeting", None)
+            conn.send(init_line(class_name, name, start, location, rotation))
+            conn.ping(command="INIT")  # after the spawn, or after its ERROR
+            conn.state.claim(lambda m: False, "INIT")  # an ERROR that came with the PONG
+        except BaseException:
+            conn.close()
+            raise
+        robot = Robot(self, conn, class_name.split(".")[-1], name)
+        self._robots[name] = robot
+        return robot
+
+    def step(self, seconds: float, timeout: float | None = None) -> float:
+        """Lock-step: advance ``seconds`` of simulated time.  Returns the new simulated time
+        once every robot of this client has read every message up to it."""
+        if not self.lockstep:
+            raise ClientError("step() needs a lock-step server (usarsim serve --lockstep, or launch(lockstep=True)); "
+                              "use wait(seconds) in real time")
+        self._conn.send(f"STEP {{Time {seconds!r}}}\r\n")
+        stepped = self._conn.wait_for(lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}", "STEP",
+                                      timeout)
+        self.time = stepped.time
+        self._sync(timeout)
+        return self.time
+
+    def _sync(self, timeout: float | None) -> None:
+        """Every robot connection read up to now (a PING each, sent together)."""
+        pending = []
+        for robot in list(self._robots.values()):
+            conn = robot._conn
+            pid = conn.state.next_ping()
+            conn.send(f"PING {{Id {pid}}}\r\n")
+            pending.append((conn, pid))
+        for conn, pid in pending:
+            conn.wait_for(lambda m, pid=pid: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)",
+                          None, timeout)
+
+    def wait(self, seconds: float) -> None:
+        """Real time: read every robot's messages for ``seconds`` of wall time."""
+        deadline = time.monotonic() + seconds
+        sel = selectors.DefaultSelector()
+        try:
+            for robot in self._robots.values():
+                if not robot._conn.state.closed:
+                    sel.register(robot._conn.sock, selectors.EVENT_READ, robot._conn)
+            while True:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    break
+                if not sel.get_map():
+                    time.sleep(left)
+                    break
+                for key, _ in sel.select(left):
+                    conn = key.data
+                    if not conn.read(0.0):
+                        sel.unregister(conn.sock)
+        finally:
+            sel.close()
+        for robot in self._robots.values():
+            t = robot._conn.state.time
+            if t is not None and t > self.time:
+                self.time = t
+
+    def truth(self, class_name: str | None = None, name: str | None = None) -> list[TruthObject]:
+        """Where things are now, from the ground-truth service: robots, victims, RFID tags,
+        false alarms and movable objects (``class_name``/``name`` filter)."""
+        try:
+            s = socket.create_connection((self.host, self.truth_port), timeout=self.timeout)
+        except OSError as exc:
+            raise ClientError(f"cannot reach the ground-truth service at {self.host}:{self.truth_port} ({exc})") \
+                from exc
+        out: list[TruthObject] = []
+        with s:
+            s.sendall(format_truth_request(class_name, name).encode("ascii"))
+            buf = b""
+            deadline = time.monotonic() + self.timeout
+            while True:
+                while b"\n" in buf:
+                    line, buf = buf.split(b"\n", 1)
+                    obj = parse_truth_object(line.decode("ascii", "replace"))
+                    if obj is None:
+                        return out
+                    out.append(obj)
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise ClientTimeout(f"no {{End}} from the ground-truth service within {self.timeout:g} s")
+                s.settimeout(left)
+                try:
+                    data = s.recv(1 << 16)
+                except TimeoutError:
+                    continue
+                if not data:
+                    raise ClientError("the ground-truth service closed the connection before {End}")
+                buf += data
+
+    def close(self) -> None:
+        for robot in list(self._robots.values()):
+            robot.close()
+        self._conn.close()
+
+
+def connect(host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False, truth_port: int | None = None,
+            timeout: float = DEFAULT_TIMEOUT_S) -> World:
+    """Connect to a running simulator (``lockstep=True`` if it was started with
+    ``--lockstep``: then :meth:`World.step` drives its clock)."""
+    return World(host, port, lockstep=lockstep, truth_port=truth_port, timeout=timeout)

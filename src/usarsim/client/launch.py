@@ -1,0 +1,113 @@
+"""Starting a simulator for a script: ``usarsim serve`` in a subprocess on free ports, stopped
+when the ``with`` block ends."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from typing import Any
+
+from .blocking import World
+from .core import DEFAULT_TIMEOUT_S, ClientError
+
+_LISTENING = re.compile(r"usarsim: (\w+) listening on ([\w.:\-]+):(\d+)")
+START_TIMEOUT_S = 120.0
+
+
+class Server:
+    """A ``usarsim serve`` subprocess: its ``host``, control ``port`` and every listener's
+    port in ``ports`` (``control``, ``truth``, and ``image``, ``web``, ``comserver``, ``wss``,
+    ``cominterface`` when started)."""
+
+    def __init__(self, args: list[str], lockstep: bool, timeout: float):
+        self.lockstep = lockstep
+        self.timeout = timeout
+        self._stderr = tempfile.TemporaryFile(mode="w+")
+        env = dict(os.environ)
+        env.setdefault("MUJOCO_GL", "egl")
+        self.proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", *args], stdout=subprocess.PIPE,
+                                     stderr=self._stderr, stdin=subprocess.DEVNULL, text=True, env=env)
+        self.ports: dict[str, int] = {}
+        self.host = "127.0.0.1"
+        expected = {"control", "truth"}
+
+        def read_ports() -> None:  # every stdout line, to the end (the pipe never fills)
+            assert self.proc.stdout is not None
+            for line in self.proc.stdout:
+                m = _LISTENING.search(line)
+                if m:
+                    self.host = m.group(2)
+                    self.ports[m.group(1)] = int(m.group(3))
+
+        self._reader = threading.Thread(target=read_ports, name="usarsim-launch", daemon=True)
+        self._reader.start()
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while time.monotonic() < deadline and self.proc.poll() is None and not expected <= set(self.ports):
+            time.sleep(0.02)
+        time.sleep(0.1)  # the other listener lines, printed in the same burst
+        if not expected <= set(self.ports):
+            self.close()
+            raise ClientError(f"the simulator did not start: {self.stderr_tail()}")
+
+    @property
+    def port(self) -> int:
+        return self.ports["control"]
+
+    def connect(self, timeout: float | None = None) -> World:
+        """A :class:`World` on this server (lock-step if the server is)."""
+        return World(self.host, self.port, lockstep=self.lockstep, truth_port=self.ports.get("truth"),
+                     timeout=self.timeout if timeout is None else timeout)
+
+    def stderr_tail(self, n: int = 2000) -> str:
+        try:
+            self._stderr.seek(0)
+            return self._stderr.read()[-n:].strip() or "(nothing on stderr)"
+        except (OSError, ValueError):
+            return "(stderr unavailable)"
+
+    def close(self) -> None:
+        """Stop the simulator (SIGTERM, then kill if it does not end within 30 s)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(30)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+        self._reader.join(5)
+        if self.proc.stdout is not None:
+            self.proc.stdout.close()
+        self._stderr.close()
+
+    def __enter__(self) -> Server:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = True, speed: float | None = 1.0,
+           wireless: bool = False, image: bool = False, web: bool = False, robot_dirs: tuple[str, ...] = (),
+           extra_args: tuple[str, ...] = (), timeout: float = DEFAULT_TIMEOUT_S) -> Server:
+    """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file),
+    ``seed``, lock-step (default) or real time at ``speed`` (None: as fast as it can).
+    ``wireless``, ``image`` and ``web`` start those services too.  Use it in a ``with``
+    block, or call :meth:`Server.close`."""
+    args = ["--world", str(world), "--seed", str(int(seed)), "--port", "0", "--truth-port", "0"]
+    if lockstep:
+        args.append("--lockstep")
+    else:
+        args += ["--speed", "max" if speed is None else repr(float(speed))]
+    args += ["--image-port", "0"] if image else ["--no-image"]
+    args += ["--web-port", "0"] if web else ["--no-web"]
+    args += ["--wcs-port", "0", "--wss-port", "0", "--cominterface-port", "0"] if wireless else ["--no-wireless"]
+    for d in robot_dirs:
+        args += ["--robot-dir", str(d)]
+    args += list(extra_args)
+    return Server(args, lockstep, timeout)
