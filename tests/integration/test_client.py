@@ -180,3 +180,17 @@ def test_the_readme_example_runs_as_printed():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert re.fullmatch(r"t=20\.0 s: odometry -?\d+\.\d\d, -?\d+\.\d\d m, heading -?\d+\.\d\d rad\n", out.stdout)
+
+
+def test_a_robot_cameras_picture_as_a_numpy_array():
+    with launch(world="DM-USAR_yellow", seed=1, image=True) as srv, srv.connect() as world:
+        robot = world.spawn("P2AT", start="PlayerStart1")
+        world.step(0.5)
+        ahead = robot.picture()
+        assert ahead.shape == (480, 640, 3) and ahead.dtype.name == "uint8"
+        assert ahead.std() > 5.0  # a scene, not a blank frame
+        for _ in range(20):  # turn away: the picture changes
+            robot.drive(left=-2.0, right=2.0)
+            world.step(0.1)
+        turned = robot.picture()
+        assert abs(turned.astype(float) - ahead.astype(float)).mean() > 5.0

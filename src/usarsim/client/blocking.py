@@ -16,16 +16,19 @@ from usarsim.protocol.truth import TruthObject, format_truth_request, parse_trut
 
 from .core import (
     DEFAULT_TIMEOUT_S,
+    PICTURE_HEADER,
     ClientError,
     ClientTimeout,
     ConnectionState,
     Scan,
     accepts_reply,
+    decode_picture,
     drive_line,
     first_scan_name,
     init_line,
     max_range_of,
     odometry_of,
+    picture_size,
     pose_of,
     query_line,
     scan_of,
@@ -119,6 +122,8 @@ class Robot:
         self.class_name = class_name
         self.name = name
         self._max_ranges: dict[str, float | None] = {}
+        self._image: socket.socket | None = None
+        self._image_camera: str | None = None
 
     # what it knows ----------------------------------------------------------------------
     @property
@@ -196,6 +201,44 @@ class Robot:
         return self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}",
                                    "SET")
 
+    def picture(self, camera: str = "Camera", timeout: float | None = None) -> Any:
+        """A picture of the robot's camera ``camera`` from the image server, as a (height,
+        width, 3) uint8 RGB NumPy array (the server needs its image service: ``launch(...,
+        image=True)``; the size is its ``--image-size``)."""
+        limit = self._conn.timeout if timeout is None else timeout
+        if self._image is None:
+            port = self.world.image_port
+            try:
+                self._image = socket.create_connection((self.world.host, port), timeout=limit)
+            except OSError as exc:
+                raise ClientError(f"cannot reach the image server at {self.world.host}:{port} ({exc}); "
+                                  f"launch(..., image=True) starts it") from exc
+        if self._image_camera != camera:
+            local_port = self._image.getsockname()[1]
+            self.send(set_line("Camera", camera, None, None).rstrip("\r\n")
+                      + f" {{Robot {self.name}}} {{Client 127.0.0.1:{local_port}}}")
+            self._conn.ping(limit)  # the binding is in place
+            self._image_camera = camera
+        self._image.settimeout(limit)
+        try:
+            self._image.sendall(b"OK")
+            header = self._recv_exactly(PICTURE_HEADER)
+            image_type, length = picture_size(header)
+            return decode_picture(image_type, self._recv_exactly(length))
+        except TimeoutError:
+            raise ClientTimeout(f"robot {self.name}: no picture of {camera} within {limit:g} s") from None
+
+    def _recv_exactly(self, n: int) -> bytes:
+        assert self._image is not None
+        chunks, got = [], 0
+        while got < n:
+            data = self._image.recv(min(n - got, 1 << 20))
+            if not data:
+                raise ClientError(f"robot {self.name}: the image server closed the connection")
+            chunks.append(data)
+            got += len(data)
+        return b"".join(chunks)
+
     def update(self, wait: float = 0.0) -> None:
         """Read what has arrived (waiting up to ``wait`` seconds for something)."""
         if not self._conn.read(wait) and not self._conn.state.messages:
@@ -203,6 +246,9 @@ class Robot:
 
     def close(self) -> None:
         """Close the connection: the robot leaves the world."""
+        if self._image is not None:
+            self._image.close()
+            self._image = None
         self._conn.close()
         self.world._robots.pop(self.name, None)
 
@@ -211,8 +257,9 @@ class World:
     """A simulator to talk to: start poses, spawning robots, lock-step STEPs, ground truth."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False,
-                 truth_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S):
+                 truth_port: int | None = None, image_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S):
         self.host, self.port, self.lockstep, self.timeout = host, port, lockstep, timeout
+        self.image_port = image_port if image_port is not None else port + 2003  # 3000 -> 5003
         self.truth_port = truth_port if truth_port is not None else port + 989  # 3000 -> 3989
         self._conn = _Connection(host, port, timeout, "world")
         try:
@@ -354,7 +401,7 @@ class World:
 
 
 def connect(host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False, truth_port: int | None = None,
-            timeout: float = DEFAULT_TIMEOUT_S) -> World:
+            image_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S) -> World:
     """Connect to a running simulator (``lockstep=True`` if it was started with
     ``--lockstep``: then :meth:`World.step` drives its clock)."""
-    return World(host, port, lockstep=lockstep, truth_port=truth_port, timeout=timeout)
+    return World(host, port, lockstep=lockstep, truth_port=truth_port, image_port=image_port, timeout=timeout)

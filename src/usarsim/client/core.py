@@ -263,3 +263,28 @@ def max_range_of(conf: Any, name: str) -> float | None:
                         except (TypeError, ValueError):
                             return None
     return None
+
+
+# Pictures (the image server, protocol.md 10) ------------------------------------------------
+
+PICTURE_HEADER = 5  # a type byte and a 4-byte big-endian length
+
+
+def picture_size(header: bytes) -> tuple[int, int]:
+    """(image type, payload length) of a picture's header."""
+    return header[0], int.from_bytes(header[1:5], "big")
+
+
+def decode_picture(image_type: int, payload: bytes) -> np.ndarray:
+    """A picture as an (height, width, 3) uint8 RGB array: raw (type 0: 16-bit width and
+    height, then B, G, R rows top to bottom) or JPEG (types 1 to 5)."""
+    if image_type == 0:
+        w, h = int.from_bytes(payload[0:2], "big"), int.from_bytes(payload[2:4], "big")
+        bgr = np.frombuffer(payload, dtype=np.uint8, count=w * h * 3, offset=4).reshape(h, w, 3)
+        return bgr[:, :, ::-1].copy()
+    import io
+
+    from PIL import Image
+
+    with Image.open(io.BytesIO(payload)) as im:
+        return np.asarray(im.convert("RGB")).copy()
