@@ -47,6 +47,10 @@ def test_launch_spawn_drive_and_step(server):
         assert pts.shape == (181, 2) and pts[0, 1] > 0  # ... to the right: +Y
         assert robot.status.battery_s > 0
         assert {"Scanner1", "Odometry", "GroundTruth", "Sonar"} <= set(robot.readings)
+        robot.move("CameraPanTilt", {1: 0.2, 2: 0.1})
+        for _ in range(20):
+            world.step(0.1)
+        assert robot.links("CameraPanTilt") == pytest.approx({1: 0.2, 2: 0.1}, abs=0.02)
         robot.close()
 
 

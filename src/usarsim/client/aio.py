@@ -23,6 +23,7 @@ from .core import (
     first_scan_name,
     init_line,
     max_range_of,
+    mispkg_line,
     odometry_of,
     pose_of,
     query_line,
@@ -156,6 +157,13 @@ class Robot:
 
     async def drive(self, **keys: Any) -> None:
         await self._conn.send(drive_line(**keys))
+
+    async def move(self, package: str, values: dict[int, float], order: int = 0) -> None:
+        await self._conn.send(mispkg_line(package, values, order))
+
+    def links(self, package: str) -> dict[int, float] | None:
+        st = self._conn.state.packages.get(package)
+        return None if st is None else {k.link: k.value for k in st.links}
 
     async def send(self, line: str) -> None:
         await self._conn.send(line if line.endswith("\n") else line + "\r\n")

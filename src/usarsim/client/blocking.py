@@ -27,6 +27,7 @@ from .core import (
     first_scan_name,
     init_line,
     max_range_of,
+    mispkg_line,
     odometry_of,
     picture_size,
     pose_of,
@@ -178,6 +179,16 @@ class Robot:
     def drive(self, **keys: Any) -> None:
         """``DRIVE``: ``drive(left=2, right=2)``; see :func:`usarsim.client.core.drive_line`."""
         self._conn.send(drive_line(**keys))
+
+    def move(self, package: str, values: dict[int, float], order: int = 0) -> None:
+        """Mission-package links (an arm, a pan-tilt) to positions: ``move("CameraPanTilt",
+        {1: 0.3, 2: -0.1})`` (rad or m; ``order`` as MISPKG's)."""
+        self._conn.send(mispkg_line(package, values, order))
+
+    def links(self, package: str) -> dict[int, float] | None:
+        """The latest position of each link of a mission package (its MISSTA), or None."""
+        st = self._conn.state.packages.get(package)
+        return None if st is None else {k.link: k.value for k in st.links}
 
     def send(self, line: str) -> None:
         """A raw protocol line (CR LF added when missing)."""

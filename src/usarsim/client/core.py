@@ -103,6 +103,7 @@ class ConnectionState:
         self.readings: dict[str, Any] = {}
         self.reading_times: dict[str, float | None] = {}
         self.status: M.GroundVehicleStatus | M.AerialVehicleStatus | None = None
+        self.packages: dict[str, M.MisPkgStatus] = {}  # the latest MISSTA of each mission package
         self.time: float | None = None
         self.messages: list[Any] = []
         self.replies: deque[Any] = deque()
@@ -134,6 +135,8 @@ class ConnectionState:
             self.reading_times[key] = msg.time
         elif isinstance(msg, (M.GroundVehicleStatus, M.AerialVehicleStatus)):
             self.status = msg
+        elif isinstance(msg, M.MisPkgStatus):
+            self.packages[msg.name] = msg
         elif isinstance(msg, REPLIES):
             self.replies.append(msg)
 
@@ -184,6 +187,14 @@ def drive_line(**kwargs: Any) -> str:
     if not values:
         raise TypeError("drive() needs at least one key, e.g. drive(left=1.0, right=1.0)")
     return C.format_command(C.Drive(**values))
+
+
+def mispkg_line(package: str, values: dict[int, float], order: int = 0) -> str:
+    """``MISPKG {Name p} {Link k} {Value v} {Order o} ...`` (order 0: an angle or position)."""
+    if not values:
+        raise TypeError("move() needs at least one link: move('CameraPanTilt', {1: 0.3})")
+    links = tuple(C.LinkCommand(int(k), float(v), order) for k, v in sorted(values.items()))
+    return C.format_command(C.MisPkg(name=package, links=links))
 
 
 def set_line(item_type: str, name: str | None, opcode: str | None, params: Any) -> str:
