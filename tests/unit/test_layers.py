@@ -46,6 +46,15 @@ def test_config_loads_no_mujoco_or_asyncio():
     assert top(mods, "usarsim.sim", "usarsim.server", "usarsim.protocol") == set()
 
 
+def test_the_client_loads_no_mujoco_simulation_or_server():
+    """usarsim.client talks to a simulator over the wire only: a controller can run where
+    MuJoCo is not installed."""
+    mods = loaded_after(["usarsim.client", "usarsim.client.aio"])
+    assert "usarsim.client.blocking" in mods
+    assert top(mods, "mujoco") == set()
+    assert top(mods, "usarsim.sim", "usarsim.server", "usarsim.web", "usarsim.sensors", "usarsim.config") == set()
+
+
 @pytest.mark.parametrize("module", ["usarsim.sim.simulation", "usarsim.sim.runner", "usarsim.sim.facade",
                                     "usarsim.sensors", "usarsim.effecters"])
 def test_sim_loads_no_asyncio_protocol_or_server(module):
