@@ -228,6 +228,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
                    help="with --cameras: picture sizes (default: 320x240 640x480)")
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
+    b.add_argument("--env", action="store_true",
+                   help="measure the learning environments instead: Gymnasium steps per second of one P2AT at a "
+                        "0.1 s control period in lock-step, and PettingZoo steps per second of a team (--team)")
+    b.add_argument("--team", type=int, default=8, help="with --env: robots in the team (default: %(default)s)")
+    b.add_argument("--steps", type=int, default=300, help="with --env: steps timed (default: %(default)s)")
     for command in (s, v, w, r, b):  # -v and -vv after the command too: 'usarsim serve -v'
         _add_verbose(command, "verbose_after")
     return p
@@ -482,7 +487,28 @@ def cmd_robots(args) -> int:
 def cmd_bench(args) -> int:
     from usarsim.bench import run_bench, run_camera_bench
 
+    if args.env:
+        return run_env_bench(args)
     return run_camera_bench(args) if args.cameras else run_bench(args)
+
+
+def run_env_bench(args) -> int:
+    """Environment steps per second (usarsim.envs.bench_env), one robot and a team."""
+    import json
+
+    from usarsim.envs import bench_env
+
+    one = bench_env(args.steps, world=args.world)
+    team = bench_env(max(1, args.steps // 3), team=args.team, world=args.world) if args.team > 0 else None
+    result = {"env_steps_per_s": round(one, 1), "control_period_s": 0.1, "team": args.team,
+              "team_steps_per_s": None if team is None else round(team, 1), "cpu_count": os.cpu_count()}
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"Explore-v0, one P2AT at 0.1 s: {one:.0f} env steps/s ({one * 0.1:.0f}x real time)")
+        if team is not None:
+            print(f"TeamExplore, {args.team} P2ATs: {team:.0f} team steps/s ({team * 0.1:.0f}x real time)")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -397,3 +397,12 @@ def test_serve_refuses_a_robot_dir_file_named_unlike_its_class(tmp_path):
     out = usarsim("serve", "--port", "0", "--robot-dir", str(tmp_path), "--no-web", "--no-image", timeout=60)
     assert out.returncode == 1, out
     assert "MyBot.yaml" in out.stderr and "class_name is 'P2AT'" in out.stderr, out.stderr
+
+
+def test_bench_env_prints_steps_per_second():
+    out = usarsim("bench", "--env", "--steps", "20", "--team", "2", "--json", timeout=300)
+    assert out.returncode == 0, out.stderr
+    import json
+
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    assert result["env_steps_per_s"] > 0 and result["team"] == 2 and result["team_steps_per_s"] > 0

@@ -198,3 +198,21 @@ def test_a_robot_cameras_picture_as_a_numpy_array():
             world.step(0.1)
         turned = robot.picture()
         assert abs(turned.astype(float) - ahead.astype(float)).mean() > 5.0
+
+
+def test_commands_sent_before_a_step_take_effect_in_it_every_time(server):
+    """A DRIVE goes out on the robot's connection, the STEP on the world's: the client makes
+    sure the DRIVE is in the simulation first, so that two runs are alike."""
+    def run():
+        with launch(world="DM-USAR_yellow", seed=3) as srv, srv.connect() as world:
+            robot = world.spawn("P2AT", start="PlayerStart1")
+            poses = []
+            for i in range(15):
+                robot.drive(left=3.0 if i % 3 else -3.0, right=3.0)
+                world.step(0.05)
+                poses.append(robot.ground_truth())
+            return poses
+
+    first = run()
+    assert first[-1][0][0] > first[0][0][0]  # it moved
+    assert run() == first

@@ -37,6 +37,7 @@ class _Connection:
     def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, timeout: float, what: str):
         self.reader, self.writer, self.timeout, self.what = reader, writer, timeout, what
         self.state = ConnectionState()
+        self.sent = False  # a command went out since the last PING
         self._arrived = asyncio.Event()
         self._task = asyncio.get_running_loop().create_task(self._read())
 
@@ -66,6 +67,7 @@ class _Connection:
     async def send(self, line: str) -> None:
         if self.state.closed:
             raise ClientError(f"{self.what}: the connection is closed")
+        self.sent = True
         self.writer.write(line.encode("ascii"))
         try:
             await self.writer.drain()
@@ -95,6 +97,7 @@ class _Connection:
     async def ping(self, timeout: float | None = None, command: str | None = None) -> M.Pong:
         pid = self.state.next_ping()
         await self.send(f"PING {{Id {pid}}}\r\n")
+        self.sent = False
         return await self.wait_for(lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)",
                                    command, timeout)
 
@@ -241,6 +244,8 @@ class World:
     async def step(self, seconds: float, timeout: float | None = None) -> float:
         if not self.lockstep:
             raise ClientError("step() needs a lock-step server; use wait(seconds) in real time")
+        # the robots' commands reach the simulation before the STEP does (see the blocking client)
+        await asyncio.gather(*(r._conn.ping(timeout) for r in list(self._robots.values()) if r._conn.sent))
         await self._conn.send(f"STEP {{Time {seconds!r}}}\r\n")
         stepped = await self._conn.wait_for(lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}",
                                             "STEP", timeout)

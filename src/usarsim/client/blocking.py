@@ -51,10 +51,12 @@ class _Connection:
                               f"'usarsim serve' running there?") from exc
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.state = ConnectionState()
+        self.sent = False  # a command went out since the last PING
 
     def send(self, line: str) -> None:
         if self.state.closed:
             raise ClientError(f"{self.what}: the connection is closed")
+        self.sent = True
         try:
             self.sock.sendall(line.encode("ascii"))
         except OSError as exc:
@@ -102,6 +104,7 @@ class _Connection:
         message produced so far has been read."""
         pid = self.state.next_ping()
         self.send(f"PING {{Id {pid}}}\r\n")
+        self.sent = False
         return self.wait_for(lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", command,
                              timeout)
 
@@ -328,6 +331,9 @@ class World:
         if not self.lockstep:
             raise ClientError("step() needs a lock-step server (usarsim serve --lockstep, or launch(lockstep=True)); "
                               "use wait(seconds) in real time")
+        # the robots' commands (DRIVE, SET...) reach the simulation before the STEP does: each
+        # robot connection is a socket of its own, and the server reads them in no fixed order
+        self._sync(timeout, only_sent=True)
         self._conn.send(f"STEP {{Time {seconds!r}}}\r\n")
         stepped = self._conn.wait_for(lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}", "STEP",
                                       timeout)
@@ -335,13 +341,17 @@ class World:
         self._sync(timeout)
         return self.time
 
-    def _sync(self, timeout: float | None) -> None:
-        """Every robot connection read up to now (a PING each, sent together)."""
+    def _sync(self, timeout: float | None, only_sent: bool = False) -> None:
+        """Every robot connection read up to now, and its commands handed to the simulation
+        (a PING each, sent together; ``only_sent``: only those that sent something since)."""
         pending = []
         for robot in list(self._robots.values()):
             conn = robot._conn
+            if only_sent and not conn.sent:
+                continue
             pid = conn.state.next_ping()
             conn.send(f"PING {{Id {pid}}}\r\n")
+            conn.sent = False
             pending.append((conn, pid))
         for conn, pid in pending:
             conn.wait_for(lambda m, pid=pid: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)",

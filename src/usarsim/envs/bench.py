@@ -1,0 +1,55 @@
+"""How fast the environments step (``usarsim bench --env``)."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+
+def bench_env(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any) -> float:
+    """Environment steps per second over ``steps`` steps with random actions (seeded with
+    ``seed``): of :class:`~usarsim.envs.ExploreEnv` when ``team`` is 0, else of a
+    :class:`~usarsim.envs.TeamExplore` of ``team`` robots (one step moves them all).
+    ``kwargs`` go to the environment (``control_period_s``, ``message_size``, ...); the
+    time limit defaults to one long enough for every step, and no simulator is launched
+    ahead.  Resets (a simulator launch each) are not counted."""
+    from .explore import ExploreEnv
+    from .team import TeamExplore
+
+    if steps < 1:
+        raise ValueError(f"steps must be at least 1, got {steps!r}")
+    period = float(kwargs.get("control_period_s", 0.1))
+    kwargs.setdefault("time_limit_s", period * (steps + 10))
+    kwargs.setdefault("prelaunch", False)  # no simulator starting beside the steps timed
+    if team:
+        env = TeamExplore(robots=team, **kwargs)
+        try:
+            env.reset(seed=seed)
+            for i, a in enumerate(env.possible_agents):
+                env.action_space(a).seed(seed + i)
+            elapsed = 0.0
+            for _ in range(steps):
+                if not env.agents:
+                    env.reset()
+                actions = {a: env.action_space(a).sample() for a in env.agents}
+                t = time.perf_counter()
+                env.step(actions)
+                elapsed += time.perf_counter() - t
+        finally:
+            env.close()
+        return steps / elapsed
+    env = ExploreEnv(**kwargs)
+    try:
+        env.reset(seed=seed)
+        env.action_space.seed(seed)
+        elapsed = 0.0
+        for _ in range(steps):
+            action = env.action_space.sample()
+            t = time.perf_counter()
+            _, _, terminated, truncated, _ = env.step(action)
+            elapsed += time.perf_counter() - t
+            if terminated or truncated:
+                env.reset()
+    finally:
+        env.close()
+    return steps / elapsed
