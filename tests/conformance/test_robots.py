@@ -214,3 +214,27 @@ def test_robot_conf_and_geo_lines_match_its_file(path: Path, server_factory):
     assert c.ask("GETGEO {Type Robot}", "GEO").raw.decode() == geo
     assert c.ask("GETCONF {Type Robot}", "CONF").raw.decode() == conf
     assert f"{{SteeringType {robot.steering_type}}}" in conf and f"{{Name {robot.class_name}}}" in conf
+
+
+SCANNER_ROBOTS = [p for p in ROBOT_FILES
+                  if any(i.item_type in ("RangeScanner", "IRScanner") for i in load_robot(p).items)]
+
+
+@pytest.mark.parametrize("path", SCANNER_ROBOTS, ids=lambda p: p.stem)
+def test_every_robots_laser_sees_past_its_own_body(path: Path):
+    """At a start pose with open floor around it, a robot's laser reads the room, not its own
+    arm, camera or chassis: no beam stops within 0.3 m (a scanner mounted inside a part of the
+    robot reads its MinRange on every beam)."""
+    from usarsim.readings import RangeScanReading
+
+    robot = load_robot(path)
+    world = load_world(WORLDS_DIR / "DM-USAR_yellow.yaml")
+    pose = world.start_pose("PlayerStart1")
+    sim = Simulation(world, seed=0)
+    sim.spawn(1, robot, "R", pose.location, pose.rotation, set_down=True)
+    sim.advance(1.0)
+    scans = [o.value for o in sim.take_outputs() if isinstance(o.value, RangeScanReading)]
+    assert scans, "no scan in 1 s"
+    for s in scans[-len({x.name for x in scans}):]:
+        near = [r for r in s.ranges_m if r < 0.3]
+        assert not near, f"{s.name}: {len(near)} of {len(s.ranges_m)} beams stop within 0.3 m"
