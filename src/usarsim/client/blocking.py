@@ -175,7 +175,9 @@ class Robot:
         return pose_of(self.readings, "GroundTruth")
 
     def victims(self) -> list:
-        """The victim parts the VictSensor sees now (``part_name``, ``location`` robot frame)."""
+        """The victim parts the VictSensor sees now (``part_name``, ``location`` in the victim
+        sensor's frame, as the server reports them: add the sensor's mount from
+        ``geo("VictSensor")`` for the robot's frame)."""
         return victims_of(self.readings)
 
     # commands ---------------------------------------------------------------------------

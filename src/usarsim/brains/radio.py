@@ -1,0 +1,187 @@
+"""A robot's radio through the simulator's ComServer (README "Team communication",
+protocol.md 12.1, manual 3.2.4): the messages get through only while the simulated link
+between the two robots holds.
+
+Each :class:`Radio` registers its robot's name with the ComServer and listens on a port of
+its own; to link two robots, the one says ``LISTEN`` and the other ``OPEN`` (each OPEN
+uses up a LISTEN), and the ComServer connects to both robots' ports and relays
+``SEND <n> <bytes>;`` frames between them: the other robot receives the bytes of each SEND
+as a stream, without the framing, so every message here starts with its length (4 bytes,
+big-endian).  :func:`link` opens a link between two radios of this process; a link the
+ComServer closes (the signal fell below the cutoff) is dropped and can be opened again
+later.  The protocol's words are :mod:`usarsim.protocol.wireless`'s.
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+import struct
+import time
+from dataclasses import dataclass, field
+
+from usarsim.errors import ProtocolError
+from usarsim.protocol.wireless import (
+    CommandSplitter,
+    WcsFail,
+    WcsListen,
+    WcsOk,
+    WcsOpen,
+    WcsRegister,
+    WcsReply,
+    WcsRequest,
+    format_send,
+    format_wcs_request,
+    parse_wcs_reply,
+)
+
+log = logging.getLogger("usarsim.brains.radio")
+_LENGTH = struct.Struct(">I")  # a message's length, before it
+
+
+class RadioError(RuntimeError):
+    """The ComServer refused or did not answer."""
+
+
+@dataclass
+class Link:
+    """One end of a relayed link: its socket and what is half received on it."""
+
+    peer: str
+    sock: socket.socket
+    buffer: bytearray = field(default_factory=bytearray)
+
+
+class Radio:
+    """The radio of robot ``name``, through the ComServer at ``host``:``port``."""
+
+    def __init__(self, host: str, port: int, name: str, *, timeout: float = 10.0, address: str = "127.0.0.1"):
+        self.name, self.timeout = name, timeout
+        try:
+            self._ctl = socket.create_connection((host, port), timeout=timeout)
+        except OSError as exc:
+            raise RadioError(f"cannot reach the ComServer at {host}:{port} ({exc}); is the server's wireless on?") \
+                from exc
+        self._splitter = CommandSplitter()
+        self._replies: list[str] = []
+        self._server = socket.create_server((address, 0))
+        self._server.settimeout(timeout)
+        self.port = self._server.getsockname()[1]
+        self.links: dict[str, Link] = {}
+        self.received = 0  # messages received
+        self.sent = 0  # messages sent (one per link they went out on)
+        reply = self.ask(WcsRegister(name, address))
+        if not isinstance(reply, WcsOk):
+            self.close()
+            raise RadioError(f"REGISTER {name}: {reply}")
+
+    def ask(self, request: WcsRequest) -> WcsReply:
+        """Send one command, return its reply."""
+        self._ctl.sendall(format_wcs_request(request).encode("ascii"))
+        deadline = time.monotonic() + self.timeout
+        while not self._replies:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise RadioError(f"no reply from the ComServer to {request.type} within {self.timeout:g} s")
+            self._ctl.settimeout(left)
+            try:
+                data = self._ctl.recv(4096)
+            except TimeoutError:
+                continue
+            if not data:
+                raise RadioError("the ComServer closed the connection")
+            self._replies.extend(self._splitter.feed(data))
+        text = self._replies.pop(0)
+        try:
+            return parse_wcs_reply(text)
+        except ProtocolError as exc:
+            raise RadioError(f"unexpected ComServer reply to {request.type}: {text!r}") from exc
+
+    def accept(self, peer: str) -> None:
+        """Take the connection the ComServer makes for a new link with ``peer``."""
+        try:
+            sock, _ = self._server.accept()
+        except TimeoutError as exc:
+            raise RadioError(f"{self.name}: the ComServer did not connect for the link with {peer}") from exc
+        sock.setblocking(False)
+        old = self.links.pop(peer, None)
+        if old is not None:
+            old.sock.close()
+        self.links[peer] = Link(peer, sock)
+
+    def broadcast(self, payload: bytes) -> int:
+        """Send ``payload`` on every open link; returns on how many it went."""
+        frame = format_send(_LENGTH.pack(len(payload)) + payload)
+        n = 0
+        for link in list(self.links.values()):
+            try:
+                link.sock.setblocking(True)
+                link.sock.settimeout(self.timeout)
+                link.sock.sendall(frame)
+                link.sock.setblocking(False)
+                n += 1
+            except OSError:
+                self._drop(link)
+        self.sent += n
+        return n
+
+    def poll(self) -> list[tuple[str, bytes]]:
+        """The messages received since the last poll, as (peer, payload); links the
+        ComServer closed are dropped."""
+        out: list[tuple[str, bytes]] = []
+        for link in list(self.links.values()):
+            while True:
+                try:
+                    data = link.sock.recv(1 << 16)
+                except BlockingIOError:
+                    break
+                except OSError:
+                    data = b""
+                if not data:
+                    self._drop(link)
+                    break
+                buf = link.buffer
+                buf += data
+                while len(buf) >= _LENGTH.size:
+                    (n,) = _LENGTH.unpack_from(buf)
+                    if len(buf) < _LENGTH.size + n:
+                        break
+                    out.append((link.peer, bytes(buf[_LENGTH.size:_LENGTH.size + n])))
+                    del buf[:_LENGTH.size + n]
+        self.received += len(out)
+        return out
+
+    def forget(self, peer: str) -> None:
+        """Close the link with ``peer``, if there is one."""
+        link = self.links.get(peer)
+        if link is not None:
+            self._drop(link)
+
+    def _drop(self, link: Link) -> None:
+        if self.links.get(link.peer) is link:
+            del self.links[link.peer]
+            log.info("%s: the link with %s closed", self.name, link.peer)
+        link.sock.close()
+
+    def close(self) -> None:
+        for link in list(self.links.values()):
+            link.sock.close()
+        self.links.clear()
+        self._server.close()
+        self._ctl.close()
+
+
+def link(a: Radio, b: Radio) -> bool:
+    """Open a link between two radios of this process (b listens, a opens); False when the
+    ComServer refuses (no signal between them, ...)."""
+    listen = b.ask(WcsListen(b.name, b.port))
+    # a LISTEN left from an OPEN that failed is still there: fine
+    if not isinstance(listen, WcsOk) and "already listening" not in getattr(listen, "reason", ""):
+        return False
+    reply = a.ask(WcsOpen(a.name, a.port, b.name, b.port))
+    if isinstance(reply, WcsFail):
+        log.info("no link %s - %s: %s", a.name, b.name, reply.reason)
+        return False
+    a.accept(b.name)
+    b.accept(a.name)
+    return True
