@@ -17,9 +17,9 @@ import pytest
 from usarsim.brains import Bounds, FrontierExplorer, Team, VictimApproacher, WallFollower, Wander, run
 from usarsim.brains.coverage import FloorMap, Referee
 from usarsim.brains.grid import OccupancyGrid
-from usarsim.brains.radio import Radio
 from usarsim.brains.team import decode, encode
 from usarsim.client import launch
+from usarsim.client.radio import Radio
 from usarsim.config.catalog import resolve_world
 
 ARENA = Bounds(-6.0, -7.2, 6.0, 7.2)  # DM-USAR_yellow inside its outer walls

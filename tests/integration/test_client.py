@@ -216,3 +216,27 @@ def test_commands_sent_before_a_step_take_effect_in_it_every_time(server):
     first = run()
     assert first[-1][0][0] > first[0][0][0]  # it moved
     assert run() == first
+
+
+def test_robots_talk_over_the_simulated_radio_only_while_the_link_holds(tmp_path):
+    # a short-range radio: the link holds within about 4 m only (cutoff -53 dBm)
+    ini = tmp_path / "radio.ini"
+    ini.write_text("[USARBot.ComServer]\nModel=distance\neCutoff=-53\n")
+    with launch(world="DM-USAR_yellow", seed=1, wireless=True,
+                extra_args=("--wireless-config", str(ini))) as srv, srv.connect() as world:
+        a = world.spawn("P2AT", name="A", start="PlayerStart1")
+        b = world.spawn("P2AT", name="B", location=(-9.5, 2.0, -0.25))  # 2 m away
+        far = world.spawn("P2AT", name="C", start="PlayerStart8")  # 8 m away
+        world.step(0.2)
+        near_dbm, far_dbm = a.signal_to(b), a.signal_to("C")
+        assert near_dbm > -53 > far_dbm
+        assert a.send_to(b, b"victim at 3,4")
+        assert not a.send_to(far, b"out of range")  # the ComServer refuses the link
+        world.step(0.2)
+        deadline = time.monotonic() + 5
+        got = []
+        while not got and time.monotonic() < deadline:
+            got = b.received()
+            time.sleep(0.02)
+        assert got == [("A", b"victim at 3,4")]
+        assert far.received() == []

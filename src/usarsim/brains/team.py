@@ -1,7 +1,7 @@
 """A team of frontier explorers that share their maps over the simulated radio.
 
 Each robot runs its own :class:`~usarsim.brains.frontier.FrontierExplorer` and, every
-``share_s`` seconds, sends its team-mates through the ComServer (:mod:`usarsim.brains.radio`)
+``share_s`` seconds, sends its team-mates through the ComServer (:mod:`usarsim.client.radio`)
 its own map (log-odds quantised to bytes and compressed: a few kB), its position and its
 goal; every ``position_s`` seconds in between, its position and goal alone (a robot leaves
 the beams that end on a team-mate out of its map and its scan matching).  A robot plans on
@@ -34,9 +34,9 @@ from typing import Any
 from usarsim.brains.coverage import NEAR_M
 from usarsim.brains.frontier import FrontierExplorer
 from usarsim.brains.grid import Bounds
-from usarsim.brains.radio import Radio, RadioError, link
 from usarsim.brains.runner import numbers_first, run
 from usarsim.client import ClientError, connect, launch
+from usarsim.client.radio import Radio, RadioError, link
 
 log = logging.getLogger("usarsim.brains.team")
 

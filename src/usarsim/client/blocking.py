@@ -128,6 +128,7 @@ class Robot:
         self._max_ranges: dict[str, float | None] = {}
         self._image: socket.socket | None = None
         self._image_camera: str | None = None
+        self._radio = None  # usarsim.client.radio.Radio, made on first use
 
     # what it knows ----------------------------------------------------------------------
     @property
@@ -255,6 +256,39 @@ class Robot:
             got += len(data)
         return b"".join(chunks)
 
+    # the radio (the simulator's ComServer: launch(..., wireless=True)) -------------------
+    def radio(self):
+        """This robot's :class:`usarsim.client.radio.Radio`, registered with the ComServer."""
+        if self._radio is None:
+            from .radio import Radio, RadioError
+
+            try:
+                self._radio = Radio(self.world.host, self.world.comserver_port, self.name,
+                                    timeout=self._conn.timeout)
+            except RadioError as exc:
+                raise ClientError(f"robot {self.name}: {exc} (launch(..., wireless=True) starts it)") from exc
+        return self._radio
+
+    def signal_to(self, other: Robot | str) -> float | None:
+        """The signal strength (dBm) from this robot to ``other`` under the simulator's radio
+        model, or None when there is none."""
+        return self.radio().signal(other if isinstance(other, str) else other.name)
+
+    def send_to(self, other: Robot, data: bytes) -> bool:
+        """Send ``data`` to another robot of this client over the simulated radio: a link is
+        opened through the ComServer when there is none; False when the ComServer refuses it
+        (no signal) or closed it.  The other robot gets it from :meth:`received`."""
+        from .radio import link
+
+        mine, theirs = self.radio(), other.radio()
+        if other.name not in mine.links and not link(mine, theirs):
+            return False
+        return mine.send(other.name, data)
+
+    def received(self) -> list[tuple[str, bytes]]:
+        """The messages other robots sent to this one since the last call: (sender, bytes)."""
+        return [] if self._radio is None else self._radio.poll()
+
     def update(self, wait: float = 0.0) -> None:
         """Read what has arrived (waiting up to ``wait`` seconds for something)."""
         if not self._conn.read(wait) and not self._conn.state.messages:
@@ -262,6 +296,9 @@ class Robot:
 
     def close(self) -> None:
         """Close the connection: the robot leaves the world."""
+        if self._radio is not None:
+            self._radio.close()
+            self._radio = None
         if self._image is not None:
             self._image.close()
             self._image = None
@@ -273,9 +310,11 @@ class World:
     """A simulator to talk to: start poses, spawning robots, lock-step STEPs, ground truth."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False,
-                 truth_port: int | None = None, image_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S):
+                 truth_port: int | None = None, image_port: int | None = None, comserver_port: int | None = None,
+                 timeout: float = DEFAULT_TIMEOUT_S):
         self.host, self.port, self.lockstep, self.timeout = host, port, lockstep, timeout
         self.image_port = image_port if image_port is not None else port + 2003  # 3000 -> 5003
+        self.comserver_port = comserver_port if comserver_port is not None else port + 2874  # 3000 -> 5874
         self.truth_port = truth_port if truth_port is not None else port + 989  # 3000 -> 3989
         self._conn = _Connection(host, port, timeout, "world")
         try:
@@ -424,7 +463,9 @@ class World:
 
 
 def connect(host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False, truth_port: int | None = None,
-            image_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S) -> World:
+            image_port: int | None = None, comserver_port: int | None = None,
+            timeout: float = DEFAULT_TIMEOUT_S) -> World:
     """Connect to a running simulator (``lockstep=True`` if it was started with
     ``--lockstep``: then :meth:`World.step` drives its clock)."""
-    return World(host, port, lockstep=lockstep, truth_port=truth_port, image_port=image_port, timeout=timeout)
+    return World(host, port, lockstep=lockstep, truth_port=truth_port, image_port=image_port,
+                 comserver_port=comserver_port, timeout=timeout)

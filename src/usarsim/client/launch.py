@@ -62,7 +62,8 @@ class Server:
     def connect(self, timeout: float | None = None) -> World:
         """A :class:`World` on this server (lock-step if the server is)."""
         return World(self.host, self.port, lockstep=self.lockstep, truth_port=self.ports.get("truth"),
-                     image_port=self.ports.get("image"), timeout=self.timeout if timeout is None else timeout)
+                     image_port=self.ports.get("image"), comserver_port=self.ports.get("comserver"),
+                     timeout=self.timeout if timeout is None else timeout)
 
     def stderr_tail(self, n: int = 2000) -> str:
         try:

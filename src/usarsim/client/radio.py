@@ -24,18 +24,20 @@ from usarsim.errors import ProtocolError
 from usarsim.protocol.wireless import (
     CommandSplitter,
     WcsFail,
+    WcsGetSS,
     WcsListen,
     WcsOk,
     WcsOpen,
     WcsRegister,
     WcsReply,
     WcsRequest,
+    WcsSignal,
     format_send,
     format_wcs_request,
     parse_wcs_reply,
 )
 
-log = logging.getLogger("usarsim.brains.radio")
+log = logging.getLogger("usarsim.client.radio")
 _LENGTH = struct.Struct(">I")  # a message's length, before it
 
 
@@ -109,11 +111,26 @@ class Radio:
             old.sock.close()
         self.links[peer] = Link(peer, sock)
 
+    def signal(self, peer: str) -> float | None:
+        """The signal strength (dBm) from this robot to ``peer`` under the simulator's radio
+        model (GETSS), or None when the ComServer cannot give one."""
+        reply = self.ask(WcsGetSS(self.name, peer))
+        return reply.dbm if isinstance(reply, WcsSignal) else None
+
+    def send(self, peer: str, payload: bytes) -> bool:
+        """Send ``payload`` on the open link with ``peer``; False when there is none (never
+        opened, or closed by the ComServer when the signal fell below the cutoff)."""
+        link = self.links.get(peer)
+        return link is not None and self._send_on([link], payload) == 1
+
     def broadcast(self, payload: bytes) -> int:
         """Send ``payload`` on every open link; returns on how many it went."""
+        return self._send_on(list(self.links.values()), payload)
+
+    def _send_on(self, links: list[Link], payload: bytes) -> int:
         frame = format_send(_LENGTH.pack(len(payload)) + payload)
         n = 0
-        for link in list(self.links.values()):
+        for link in links:
             try:
                 link.sock.setblocking(True)
                 link.sock.settimeout(self.timeout)
