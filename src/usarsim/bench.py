@@ -111,32 +111,25 @@ class _ServedApp:
         self.loop.close()
 
 
-def run_bench(args) -> int:
-    from usarsim.config.catalog import resolve_world
+def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, progress: bool = False) -> dict:
+    """One run: N P2ATs driven over loopback at max speed for ``seconds`` of simulated time;
+    with ``record``, recorded to that MCAP file (the time the recorder takes to write what
+    was still queued at the end is counted in the wall time)."""
     from usarsim.server.app import Application
 
-    logging_quiet()
-    world = resolve_world(args.world)
-    n = int(args.robots)
-    seconds = float(args.seconds)
-    if n < 1 or not (seconds > 0 and math.isfinite(seconds)):
-        print("usarsim bench: --robots must be >= 1 and --seconds > 0", file=sys.stderr)
-        return 2
     poses = free_spots(world, n)
     app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n),
-                      truth_port=None, image_port=None, web_port=None)
+                      truth_port=None, image_port=None, web_port=None, record=record)
     served = _ServedApp(app)
     port = app.control.port
     client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
                                str(seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     sim = app.facade.sim
-    progress = sys.stderr.isatty() and not args.json
     try:
         deadline = time.monotonic() + 120
         while len(sim.robots) < n:
             if time.monotonic() > deadline or client.poll() is not None:
-                print(f"usarsim bench: only {len(sim.robots)} of {n} robots spawned", file=sys.stderr)
-                return 1
+                raise SystemExit(f"usarsim bench: only {len(sim.robots)} of {n} robots spawned")
             time.sleep(0.01)
         # let every robot land and its client start driving
         t_settle = sim.time + 1.0
@@ -148,8 +141,14 @@ def run_bench(args) -> int:
             time.sleep(0.005)
             if progress:
                 done = sim.time - sim_start
-                print(f"\r  {done:7.1f} / {seconds:g} simulated s", end="", file=sys.stderr, flush=True)
+                print(f"\r  {done:7.1f} / {seconds:g} simulated s{' (recording)' if record else ''}", end="",
+                      file=sys.stderr, flush=True)
         sim_end, wall_end = sim.time, time.perf_counter()
+        if app.recorder is not None:  # what the recorder still has to write is part of the cost
+            mark = app.recorder.mark()
+            while app.recorder.written() < mark - 1 and time.perf_counter() - wall_end < 120:
+                time.sleep(0.002)
+            wall_end = time.perf_counter()
         if progress:
             print(file=sys.stderr)
         model = sim.model
@@ -158,19 +157,71 @@ def run_bench(args) -> int:
         client.terminate()
         client.wait(10)
         served.stop()
-
     sim_s = sim_end - sim_start
     wall_s = wall_end - wall_start
-    rtf = sim_s / wall_s
-    raw = raw_mujoco_rtf(model, min(seconds, 5.0), state)
-    result = {"robots": n, "sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(rtf, 3),
+    return {"sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(sim_s / wall_s, 3),
+            "model": model, "state": state, "physics_resets": sim.resets}
+
+
+def run_bench(args) -> int:
+    from usarsim.config.catalog import resolve_world
+
+    logging_quiet()
+    world = resolve_world(args.world)
+    n = int(args.robots)
+    seconds = float(args.seconds)
+    if n < 1 or not (seconds > 0 and math.isfinite(seconds)):
+        print("usarsim bench: --robots must be >= 1 and --seconds > 0", file=sys.stderr)
+        return 2
+    progress = sys.stderr.isatty() and not args.json
+    if getattr(args, "record", False):
+        return _record_bench(args, world, n, seconds, progress)
+    run = measure_rtf(world, n, seconds, progress=progress)
+    model = run["model"]
+    sim_s, wall_s, rtf = run["sim_seconds"], run["wall_seconds"], run["rtf"]
+    raw = raw_mujoco_rtf(model, min(seconds, 5.0), run["state"])
+    result = {"robots": n, "sim_seconds": sim_s, "wall_seconds": wall_s, "rtf": rtf,
               "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
-              "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": sim.resets}
+              "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": run["physics_resets"]}
     if args.json:
         print(json.dumps(result))
     else:
         print(f"robots {n}: {sim_s:.1f} simulated s in {wall_s:.2f} s wall -> real-time factor {rtf:.2f}; "
               f"bare mj_step {raw:.2f}; ratio {rtf / raw:.2f}")
+    return 0
+
+
+RECORD_ROUNDS = 3  # bench --record alternates this many runs without and with a recording
+
+
+def _record_bench(args, world, n: int, seconds: float, progress: bool) -> int:
+    """``bench --record``: runs without and with a recording, alternately in one sitting; the
+    cost in real-time factor and the recording's size per robot-minute."""
+    import tempfile
+
+    plain, recorded, sizes = [], [], []
+    with tempfile.TemporaryDirectory(prefix="usarsim-bench-") as tmp:
+        for k in range(RECORD_ROUNDS):
+            plain.append(measure_rtf(world, n, seconds, progress=progress)["rtf"])
+            path = os.path.join(tmp, f"run{k}.mcap")
+            run = measure_rtf(world, n, seconds, record=path, progress=progress)
+            recorded.append(run["rtf"])
+            # the file holds the settling second and the spawns too: its size over all the
+            # simulated time it covers
+            minutes = (run["sim_seconds"] + 1.0) / 60.0
+            sizes.append(os.path.getsize(path) / (n * minutes))
+    off, on = statistics.median(plain), statistics.median(recorded)
+    cost = 100.0 * (1.0 - on / off)
+    per = statistics.median(sizes)
+    result = {"robots": n, "sim_seconds": seconds, "rtf": off, "rtf_recording": on, "cost_percent": round(cost, 1),
+              "bytes_per_robot_minute": round(per), "runs": {"plain": plain, "recording": recorded},
+              "world": world.name, "cpu_count": os.cpu_count()}
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"robots {n}: real-time factor {off:.2f} without a recording, {on:.2f} recording every channel but "
+              f"cameras ({cost:.1f} % less; medians of {RECORD_ROUNDS} runs each, alternately)")
+        print(f"recording size: {per / 1e6:.2f} MB per robot-minute of simulated time")
     return 0
 
 

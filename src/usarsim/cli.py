@@ -50,6 +50,7 @@ def _size(text: str) -> tuple[int, int]:
 
 # The ports ``usarsim serve`` listens on when none is given, by option; ``--port-offset N``
 # adds N to each (a second server beside the first needs nothing else).
+FOXGLOVE_PORT = 8765  # Foxglove's own default for a live WebSocket connection
 DEFAULT_PORTS = {"port": 3000, "truth_port": 3989, "image_port": 5003, "web_port": 8080,
                  "wcs_port": 5874, "wss_port": 50000, "cominterface_port": 7435}
 
@@ -195,6 +196,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "http://HOST:P/ in a browser to watch the world, spawn and drive robots with their video "
                         "and sensors, and send any command")
     s.add_argument("--no-web", action="store_true", help="do not serve the operator console")
+    s.add_argument("--record", default=None, metavar="FILE.mcap",
+                   help="record the run to an MCAP file: every line each client sent and received on every port "
+                        "(for 'usarsim replay'), and the world, robots, lasers, poses, battery, radio links and "
+                        "log in Foxglove's schemas (docs/recording.md)")
+    s.add_argument("--foxglove", type=_port, nargs="?", const=FOXGLOVE_PORT, default=None, metavar="PORT",
+                   help=f"serve the run live to Foxglove over its WebSocket protocol (default port "
+                        f"{FOXGLOVE_PORT}; 0 picks a free port): open Foxglove and connect to ws://HOST:PORT")
 
     v = sub.add_parser("validate", help="check a world, robot, RNDF or MDF file",
                        description="Load a world or robot file (or a shipped world or robot class by name, "
@@ -228,12 +236,31 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
                    help="with --cameras: picture sizes (default: 320x240 640x480)")
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
+    b.add_argument("--record", action="store_true",
+                   help="measure what recording costs: runs without and with 'serve --record' (every channel but "
+                        "cameras), alternately; prints both real-time factors and the recording's size per "
+                        "robot-minute")
     b.add_argument("--env", action="store_true",
                    help="measure the learning environments instead: Gymnasium steps per second of one P2AT at a "
                         "0.1 s control period in lock-step, and PettingZoo steps per second of a team (--team)")
     b.add_argument("--team", type=int, default=8, help="with --env: robots in the team (default: %(default)s)")
     b.add_argument("--steps", type=int, default=300, help="with --env: steps timed (default: %(default)s)")
-    for command in (s, v, w, r, b):  # -v and -vv after the command too: 'usarsim serve -v'
+    rp = sub.add_parser("replay", help="replay a recording against a fresh server and compare",
+                        description="Start a server with the recording's world, seed and options (always in "
+                                    "lock-step, on free ports), send every client line of the recording "
+                                    "(usarsim serve --record) again in the order the server saw them, and "
+                                    "compare every server line with the recorded one. A lock-step recording "
+                                    "replays identically; a real-time one is replayed at its recorded "
+                                    "simulated times and the report says how far the outputs differ. Image "
+                                    "and wireless connections are not replayed.")
+    rp.add_argument("path", metavar="FILE.mcap", help="a recording made with usarsim serve --record")
+    rp.add_argument("--check", action="store_true",
+                    help="stop at the first server line that differs, name its connection, simulated time and "
+                         "both lines, and exit 1; exit 0 only when every line is identical")
+    rp.add_argument("--timeout", type=float, default=10.0, metavar="S",
+                    help="how long to wait for a recorded server line before calling it missing "
+                         "(default: %(default)s)")
+    for command in (s, v, w, r, b, rp):  # -v and -vv after the command too: 'usarsim serve -v'
         _add_verbose(command, "verbose_after")
     return p
 
@@ -327,7 +354,8 @@ def cmd_serve(args) -> int:
                       image_port=None if args.no_image else ports["image_port"], image=image, wireless=wireless,
                       web_port=None if args.no_web else ports["web_port"], max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
-                      max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections))
+                      max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections),
+                      record=args.record, foxglove_port=args.foxglove, run_options=run_options(args))
 
     _raise_file_limit()
 
@@ -359,6 +387,16 @@ def cmd_serve(args) -> int:
     except SystemExit as exc:
         return int(exc.code or 0)
     return 0
+
+
+def run_options(args) -> dict:
+    """The options of ``serve`` that a replay needs to start the same server (in a
+    recording's metadata)."""
+    return {"robot_dirs": [os.path.abspath(d) for d in args.robot_dir], "wireless": not args.no_wireless,
+            "wireless_model": args.wireless_model,
+            "wireless_config": os.path.abspath(args.wireless_config) if args.wireless_config else None,
+            "max_robots": args.max_robots, "max_connections": args.max_connections,
+            "max_line_bytes": args.max_line_bytes}
 
 
 def validate_target(text: str) -> str:
@@ -492,6 +530,12 @@ def cmd_bench(args) -> int:
     return run_camera_bench(args) if args.cameras else run_bench(args)
 
 
+def cmd_replay(args) -> int:
+    from usarsim.replay import main as replay_main
+
+    return replay_main(args)
+
+
 def run_env_bench(args) -> int:
     """Environment steps per second (usarsim.envs.bench_env), one robot and a team."""
     import json
@@ -524,7 +568,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     handler = {"serve": cmd_serve, "validate": cmd_validate, "worlds": cmd_worlds, "robots": cmd_robots,
-               "bench": cmd_bench}[args.command]
+               "bench": cmd_bench, "replay": cmd_replay}[args.command]
     return handler(args)
 
 

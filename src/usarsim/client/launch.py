@@ -95,11 +95,14 @@ class Server:
 
 def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = True, speed: float | None = 1.0,
            wireless: bool = False, image: bool = False, web: bool = False, robot_dirs: tuple[str, ...] = (),
+           record: str | os.PathLike | None = None, foxglove: bool = False,
            extra_args: tuple[str, ...] = (), timeout: float = DEFAULT_TIMEOUT_S) -> Server:
     """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file),
     ``seed``, lock-step (default) or real time at ``speed`` (None: as fast as it can).
-    ``wireless``, ``image`` and ``web`` start those services too.  Use it in a ``with``
-    block, or call :meth:`Server.close`."""
+    ``wireless``, ``image`` and ``web`` start those services too; ``record`` records the run
+    to that MCAP file (written when the server stops); ``foxglove`` serves it live to
+    Foxglove (its port in ``ports["foxglove"]``).  Use it in a ``with`` block, or call
+    :meth:`Server.close`."""
     args = ["--world", str(world), "--seed", str(int(seed)), "--port", "0", "--truth-port", "0"]
     if lockstep:
         args.append("--lockstep")
@@ -110,5 +113,9 @@ def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = Tru
     args += ["--wcs-port", "0", "--wss-port", "0", "--cominterface-port", "0"] if wireless else ["--no-wireless"]
     for d in robot_dirs:
         args += ["--robot-dir", str(d)]
+    if record is not None:
+        args += ["--record", os.fspath(record)]
+    if foxglove:
+        args += ["--foxglove", "0"]
     args += list(extra_args)
     return Server(args, lockstep, timeout)

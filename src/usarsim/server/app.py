@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 
 from usarsim.config.world import WorldConfig
@@ -21,7 +22,8 @@ class Application:
                  image: ImageSettings | None = None, wireless: WirelessOptions | None = None,
                  web_port: int | None = 8080, max_robots: int | None = None, max_line_bytes: int = 8192,
                  max_pending_bytes: int = 256 * 1024, max_viewers: int = 16,
-                 max_web_connections: int = 64):
+                 max_web_connections: int = 64, record: str | None = None, foxglove_port: int | None = None,
+                 run_options: dict | None = None):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
@@ -51,6 +53,22 @@ class Application:
             from usarsim.web import WebConsole
 
             self.web = WebConsole(self, host=host, port=web_port, max_connections=max_web_connections)
+        # the recording (--record) and the live Foxglove view (--foxglove); None: neither
+        self.recorder = None
+        if record is not None or foxglove_port is not None:
+            from usarsim import __version__
+            from usarsim.server.recording import Recorder, run_info
+
+            info = run_info(version=__version__, world=world.name, world_path=world.path, seed=seed,
+                            lockstep=lockstep, speed=speed, options=dict(run_options or {}))
+            self.recorder = Recorder(world, info, path=record, foxglove_port=foxglove_port, host=host)
+            self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
+            self.control.tap = self.recorder
+            self.control.tap_name = "control"
+            for srv, name, _ in self._extras():
+                listener = getattr(srv, "listener", srv)
+                if name != "web" and hasattr(listener, "tap_name"):
+                    listener.tap, listener.tap_name, listener.tap_binary = self.recorder, name, name == "image"
 
     def _extras(self) -> list[tuple[object, str, str]]:
         """(server, listener name, what names its port in an error) of every listener
@@ -86,14 +104,28 @@ class Application:
                     await srv.stop()
                 raise
             started.append(extra)
+        if self.recorder is not None:
+            try:
+                self.recorder.start()
+            except OSError:  # the file not writable, the Foxglove port taken: named in the error
+                for srv in started:
+                    await srv.stop()
+                raise
         self.facade.start()
 
     def listeners(self) -> list[tuple[str, str, int]]:
-        return [("control", self.host, self.control.port)] + [(name, self.host, srv.port)
-                                                              for srv, name, _ in self._extras()]
+        out = [("control", self.host, self.control.port)] + [(name, self.host, srv.port)
+                                                             for srv, name, _ in self._extras()]
+        if self.recorder is not None and self.recorder.server is not None:
+            out.append(("foxglove", self.host, self.recorder.foxglove_port))
+        return out
 
     async def stop(self) -> None:
         for srv, _, _ in reversed(self._extras()):
             await srv.stop()
         await self.control.stop()
+        for _ in range(3):  # the closed connections' connection_lost (scheduled by close()) run
+            await asyncio.sleep(0)
         self.facade.stop()
+        if self.recorder is not None:
+            self.recorder.stop()  # after the simulation: its last outputs are written

@@ -21,6 +21,12 @@ class TcpListener:
     """Subclasses give ``make_protocol()``; their connections add themselves to
     ``connections`` (a set, or a dict whose values they are) and have a ``transport``."""
 
+    # A recording's tap (usarsim.server.recording): set before start() to note every
+    # connection's traffic under ``tap_name``; ``tap_binary``: outputs noted by size only.
+    tap = None
+    tap_name = "?"
+    tap_binary = False
+
     def __init__(self, host: str, port: int):
         self.host = host
         self.port = port
@@ -42,7 +48,12 @@ class TcpListener:
     async def start(self) -> int:
         """Listen; returns the port (the one picked when asked for port 0)."""
         self.loop = asyncio.get_running_loop()
-        self._server = await self.loop.create_server(self.make_protocol, self.host, self.port, reuse_address=True)
+        factory = self.make_protocol
+        if self.tap is not None:
+            from usarsim.server.recording.tap import tapped
+
+            factory = tapped(factory, self.tap, self.tap_name, self.tap_binary)
+        self._server = await self.loop.create_server(factory, self.host, self.port, reuse_address=True)
         self.port = self._server.sockets[0].getsockname()[1]
         return self.port
 

@@ -20,6 +20,7 @@ from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner, StepRequest
 from usarsim.sim.simulation import Simulation, describe_items
+from usarsim.sim.snapshot import FrameWatch, WorldFrame
 
 log = logging.getLogger("usarsim.sim")
 
@@ -220,6 +221,19 @@ class SimFacade:
         if self._radio is None:
             raise RuntimeError("open_radio() first")
         return self._radio
+
+    # Recording and live views ------------------------------------------------------
+    def watch_frames(self, period_s: float, on_frame: Callable[[WorldFrame], None], *,
+                     radio_model: RadioModel | None = None, links_period_s: float = 1.0) -> None:
+        """``on_frame(frame)`` on the simulation thread with the poses of every robot and
+        movable object (:class:`usarsim.sim.snapshot.WorldFrame`) each time the simulated
+        clock reaches a multiple of ``period_s``, and with the radio links under ``radio_model`` every
+        ``links_period_s``.  It must return quickly.  Call before :meth:`start`."""
+        self.sim.every(period_s, FrameWatch(on_frame, radio_model=radio_model, links_period_s=links_period_s))
+
+    def describe_robot(self, robot: RobotConfig) -> tuple[RobotNumbers, list[ItemDescription]]:
+        """What GETGEO reports of a robot class and of its mounted items (cached)."""
+        return self.robot_numbers(robot), self.describe(robot)
 
     # Tools, tests and benchmarks ---------------------------------------------------
     def call(self, fn: Callable[[Simulation], Any], on_done: Done | None = None, immediate: bool = True) -> None:

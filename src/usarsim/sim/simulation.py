@@ -75,6 +75,9 @@ class Simulation:
         # called with the simulation at the end of every ``advance`` (on the simulation
         # thread, at the simulated instant the clock reached): the radio links
         self._after_advance: list[Callable[[Simulation], None]] = []
+        # [next simulated time, period, fn]: called whenever the clock reaches the next multiple
+        # of their period, within an advance too (frames for a recording, :meth:`every`)
+        self._samplers: list[list] = []
 
     # Clock -------------------------------------------------------------------
     @property
@@ -92,6 +95,20 @@ class Simulation:
     def on_advance(self, fn: Callable[[Simulation], None]) -> None:
         """Call ``fn(sim)`` at the end of every :meth:`advance` (before the simulation starts)."""
         self._after_advance.append(fn)
+
+    def every(self, period_s: float, fn: Callable[[Simulation], None]) -> None:
+        """Call ``fn(sim)`` each time the simulated clock reaches a multiple of ``period_s``
+        (the physics steps are split there, as for a sensor's report), from the next one on."""
+        period = max(self.dt, float(period_s))
+        k = math.floor(self.time / period + EPS) + 1
+        self._samplers.append([k * period, period, fn])
+
+    def _sample_due(self) -> None:
+        now = self.time
+        for s in self._samplers:
+            if s[0] <= now + EPS * self.dt:
+                s[2](self)
+                s[0] = (math.floor(now / s[1] + EPS) + 1) * s[1]
 
     # Model changes ------------------------------------------------------------
     def _rebuild(self) -> None:
@@ -275,10 +292,15 @@ class Simulation:
         target = self.step_count + max(0, int(round(seconds / self.dt)))
         while True:
             self._fire_due()
+            if self._samplers:
+                self._sample_due()
             if self.step_count >= target:
                 break
             n = target - self.step_count
             due = self.reports.next_due()
+            if self._samplers:
+                first = min(s[0] for s in self._samplers)
+                due = first if due is None else min(due, first)
             if due is not None:
                 n = max(1, min(n, int(math.ceil(due / self.dt - EPS)) - self.step_count))
             for system in self.systems:  # forces set by hand are renewed often enough

@@ -1,0 +1,471 @@
+"""Records a run to an MCAP file and shows it live to Foxglove (``usarsim serve --record``,
+``--foxglove``).
+
+What it writes (docs/recording.md lists every channel):
+
+* the protocol transcript (:mod:`.transcript`), noted by the listeners' taps (:mod:`.tap`)
+  on the event loop;
+* the world's static geometry once (:func:`.scene.world_scene`), robots, movable objects and
+  the frame-transform tree from frames of the world (:class:`usarsim.sim.types.WorldFrame`,
+  every ``frame_period_s`` of simulated time), lasers as ``foxglove.LaserScan``, 3-D
+  scanners as ``foxglove.PointCloud``, odometry and ground truth as ``foxglove.PoseInFrame``,
+  battery, speed and radio links as JSON for plots, and the server log as ``foxglove.Log``;
+  all from the outputs the servers get anyway (the simulation does no extra work per message).
+
+The taps and watchers only queue what they see; one thread of its own encodes and writes
+(``foxglove-sdk``, whose writer and WebSocket server run in native code).  Log times are
+simulated times, so that a recording plays back on the simulated clock; each transcript
+chunk carries its wall time too.  Nothing queued is dropped: a recording is whole.  A live
+viewer that reads too slowly loses its oldest messages (the server's backlog), never the
+simulation's time.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import queue
+import struct
+import threading
+import time
+from collections.abc import Callable
+
+import foxglove
+import numpy as np
+from foxglove import channels as fch
+from foxglove.messages import (
+    FrameTransforms,
+    Log,
+    LogLevel,
+    PackedElementField,
+    PackedElementFieldNumericType,
+    PointCloud,
+    PoseInFrame,
+    SceneUpdate,
+)
+from foxglove.messages import LaserScan as FLaserScan
+
+from usarsim.config.world import WorldConfig
+from usarsim.readings import OdometryReading, RangeScan3DReading, RangeScanReading, RobotStatus
+from usarsim.sim.types import Output, RadioModel, WorldFrame
+
+from . import scene
+from .transcript import METADATA_NAME, SCHEMA, SCHEMA_NAME, TOPIC, Chunk, encode_chunk
+
+log = logging.getLogger("usarsim.record")
+
+# Topics (docs/recording.md).
+WORLD_TOPIC = "/usarsim/world"
+ROBOTS_TOPIC = "/usarsim/robots"
+OBJECTS_TOPIC = "/usarsim/objects"
+TF_TOPIC = "/tf"
+LOG_TOPIC = "/usarsim/log"
+RADIO_PREFIX = "/usarsim/radio/"
+
+# Frames of the world handed to the recorder per simulated second by default (10 Hz, the
+# rate of most USARSim sensors, protocol.md 5).
+FRAME_PERIOD_S = 0.1
+# Static transforms (mounts) and robot entities are sent again this often (simulated s), so
+# that a viewer that joins late or seeks still has them.
+REFRESH_S = 1.0
+# Outputs of a robot not yet seen in a frame (spawned since the last) wait, this many at most.
+MAX_WAITING_OUTPUTS = 256
+LIVE_BACKLOG = 1024  # messages per live viewer before its oldest are dropped (foxglove-sdk's default)
+
+STATE_SCHEMA = {
+    "title": "usarsim.RobotState", "type": "object",
+    "properties": {"battery_s": {"type": "number", "description": "battery left, s"},
+                   "speed_m_s": {"type": "number", "description": "ground speed from the ground truth, m/s"},
+                   "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"},
+                   "yaw": {"type": "number", "description": "USARSim yaw, rad"}}}
+STATUS_SCHEMA = {
+    "title": "usarsim.RobotStatus", "type": "object",
+    "properties": {"battery_s": {"type": "integer", "description": "STA's Battery, s"},
+                   "front_steer": {"type": "number"}, "rear_steer": {"type": "number"},
+                   "light": {"type": "boolean"}}}
+LINK_SCHEMA = {
+    "title": "usarsim.RadioLink", "type": "object",
+    "properties": {"signal_dbm": {"type": "number"}, "distance_m": {"type": "number"},
+                   "walls": {"type": "integer"}, "holds": {"type": "boolean"}}}
+
+_LEVELS = ((logging.ERROR, LogLevel.Error), (logging.WARNING, LogLevel.Warning), (logging.INFO, LogLevel.Info))
+
+
+def _write_options():
+    """Chunks compressed with zstd at its fastest level, on the writer's own thread only: the
+    physics keeps the other core."""
+    from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+    return MCAPWriteOptions(compression=MCAPCompression.Zstd, compression_level=1, compression_threads=0)
+
+
+def _level(levelno: int) -> LogLevel:
+    if levelno >= logging.CRITICAL:
+        return LogLevel.Fatal
+    for at, lv in _LEVELS:
+        if levelno >= at:
+            return lv
+    return LogLevel.Debug
+
+
+class _LogTap(logging.Handler):
+    """The server's log lines, queued for the recording."""
+
+    def __init__(self, rec: Recorder):
+        super().__init__(logging.DEBUG)
+        self.rec = rec
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if record.name.startswith("usarsim.record"):
+            return  # the recorder's own lines are not recorded (no loop through the queue)
+        try:
+            msg = record.getMessage()
+        except Exception:  # a bad format string in a log call must not stop the server
+            msg = str(record.msg)
+        self.rec._q.put(("log", self.rec.sim_time(), record.levelno, record.name, msg, record.pathname,
+                         record.lineno))
+
+
+class _CountingQueue:
+    """A queue that counts what was put in and what was taken out and handled."""
+
+    __slots__ = ("_q", "queued", "done")
+
+    def __init__(self):
+        self._q: queue.SimpleQueue = queue.SimpleQueue()
+        self.queued = 0  # put
+        self.done = 0  # handled (the recorder's thread counts)
+
+    def put(self, item) -> None:
+        self.queued += 1  # several threads put: a lost increment only delays a benchmark's wait
+        self._q.put(item)
+
+    def get(self):
+        return self._q.get()
+
+
+class _Sink:
+    """One destination (the MCAP file or the live server): a foxglove context and its channels."""
+
+    def __init__(self, ctx: foxglove.Context):
+        self.ctx = ctx
+        self.channels: dict[str, object] = {}
+
+    def channel(self, topic: str, make: Callable[[str, foxglove.Context], object]):
+        ch = self.channels.get(topic)
+        if ch is None:
+            ch = self.channels[topic] = make(topic, self.ctx)
+        return ch
+
+
+def _json_channel(schema: dict) -> Callable[[str, foxglove.Context], object]:
+    return lambda topic, ctx: foxglove.Channel(topic, schema=foxglove.Schema(
+        name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()), message_encoding="json",
+        context=ctx)
+
+
+def _typed(cls) -> Callable[[str, foxglove.Context], object]:
+    return lambda topic, ctx: cls(topic, context=ctx)
+
+
+_TRANSCRIPT = _json_channel(SCHEMA)
+assert SCHEMA["title"] == SCHEMA_NAME
+
+
+class Recorder:
+    """Records to ``path`` (an MCAP file) and/or serves ``foxglove_port`` live; either may be
+    None.  :meth:`attach` before the simulation starts, :meth:`start`, then :meth:`stop`."""
+
+    def __init__(self, world: WorldConfig, info: dict[str, str], *, path: str | None = None,
+                 foxglove_port: int | None = None, host: str = "127.0.0.1", frame_period_s: float = FRAME_PERIOD_S):
+        self.world = world
+        self.info = info
+        self.path = path
+        self.foxglove_port = foxglove_port
+        self.host = host
+        self.frame_period_s = frame_period_s
+        self._q = _CountingQueue()
+        self._thread = threading.Thread(target=self._run, name="usarsim-record", daemon=True)
+        self._seq = 0
+        self._conns: dict[int, tuple[str, str]] = {}  # conn -> (port, peer)
+        self._next_conn = 0
+        self._sinks: list[_Sink] = []
+        self._file_sink: _Sink | None = None
+        self._live_sink: _Sink | None = None
+        self._writer = None
+        self.server = None  # the live WebSocket server
+        self._time: Callable[[], float] = lambda: 0.0
+        self._describe = None
+        self._log_tap = _LogTap(self)
+        # worker state
+        self._names: dict[int, str] = {}  # uid -> robot name
+        self._seen: dict[str, tuple] = {}  # name -> (class, dims, last location, last time, mounts)
+        self._waiting: dict[int, list[Output]] = {}
+        self._last_refresh = -math.inf
+        self.messages = 0  # written (every sink counted once)
+        self.chunks = 0
+        self.error: BaseException | None = None
+
+    # Wiring --------------------------------------------------------------------------
+    def attach(self, facade, radio_model: RadioModel | None = None) -> None:
+        """Watch ``facade``'s outputs and frames of its world (before its simulation starts)."""
+        self._time = lambda: facade.time
+        self._describe = facade.describe_robot
+        facade.add_output_watcher(self._on_outputs)
+        facade.watch_frames(self.frame_period_s, self._on_frame, radio_model=radio_model)
+
+    def sim_time(self) -> float:
+        return self._time()
+
+    def mark(self) -> int:
+        """A mark of what has been queued so far: :meth:`written` reaches it once all of that
+        is written (benchmarks count the time it takes)."""
+        return self._q.queued
+
+    def written(self) -> int:
+        return self._q.done
+
+    def start(self) -> None:
+        """Open the file and the live server; an OSError says which could not be opened
+        (its ``usarsim_listener``), and leaves neither open."""
+        try:
+            if self.path is not None:
+                ctx = foxglove.Context()
+                self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=ctx,
+                                                  writer_options=_write_options())
+                self._writer.write_metadata(METADATA_NAME, self.info)
+                self._file_sink = _Sink(ctx)
+                self._sinks.append(self._file_sink)
+        except Exception as exc:
+            err = OSError(0, str(exc))
+            err.usarsim_listener = f"the recording {self.path} (--record)"
+            raise err from exc
+        if self.foxglove_port is not None:
+            ctx = foxglove.Context()
+            try:
+                self.server = foxglove.start_server(
+                    name=f"usarsim {self.world.name}", host=self.host, port=self.foxglove_port, context=ctx,
+                    capabilities=[foxglove.Capability.Time], server_listener=_Listener(self),
+                    message_backlog_size=LIVE_BACKLOG)
+            except Exception as exc:
+                if self._writer is not None:
+                    self._writer.close()
+                    self._writer = None
+                err = OSError(0, str(exc))
+                err.usarsim_listener = f"the Foxglove port {self.foxglove_port} (--foxglove)"
+                raise err from exc
+            self._live_sink = _Sink(ctx)
+            self._sinks.append(self._live_sink)
+            self.foxglove_port = self.server.port
+        logging.getLogger("usarsim").addHandler(self._log_tap)
+        self._q.put(("world",))
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Write what is queued, then close the file and the live server."""
+        logging.getLogger("usarsim").removeHandler(self._log_tap)
+        if self._thread.is_alive():
+            self._q.put(None)
+            self._thread.join()
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+            log.info("recording: %d transcript chunks and %d messages written to %s", self.chunks, self.messages,
+                     self.path)
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+    # Taps (event loop) ---------------------------------------------------------------
+    def opened(self, port: str, peer: str) -> int:
+        conn = self._next_conn
+        self._next_conn += 1
+        self._conns[conn] = (port, peer)
+        self._chunk(conn, "open", b"")
+        return conn
+
+    def note(self, conn: int, kind: str, data) -> None:
+        self._chunk(conn, kind, data)
+
+    def note_binary(self, conn: int, size: int) -> None:
+        self._chunk(conn, "out", b"", size)
+
+    def closed(self, conn: int) -> None:
+        self._chunk(conn, "close", b"")
+        self._conns.pop(conn, None)
+
+    def _chunk(self, conn: int, kind: str, data, size: int | None = None) -> None:
+        """Queue a chunk (the recorder's thread makes it a :class:`Chunk`): the event loop
+        only counts, reads the clocks and queues."""
+        self._q.put(("chunk", self._seq, conn, self._conns.get(conn), kind, self._time(), time.time(), data, size))
+        self._seq += 1
+
+    # Watchers (simulation thread): queue only --------------------------------------
+    def _on_outputs(self, outs: list[Output]) -> None:
+        self._q.put(("outs", outs))
+
+    def _on_frame(self, frame: WorldFrame) -> None:
+        self._q.put(("frame", frame))
+
+    # The recorder's thread -----------------------------------------------------------
+    def _run(self) -> None:
+        handlers = {"chunk": self._write_chunk, "outs": self._write_outputs, "frame": self._write_frame,
+                    "log": self._write_log, "world": self._write_world, "resend": self._resend_static}
+        while True:
+            item = self._q.get()
+            if item is None:
+                return
+            try:
+                handlers[item[0]](*item[1:])
+            except Exception as exc:  # a recording problem must not stop the server
+                if self.error is None:
+                    self.error = exc
+                    log.exception("recording: cannot write %s", item[0])
+            self._q.done += 1
+
+    def _log(self, topic: str, make, msg, t: float, sinks: list[_Sink] | None = None) -> None:
+        ns = scene.to_ns(t)
+        for sink in self._sinks if sinks is None else sinks:
+            sink.channel(topic, make).log(msg, log_time=ns)
+        self.messages += 1
+
+    def _write_chunk(self, seq: int, conn: int, where, kind: str, sim_time: float, wall_time: float, data,
+                     size: int | None) -> None:
+        if self._file_sink is None:  # the transcript is for replay: the file only
+            return
+        port, peer = where or ("?", "?")
+        c = Chunk(seq, conn, port, peer, kind, sim_time, wall_time, bytes(data).decode("latin-1"), size)
+        self._file_sink.channel(TOPIC, _TRANSCRIPT).log(encode_chunk(c), log_time=scene.to_ns(sim_time))
+        self.chunks += 1
+
+    def _write_world(self, sinks: list[_Sink] | None = None) -> None:
+        self._log(WORLD_TOPIC, _typed(fch.SceneUpdateChannel), scene.world_scene(self.world, 0.0), 0.0, sinks)
+
+    def _resend_static(self) -> None:
+        """A live viewer subscribed to the world: it gets the static geometry now."""
+        if self._live_sink is not None:
+            self._write_world([self._live_sink])
+
+    def _write_log(self, t: float, levelno: int, name: str, msg: str, path: str, line: int) -> None:
+        self._log(LOG_TOPIC, _typed(fch.LogChannel), Log(timestamp=scene.timestamp(t), level=_level(levelno),
+                                                          message=msg, name=name, file=path, line=line), t)
+
+    # outputs ------------------------------------------------------------------------
+    def _write_outputs(self, outs: list[Output]) -> None:
+        for o in outs:
+            name = self._names.get(o.uid)
+            if name is None:
+                waiting = self._waiting.setdefault(o.uid, [])
+                if len(waiting) < MAX_WAITING_OUTPUTS:
+                    waiting.append(o)
+                continue
+            self._write_output(name, o)
+
+    def _write_output(self, robot: str, o: Output) -> None:
+        v = o.value
+        t = o.time if o.time is not None else self._time()
+        if isinstance(v, RangeScanReading):
+            n = len(v.ranges_m)
+            half = (n - 1) * v.resolution_rad / 2.0 if n > 1 else 0.0
+            # USARSim sends the rightmost beam first: counter-clockwise from -half seen from above;
+            # the ranges as the SEN line gives them (4 decimals, protocol.md 5)
+            self._log(f"/{robot}/{v.name}", _typed(fch.LaserScanChannel), FLaserScan(
+                timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", start_angle=-half, end_angle=half,
+                ranges=np.round(np.asarray(v.ranges_m, dtype=float), 4).tolist()), t)
+        elif isinstance(v, RangeScan3DReading):
+            self._log(f"/{robot}/{v.name}", _typed(fch.PointCloudChannel), _point_cloud(robot, v, t), t)
+        elif isinstance(v, OdometryReading):
+            self._log(f"/{robot}/odometry", _typed(fch.PoseInFrameChannel), PoseInFrame(
+                timestamp=scene.timestamp(t), frame_id=f"{robot}/odom",
+                pose=scene.pose((v.x_m, v.y_m, 0.0), (0.0, 0.0, v.theta_rad))), t)
+        elif isinstance(v, RobotStatus):
+            self._log(f"/{robot}/status", _json_channel(STATUS_SCHEMA), json.dumps(
+                {"battery_s": v.battery_s, "front_steer": v.front_steer, "rear_steer": v.rear_steer,
+                 "light": v.light_toggle}).encode(), t)
+
+    # frames -------------------------------------------------------------------------
+    def _write_frame(self, f: WorldFrame) -> None:
+        t = f.time
+        present = set()
+        tfs = []
+        refresh = t - self._last_refresh >= REFRESH_S - 1e-9
+        if refresh:
+            self._last_refresh = t
+        for r in f.robots:
+            present.add(r.name)
+            self._names[r.uid] = r.name
+            seen = self._seen.get(r.name)
+            new = seen is None
+            if new:
+                numbers, items = self._describe(r.config) if self._describe is not None else (None, [])
+                dims = numbers.dimensions if numbers is not None else r.config.geometry.dimensions
+                mounts = [(i.name, i.location, i.orientation) for i in items]
+                seen = (r.config.class_name, dims, r.location, t, mounts, (r.location, r.rotation))
+                log.debug("recording: robot %s (%s) appears at t=%.3f", r.name, r.config.class_name, t)
+            if new or refresh:
+                self._log(ROBOTS_TOPIC, _typed(fch.SceneUpdateChannel),
+                          SceneUpdate(entities=[scene.robot_entity(r.name, seen[0], seen[1], t)]), t)
+                start_loc, start_rot = seen[5]
+                tfs.append(scene.transform(scene.WORLD_FRAME, f"{r.name}/odom", start_loc, start_rot, t))
+                tfs += [scene.transform(r.name, f"{r.name}/{n}", loc, rot, t) for n, loc, rot in seen[4]]
+            tfs.append(scene.transform(scene.WORLD_FRAME, r.name, r.location, r.rotation, t))
+            dt = t - seen[3]
+            speed = math.dist(r.location, seen[2]) / dt if dt > 0 else 0.0
+            self._seen[r.name] = (seen[0], seen[1], r.location, t, seen[4], seen[5])
+            self._log(f"/{r.name}/pose", _typed(fch.PoseInFrameChannel), PoseInFrame(
+                timestamp=scene.timestamp(t), frame_id=scene.WORLD_FRAME, pose=scene.pose(r.location, r.rotation)), t)
+            self._log(f"/{r.name}/state", _json_channel(STATE_SCHEMA), (
+                '{"battery_s":%.3f,"speed_m_s":%.4f,"x":%.4f,"y":%.4f,"z":%.4f,"yaw":%.4f}' % (
+                    r.battery_s, speed, r.location[0], r.location[1], r.location[2], r.rotation[2])).encode(), t)
+            waiting = self._waiting.pop(r.uid, None)
+            for o in waiting or ():
+                self._write_output(r.name, o)
+        for gone in [n for n in self._seen if n not in present]:
+            del self._seen[gone]
+            self._log(ROBOTS_TOPIC, _typed(fch.SceneUpdateChannel), scene.robot_deletion(gone, t), t)
+        self._names = {u: n for u, n in self._names.items() if n in present}
+        if tfs:
+            self._log(TF_TOPIC, _typed(fch.FrameTransformsChannel), FrameTransforms(transforms=tfs), t)
+        if f.objects:
+            self._log(OBJECTS_TOPIC, _typed(fch.SceneUpdateChannel), scene.objects_scene(self.world, f.objects, t), t)
+        for ln in f.links or ():
+            self._log(f"{RADIO_PREFIX}{ln.a}-{ln.b}", _json_channel(LINK_SCHEMA), json.dumps(
+                {"signal_dbm": round(ln.signal_dbm, 3), "distance_m": round(ln.distance_m, 3), "walls": ln.walls,
+                 "holds": ln.holds}).encode(), t)
+        if self.server is not None:
+            self.server.broadcast_time(scene.to_ns(t))
+
+
+_XYZ = [PackedElementField(name="x", offset=0, type=PackedElementFieldNumericType.Float32),
+        PackedElementField(name="y", offset=4, type=PackedElementFieldNumericType.Float32),
+        PackedElementField(name="z", offset=8, type=PackedElementFieldNumericType.Float32)]
+
+
+def _point_cloud(robot: str, v: RangeScan3DReading, t: float) -> PointCloud:
+    """A 3-D sweep as points in the scanner's frame: rows from the top, each from the right
+    (the order of the SEN lines, usarsim.sensors.scanner.RangeScanner3D)."""
+    vres, hres = v.resolution_rad
+    vfov, hfov = v.fov_rad
+    rows = v.frames or (max(1, int(round(vfov / vres)) + 1) if vres > 0 else 1)
+    cols = max(1, len(v.ranges_m) // rows)
+    buf = bytearray()
+    for k, r in enumerate(v.ranges_m):
+        i, j = divmod(k, cols)
+        pitch = vfov / 2.0 - vres * i
+        yaw = hfov / 2.0 - hres * j  # USARSim yaw: to the right
+        c = math.cos(pitch)
+        buf += struct.pack("<3f", r * c * math.cos(yaw), -r * c * math.sin(yaw), r * math.sin(pitch))
+    return PointCloud(timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", point_stride=12, fields=_XYZ,
+                      data=bytes(buf))
+
+
+class _Listener:
+    """Live viewers: one that subscribes to the world is sent its static geometry."""
+
+    def __init__(self, rec: Recorder):
+        self.rec = rec
+
+    def on_subscribe(self, client, channel) -> None:
+        if channel.topic == WORLD_TOPIC:
+            self.rec._q.put(("resend",))

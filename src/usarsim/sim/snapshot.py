@@ -1,0 +1,120 @@
+"""Frames of the world for observers that draw or record it (``usarsim serve --record``,
+``--foxglove``): where every robot and movable object is at one simulated instant, and how
+strong the radio link between robots is.
+
+A frame is taken on the simulation thread each time the simulated clock reaches a multiple
+of its period (:class:`FrameWatch`, registered with ``Simulation.every``): a read of the poses already
+computed by the physics, a few microseconds per robot; the radio links (a ray cast per pair
+that moved) only every ``links_period_s`` and for a bounded number of robots.  Nothing is
+taken per sensor message: sensor data reach observers as the outputs the servers get.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from usarsim.config.robot import RobotConfig
+from usarsim.sim import frames
+from usarsim.sim.radio import RadioModel, RadioNet, pair_key
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
+
+# Radio links are sampled for all pairs of at most this many robots (n (n - 1) / 2 pairs);
+# beyond it a frame carries no links (the wireless servers still compute theirs).
+MAX_LINK_ROBOTS = 32
+
+
+@dataclass(frozen=True, slots=True)
+class RobotFrame:
+    """A robot at one instant: USARSim frame, metres and radians (rotations in [0, 2 pi))."""
+
+    uid: int
+    name: str
+    config: RobotConfig
+    location: tuple[float, float, float]
+    rotation: tuple[float, float, float]
+    battery_s: float
+    spawn_time: float
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectFrame:
+    """A movable object (a brick, a pipe) at one instant."""
+
+    name: str
+    location: tuple[float, float, float]
+    rotation: tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class LinkFrame:
+    """The radio link between two robots (by name, lower case, sorted) at one instant."""
+
+    a: str
+    b: str
+    signal_dbm: float
+    distance_m: float
+    walls: int
+    holds: bool
+
+
+@dataclass(frozen=True, slots=True)
+class WorldFrame:
+    time: float
+    robots: tuple[RobotFrame, ...]
+    objects: tuple[ObjectFrame, ...]
+    links: tuple[LinkFrame, ...] | None  # None: not sampled in this frame
+
+
+def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
+    """The poses of every robot and movable object now; with ``radio``, the links of every
+    pair of robots (at most MAX_LINK_ROBOTS robots)."""
+    d, m = sim.data, sim.model
+    robots = tuple(RobotFrame(r.uid, r.name, r.config, r.handle.location(d),
+                              tuple(frames.wrap_2pi(a) for a in r.handle.orientation(d)),
+                              r.battery_left(), r.spawn_time)
+                   for r in sim.robots.values() if not r.removed)
+    objects = []
+    for o in sim.world.objects:
+        if o.mass_kg > 0:
+            b = m.body(f"movable/{o.name}").id
+            objects.append(ObjectFrame(o.name, frames.from_mj_vec(d.xpos[b]),
+                                       tuple(frames.wrap_2pi(a) for a in frames.mj_mat_to_usar_euler(d.xmat[b]))))
+    links = None
+    if radio is not None:
+        links = []
+        if len(robots) <= MAX_LINK_ROBOTS:
+            antennas = RadioNet.antennas(sim)
+            names = sorted(antennas)
+            for i, a in enumerate(names):
+                for b in names[i + 1:]:
+                    ln = radio.link(sim, a, b, antennas)
+                    if ln is not None:
+                        pa, pb = pair_key(a, b)
+                        links.append(LinkFrame(pa, pb, ln.signal_dbm, ln.distance_m, ln.walls, ln.holds))
+        links = tuple(links)
+    return WorldFrame(sim.time, robots, tuple(objects), links)
+
+
+class FrameWatch:
+    """Hands a :class:`WorldFrame` to ``on_frame`` (on the simulation thread) each time the
+    simulated clock reaches a multiple of its period (:meth:`Simulation.every`); radio links
+    in the frames that fall ``links_period_s`` after the last ones that had them."""
+
+    def __init__(self, on_frame: Callable[[WorldFrame], None], *, radio_model: RadioModel | None = None,
+                 links_period_s: float = 1.0):
+        self.on_frame = on_frame
+        self.links_period_s = links_period_s
+        self._radio = RadioNet(radio_model) if radio_model is not None else None  # its own wall cache
+        self._last_links = -math.inf
+
+    def __call__(self, sim: Simulation) -> None:
+        now = sim.time
+        radio = None
+        if self._radio is not None and now - self._last_links >= self.links_period_s - 1e-9:
+            radio, self._last_links = self._radio, now
+        self.on_frame(take_frame(sim, radio))

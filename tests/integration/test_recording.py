@@ -1,0 +1,324 @@
+"""Recording a run (usarsim serve --record), reading it back with the mcap reader, replaying
+it (usarsim replay --check) and watching it live over Foxglove's WebSocket protocol."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import Writer
+from mcap_protobuf.decoder import DecoderFactory
+
+from usarsim.client import launch
+from usarsim.protocol import messages as M
+from usarsim.server.recording.transcript import TOPIC, decode_chunk, encode_chunk, split_lines
+
+ENV = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+
+
+def usarsim(*args: str, timeout: float = 180) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "usarsim", *args], capture_output=True, text=True,
+                          timeout=timeout, env=ENV, stdin=subprocess.DEVNULL)
+
+
+def read_all(path: Path) -> tuple[dict, dict[str, list]]:
+    """(metadata, topic -> [(schema name, log time, decoded message)]) of a recording; protobuf
+    messages decoded with the schemas the file carries, JSON ones parsed."""
+    decoders = DecoderFactory()
+    out: dict[str, list] = defaultdict(list)
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        meta = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
+        f.seek(0)
+        reader = make_reader(f)
+        for schema, channel, msg in reader.iter_messages():
+            if channel.message_encoding == "protobuf":
+                value = decoders.decoder_for("protobuf", schema)(msg.data)
+            else:
+                assert channel.message_encoding == "json", channel
+                value = json.loads(msg.data)
+            out[channel.topic].append((schema.name, msg.log_time, value))
+    return meta, out
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    """A lock-step session of two robots (a P2AT and a Kurt3D with its 3-D scanner) over the
+    wireless model, recorded; with what the client saw at the end."""
+    path = tmp_path_factory.mktemp("rec") / "run.mcap"
+    seen = {}
+    with launch(world="DM-USAR_yellow", seed=3, wireless=True, record=path) as srv:
+        with srv.connect() as world:
+            r1 = world.spawn("P2AT", name="R1", start="PlayerStart1")
+            r2 = world.spawn("Kurt3D", name="K1", start="PlayerStart2")
+            r1.send("DRIVE {Left garbage}")  # a warning in the server's log
+            for k in range(20):
+                r1.drive(left=1.5, right=2.0 if k < 10 else 1.0)
+                r2.drive(left=1.0, right=1.0)
+                world.step(0.1)
+            seen["time"] = world.time
+            seen["scan"] = r1.scan("Scanner1")
+            seen["truth"] = {o.name: o for o in world.truth()}
+    assert path.is_file() and path.stat().st_size > 10_000
+    return path, seen
+
+
+def test_every_channel_decodes_and_agrees_with_the_run(recorded):
+    path, seen = recorded
+    meta, topics = read_all(path)
+    info = meta["usarsim"]
+    assert info["world"] == "DM-USAR_yellow" and info["seed"] == "3" and info["clock"] == "lockstep"
+    assert json.loads(info["options"])["wireless"] is True
+    expected = {"/usarsim/transcript": "usarsim.TranscriptChunk", "/usarsim/world": "foxglove.SceneUpdate",
+                "/usarsim/robots": "foxglove.SceneUpdate", "/usarsim/objects": "foxglove.SceneUpdate",
+                "/tf": "foxglove.FrameTransforms", "/usarsim/log": "foxglove.Log",
+                "/R1/Scanner1": "foxglove.LaserScan", "/R1/odometry": "foxglove.PoseInFrame",
+                "/R1/pose": "foxglove.PoseInFrame", "/R1/state": "usarsim.RobotState",
+                "/R1/status": "usarsim.RobotStatus", "/K1/pose": "foxglove.PoseInFrame",
+                "/usarsim/radio/k1-r1": "usarsim.RadioLink"}
+    scanners3d = [t for t in topics if t.startswith("/K1/") and topics[t][0][0] == "foxglove.PointCloud"]
+    assert scanners3d, sorted(topics)
+    for topic, schema in expected.items():
+        assert topic in topics, (topic, sorted(topics))
+        assert topics[topic][0][0] == schema, topic
+    for topic, msgs in topics.items():  # every message of every channel decodes
+        assert msgs, topic
+
+    # the laser: the last LaserScan holds the ranges of the last SEN line the client got
+    scan = seen["scan"]
+    last = topics["/R1/Scanner1"][-1][2]
+    assert last.frame_id == "R1/Scanner1"
+    assert len(last.ranges) == len(scan.ranges) == 181
+    assert max(abs(a - b) for a, b in zip(last.ranges, scan.ranges, strict=True)) < 1e-9
+    # the beams' directions as the client library reads them (rightmost first, about -90 degrees)
+    assert last.start_angle == pytest.approx(scan.angles[0]) and last.end_angle == pytest.approx(scan.angles[-1])
+    assert last.start_angle == pytest.approx(-math.pi / 2, abs=0.01)
+    # ... and every LaserScan is a SEN line of the transcript, to the digit
+    sen = [line for _, line in _server_lines(path, "control") if line.startswith("SEN") and "{Name Scanner1}" in line
+           and "RangeScanner}" in line]
+    assert len(sen) >= len(topics["/R1/Scanner1"]) > 5
+    first = M.parse_message(sen[0])
+    assert [round(r, 4) for r in topics["/R1/Scanner1"][0][2].ranges] == [round(r, 4) for r in first.reading.ranges_m]
+
+    # the pose: the last ground-truth pose is where the truth service said the robot was
+    t_end = seen["time"]
+    pose_t, pose = max(((lt, m) for _, lt, m in topics["/R1/pose"]), key=lambda x: x[0])
+    assert pose_t == round(t_end * 1e9)
+    truth = seen["truth"]["R1"]
+    p = pose.pose.position
+    assert (p.x, -p.y, -p.z) == pytest.approx(truth.location, abs=2e-3)  # Foxglove's frame: Y left, Z up
+    q = pose.pose.orientation
+    yaw = -math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))  # USARSim yaw: clockwise
+    assert math.remainder(yaw - truth.rotation[2], math.tau) == pytest.approx(0.0, abs=2e-3)
+    # the transform tree: world -> R1 at the same pose, R1 -> its laser at its mount
+    tfs = [tf for _, lt, m in topics["/tf"] if lt == pose_t for tf in m.transforms]
+    r1 = next(tf for tf in tfs if tf.child_frame_id == "R1")
+    assert r1.parent_frame_id == "world" and r1.translation.x == pytest.approx(p.x)
+    mounts = {tf.child_frame_id: tf for _, _, m in topics["/tf"] for tf in m.transforms if tf.parent_frame_id == "R1"}
+    assert "R1/Scanner1" in mounts and mounts["R1/Scanner1"].translation.x > 0.05  # in front of the chassis origin
+
+    # the robot drove forward and turned: speed and battery are plottable, falling battery
+    states = [m for _, _, m in topics["/R1/state"]]
+    assert max(s["speed_m_s"] for s in states) > 0.1
+    assert states[-1]["battery_s"] < states[0]["battery_s"]
+    # the radio link between the two robots, a plottable signal strength
+    link = topics["/usarsim/radio/k1-r1"][-1][2]
+    assert link["signal_dbm"] < 0 and link["distance_m"] > 0.5 and isinstance(link["holds"], bool)
+    # the world's static geometry: floor, walls, victims
+    world = topics["/usarsim/world"][0][2]
+    ids = {e.id for e in world.entities}
+    assert {"floor", "static", "victims"} <= ids
+    assert len(next(e for e in world.entities if e.id == "static").cubes) > 20
+    # the server's log: the garbage DRIVE was logged
+    assert any("malformed" in m.message for _, _, m in topics["/usarsim/log"])
+    # the 3-D scanner: points in front of the robot, as many as its ranges
+    cloud = topics[scanners3d[0]][-1][2]
+    assert cloud.point_stride == 12 and len(cloud.data) // 12 > 100
+
+
+def _server_lines(path: Path, port: str) -> list[tuple[int, str]]:
+    """(connection, line) of every server line on ``port``, in order."""
+    chunks = []
+    with path.open("rb") as f:
+        for _, _, msg in make_reader(f).iter_messages(topics=[TOPIC]):
+            chunks.append(decode_chunk(msg.data))
+    by_conn = defaultdict(list)
+    for c in sorted(chunks, key=lambda c: c.seq):
+        if c.port == port and c.kind == "out":
+            by_conn[c.conn].append(c)
+    return [(cid, line) for cid, outs in by_conn.items() for _, line in split_lines(outs)]
+
+
+def test_the_transcript_holds_every_line_in_the_order_the_server_saw_it(recorded):
+    path, _ = recorded
+    chunks = []
+    with path.open("rb") as f:
+        for _, _, msg in make_reader(f).iter_messages(topics=[TOPIC], log_time_order=False):
+            chunks.append(decode_chunk(msg.data))
+    assert [c.seq for c in chunks] == list(range(len(chunks)))  # none lost, in order
+    kinds = {c.kind for c in chunks}
+    assert kinds == {"open", "in", "out", "close"}
+    ports = {c.port for c in chunks}
+    assert {"control", "truth"} <= ports
+    first_in = next(c for c in chunks if c.kind == "in" and c.text.startswith("INIT"))
+    assert first_in.text.startswith("INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}\r\n")
+    nfo = next(c for c in chunks if c.kind == "out" and c.port == "control")
+    assert nfo.text == "NFO {Gametype BotDeathMatch} {Level DM-USAR_yellow} {TimeLimit 0}\r\n"
+    steps = [c for c in chunks if c.kind == "in" and c.text.startswith("STEP")]
+    assert len(steps) == 20 and steps[-1].sim_time == pytest.approx(1.9, abs=1e-9)
+
+
+def test_replay_check_passes_on_the_recording(recorded):
+    path, _ = recorded
+    out = usarsim("replay", str(path), "--check")
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "identical: all" in out.stdout
+    n = int(out.stdout.split("identical: all ")[1].split()[0])
+    assert n > 200  # every server line compared
+    assert "not replayed" not in out.stdout or "image" not in out.stdout
+
+
+def _altered(src: Path, dst: Path, change) -> None:
+    """A copy of a recording with one transcript chunk changed by ``change(chunk) -> chunk|None``
+    (None: keep it), written with the mcap writer."""
+    with src.open("rb") as f, dst.open("wb") as g:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        w = Writer(g)
+        w.start(profile="", library="test")
+        schema_ids = {sid: w.register_schema(s.name, s.encoding, s.data) for sid, s in summary.schemas.items()}
+        channel_ids = {cid: w.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
+                                               dict(c.metadata)) for cid, c in summary.channels.items()}
+        f.seek(0)
+        for m in make_reader(f).iter_metadata():
+            w.add_metadata(m.name, dict(m.metadata))
+        f.seek(0)
+        done = False
+        for _, channel, msg in make_reader(f).iter_messages(log_time_order=False):
+            data = msg.data
+            if channel.topic == TOPIC and not done:
+                new = change(decode_chunk(data))
+                if new is not None:
+                    data, done = encode_chunk(new), True
+            w.add_message(channel_ids[msg.channel_id], msg.log_time, data, msg.publish_time, msg.sequence)
+        w.finish()
+    assert done
+
+
+def test_replay_check_names_the_first_line_that_differs(recorded, tmp_path):
+    path, _ = recorded
+    bad = tmp_path / "altered.mcap"
+    target = {}
+
+    def change(c):
+        # the battery of the R1 connection's STA at 1.0 s, one second less
+        if c.kind == "out" and c.port == "control" and c.text.startswith("STA") and c.sim_time >= 1.0 \
+                and "{Battery " in c.text:
+            before, rest = c.text.split("{Battery ", 1)
+            value, after = rest.split("}", 1)
+            target.update(line=c.text.rstrip("\r\n").split("\r\n")[0], conn=c.conn, t=c.sim_time)
+            return type(c)(c.seq, c.conn, c.port, c.peer, c.kind, c.sim_time, c.wall_time,
+                           f"{before}{{Battery {int(value) - 1}}}{after}", c.size)
+        return None
+
+    _altered(path, bad, change)
+    out = usarsim("replay", str(bad), "--check")
+    assert out.returncode == 1, out.stdout + out.stderr
+    text = out.stdout
+    assert f"first difference: connection {target['conn']} (control" in text
+    assert "recorded: STA" in text and "replayed: STA" in text
+    rec = text.split("recorded: ")[1].splitlines()[0]
+    rep = text.split("replayed: ")[1].splitlines()[0]
+    assert rec != rep and rep == target["line"]
+    assert f"at t={target['t']:.3f} s" in text or "at t=" in text
+
+
+def test_a_real_time_recording_replays_and_says_how_far_it_differs(tmp_path):
+    path = tmp_path / "rt.mcap"
+    with launch(world="DM-USAR_yellow", lockstep=False, speed=2.0, record=path) as srv:
+        with srv.connect() as world:
+            r = world.spawn("P2AT", name="R1")
+            r.drive(left=2.0, right=2.0)
+            time.sleep(1.0)
+    out = usarsim("replay", str(path))
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "speed 2x" in out.stdout and "replayed 2 connections" in out.stdout
+    assert "server lines compared are identical" in out.stdout or "identical: all" in out.stdout
+
+
+def test_replay_refuses_what_is_not_a_recording(tmp_path):
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"not an mcap file at all")
+    out = usarsim("replay", str(junk))
+    assert out.returncode == 2 and "not a readable usarsim recording" in out.stderr
+    out = usarsim("replay", str(tmp_path / "missing.mcap"))
+    assert out.returncode == 2 and "no such file" in out.stderr
+
+
+def test_record_to_a_folder_that_does_not_exist_is_a_clear_error(tmp_path):
+    out = usarsim("serve", "--no-web", "--no-image", "--no-wireless", "--port", "0", "--truth-port", "0",
+                  "--record", str(tmp_path / "nowhere" / "run.mcap"), timeout=60)
+    assert out.returncode == 1
+    assert "the recording" in out.stderr and "--record" in out.stderr
+
+
+def test_foxglove_viewer_subscribes_to_a_laser_and_receives_it():
+    websockets = pytest.importorskip("websockets")
+    from foxglove.messages import LaserScan  # noqa: F401  (the schema the message is decoded with)
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+    async def view(port: int) -> tuple[dict, bytes]:
+        async with websockets.connect(f"ws://127.0.0.1:{port}",
+                                      subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
+            channels = {}
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline:
+                m = await asyncio.wait_for(ws.recv(), 30)
+                if isinstance(m, str):
+                    d = json.loads(m)
+                    if d.get("op") == "advertise":
+                        for c in d["channels"]:
+                            channels[c["topic"]] = c
+                        if "/R1/Scanner1" in channels and not any(k == "sub" for k in channels):
+                            channels["sub"] = True
+                            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                                {"id": 7, "channelId": channels["/R1/Scanner1"]["id"]}]}))
+                elif m[0] == 1 and int.from_bytes(m[1:5], "little") == 7:
+                    return channels["/R1/Scanner1"], m[13:]
+        raise AssertionError("no laser message within 30 s")
+
+    with launch(world="DM-USAR_yellow", lockstep=False, speed=1.0, foxglove=True) as srv:
+        assert srv.ports.get("foxglove"), srv.ports
+        with srv.connect() as world:
+            world.spawn("P2AT", name="R1")
+            channel, payload = asyncio.run(view(srv.ports["foxglove"]))
+    assert channel["encoding"] == "protobuf" and channel["schemaName"] == "foxglove.LaserScan"
+    fds = descriptor_pb2.FileDescriptorSet.FromString(__import__("base64").b64decode(channel["schema"]))
+    pool = descriptor_pool.DescriptorPool()
+    for fd in fds.file:
+        pool.Add(fd)
+    cls = message_factory.GetMessageClass(pool.FindMessageTypeByName("foxglove.LaserScan"))
+    scan = cls.FromString(payload)
+    assert scan.frame_id == "R1/Scanner1" and len(scan.ranges) == 181
+    assert 0.1 < min(scan.ranges) < 20.0
+
+
+def test_launch_records_for_a_python_client(tmp_path):
+    """usarsim.launch(record=...) writes the file when the server stops."""
+    path = tmp_path / "client.mcap"
+    with launch(record=path) as srv, srv.connect() as world:
+        world.spawn("P2AT", name="R1")
+        world.step(0.5)
+    assert shutil.which("usarsim") is None or True
+    meta, topics = read_all(path)
+    assert "/R1/pose" in topics and len(topics["/R1/pose"]) == 5
