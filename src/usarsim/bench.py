@@ -105,21 +105,23 @@ class _ServedApp:
         ready.wait(30)
 
     def stop(self) -> None:
-        asyncio.run_coroutine_threadsafe(self.app.stop(), self.loop).result(10)
+        asyncio.run_coroutine_threadsafe(self.app.stop(), self.loop).result(120)
         self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(5)
         self.loop.close()
 
 
-def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, progress: bool = False) -> dict:
-    """One run: N P2ATs driven over loopback at max speed for ``seconds`` of simulated time;
-    with ``record``, recorded to that MCAP file (the time the recorder takes to write what
-    was still queued at the end is counted in the wall time)."""
+def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, progress: bool = False,
+                speed: float | None = None, cameras_fps: float = 0.0) -> dict:
+    """One run: N P2ATs driven over loopback at ``speed`` (None: as fast as it goes) for
+    ``seconds`` of simulated time; with ``record``, recorded to that MCAP file, with every
+    camera's picture ``cameras_fps`` times a simulated second (the time the recorder takes to
+    write what was still queued at the end is counted in the wall time)."""
     from usarsim.server.app import Application
 
     poses = free_spots(world, n)
-    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=None, lockstep=False, max_connections=max(64, n),
-                      truth_port=None, image_port=None, web_port=None, record=record)
+    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=speed, lockstep=False, max_connections=max(64, n),
+                      truth_port=None, image_port=None, web_port=None, record=record, record_cameras_fps=cameras_fps)
     served = _ServedApp(app)
     port = app.control.port
     client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
@@ -160,7 +162,8 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
     sim_s = sim_end - sim_start
     wall_s = wall_end - wall_start
     return {"sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(sim_s / wall_s, 3),
-            "model": model, "state": state, "physics_resets": sim.resets}
+            "model": model, "state": state, "physics_resets": sim.resets,
+            "pictures": app.recorder.pictures if app.recorder is not None else 0}
 
 
 def run_bench(args) -> int:
@@ -192,6 +195,8 @@ def run_bench(args) -> int:
 
 
 RECORD_ROUNDS = 3  # bench --record alternates this many runs without and with a recording
+CAMERA_ROBOTS = 4  # bench --record then records this many robots' cameras in real time ...
+CAMERA_FPS = 5.0  # ... at this many pictures a simulated second
 
 
 def _record_bench(args, world, n: int, seconds: float, progress: bool) -> int:
@@ -210,11 +215,19 @@ def _record_bench(args, world, n: int, seconds: float, progress: bool) -> int:
             # simulated time it covers
             minutes = (run["sim_seconds"] + 1.0) / 60.0
             sizes.append(os.path.getsize(path) / (n * minutes))
+        # cameras: 4 robots in real time, every camera recorded at 5 pictures a simulated second
+        cams = measure_rtf(world, CAMERA_ROBOTS, seconds, record=os.path.join(tmp, "cameras.mcap"), speed=1.0,
+                           cameras_fps=CAMERA_FPS, progress=progress)
+        cam_size = os.path.getsize(os.path.join(tmp, "cameras.mcap")) / (CAMERA_ROBOTS * (cams["sim_seconds"] + 1) / 60)
     off, on = statistics.median(plain), statistics.median(recorded)
     cost = 100.0 * (1.0 - on / off)
     per = statistics.median(sizes)
+    # pictures a camera per simulated second over the measured stretch (each P2AT has one camera)
+    cam_rate = cams["pictures"] / (CAMERA_ROBOTS * (cams["sim_seconds"] + 1.0))
     result = {"robots": n, "sim_seconds": seconds, "rtf": off, "rtf_recording": on, "cost_percent": round(cost, 1),
               "bytes_per_robot_minute": round(per), "runs": {"plain": plain, "recording": recorded},
+              "cameras": {"robots": CAMERA_ROBOTS, "fps_asked": CAMERA_FPS, "speed": cams["rtf"],
+                          "pictures_per_s": round(cam_rate, 2), "bytes_per_robot_minute": round(cam_size)},
               "world": world.name, "cpu_count": os.cpu_count()}
     if args.json:
         print(json.dumps(result))
@@ -222,6 +235,9 @@ def _record_bench(args, world, n: int, seconds: float, progress: bool) -> int:
         print(f"robots {n}: real-time factor {off:.2f} without a recording, {on:.2f} recording every channel but "
               f"cameras ({cost:.1f} % less; medians of {RECORD_ROUNDS} runs each, alternately)")
         print(f"recording size: {per / 1e6:.2f} MB per robot-minute of simulated time")
+        print(f"{CAMERA_ROBOTS} robots in real time, every camera recorded at {CAMERA_FPS:g} pictures a simulated "
+              f"second: the clock ran at {cams['rtf']:.2f}x real time; {cam_rate:.1f} pictures a camera per "
+              f"simulated second; {cam_size / 1e6:.2f} MB per robot-minute")
     return 0
 
 

@@ -200,6 +200,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="record the run to an MCAP file: every line each client sent and received on every port "
                         "(for 'usarsim replay'), and the world, robots, lasers, poses, battery, radio links and "
                         "log in Foxglove's schemas (docs/recording.md)")
+    s.add_argument("--record-cameras", type=float, default=0.0, metavar="FPS",
+                   help="with --record or --foxglove: also every robot camera's picture (JPEG), FPS a simulated "
+                        "second (default: 0, none; rendering costs the CPU: 5 is a good rate)")
+    s.add_argument("--record-camera-size", type=_size, default=(320, 240), metavar="WxH",
+                   help="with --record-cameras: the pictures' size (default: 320x240)")
     s.add_argument("--foxglove", type=_port, nargs="?", const=FOXGLOVE_PORT, default=None, metavar="PORT",
                    help=f"serve the run live to Foxglove over its WebSocket protocol (default port "
                         f"{FOXGLOVE_PORT}; 0 picks a free port): open Foxglove and connect to ws://HOST:PORT")
@@ -355,7 +360,8 @@ def cmd_serve(args) -> int:
                       web_port=None if args.no_web else ports["web_port"], max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections),
-                      record=args.record, foxglove_port=args.foxglove, run_options=run_options(args))
+                      record=args.record, foxglove_port=args.foxglove, run_options=run_options(args),
+                      record_cameras_fps=max(0.0, args.record_cameras), record_camera_size=args.record_camera_size)
 
     _raise_file_limit()
 

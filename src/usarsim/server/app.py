@@ -23,7 +23,8 @@ class Application:
                  web_port: int | None = 8080, max_robots: int | None = None, max_line_bytes: int = 8192,
                  max_pending_bytes: int = 256 * 1024, max_viewers: int = 16,
                  max_web_connections: int = 64, record: str | None = None, foxglove_port: int | None = None,
-                 run_options: dict | None = None):
+                 run_options: dict | None = None, record_cameras_fps: float = 0.0,
+                 record_camera_size: tuple[int, int] = (320, 240)):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
@@ -61,7 +62,8 @@ class Application:
 
             info = run_info(version=__version__, world=world.name, world_path=world.path, seed=seed,
                             lockstep=lockstep, speed=speed, options=dict(run_options or {}))
-            self.recorder = Recorder(world, info, path=record, foxglove_port=foxglove_port, host=host)
+            self.recorder = Recorder(world, info, path=record, foxglove_port=foxglove_port, host=host,
+                                     camera_fps=record_cameras_fps, camera_size=record_camera_size)
             self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
             self.control.tap = self.recorder
             self.control.tap_name = "control"

@@ -22,6 +22,7 @@ simulation's time.
 
 from __future__ import annotations
 
+import io
 import json
 import logging
 import math
@@ -30,21 +31,26 @@ import struct
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import foxglove
 import numpy as np
 from foxglove import channels as fch
 from foxglove.messages import (
+    CompressedImage,
+    FrameTransform,
     FrameTransforms,
     Log,
     LogLevel,
     PackedElementField,
     PackedElementFieldNumericType,
     PointCloud,
+    Pose,
     PoseInFrame,
     SceneUpdate,
 )
 from foxglove.messages import LaserScan as FLaserScan
+from PIL import Image
 
 from usarsim.config.world import WorldConfig
 from usarsim.readings import OdometryReading, RangeScan3DReading, RangeScanReading, RobotStatus
@@ -71,6 +77,10 @@ FRAME_PERIOD_S = 0.1
 REFRESH_S = 1.0
 # Outputs of a robot not yet seen in a frame (spawned since the last) wait, this many at most.
 MAX_WAITING_OUTPUTS = 256
+# Camera pictures recorded by default (--record-camera-size): a quarter of the image server's
+# default 640x480, enough to see where a robot looks at a few megabytes a robot-minute.
+CAMERA_SIZE = (320, 240)
+CAMERA_JPEG_QUALITY = 75  # the image server's "normal" (usarsim.server.image.JPEG_QUALITY)
 LIVE_BACKLOG = 1024  # messages per live viewer before its oldest are dropped (foxglove-sdk's default)
 
 STATE_SCHEMA = {
@@ -127,6 +137,28 @@ class _LogTap(logging.Handler):
                          record.lineno))
 
 
+@dataclass(slots=True)
+class _Seen:
+    """What the recorder knows of a robot in the world."""
+
+    class_name: str
+    dimensions: tuple
+    mounts: tuple  # (item name, location, orientation) of each mounted item
+    cameras: tuple[str, ...]
+    start: tuple  # (location, rotation) where it appeared: its odometry's origin
+    location: tuple  # at the last frame
+    time: float  # of the last frame
+    pose_topic: str
+    state_topic: str
+
+
+def _moved(before, now) -> bool:
+    if before is None:
+        return True
+    return math.dist(before.location, now.location) > 1e-3 or \
+        max(abs(math.remainder(a - b, math.tau)) for a, b in zip(before.rotation, now.rotation, strict=True)) > 1e-3
+
+
 class _CountingQueue:
     """A queue that counts what was put in and what was taken out and handled."""
 
@@ -171,6 +203,17 @@ def _typed(cls) -> Callable[[str, foxglove.Context], object]:
 
 _TRANSCRIPT = _json_channel(SCHEMA)
 assert SCHEMA["title"] == SCHEMA_NAME
+# the makers of each kind of channel, made once
+_SCENE = _typed(fch.SceneUpdateChannel)
+_LOG = _typed(fch.LogChannel)
+_LASER = _typed(fch.LaserScanChannel)
+_CLOUD = _typed(fch.PointCloudChannel)
+_POSE = _typed(fch.PoseInFrameChannel)
+_TF = _typed(fch.FrameTransformsChannel)
+_IMAGE = _typed(fch.CompressedImageChannel)
+_STATE = _json_channel(STATE_SCHEMA)
+_STATUS = _json_channel(STATUS_SCHEMA)
+_LINK = _json_channel(LINK_SCHEMA)
 
 
 class Recorder:
@@ -178,13 +221,21 @@ class Recorder:
     None.  :meth:`attach` before the simulation starts, :meth:`start`, then :meth:`stop`."""
 
     def __init__(self, world: WorldConfig, info: dict[str, str], *, path: str | None = None,
-                 foxglove_port: int | None = None, host: str = "127.0.0.1", frame_period_s: float = FRAME_PERIOD_S):
+                 foxglove_port: int | None = None, host: str = "127.0.0.1", frame_period_s: float = FRAME_PERIOD_S,
+                 camera_fps: float = 0.0, camera_size: tuple[int, int] = CAMERA_SIZE):
         self.world = world
         self.info = info
         self.path = path
         self.foxglove_port = foxglove_port
         self.host = host
         self.frame_period_s = frame_period_s
+        # cameras: every robot camera's picture each 1 / camera_fps simulated seconds (0: none)
+        self.camera_fps = max(0.0, float(camera_fps))
+        self.camera_size = camera_size
+        self._renderer = None
+        self._rendering: set[tuple[str, str]] = set()  # (robot, camera) pictures asked and not back yet
+        self._last_pictures = -math.inf
+        self.pictures = 0
         self._q = _CountingQueue()
         self._thread = threading.Thread(target=self._run, name="usarsim-record", daemon=True)
         self._seq = 0
@@ -200,7 +251,8 @@ class Recorder:
         self._log_tap = _LogTap(self)
         # worker state
         self._names: dict[int, str] = {}  # uid -> robot name
-        self._seen: dict[str, tuple] = {}  # name -> (class, dims, last location, last time, mounts)
+        self._seen: dict[str, _Seen] = {}  # robots by name
+        self._objects: dict[str, object] = {}  # movable objects as last written
         self._waiting: dict[int, list[Output]] = {}
         self._last_refresh = -math.inf
         self.messages = 0  # written (every sink counted once)
@@ -214,6 +266,11 @@ class Recorder:
         self._describe = facade.describe_robot
         facade.add_output_watcher(self._on_outputs)
         facade.watch_frames(self.frame_period_s, self._on_frame, radio_model=radio_model)
+        if self.camera_fps > 0:
+            # a render thread of the recording's own, without a frame budget: it is asked for
+            # camera_fps pictures a camera per simulated second, and a picture not back when
+            # the next is due is skipped
+            self._renderer = facade.render_service(max_fps=0.0)
 
     def sim_time(self) -> float:
         return self._time()
@@ -265,6 +322,8 @@ class Recorder:
     def stop(self) -> None:
         """Write what is queued, then close the file and the live server."""
         logging.getLogger("usarsim").removeHandler(self._log_tap)
+        if self._renderer is not None:
+            self._renderer.stop()  # its last pictures are queued before the end
         if self._thread.is_alive():
             self._q.put(None)
             self._thread.join()
@@ -311,7 +370,8 @@ class Recorder:
     # The recorder's thread -----------------------------------------------------------
     def _run(self) -> None:
         handlers = {"chunk": self._write_chunk, "outs": self._write_outputs, "frame": self._write_frame,
-                    "log": self._write_log, "world": self._write_world, "resend": self._resend_static}
+                    "log": self._write_log, "world": self._write_world, "resend": self._resend_static,
+                    "picture": self._write_picture}
         while True:
             item = self._q.get()
             if item is None:
@@ -340,7 +400,7 @@ class Recorder:
         self.chunks += 1
 
     def _write_world(self, sinks: list[_Sink] | None = None) -> None:
-        self._log(WORLD_TOPIC, _typed(fch.SceneUpdateChannel), scene.world_scene(self.world, 0.0), 0.0, sinks)
+        self._log(WORLD_TOPIC, _SCENE, scene.world_scene(self.world, 0.0), 0.0, sinks)
 
     def _resend_static(self) -> None:
         """A live viewer subscribed to the world: it gets the static geometry now."""
@@ -348,7 +408,7 @@ class Recorder:
             self._write_world([self._live_sink])
 
     def _write_log(self, t: float, levelno: int, name: str, msg: str, path: str, line: int) -> None:
-        self._log(LOG_TOPIC, _typed(fch.LogChannel), Log(timestamp=scene.timestamp(t), level=_level(levelno),
+        self._log(LOG_TOPIC, _LOG, Log(timestamp=scene.timestamp(t), level=_level(levelno),
                                                           message=msg, name=name, file=path, line=line), t)
 
     # outputs ------------------------------------------------------------------------
@@ -370,71 +430,138 @@ class Recorder:
             half = (n - 1) * v.resolution_rad / 2.0 if n > 1 else 0.0
             # USARSim sends the rightmost beam first: counter-clockwise from -half seen from above;
             # the ranges as the SEN line gives them (4 decimals, protocol.md 5)
-            self._log(f"/{robot}/{v.name}", _typed(fch.LaserScanChannel), FLaserScan(
+            self._log(f"/{robot}/{v.name}", _LASER, FLaserScan(
                 timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", start_angle=-half, end_angle=half,
                 ranges=np.round(np.asarray(v.ranges_m, dtype=float), 4).tolist()), t)
         elif isinstance(v, RangeScan3DReading):
-            self._log(f"/{robot}/{v.name}", _typed(fch.PointCloudChannel), _point_cloud(robot, v, t), t)
+            self._log(f"/{robot}/{v.name}", _CLOUD, _point_cloud(robot, v, t), t)
         elif isinstance(v, OdometryReading):
-            self._log(f"/{robot}/odometry", _typed(fch.PoseInFrameChannel), PoseInFrame(
+            self._log(f"/{robot}/odometry", _POSE, PoseInFrame(
                 timestamp=scene.timestamp(t), frame_id=f"{robot}/odom",
                 pose=scene.pose((v.x_m, v.y_m, 0.0), (0.0, 0.0, v.theta_rad))), t)
         elif isinstance(v, RobotStatus):
-            self._log(f"/{robot}/status", _json_channel(STATUS_SCHEMA), json.dumps(
+            self._log(f"/{robot}/status", _STATUS, json.dumps(
                 {"battery_s": v.battery_s, "front_steer": v.front_steer, "rear_steer": v.rear_steer,
                  "light": v.light_toggle}).encode(), t)
 
     # frames -------------------------------------------------------------------------
     def _write_frame(self, f: WorldFrame) -> None:
         t = f.time
+        ts = scene.timestamp(t)
         present = set()
         tfs = []
         refresh = t - self._last_refresh >= REFRESH_S - 1e-9
         if refresh:
             self._last_refresh = t
         for r in f.robots:
-            present.add(r.name)
-            self._names[r.uid] = r.name
-            seen = self._seen.get(r.name)
+            name = r.name
+            present.add(name)
+            self._names[r.uid] = name
+            seen = self._seen.get(name)
             new = seen is None
             if new:
-                numbers, items = self._describe(r.config) if self._describe is not None else (None, [])
-                dims = numbers.dimensions if numbers is not None else r.config.geometry.dimensions
-                mounts = [(i.name, i.location, i.orientation) for i in items]
-                seen = (r.config.class_name, dims, r.location, t, mounts, (r.location, r.rotation))
-                log.debug("recording: robot %s (%s) appears at t=%.3f", r.name, r.config.class_name, t)
+                seen = self._seen[name] = self._appears(r, t)
             if new or refresh:
-                self._log(ROBOTS_TOPIC, _typed(fch.SceneUpdateChannel),
-                          SceneUpdate(entities=[scene.robot_entity(r.name, seen[0], seen[1], t)]), t)
-                start_loc, start_rot = seen[5]
-                tfs.append(scene.transform(scene.WORLD_FRAME, f"{r.name}/odom", start_loc, start_rot, t))
-                tfs += [scene.transform(r.name, f"{r.name}/{n}", loc, rot, t) for n, loc, rot in seen[4]]
-            tfs.append(scene.transform(scene.WORLD_FRAME, r.name, r.location, r.rotation, t))
-            dt = t - seen[3]
-            speed = math.dist(r.location, seen[2]) / dt if dt > 0 else 0.0
-            self._seen[r.name] = (seen[0], seen[1], r.location, t, seen[4], seen[5])
-            self._log(f"/{r.name}/pose", _typed(fch.PoseInFrameChannel), PoseInFrame(
-                timestamp=scene.timestamp(t), frame_id=scene.WORLD_FRAME, pose=scene.pose(r.location, r.rotation)), t)
-            self._log(f"/{r.name}/state", _json_channel(STATE_SCHEMA), (
+                self._log(ROBOTS_TOPIC, _SCENE, SceneUpdate(entities=[
+                    scene.robot_entity(name, seen.class_name, seen.dimensions, t)]), t)
+                tfs.append(scene.transform(scene.WORLD_FRAME, f"{name}/odom", seen.start[0], seen.start[1], t))
+                tfs += [scene.transform(name, f"{name}/{n}", loc, rot, t) for n, loc, rot in seen.mounts]
+            position = scene.vec(r.location)
+            rotation = scene.quat(r.rotation)
+            tfs.append(FrameTransform(timestamp=ts, parent_frame_id=scene.WORLD_FRAME, child_frame_id=name,
+                                      translation=position, rotation=rotation))
+            dt = t - seen.time
+            speed = math.dist(r.location, seen.location) / dt if dt > 0 else 0.0
+            seen.location, seen.time = r.location, t
+            self._log(seen.pose_topic, _POSE, PoseInFrame(timestamp=ts, frame_id=scene.WORLD_FRAME,
+                                                          pose=Pose(position=position, orientation=rotation)), t)
+            self._log(seen.state_topic, _STATE, (
                 '{"battery_s":%.3f,"speed_m_s":%.4f,"x":%.4f,"y":%.4f,"z":%.4f,"yaw":%.4f}' % (
                     r.battery_s, speed, r.location[0], r.location[1], r.location[2], r.rotation[2])).encode(), t)
             waiting = self._waiting.pop(r.uid, None)
             for o in waiting or ():
-                self._write_output(r.name, o)
-        for gone in [n for n in self._seen if n not in present]:
-            del self._seen[gone]
-            self._log(ROBOTS_TOPIC, _typed(fch.SceneUpdateChannel), scene.robot_deletion(gone, t), t)
-        self._names = {u: n for u, n in self._names.items() if n in present}
+                self._write_output(name, o)
+        if len(present) != len(self._seen):
+            for gone in [n for n in self._seen if n not in present]:
+                del self._seen[gone]
+                self._log(ROBOTS_TOPIC, _SCENE, scene.robot_deletion(gone, t), t)
+            self._names = {u: n for u, n in self._names.items() if n in present}
         if tfs:
-            self._log(TF_TOPIC, _typed(fch.FrameTransformsChannel), FrameTransforms(transforms=tfs), t)
+            self._log(TF_TOPIC, _TF, FrameTransforms(transforms=tfs), t)
         if f.objects:
-            self._log(OBJECTS_TOPIC, _typed(fch.SceneUpdateChannel), scene.objects_scene(self.world, f.objects, t), t)
+            # movable objects: those that moved (by a millimetre or a milliradian), all of them
+            # every REFRESH_S
+            moved = [o for o in f.objects if refresh or _moved(self._objects.get(o.name), o)]
+            if moved:
+                for o in moved:
+                    self._objects[o.name] = o
+                self._log(OBJECTS_TOPIC, _SCENE, scene.objects_scene(self.world, moved, t), t)
         for ln in f.links or ():
-            self._log(f"{RADIO_PREFIX}{ln.a}-{ln.b}", _json_channel(LINK_SCHEMA), json.dumps(
+            self._log(f"{RADIO_PREFIX}{ln.a}-{ln.b}", _LINK, json.dumps(
                 {"signal_dbm": round(ln.signal_dbm, 3), "distance_m": round(ln.distance_m, 3), "walls": ln.walls,
                  "holds": ln.holds}).encode(), t)
+        if self._renderer is not None and t - self._last_pictures >= 1.0 / self.camera_fps - 1e-9:
+            self._last_pictures = t
+            self._ask_pictures()
         if self.server is not None:
             self.server.broadcast_time(scene.to_ns(t))
+
+    def _appears(self, r, t: float) -> _Seen:
+        """A robot seen for the first time: its class, size, mounts and cameras."""
+        numbers, items = self._describe(r.config) if self._describe is not None else (None, [])
+        log.debug("recording: robot %s (%s) appears at t=%.3f", r.name, r.config.class_name, t)
+        return _Seen(class_name=r.config.class_name,
+                     dimensions=numbers.dimensions if numbers is not None else r.config.geometry.dimensions,
+                     mounts=tuple((i.name, i.location, i.orientation) for i in items),
+                     cameras=tuple(i.name for i in items if i.item_type == "Camera"),
+                     start=(r.location, r.rotation), location=r.location, time=t,
+                     pose_topic=f"/{r.name}/pose", state_topic=f"/{r.name}/state")
+
+    # cameras ------------------------------------------------------------------------
+    def _ask_pictures(self) -> None:
+        """Ask the render thread for a picture of every robot camera, except those whose last
+        picture is not back yet (a slow renderer skips pictures, it does not queue them)."""
+        from usarsim.sim.types import Tile
+
+        w, h = self.camera_size
+        for robot, seen in self._seen.items():
+            for cam in seen.cameras:
+                key = (robot, cam)
+                if key in self._rendering:
+                    continue
+                self._rendering.add(key)
+                when: dict[str, float] = {}
+
+                def layout(snap, robot=robot, cam=cam, when=when):
+                    when["t"] = snap.time  # the simulated instant the picture shows
+                    uid = snap.robots.get(robot.lower())
+                    return w, h, ([Tile(uid, cam, 0, 0, w, h)] if uid is not None else [])
+
+                fut = self._renderer.render_layout(layout)
+                fut.add_done_callback(lambda f, key=key, when=when: self._picture_done(key, f, when))
+
+    def _picture_done(self, key: tuple[str, str], fut, when: dict) -> None:
+        """On the render thread: JPEG-encode the picture and queue it."""
+        try:
+            rgb = fut.result()
+            t = when["t"]
+        except Exception as exc:
+            self._q.put(("picture", key, None, None, str(exc)))
+            return
+        buf = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(rgb)).save(buf, "JPEG", quality=CAMERA_JPEG_QUALITY)
+        self._q.put(("picture", key, t, buf.getvalue(), None))
+
+    def _write_picture(self, key: tuple[str, str], t: float | None, jpeg: bytes | None, error: str | None) -> None:
+        self._rendering.discard(key)
+        robot, cam = key
+        if jpeg is None:
+            if self.pictures == 0 and error:
+                log.warning("recording: no camera pictures: %s", error)
+            return
+        self.pictures += 1
+        self._log(f"/{robot}/{cam}", _IMAGE, CompressedImage(
+            timestamp=scene.timestamp(t), frame_id=f"{robot}/{cam}", data=jpeg, format="jpeg"), t)
 
 
 _XYZ = [PackedElementField(name="x", offset=0, type=PackedElementFieldNumericType.Float32),
