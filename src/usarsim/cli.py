@@ -382,11 +382,17 @@ def cmd_serve(args) -> int:
             where = "127.0.0.1" if args.host in ("", "0.0.0.0") else args.host
             where = f"[{where}]" if ":" in where else where
             print(f"usarsim: operator console at http://{where}:{app.web.port}/", flush=True)
+        if app.recorder is not None and args.record:
+            print(f"usarsim: recording to {args.record} (complete when the server stops)", flush=True)
         mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
         log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
         await stop.wait()
         log.info("shutting down")
         await app.stop()
+        if app.recorder is not None and args.record and os.path.isfile(args.record):
+            rec = app.recorder
+            print(f"usarsim: recorded {args.record}: {os.path.getsize(args.record) / 1e6:.1f} MB, {rec.chunks} "
+                  f"transcript chunks, {rec.messages} other messages, {rec.pictures} camera pictures", flush=True)
 
     try:
         asyncio.run(main())

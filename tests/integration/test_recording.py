@@ -352,3 +352,36 @@ def test_camera_pictures_are_recorded_when_asked(tmp_path):
     assert int(pixels.max()) - int(pixels.min()) > 40  # walls, floor and sky: not one flat colour
     # the camera's mount is in the transform tree
     assert any(tf.child_frame_id == "R1/Camera" for _, _, m in topics["/tf"] for tf in m.transforms)
+
+
+def test_a_viewer_that_does_not_read_never_holds_the_simulation_back():
+    """A Foxglove viewer subscribed to every channel that stops reading: the server keeps at
+    most its backlog for it and drops the oldest; the simulated clock keeps real time."""
+    websockets = pytest.importorskip("websockets")
+
+    async def stalled_viewer(port: int, clock, seconds: float) -> tuple[float, float]:
+        async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"],
+                                      max_queue=4) as ws:
+            channels = {}
+            deadline = time.monotonic() + 2.5
+            while time.monotonic() < deadline:  # subscribe to whatever is advertised meanwhile
+                try:
+                    m = await asyncio.wait_for(ws.recv(), 0.5)
+                except TimeoutError:
+                    continue
+                if isinstance(m, str) and json.loads(m).get("op") == "advertise":
+                    new = [c for c in json.loads(m)["channels"] if c["id"] not in channels]
+                    for c in new:
+                        channels[c["id"]] = c
+                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                        {"id": c["id"], "channelId": c["id"]} for c in new]}))
+            assert len(channels) >= 5
+            t0, w0 = clock(), time.monotonic()
+            await asyncio.sleep(seconds)  # reading nothing: its socket fills, then the server's backlog
+            return clock() - t0, time.monotonic() - w0
+
+    with launch(world="DM-USAR_yellow", lockstep=False, speed=1.0, foxglove=True) as srv, srv.connect() as world:
+        robot = world.spawn("P2AT", name="R1")
+        robot.drive(left=2.0, right=2.0)
+        sim_s, wall_s = asyncio.run(stalled_viewer(srv.ports["foxglove"], lambda: world.truth("P2AT")[0].time, 3.0))
+    assert sim_s == pytest.approx(wall_s, rel=0.15), (sim_s, wall_s)
