@@ -361,7 +361,7 @@ def test_a_viewer_that_does_not_read_never_holds_the_simulation_back():
 
     async def stalled_viewer(port: int, clock, seconds: float) -> tuple[float, float]:
         async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"],
-                                      max_queue=4) as ws:
+                                      max_queue=4, close_timeout=1) as ws:
             channels = {}
             deadline = time.monotonic() + 2.5
             while time.monotonic() < deadline:  # subscribe to whatever is advertised meanwhile
