@@ -205,6 +205,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "second (default: 0, none; rendering costs the CPU: 5 is a good rate)")
     s.add_argument("--record-camera-size", type=_size, default=(320, 240), metavar="WxH",
                    help="with --record-cameras: the pictures' size (default: 320x240)")
+    s.add_argument("--score", action="store_true",
+                   help="keep the run's score (victims found, floor explored, distance, collisions, robots lost, "
+                        "radio contact: docs/scoring.md) and print it every 10 simulated seconds and at the end")
+    s.add_argument("--score-file", default=None, metavar="FILE.json",
+                   help="write the run's final score as JSON when the server stops (docs/scoring.md)")
     s.add_argument("--foxglove", type=_port, nargs="?", const=FOXGLOVE_PORT, default=None, metavar="PORT",
                    help=f"serve the run live to Foxglove over its WebSocket protocol (default port "
                         f"{FOXGLOVE_PORT}; 0 picks a free port): open Foxglove and connect to ws://HOST:PORT")
@@ -361,7 +366,9 @@ def cmd_serve(args) -> int:
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections),
                       record=args.record, foxglove_port=args.foxglove, run_options=run_options(args),
-                      record_cameras_fps=max(0.0, args.record_cameras), record_camera_size=args.record_camera_size)
+                      record_cameras_fps=max(0.0, args.record_cameras), record_camera_size=args.record_camera_size,
+                      score=args.score, score_file=args.score_file,
+                      on_score_line=lambda line: print(f"usarsim: {line}", flush=True))
 
     _raise_file_limit()
 

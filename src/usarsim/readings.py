@@ -14,7 +14,7 @@ positive clockwise seen from above).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 Vec3 = tuple[float, float, float]
 # A typed value of a CONF field or of an RES/EFF item-specific key (protocol.md 6.5-6.7):
@@ -157,6 +157,9 @@ class ImuReading:
 class VictimPart:
     part_name: str
     location: Vec3
+    # the victim whose part it is, in the simulation (the score's ground truth); never on the
+    # wire: None for a false alarm and in a reading parsed from a line
+    victim: str | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, slots=True)

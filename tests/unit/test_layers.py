@@ -83,7 +83,7 @@ def _imports(path: Path) -> list[tuple[int, str]]:
 
 
 def _server_files() -> list[Path]:
-    return sorted([*(SRC / "server").rglob("*.py"), *(SRC / "web").rglob("*.py")])
+    return sorted([*(SRC / "server").rglob("*.py"), *(SRC / "web").rglob("*.py"), *(SRC / "scoring").rglob("*.py")])
 
 
 @pytest.mark.parametrize("path", _server_files(), ids=lambda p: str(p.relative_to(SRC)))

@@ -545,6 +545,7 @@ COMMAND_STRATEGIES = {
     "Test": st.builds(c.Test, segments=_extra_segments(set())),
     "Step": st.builds(c.Step, time_s=_positive),
     "Ping": st.builds(c.Ping, id=_opt(_names)),
+    "Report": st.builds(c.Report, type=st.just("Victim"), location=_vec3, name=_opt(_names)),
     "UnknownCommand": st.builds(
         c.UnknownCommand,
         type=_names.map(str.upper).filter(lambda t: t not in c._PARSERS),

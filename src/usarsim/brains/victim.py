@@ -28,6 +28,7 @@ from usarsim.brains.base import compose
 from usarsim.brains.frontier import FrontierExplorer
 from usarsim.brains.grid import Bounds, path_to
 from usarsim.brains.runner import main_for, parser
+from usarsim.client.core import report_line
 from usarsim.readings import VictimReading
 
 log = logging.getLogger("usarsim.brains.victim")
@@ -144,6 +145,8 @@ class VictimApproacher(FrontierExplorer):
             self.found = (vx, vy)
             self.done = True
             log.info("t=%.1f beside the victim: estimated at %.2f, %.2f", self.time, vx, vy)
+            # for the score (REPORT, an extension: a server without it ignores the line)
+            self.robot.send(report_line((vx, vy, 0.0), "Victim1"))
             return (0.0, 0.0)
         if not self.path or self.time - self._approach_plan >= self.replan_s:
             self.approach(pose)

@@ -22,11 +22,13 @@ from .core import (
     drive_line,
     first_scan_name,
     init_line,
+    is_report_reply,
     max_range_of,
     mispkg_line,
     odometry_of,
     pose_of,
     query_line,
+    report_line,
     scan_of,
     set_line,
     victims_of,
@@ -186,6 +188,11 @@ class Robot:
             return None
         return await self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)),
                                          f"RES of SET {type}", "SET")
+
+    async def report_victim(self, location, name: str | None = None) -> M.Result:
+        """Report a victim at ``location`` for the score (see the blocking client's)."""
+        await self._conn.send(report_line(location, name))
+        return await self._conn.wait_for(is_report_reply, "RES of REPORT", "REPORT")
 
     async def close(self) -> None:
         await self._conn.close()

@@ -26,12 +26,14 @@ from .core import (
     drive_line,
     first_scan_name,
     init_line,
+    is_report_reply,
     max_range_of,
     mispkg_line,
     odometry_of,
     picture_size,
     pose_of,
     query_line,
+    report_line,
     scan_of,
     set_line,
     victims_of,
@@ -217,6 +219,12 @@ class Robot:
             return None
         return self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}",
                                    "SET")
+
+    def report_victim(self, location, name: str | None = None) -> M.Result:
+        """Report a victim at ``location`` (world frame, USARSim axes, metres) for the score:
+        ``REPORT {Type Victim}`` (an extension, docs/scoring.md); returns the server's RES."""
+        self._conn.send(report_line(location, name))
+        return self._conn.wait_for(is_report_reply, "RES of REPORT", "REPORT")
 
     def picture(self, camera: str = "Camera", timeout: float | None = None) -> Any:
         """A picture of the robot's camera ``camera`` from the image server, as a (height,

@@ -197,6 +197,15 @@ def mispkg_line(package: str, values: dict[int, float], order: int = 0) -> str:
     return C.format_command(C.MisPkg(name=package, links=links))
 
 
+def report_line(location, name: str | None = None) -> str:
+    """``REPORT {Type Victim} {Location x,y,z} [{Name label}]`` (an extension, docs/scoring.md)."""
+    return C.format_command(C.Report(type="Victim", location=tuple(float(v) for v in location), name=name))
+
+
+def is_report_reply(msg: Any) -> bool:
+    return isinstance(msg, M.Result) and msg.item_type == "Victim"
+
+
 def set_line(item_type: str, name: str | None, opcode: str | None, params: Any) -> str:
     parts = ["SET", format_segment("Type", item_type)]
     if name:

@@ -52,8 +52,10 @@ class Server:
             time.sleep(0.02)
         time.sleep(0.1)  # the other listener lines, printed in the same burst
         if not expected <= set(self.ports):
-            self.close()
-            raise ClientError(f"the simulator did not start: {self.stderr_tail()}")
+            self.close(keep_stderr=True)
+            tail = self.stderr_tail()
+            self._stderr.close()
+            raise ClientError(f"the simulator did not start: {tail}")
 
     @property
     def port(self) -> int:
@@ -72,7 +74,7 @@ class Server:
         except (OSError, ValueError):
             return "(stderr unavailable)"
 
-    def close(self) -> None:
+    def close(self, keep_stderr: bool = False) -> None:
         """Stop the simulator (SIGTERM, then kill if it does not end within 30 s)."""
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
@@ -84,7 +86,8 @@ class Server:
         self._reader.join(5)
         if self.proc.stdout is not None:
             self.proc.stdout.close()
-        self._stderr.close()
+        if not keep_stderr:
+            self._stderr.close()
 
     def __enter__(self) -> Server:
         return self

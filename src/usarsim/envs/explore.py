@@ -14,8 +14,8 @@ from typing import Any
 import gymnasium as gym
 
 from usarsim.config.catalog import resolve_world
+from usarsim.coverage import CoverageGrid
 
-from .coverage import CoverageGrid
 from .explorer import Explorer, Outcome, Rewards
 from .session import PRELAUNCH_AFTER_STEPS, SEED_RANGE, Pose, Simulator, next_seed, spawn_at
 from .spec import action_space, check_robot, observation_space, robot_config, world_bounds

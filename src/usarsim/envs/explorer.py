@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from usarsim.client import Robot
+from usarsim.coverage import CoverageGrid
 from usarsim.readings import PoseReading, RangeReading, RangeScanReading, TouchReading, VictimReading
 
-from .coverage import CoverageGrid
 from .spec import MAX_VICTIM_PARTS, RobotSpec, side_speeds
 
 POSE_HISTORY_S = 1.0  # ground-truth poses kept to place laser sweeps at their own time

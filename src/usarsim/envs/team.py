@@ -22,8 +22,8 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from usarsim.config.catalog import resolve_world
+from usarsim.coverage import CoverageGrid
 
-from .coverage import CoverageGrid
 from .explore import check_common, rewards_of
 from .explorer import Explorer, Outcome, Rewards
 from .radio import SignalMeter, radio_model

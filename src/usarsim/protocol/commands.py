@@ -57,6 +57,7 @@ __all__ = [
     "GetPathNodes",
     "GetStartPoses",
     "Ping",
+    "Report",
     "Goto",
     "Init",
     "JOINT_ORDERS",
@@ -402,6 +403,22 @@ class Ping:
 
 
 @dataclass(frozen=True, slots=True)
+class Report:
+    """``REPORT {Type Victim} {Location x,y,z} [{Name label}]`` (an extension): the controller
+    reports a victim where it believes one lies (world frame, metres), for the score
+    (docs/scoring.md); answered ``RES {Time t} {Type Victim} {Name label} {Status OK}
+    {Location x,y,z}``.  ``Victim`` is the only type."""
+
+    keyword: ClassVar[str] = "REPORT"
+    type: str = "Victim"
+    location: Vec3 = (0.0, 0.0, 0.0)
+    name: str | None = None
+
+
+REPORT_TYPES = ("Victim",)
+
+
+@dataclass(frozen=True, slots=True)
 class UnknownCommand:
     """A line whose command word is not known; servers ignore it.  ``type`` is upper-cased."""
 
@@ -428,6 +445,7 @@ Command = (
     | Test
     | Step
     | Ping
+    | Report
     | UnknownCommand
 )
 
@@ -824,6 +842,23 @@ def _parse_step(raw: RawMessage) -> Step:
     return Step(**values)
 
 
+_REPORT_KEYS: _Table = {"type": ("type", _text), "location": ("location", _vec3), "name": ("name", _text)}
+
+
+def _parse_report(raw: RawMessage) -> Report:
+    values = _read_fields(raw.type, raw.segments, _REPORT_KEYS)
+    if "type" not in values:
+        raise ProtocolError(f"{raw.type}: missing {{Type Victim}}")
+    kind = next((t for t in REPORT_TYPES if t.lower() == values["type"].lower()), None)
+    if kind is None:
+        raise ProtocolError(f"{raw.type}: {{Type {values.get('type', '')}}} is not a kind of report: expected "
+                            f"{{Type Victim}}")
+    if "location" not in values:
+        raise ProtocolError(f"{raw.type}: missing {{Location x,y,z}}: expected for example "
+                            f"REPORT {{Type Victim}} {{Location 3.1,6.0,0.1}}")
+    return Report(type=kind, location=values["location"], name=values.get("name"))
+
+
 _PARSERS: dict[str, Callable[[RawMessage], Command]] = {
     "INIT": _parse_init,
     "GETSTARTPOSES": _parse_get_start_poses,
@@ -843,6 +878,7 @@ _PARSERS: dict[str, Callable[[RawMessage], Command]] = {
     "TEST": _parse_test,
     "STEP": _parse_step,
     "PING": lambda raw: Ping(id=raw.get("Id")),
+    "REPORT": _parse_report,
 }
 
 
@@ -1049,6 +1085,7 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     Test: lambda c: _Line("TEST").segments(c.segments).end(),
     Step: lambda c: _Line("STEP").number("Time", c.time_s).end(),
     Ping: lambda c: _Line("PING").text("Id", c.id).end(),
+    Report: lambda c: _Line("REPORT").text("Type", c.type).vector("Location", c.location).text("Name", c.name).end(),
     UnknownCommand: lambda c: _Line(_word(c.type, "command word")).segments(c.segments).end(),
 }
 

@@ -111,7 +111,8 @@ class VictSensor(Sensor):
                 x, y, z = frames.from_mj_vec(local_mj)
                 noise = self.rng.normal(0.0, c.sigma * d, 3) if c.sigma > 0 else np.zeros(3)
                 self._found.append(VictimPart(hit.part, (x + float(noise[0]), y + float(noise[1]),
-                                                         z + float(noise[2]))))
+                                                         z + float(noise[2])),
+                                              None if hit.false_alarm else hit.owner))
         self._tick += 1
         if self._tick % SUBGRIDS:
             return None

@@ -24,7 +24,8 @@ class Application:
                  max_pending_bytes: int = 256 * 1024, max_viewers: int = 16,
                  max_web_connections: int = 64, record: str | None = None, foxglove_port: int | None = None,
                  run_options: dict | None = None, record_cameras_fps: float = 0.0,
-                 record_camera_size: tuple[int, int] = (320, 240)):
+                 record_camera_size: tuple[int, int] = (320, 240), score: bool = False,
+                 score_file: str | None = None, score_every_s: float = 10.0, on_score_line=None):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
@@ -72,6 +73,17 @@ class Application:
                 if name != "web" and hasattr(listener, "tap_name"):
                     listener.tap, listener.tap_name, listener.tap_binary = self.recorder, name, name == "image"
 
+        # the score (--score prints it live, --score-file writes it at the end); None: not kept
+        self.score = None
+        if score or score_file is not None:
+            from usarsim.scoring import ScoreKeeper
+            from usarsim.sim.types import resolve_model
+
+            self.score = ScoreKeeper(world, seed=seed, path=score_file, print_every_s=score_every_s if score else 0.0,
+                                     on_line=on_score_line)
+            self.score.attach(self.facade, self.wireless.service.model if self.wireless is not None
+                              else resolve_model(world.wireless))
+
     def _extras(self) -> list[tuple[object, str, str]]:
         """(server, listener name, what names its port in an error) of every listener
         beside the control port."""
@@ -113,6 +125,8 @@ class Application:
                 for srv in started:
                     await srv.stop()
                 raise
+        if self.score is not None:
+            self.score.start()
         self.facade.start()
 
     def listeners(self) -> list[tuple[str, str, int]]:
@@ -131,3 +145,5 @@ class Application:
         self.facade.stop()
         if self.recorder is not None:
             self.recorder.stop()  # after the simulation: its last outputs are written
+        if self.score is not None:
+            self.score.stop()

@@ -29,7 +29,7 @@ NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
 
 NO_ROBOT = "no robot on this connection: send INIT first"
 # Commands a client waits for an answer to: a malformed one is answered with an ERROR.
-ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES")
+ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES", "REPORT")
 
 
 def _copied(sent, exact) -> bool:
@@ -88,10 +88,12 @@ class Session:
             C.Camera: self.on_camera,
             C.Act: self.on_act,
             C.Ping: self.on_ping,
+            C.Report: self.on_report,
         }
         # the client speaks the UDK actuator API (ACT, or a query of {Type Actuator}): its
         # robot's mission packages are reported as ASTA too, each status period
         self.actuator_api = False
+        self.reports = 0  # REPORTs so far (one without a Name is named Victim<n>)
         self._spawn_done = ctx.threadsafe(self.spawn_done)
         self._stepped = ctx.threadsafe(lambda t: self.send(M.Stepped(time=t)))
 
@@ -231,6 +233,16 @@ class Session:
             self.send(M.Pong(id=cmd.id, time=t if error is None else None))
 
         self.facade.barrier(self.ctx.threadsafe(done))
+
+    def on_report(self, cmd: C.Report) -> None:
+        """``REPORT {Type Victim} {Location x,y,z} [{Name label}]`` (an extension): a victim the
+        controller reports, for the score; answered with RES (after the spawn it follows).  A
+        report without a Name is named ``Victim<n>``, n counting this connection's reports."""
+        if self.state not in (SPAWNING, ALIVE):
+            self.refuse("REPORT", "before-init-query", NO_ROBOT, level=logging.INFO)
+            return
+        self.reports += 1
+        self.facade.report_victim(self.uid, cmd.name or f"Victim{self.reports}", cmd.location)
 
     def on_drive(self, cmd: C.Drive) -> None:
         # SPAWNING too: the spawn request is ahead of this one in the simulation's queue

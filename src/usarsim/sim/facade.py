@@ -15,6 +15,7 @@ from typing import Any
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
+from usarsim.readings import CommandResult
 from usarsim.robots import drive_class
 from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
@@ -146,6 +147,12 @@ class SimFacade:
         """SET {Type Viewports}: ``on_done((time, [(camera, status), ...]), error)``."""
         self.runner.submit(Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)),
                                    immediate=True, on_done=on_done))
+
+    def report_victim(self, uid: int, name: str, location) -> None:
+        """``REPORT {Type Victim}``: recorded at the simulated instant it is carried out, as a
+        RES output for the robot's client (observers such as the score see it too)."""
+        result = CommandResult("Victim", name, True, (("Location", tuple(float(v) for v in location)),))
+        self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True))
 
     def step(self, seconds: float, on_done: Callable[[float], None]) -> None:
         self.runner.submit(StepRequest(seconds, on_done))

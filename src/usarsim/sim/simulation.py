@@ -368,6 +368,12 @@ class Simulation:
         """The ground truth now (:func:`usarsim.sim.truth.truth_rows`)."""
         return truth.truth_rows(self, class_name, name)
 
+    def report(self, uid: int, value) -> None:
+        """An answer for robot ``uid``'s client now (a reply: never dropped); nothing when the
+        robot is gone."""
+        if uid in self.robots:
+            self.outbox.append(Output(uid, self.time, value, "RES", periodic=False))
+
     def take_outputs(self) -> list[Output]:
         out, self.outbox = self.outbox, []
         return out

@@ -16,6 +16,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import mujoco
+import numpy as np
+
 from usarsim.config.robot import RobotConfig
 from usarsim.sim import frames
 from usarsim.sim.radio import RadioModel, RadioNet, pair_key
@@ -39,6 +42,7 @@ class RobotFrame:
     rotation: tuple[float, float, float]
     battery_s: float
     spawn_time: float
+    wall_force_n: float = 0.0  # the strongest push against a static solid now (contact_forces)
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,9 +78,10 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
     """The poses of every robot and movable object now; with ``radio``, the links of every
     pair of robots (at most MAX_LINK_ROBOTS robots)."""
     d, m = sim.data, sim.model
+    forces = wall_forces(sim)
     robots = tuple(RobotFrame(r.uid, r.name, r.config, r.handle.location(d),
                               tuple(frames.wrap_2pi(a) for a in r.handle.orientation(d)),
-                              r.battery_left(), r.spawn_time)
+                              r.battery_left(), r.spawn_time, forces.get(r.uid, 0.0))
                    for r in sim.robots.values() if not r.removed)
     objects = []
     for o in sim.world.objects:
@@ -98,6 +103,43 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
                         links.append(LinkFrame(pa, pb, ln.signal_dbm, ln.distance_m, ln.walls, ln.holds))
         links = tuple(links)
     return WorldFrame(sim.time, robots, tuple(objects), links)
+
+
+# A contact counts as a push against a wall when its normal is within 60 degrees of the
+# horizontal (|n_z| < sin 30 degrees = 0.5): driving on a floor, a ramp or a step is not one.
+WALL_NORMAL_MAX_Z = 0.5
+
+
+def wall_forces(sim: Simulation) -> dict[int, float]:
+    """Robot id -> the largest normal force (N) of its contacts with static solids (geoms of
+    the world body: walls, boxes, ramps) whose normal is near horizontal, now."""
+    m, d = sim.model, sim.data
+    n = d.ncon
+    if n == 0 or not sim.robots:
+        return {}
+    geoms = d.contact.geom[:n]
+    bodies = m.geom_bodyid[geoms]
+    static = bodies == 0
+    one = np.flatnonzero(static[:, 0] ^ static[:, 1])
+    if one.size == 0:
+        return {}
+    normals_z = d.contact.frame[:n, 2]
+    one = one[np.abs(normals_z[one]) < WALL_NORMAL_MAX_Z]
+    if one.size == 0:
+        return {}
+    roots = {int(m.body_rootid[r.handle.body_id]): r.uid for r in sim.robots.values()}
+    out: dict[int, float] = {}
+    f6 = np.zeros(6)
+    for i in one.tolist():
+        other = bodies[i, 1] if static[i, 0] else bodies[i, 0]
+        uid = roots.get(int(m.body_rootid[other]))
+        if uid is None:
+            continue
+        mujoco.mj_contactForce(m, d, i, f6)
+        f = abs(float(f6[0]))
+        if f > out.get(uid, 0.0):
+            out[uid] = f
+    return out
 
 
 class FrameWatch:
