@@ -1,6 +1,7 @@
 """Robot cameras on the simulation's side: which camera each tile of the MultiView shows
 (manual 3.2.6; protocol.md 11), the viewports a robot chose (SET {Type Viewports}, 5.4),
-and the snapshots the render thread draws from (protocol.md 10)."""
+and the snapshots the render thread draws from (protocol.md 10; with each robot's chassis,
+which a free camera may follow)."""
 
 from __future__ import annotations
 
@@ -100,6 +101,7 @@ class Cameras:
         mujoco.mj_copyData(snap.data, m, self.sim.data)
         snap.time = self.sim.time
         snap.robots = {r.name.lower(): r.uid for r in self.sim.robots.values()}
+        snap.bodies = {r.name.lower(): r.handle.body_id for r in self.sim.robots.values()}  # a free camera follows one
         snap.multiview = list(self.multiview())
         for r in self.sim.robots.values():
             for cam in self.cameras_of(r):

@@ -12,6 +12,10 @@ Layouts: a picture is a grid of tiles, each showing one robot camera (or nothing
 A camera bound to a client fills the whole picture; the MultiView (manual 3.2.6) tiles
 several robots' cameras.  An omnidirectional camera renders a panorama: four 90-degree
 views side by side, from 135 degrees left to 135 degrees right of its heading.
+
+A free camera belongs to no robot: the operator console's 3-D view orbits it about a point
+of the world (MuJoCo's free camera: a look-at point, azimuth, elevation and distance, in
+MuJoCo's frame: X forward, Y left, Z up), or about a robot's chassis that it follows.
 """
 
 from __future__ import annotations
@@ -32,6 +36,11 @@ from usarsim.sim.builder import MAX_PICTURE_WIDTH as MAX_WIDTH
 from usarsim.sim.builder import camera_fovy_deg
 
 log = logging.getLogger("usarsim.render")
+
+# Renderers (one offscreen context each, by picture size) kept at most; the least recently
+# used one is closed beyond this, so that a console page resized again and again does not
+# pile up contexts.
+MAX_RENDERERS = 8
 
 # The near clipping plane of every picture (m).  MuJoCo puts it at 1 % of the model's extent,
 # which in a large world cuts away everything close to the camera: 5 m in a town 300 m
@@ -69,12 +78,30 @@ class Snapshot:
     cameras: dict[tuple[int, str], CameraState] = field(default_factory=dict)
     robots: dict[str, int] = field(default_factory=dict)  # robot id by its name, in lower case
     multiview: list[tuple[int, str]] = field(default_factory=list)  # what the MultiView shows
+    bodies: dict[str, int] = field(default_factory=dict)  # each robot's chassis body, by its name in lower case
+
+
+@dataclass(frozen=True)
+class FreeView:
+    """A free camera (MuJoCo's ``mjCAMERA_FREE``): it looks at ``lookat`` (MuJoCo's frame,
+    metres) from ``distance`` metres away, turned ``azimuth`` degrees about the vertical
+    (0: looking along +X, 90: along +Y) and ``elevation`` degrees above the horizontal
+    (negative: looking down).  ``follow`` names a robot whose chassis replaces ``lookat``."""
+
+    lookat: tuple[float, float, float]
+    azimuth: float
+    elevation: float
+    distance: float
+    width: int
+    height: int
+    follow: str | None = None
 
 
 @dataclass
 class _Job:
-    layout: object  # snapshot -> (width, height, tiles)
+    layout: object  # snapshot -> (width, height, tiles); None for a free camera
     future: Future
+    free: FreeView | None = None
 
 
 class RenderService:
@@ -105,13 +132,26 @@ class RenderService:
         """A picture laid out from the snapshot: ``layout(snapshot)`` returns its width,
         height and tiles (so that robot names and the MultiView are read at the same
         instant as the picture)."""
-        fut: Future = Future()
+        return self._submit(_Job(layout, Future()))
+
+    def render_free(self, width: int, height: int, *, lookat, azimuth: float, elevation: float, distance: float,
+                    follow: str | None = None) -> Future:
+        """A picture of ``width`` x ``height`` from a free camera (see :class:`FreeView`);
+        the Future's result is ``(picture, camera)``: the RGB picture and a dict of the camera
+        it was seen from (``lookat``, ``azimuth``, ``elevation``, ``distance``, ``fovy``, the
+        vertical field of view in degrees, ``time``, the simulated time of the picture, and
+        ``follow``, the robot followed or None when it is not in the world)."""
+        view = FreeView(lookat=tuple(float(v) for v in lookat), azimuth=float(azimuth), elevation=float(elevation),
+                        distance=float(distance), width=int(width), height=int(height), follow=follow)
+        return self._submit(_Job(None, Future(), free=view))
+
+    def _submit(self, job: _Job) -> Future:
         with self._lock:
             if self._thread is None:
                 self._thread = threading.Thread(target=self._run, name="usarsim-render", daemon=True)
                 self._thread.start()
-        self._queue.put(_Job(layout, fut))
-        return fut
+        self._queue.put(job)
+        return job.future
 
     def stop(self) -> None:
         with self._lock:
@@ -132,6 +172,8 @@ class RenderService:
                 job = self._queue.get()
                 if job is None:
                     return
+                if not job.future.set_running_or_notify_cancel():
+                    continue  # its client gave up waiting: no picture is made for nobody
                 try:
                     self._pace()
                     snap = self._snapshot_now()
@@ -180,8 +222,10 @@ class RenderService:
                 r.close()
             self._renderers.clear()
             self._model = model
-        r = self._renderers.get((width, height))
+        r = self._renderers.pop((width, height), None)
         if r is None:
+            while len(self._renderers) >= MAX_RENDERERS:  # the least recently used goes
+                self._renderers.pop(next(iter(self._renderers))).close()
             try:
                 r = mujoco.Renderer(model, height, width)
             except Exception as exc:
@@ -192,10 +236,12 @@ class RenderService:
             # shadows and reflections cost more than they tell an operator
             r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
             r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
-            self._renderers[(width, height)] = r
+        self._renderers[(width, height)] = r  # (again) the most recently used
         return r
 
-    def _draw(self, snap: Snapshot, job: _Job) -> np.ndarray:
+    def _draw(self, snap: Snapshot, job: _Job):
+        if job.free is not None:
+            return self._free(snap, job.free)
         width, height, tiles = job.layout(snap)
         if not (1 <= width <= MAX_WIDTH and 1 <= height <= MAX_HEIGHT):
             raise ValueError(f"picture {width}x{height} is outside 1x1..{MAX_WIDTH}x{MAX_HEIGHT}")
@@ -235,6 +281,32 @@ class RenderService:
         finally:
             data.cam_xmat[cam.cam_id] = base.ravel()
         return out
+
+
+    def _free(self, snap: Snapshot, v: FreeView) -> tuple[np.ndarray, dict]:
+        if not (1 <= v.width <= MAX_WIDTH and 1 <= v.height <= MAX_HEIGHT):
+            raise ValueError(f"picture {v.width}x{v.height} is outside 1x1..{MAX_WIDTH}x{MAX_HEIGHT}")
+        model, data = snap.model, snap.data
+        model.vis.map.znear = NEAR_CLIP_M / max(float(model.stat.extent), 1e-6)
+        lookat = np.array(v.lookat, dtype=float)
+        followed = None
+        if v.follow is not None:
+            body = snap.bodies.get(v.follow.lower())
+            if body is not None:
+                lookat = data.xpos[body].copy()
+                followed = v.follow
+        cam = mujoco.MjvCamera()
+        cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        cam.lookat[:] = lookat
+        cam.azimuth = v.azimuth
+        cam.elevation = v.elevation
+        cam.distance = v.distance
+        r = self._renderer(model, v.width, v.height)
+        r.update_scene(data, camera=cam)
+        picture = r.render()
+        return picture, {"lookat": [round(float(c), 4) for c in lookat], "azimuth": v.azimuth,
+                         "elevation": v.elevation, "distance": v.distance,
+                         "fovy": float(model.vis.global_.fovy), "time": round(snap.time, 4), "follow": followed}
 
 
 def grid_tiles(cameras, count: int, wide_mode: int, tile_w: int, tile_h: int) -> tuple[list[Tile], int, int]:

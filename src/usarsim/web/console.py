@@ -11,6 +11,14 @@ over one of the page's control connections, asks with ``OK`` and forwards each J
 as a binary WebSocket message.  The world view polls the ground-truth service
 (``/api/truth``) and draws the world's static geometry (``/api/world``).
 
+The 3-D view (``/api/view3d``) is a picture of the world from a free camera that the page
+moves: each request carries the camera (the point it orbits, azimuth, elevation and
+distance, as MuJoCo's free camera has them, or a robot to follow) and the answer is one JPEG
+picture rendered for it by the image server's render thread from a snapshot of the state,
+with the camera it was seen from in the ``X-View`` header (JSON).  The page asks only when
+its view changed or, while something moves, at a few pictures a second; the physics never
+waits for a picture.
+
 A robot that another client drives is watched, never operated (``/ws/watch?robot=name``):
 the page receives the lines the simulation sends that robot's client (its status and sensor
 lines, the results of its commands), a description of its mounted items (GEO and CONF
@@ -18,7 +26,7 @@ lines, as GETGEO and GETCONF would answer) and, when the robot leaves the world,
 message that says so.  Nothing the page sends on that socket goes anywhere.
 
 Routes: ``/`` the page, ``/static/*`` its files, ``/api/info``, ``/api/world``,
-``/api/classes``, ``/api/truth``, ``/ws/control``, ``/ws/video``, ``/ws/watch``.
+``/api/classes``, ``/api/truth``, ``/api/view3d``, ``/ws/control``, ``/ws/video``, ``/ws/watch``.
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ import asyncio
 import io
 import json
 import logging
+import math
 import re
 import socket
 import struct
@@ -61,6 +70,12 @@ NAME_RE = re.compile(r"[A-Za-z0-9_.\-]{1,64}\Z")  # robot and camera names the p
 WATCH_FIND_S = 3.0  # how long a watch waits for a robot that is still being spawned
 WATCH_CHECK_S = 0.2  # how often a watch checks that its robot is still in the world
 WATCH_MAX_PENDING = 512  # lines waiting for a slow page, beyond which only the latest of each stream is kept
+VIEW3D_MAX_RENDERING = 4  # 3-D view pictures being made at once, all pages together; more are answered 503
+VIEW3D_MAX_SIZE = (1280, 960)  # the largest 3-D view picture (width, height)
+VIEW3D_MIN_SIZE = 16
+VIEW3D_DISTANCE_M = (0.2, 2000.0)  # how near and how far the free camera may be from the point it orbits
+VIEW3D_TIMEOUT_S = 30.0
+VIEW3D_JPEG_QUALITY = 80  # libjpeg's 1..100 scale
 
 
 def _loopback(host: str) -> str:
@@ -91,6 +106,51 @@ def raw_to_jpeg(payload: bytes) -> bytes:
     buf = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(bgr[:, :, ::-1])).save(buf, "JPEG", quality=85)
     return buf.getvalue()
+
+
+def rgb_to_jpeg(rgb, quality: int = VIEW3D_JPEG_QUALITY) -> bytes:
+    """An RGB picture (rows top to bottom) as a JPEG file."""
+    import numpy as np
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(rgb)).save(buf, "JPEG", quality=quality)
+    return buf.getvalue()
+
+
+def view3d_request(query) -> dict:
+    """The free camera a 3-D view request asks for (the keyword arguments of the render
+    thread's ``render_free``), from the query: ``lookat=x,y,z`` (MuJoCo's frame: X forward,
+    Y left, Z up, metres), ``azimuth`` and ``elevation`` (degrees), ``distance`` (metres),
+    ``width`` and ``height`` (pixels), and optionally ``follow``, a robot's name.  Raises
+    ValueError with what is wrong."""
+    def number(key: str) -> float:
+        text = query.get(key)
+        if text is None:
+            raise ValueError(f"{key} is missing")
+        value = float(text)
+        if not math.isfinite(value):
+            raise ValueError(f"{key} is not a finite number: {text!r}")
+        return value
+
+    parts = str(query.get("lookat", "")).split(",")
+    if len(parts) != 3:
+        raise ValueError("lookat must be three numbers x,y,z")
+    lookat = [float(v) for v in parts]
+    if not all(math.isfinite(v) and abs(v) < 1e6 for v in lookat):
+        raise ValueError("lookat must be three finite numbers")
+    width, height = int(number("width")), int(number("height"))
+    if not (VIEW3D_MIN_SIZE <= width <= VIEW3D_MAX_SIZE[0] and VIEW3D_MIN_SIZE <= height <= VIEW3D_MAX_SIZE[1]):
+        raise ValueError(f"the picture must be {VIEW3D_MIN_SIZE}x{VIEW3D_MIN_SIZE}.."
+                         f"{VIEW3D_MAX_SIZE[0]}x{VIEW3D_MAX_SIZE[1]}, not {width}x{height}")
+    follow = query.get("follow") or None
+    if follow is not None and not NAME_RE.match(follow):
+        raise ValueError(f"not a robot name: {follow!r}")
+    return {"width": width, "height": height, "lookat": lookat,
+            "azimuth": math.remainder(number("azimuth"), 360.0),
+            "elevation": min(90.0, max(-90.0, number("elevation"))),
+            "distance": min(VIEW3D_DISTANCE_M[1], max(VIEW3D_DISTANCE_M[0], number("distance"))),
+            "follow": follow}
 
 
 def truth_row(text: str) -> dict | None:
@@ -240,6 +300,10 @@ class WebConsole:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._world_json: dict | None = None
         self._classes: list[dict] | None = None
+        self._renderer = None  # the render thread the 3-D view uses (the image server's, when there is one)
+        self._own_renderer = False
+        self._view3d_rendering = 0
+        self._stopped = False
 
     # lifecycle --------------------------------------------------------------------------
     async def start(self) -> int:
@@ -250,6 +314,7 @@ class WebConsole:
         web_app.router.add_get("/api/world", self._world)
         web_app.router.add_get("/api/classes", self._classes_json)
         web_app.router.add_get("/api/truth", self._truth_json)
+        web_app.router.add_get("/api/view3d", self._view3d)
         web_app.router.add_get("/ws/control", self._control_ws)
         web_app.router.add_get("/ws/video", self._video_ws)
         web_app.router.add_get("/ws/watch", self._watch_ws)
@@ -270,6 +335,7 @@ class WebConsole:
         return self.port
 
     async def stop(self) -> None:
+        self._stopped = True
         self.app.facade.remove_output_watcher(self._outputs_seen)
         await asyncio.gather(*(ws.close(code=1001, message=b"the simulator is shutting down")
                                for ws in list(self._sockets)), return_exceptions=True)
@@ -282,6 +348,9 @@ class WebConsole:
         if self._runner is not None:
             await self._runner.cleanup()
             self._runner = None
+        if self._own_renderer and self._renderer is not None:
+            await asyncio.get_running_loop().run_in_executor(None, self._renderer.stop)
+        self._renderer = None
 
     @web.middleware
     async def _limit(self, request: web.Request, handler) -> web.StreamResponse:
@@ -371,6 +440,43 @@ class WebConsole:
             return web.json_response({"error": f"the ground-truth service did not answer: {exc}", "objects": []},
                                      status=503)
         return web.json_response({"objects": rows})
+
+    # the 3-D view ---------------------------------------------------------------------------
+    def _view_renderer(self):
+        """The render thread of the image server (one GL context and one frame budget for
+        every picture), or without an image server one of the console's own."""
+        if self._renderer is None:
+            image = self.app.image
+            if image is not None:
+                self._renderer = image.renderer
+            else:
+                self._renderer = self.app.facade.render_service(self.app.image_settings.max_fps)
+                self._own_renderer = True
+        return self._renderer
+
+    async def _view3d(self, request: web.Request) -> web.Response:
+        """One picture of the 3-D view: see the module's description."""
+        try:
+            req = view3d_request(request.query)
+        except ValueError as exc:
+            return web.json_response({"error": str(exc)}, status=400)
+        if self._stopped:
+            return web.json_response({"error": "the simulator is shutting down"}, status=503)
+        if self._view3d_rendering >= VIEW3D_MAX_RENDERING:
+            return web.json_response({"error": "the 3-D view is busy: retry"}, status=503, headers={"Retry-After": "1"})
+        self._view3d_rendering += 1
+        try:
+            fut = self._view_renderer().render_free(**req)
+            picture, camera = await asyncio.wait_for(asyncio.wrap_future(fut), VIEW3D_TIMEOUT_S)
+            jpeg = await asyncio.get_running_loop().run_in_executor(None, rgb_to_jpeg, picture)
+        except Exception as exc:  # no GL context here, a snapshot that timed out: said to the page
+            log.debug("console: no 3-D view picture: %s", exc)
+            return web.json_response({"error": f"no 3-D view: {exc}"}, status=503)
+        finally:
+            self._view3d_rendering -= 1
+        camera["width"], camera["height"] = req["width"], req["height"]
+        return web.Response(body=jpeg, content_type="image/jpeg",
+                            headers={"X-View": json.dumps(camera, separators=(",", ":"))})
 
     # robot sessions -----------------------------------------------------------------------
     async def _control_ws(self, request: web.Request) -> web.WebSocketResponse:

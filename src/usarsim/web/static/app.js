@@ -1,16 +1,19 @@
-// The operator console: the spectator (world view), robot operation (video, range
-// sensors, sensor tree, wheels, camera, light) and the command console (spawn, any
-// protocol line, the log of every message received).  A robot that another controller
+// The operator console: the spectator (world view, 3-D view, plots of the attached robot),
+// robot operation (video, range sensors, sensor tree, wheels, camera, light) and the
+// command console (spawn, any protocol line, the log of every message received).  A robot that another controller
 // drives is watched read-only: its sensors, range view and log, never its controls.
 
+import { TimePlot } from "./plots.js";
 import { cleanName, parseLine, splitSegment } from "./protocol.js";
 import { RobotSession } from "./robot.js";
 import { drawRanges, rangeGeometry, SensorTree } from "./sensors.js";
 import { Video } from "./video.js";
+import { View3D } from "./view3d.js";
 import { WorldView } from "./worldview.js";
 
 const $ = (id) => document.getElementById(id);
 const TRUTH_PERIOD_MS = 200;
+const PLOT_PERIOD_MS = 250;
 const LOG_MAX = 3000; // entries kept; older ones are dropped
 const CHASE = "Chase"; // the camera name of the view from above and behind a robot
 
@@ -41,10 +44,19 @@ class Console {
       overlay: $("video-overlay"), fps: $("video-fps"), width: $("video-width"), height: $("video-height"),
     });
     this.video.pageId = this.pageId;
+    this.view3d = new View3D($("view3d"), { overlay: $("view3d-overlay"), info: $("view3d-info"),
+      followButton: $("view3d-follow") });
+    this.plots = {
+      speed: new TimePlot($("plot-speed"), { title: "Speed", unit: "m/s", digits: 2, colour: "#3ddc6a", floor: 0.5 }),
+      battery: new TimePlot($("plot-battery"), { title: "Battery", unit: "s", digits: 0, colour: "#ffcc4d", floor: 10 }),
+      obstacle: new TimePlot($("plot-obstacle"), { title: "Nearest obstacle", unit: "m", digits: 2, colour: "#e0593b", floor: 1 }),
+    };
+    this.simTime = null;
     this.tree = new SensorTree($("sensor-tree"));
     this.bindUi();
     this.load();
     setInterval(() => this.drawRanges(), 200);
+    setInterval(() => this.drawPlots(), PLOT_PERIOD_MS);
     requestAnimationFrame(() => this.flushLog());
   }
 
@@ -63,6 +75,7 @@ class Console {
         note.textContent = "lock-step: the world moves only on STEP {Time s}";
       }
       this.map.setWorld(world);
+      this.view3d.setWorld(world);
       this.fillSpawnForm();
     } catch (exc) {
       this.status(`cannot load the console's data: ${exc}`);
@@ -98,8 +111,17 @@ class Console {
       }
       this.truthRows = data.objects || [];
       this.map.setTruth(this.truthRows);
+      this.view3d.setTruth(this.truthRows);
       const t = this.truthRows.length ? this.truthRows[0].time : null;
-      if (t !== null) $("sim-time").textContent = t.toFixed(1);
+      if (t !== null) {
+        $("sim-time").textContent = t.toFixed(1);
+        this.simTime = t;
+      }
+      // where each robot is: its speed for the plots when it has no position sensor of its own
+      for (const s of this.sessions) {
+        const row = s.name && !s.closed ? this.map.robots.get(s.name) : null;
+        if (row) s.track.position("truth", row.time, row.location);
+      }
       this.updateRobotList();
       this.updateScanOnMap();
     } catch (exc) {
@@ -240,6 +262,7 @@ class Console {
       this.attached = null;
       this.map.attached = null;
       this.map.dirty = true;
+      this.view3d.setAttached(null);
       $("video-robot").textContent = "";
       $("video-camera").replaceChildren();
       this.video.detach();
@@ -383,6 +406,7 @@ class Console {
     this.attached = { robot, camera: cam };
     this.map.attached = robot;
     this.map.dirty = true;
+    this.view3d.setAttached(robot);
     const sel = $("video-camera");
     sel.replaceChildren(...[...cams, CHASE].map((c) => {
       const o = document.createElement("option");
@@ -409,6 +433,7 @@ class Console {
     this.attached = null;
     this.map.attached = null;
     this.map.dirty = true;
+    this.view3d.setAttached(null);
     $("video-robot").textContent = "";
     $("video-camera").replaceChildren();
     this.video.detach();
@@ -455,6 +480,17 @@ class Console {
 
   drawRanges() {
     drawRanges($("range-view"), this.selected, Number($("range-radius").value) || 5);
+  }
+
+  // the plots of the selected robot (the attached one), up to the latest simulated time
+  drawPlots() {
+    if (document.hidden) return;
+    const s = this.selected;
+    const tr = s ? s.track : null;
+    const times = [this.simTime, tr && tr.latestTime].filter((x) => x !== null && x !== undefined);
+    const now = times.length ? Math.max(...times) : 0;
+    const note = s ? "no reading yet" : "no robot";
+    for (const k of ["speed", "battery", "obstacle"]) this.plots[k].draw(tr ? tr[k] : null, now, note);
   }
 
   // the command box ------------------------------------------------------------------
@@ -655,6 +691,13 @@ class Console {
       ev.currentTarget.setAttribute("aria-pressed", String(this.map.follow));
     });
     $("map-pick").addEventListener("click", () => this.setPicking(!this.map.picking));
+    $("view3d-arena").addEventListener("click", () => this.view3d.arena());
+    $("view3d-follow").addEventListener("click", () => this.view3d.setFollow(!this.view3d.follow));
+    $("view3d-wide").addEventListener("click", (ev) => {
+      const wide = !document.querySelector("main").classList.contains("wide3d");
+      document.querySelector("main").classList.toggle("wide3d", wide);
+      ev.currentTarget.setAttribute("aria-pressed", String(wide));
+    });
     $("video-camera").addEventListener("change", (ev) => {
       if (this.attached) this.attach(this.attached.robot, ev.target.value);
     });

@@ -7,10 +7,12 @@
 // brings the lines the simulator sends that controller, read-only.  It sends nothing, and
 // says when the robot has left the world.
 
+import { RobotTrack } from "./plots.js";
 import { fields, items, parseLine, vec } from "./protocol.js";
 
 const DEG10 = 0.1745; // 10 degrees, the camera group's step (SimpleUI)
 const RANGE_TYPES = new Set(["Sonar", "IR", "RangeSensor", "RangeScanner", "IRScanner"]);
+const SCANNER_TYPES = new Set(["RangeScanner", "IRScanner"]);
 
 export class RobotSession {
   constructor(console_, { name, cls, initLine, watch = false }) {
@@ -28,6 +30,7 @@ export class RobotSession {
     this.asked = new Set(); // item types whose GEO/CONF were asked for
     this.sta = {};
     this.pose = null; // from the robot's own GroundTruth sensor: { location, rotation }
+    this.track = new RobotTrack(); // speed, battery and nearest obstacle over time, for the plots
     this.motion = { v: 0, w: 0, a: 0 }; // forward, right turn, up: -1, 0 or 1 each
     this.speed = 0.4; // share of the robot's top speed
     this.turn = 0.25; // Ackermann: share of its steering range a turn uses
@@ -133,6 +136,7 @@ export class RobotSession {
         const f = Object.fromEntries(n ? n.fields : it.head);
         this.pose = { location: vec(f.Location), rotation: vec(f.Orientation) };
       }
+      this.trackReading(title, Number(head.Time), it);
       if (RANGE_TYPES.has(title) && !this.asked.has(title)) {
         this.asked.add(title);
         this.send(`GETGEO {Type ${title}}`);
@@ -142,6 +146,7 @@ export class RobotSession {
       key = "STA";
       title = "Status";
       this.sta = Object.fromEntries(it.head);
+      if (this.sta.Battery !== undefined) this.track.batteryLeft(Number(this.sta.Time), Number(this.sta.Battery));
       this.console.statusChanged(this);
     } else if (type === "MISSTA") {
       key = "MISSTA " + (it.named[0] ? it.named[0].name : "");
@@ -155,6 +160,21 @@ export class RobotSession {
     for (const n of it.named) named.set(n.name, n.fields);
     this.readings.set(key, { title, time: head.Time || "", head: it.head, named, line });
     this.console.readingsChanged(this);
+  }
+
+  // what the plots take from a SEN line: a position, or the ranges of a range sensor
+  trackReading(sensorType, t, it) {
+    if (sensorType === "GroundTruth" || sensorType === "INS" || sensorType === "Odometry") {
+      const n = it.named[0];
+      const f = Object.fromEntries(n ? [...it.head, ...n.fields] : it.head);
+      const p = vec(sensorType === "Odometry" ? f.Pose : f.Location);
+      if (p.length >= 2) this.track.position(sensorType, t, sensorType === "Odometry" ? [p[0], p[1], 0] : p);
+    } else if (RANGE_TYPES.has(sensorType)) {
+      const values = [];
+      for (const n of it.named) for (const [k, v] of n.fields) if (k === "Range") values.push(...vec(v));
+      for (const [k, v] of it.head) if (k === "Range") values.push(...vec(v));
+      if (values.length) this.track.ranges(SCANNER_TYPES.has(sensorType), t, values);
+    }
   }
 
   keepDescription(type, line) {

@@ -220,31 +220,62 @@ export class WorldView {
     ctx.fillText(text, sx, sy + dy);
   }
 
-  // Each start pose's name beside its marker: on its right, else on its left, below or
-  // above, wherever it covers no other marker or name (the first place when none is free).
+  // Each start pose's name beside its marker: on its right, else on its left, below, above or
+  // at a corner, wherever it covers no other marker or name and stays on the canvas.  Names
+  // are placed one after another, going back to move an earlier one when a later one finds
+  // no place (a row of poses closer together than their names are long: above and below in
+  // turn); the first place when there is none.
   drawStartLabels(poses) {
     const ctx = this.ctx;
-    const labels = [];
+    let labels = [];
     if (this.showStartLabels) {
       ctx.font = "10px system-ui, sans-serif";
       const h = 11;
       const r = Math.max(5, 0.3 * this.view.scale); // how far the marker reaches from its pose
+      const cw = this.canvas.width / this.dpr;
+      const ch = this.canvas.height / this.dpr;
       const markers = poses.map((p) => {
         const [sx, sy] = this.toScreen(p.location[0], p.location[1]);
         return { x: sx - r, y: sy - r, w: 2 * r, h: 2 * r };
       });
       const overlaps = (a, b) => a.x < b.x + b.w + 2 && b.x < a.x + a.w + 2 && a.y < b.y + b.h + 2 && b.y < a.y + a.h + 2;
-      poses.forEach((p, i) => {
+      const onCanvas = (b) => b.x >= 0 && b.y >= 0 && b.x + b.w <= cw && b.y + b.h <= ch;
+      const candidates = poses.map((p, i) => {
         const m = markers[i];
         const sx = m.x + r;
         const sy = m.y + r;
         const w = ctx.measureText(p.name).width;
         const places = [[sx + r + 3, sy - h / 2], [sx - r - 3 - w, sy - h / 2], [sx - w / 2, sy + r + 2],
-          [sx - w / 2, sy - r - 2 - h]].map(([x, y]) => ({ x, y, w, h }));
-        const free = places.find((b) => !markers.some((o, j) => j !== i && overlaps(b, o))
-          && !labels.some((o) => overlaps(b, o))) || places[0];
-        labels.push({ name: p.name, ...free, marker: [sx, sy] });
+          [sx - w / 2, sy - r - 2 - h], [sx + r + 1, sy + r + 1], [sx + r + 1, sy - r - 1 - h],
+          [sx - r - 1 - w, sy + r + 1], [sx - r - 1 - w, sy - r - 1 - h]].map(([x, y]) => ({ x, y, w, h }));
+        const free = places.filter((b) => onCanvas(b) && !markers.some((o, j) => j !== i && overlaps(b, o)));
+        // a name with no free place (its pose out of sight, say) keeps its first place and is
+        // left out of the search
+        return { name: p.name, marker: [sx, sy], places, free: free.length ? free : [places[0]], forced: !free.length };
       });
+      // a search over the free places, in order, with a bound on its steps
+      const chosen = [];
+      let steps = 0;
+      const place = (i) => {
+        if (i === candidates.length) return true;
+        const c = candidates[i];
+        for (const b of c.free) {
+          if (++steps > 5000) return false;
+          if (!c.forced && chosen.some((o, j) => !candidates[j].forced && overlaps(b, o))) continue;
+          chosen.push(b);
+          if (place(i + 1)) return true;
+          chosen.pop();
+        }
+        return false;
+      };
+      if (place(0)) {
+        labels = candidates.map((c, i) => ({ name: c.name, ...chosen[i], marker: c.marker }));
+      } else { // no arrangement: each name where it is free of those before it, else in its first place
+        for (const c of candidates) {
+          const b = c.free.find((x) => c.forced || !labels.some((o) => overlaps(x, o))) || c.places[0];
+          labels.push({ name: c.name, ...b, marker: c.marker });
+        }
+      }
       ctx.textAlign = "left";
       ctx.textBaseline = "top";
       ctx.lineWidth = 3;
