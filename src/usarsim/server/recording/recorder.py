@@ -82,6 +82,7 @@ MAX_WAITING_OUTPUTS = 256
 CAMERA_SIZE = (320, 240)
 CAMERA_JPEG_QUALITY = 75  # the image server's "normal" (usarsim.server.image.JPEG_QUALITY)
 LIVE_BACKLOG = 1024  # messages per live viewer before its oldest are dropped (foxglove-sdk's default)
+BACKLOG_WARNING = 200_000  # items queued for the recorder's thread before a warning
 
 STATE_SCHEMA = {
     "title": "usarsim.RobotState", "type": "object",
@@ -162,16 +163,21 @@ def _moved(before, now) -> bool:
 class _CountingQueue:
     """A queue that counts what was put in and what was taken out and handled."""
 
-    __slots__ = ("_q", "queued", "done")
+    __slots__ = ("_q", "queued", "done", "_warned")
 
     def __init__(self):
         self._q: queue.SimpleQueue = queue.SimpleQueue()
         self.queued = 0  # put
         self.done = 0  # handled (the recorder's thread counts)
+        self._warned = False
 
     def put(self, item) -> None:
         self.queued += 1  # several threads put: a lost increment only delays a benchmark's wait
         self._q.put(item)
+        if self.queued - self.done > BACKLOG_WARNING and not self._warned:
+            self._warned = True
+            log.warning("recording: %d items wait to be written: the recorder falls behind the simulation "
+                        "(nothing is dropped; memory grows until it catches up)", self.queued - self.done)
 
     def get(self):
         return self._q.get()
