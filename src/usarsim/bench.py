@@ -111,18 +111,39 @@ class _ServedApp:
         self.loop.close()
 
 
+def rss_mb() -> float:
+    """This process's resident memory now (MB; Linux /proc, else the peak so far)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+    except (OSError, ValueError, IndexError):
+        return peak_rss_mb()
+
+
+def peak_rss_mb() -> float:
+    """This process's peak resident memory so far (MB)."""
+    import resource
+
+    kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return kb / 1e3 if sys.platform != "darwin" else kb / 1e6
+
+
 def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, progress: bool = False,
-                speed: float | None = None, cameras_fps: float = 0.0) -> dict:
+                speed: float | None = None, cameras_fps: float = 0.0, window=None) -> dict:
     """One run: N P2ATs driven over loopback at ``speed`` (None: as fast as it goes) for
     ``seconds`` of simulated time; with ``record``, recorded to that MCAP file, with every
     camera's picture ``cameras_fps`` times a simulated second (the time the recorder takes to
-    write what was still queued at the end is counted in the wall time)."""
+    write what was still queued at the end is counted in the wall time).  ``window``: an
+    object whose ``start(app)`` and ``stop(app)`` are called as the measured stretch begins
+    and ends (``usarsim bench --profile``).  The server runs in this process (its client in
+    another): the memory figures are the simulator's."""
     from usarsim.server.app import Application
 
     poses = free_spots(world, n)
     app = Application(world, host="127.0.0.1", port=0, seed=0, speed=speed, lockstep=False, max_connections=max(64, n),
                       truth_port=None, image_port=None, web_port=None, record=record, record_cameras_fps=cameras_fps)
     served = _ServedApp(app)
+    rss_before = rss_mb()  # the world built, no robot yet
     port = app.control.port
     client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
                                str(seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -138,6 +159,8 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
         while sim.time < t_settle:
             time.sleep(0.01)
 
+        if window is not None:
+            window.start(app)
         sim_start, wall_start = sim.time, time.perf_counter()
         while sim.time - sim_start < seconds:
             time.sleep(0.005)
@@ -146,6 +169,9 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
                 print(f"\r  {done:7.1f} / {seconds:g} simulated s{' (recording)' if record else ''}", end="",
                       file=sys.stderr, flush=True)
         sim_end, wall_end = sim.time, time.perf_counter()
+        if window is not None:
+            window.stop(app)
+        rss_after = rss_mb()
         if app.recorder is not None:  # what the recorder still has to write is part of the cost
             mark = app.recorder.mark()
             while app.recorder.written() < mark - 1 and time.perf_counter() - wall_end < 120:
@@ -163,7 +189,8 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
     wall_s = wall_end - wall_start
     return {"sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(sim_s / wall_s, 3),
             "model": model, "state": state, "physics_resets": sim.resets,
-            "pictures": app.recorder.pictures if app.recorder is not None else 0}
+            "pictures": app.recorder.pictures if app.recorder is not None else 0,
+            "peak_rss_mb": round(peak_rss_mb(), 1), "rss_per_robot_mb": round((rss_after - rss_before) / n, 2)}
 
 
 def run_bench(args) -> int:
@@ -179,18 +206,42 @@ def run_bench(args) -> int:
     progress = sys.stderr.isatty() and not args.json
     if getattr(args, "record", False):
         return _record_bench(args, world, n, seconds, progress)
+    if getattr(args, "profile", False):
+        return _profile_bench(args, world, n, seconds, progress)
     run = measure_rtf(world, n, seconds, progress=progress)
     model = run["model"]
     sim_s, wall_s, rtf = run["sim_seconds"], run["wall_seconds"], run["rtf"]
     raw = raw_mujoco_rtf(model, min(seconds, 5.0), run["state"])
     result = {"robots": n, "sim_seconds": sim_s, "wall_seconds": wall_s, "rtf": rtf,
               "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
-              "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": run["physics_resets"]}
+              "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": run["physics_resets"],
+              "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}
     if args.json:
         print(json.dumps(result))
     else:
         print(f"robots {n}: {sim_s:.1f} simulated s in {wall_s:.2f} s wall -> real-time factor {rtf:.2f}; "
-              f"bare mj_step {raw:.2f}; ratio {rtf / raw:.2f}")
+              f"bare mj_step {raw:.2f}; ratio {rtf / raw:.2f}; memory {run['peak_rss_mb']:.0f} MB at the peak, "
+              f"{run['rss_per_robot_mb']:.1f} MB a robot")
+    return 0
+
+
+def _profile_bench(args, world, n: int, seconds: float, progress: bool) -> int:
+    """``bench --profile``: one run with both threads profiled; the breakdown."""
+    from usarsim.benchprofile import Profiler, breakdown, format_breakdown
+
+    prof = Profiler()
+    run = measure_rtf(world, n, seconds, progress=progress, window=prof)
+    b = breakdown(prof)
+    if args.json:
+        print(json.dumps({"robots": n, "sim_seconds": run["sim_seconds"], "rtf_profiled": run["rtf"],
+                          "sim_wall_s": round(b["sim_wall_s"], 3), "sim_cpu_s": round(b["sim_cpu_s"], 3),
+                          "loop_wall_s": round(b["loop_wall_s"], 3), "loop_cpu_s": round(b["loop_cpu_s"], 3),
+                          "sim": {k: round(v, 4) for k, v in b["sim"]}, "loop": {k: round(v, 4) for k, v in b["loop"]},
+                          "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}))
+    else:
+        print(f"robots {n}: {run['sim_seconds']:.1f} simulated s in {run['wall_seconds']:.2f} s wall under the "
+              f"profiler (real-time factor {run['rtf']:.2f}; without it, run 'usarsim bench')")
+        print(format_breakdown(b, run["sim_seconds"]))
     return 0
 
 

@@ -246,6 +246,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
                    help="with --cameras: picture sizes (default: 320x240 640x480)")
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
+    b.add_argument("--profile", action="store_true",
+                   help="profile the simulation thread and the server's event loop during the run and print "
+                        "where the time goes (physics, each sensor type, ray casting, report scheduling, "
+                        "building readings, formatting, socket writes, waiting for the interpreter lock)")
     b.add_argument("--record", action="store_true",
                    help="measure what recording costs: runs without and with 'serve --record' (every channel but "
                         "cameras), alternately; prints both real-time factors and the recording's size per "

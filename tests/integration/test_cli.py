@@ -382,6 +382,26 @@ def test_bench_reports_real_time_factors_as_json():
     assert result["rtf"] > 0 and result["raw_mujoco_rtf"] > 0
     assert result["ratio"] == pytest.approx(result["rtf"] / result["raw_mujoco_rtf"], rel=0.01)
     assert result["physics_resets"] == 0
+    # the simulator's memory: the whole process, and what each robot added
+    assert 50 < result["peak_rss_mb"] < 4000 and 0 <= result["rss_per_robot_mb"] < 200
+
+
+def test_bench_profile_says_where_the_time_goes():
+    import json
+
+    out = usarsim("bench", "--robots", "2", "--seconds", "2", "--profile", "--json", timeout=180)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    sim, loop = r["sim"], r["loop"]
+    assert sim["physics (MuJoCo steps)"] > 0 and sim["sensor RangeScanner"] > 0
+    assert sim["  of which ray casting (all sensors)"] > 0
+    assert 0 < r["sim_cpu_s"] <= r["sim_wall_s"] * 1.05
+    # the lines account for the simulation thread's wall time (the rest is its own line)
+    parts = sum(v for k, v in sim.items() if not k.startswith("  of which"))
+    assert parts == pytest.approx(r["sim_wall_s"], rel=0.05)
+    assert loop["formatting lines"] > 0 and loop["socket writes"] > 0
+    text = usarsim("bench", "--robots", "1", "--seconds", "1", "--profile", timeout=180).stdout
+    assert "physics (MuJoCo steps)" in text and "ms per simulated s" in text and "interpreter lock" in text
 
 
 def test_bench_refuses_nonsense():

@@ -1,0 +1,177 @@
+"""``usarsim bench --profile``: where the time of the simulation thread and of the server's
+event loop goes during the bench's measured stretch.
+
+Both threads are profiled with ``cProfile`` (deterministic profiling: it slows Python code
+down, native code such as MuJoCo's step and the ray-cast kernel not, so the shares of Python
+work come out somewhat high; compare runs with each other, not with the bench's plain real-time
+factor).  The simulation thread's time is split by entry point: the physics (the guarded
+``mj_step`` calls), each sensor type's measurement (its ray casting included, which is also
+given on its own line), report scheduling, the rest of building the outputs, world systems,
+handing the outputs to the server and the rest.  Its CPU time beside its wall time tells how
+long it waited for the interpreter lock (the GIL) or slept.  The event loop's time is split
+into formatting lines, socket writes, reading clients' lines and the rest (mostly waiting).
+"""
+
+from __future__ import annotations
+
+import cProfile
+import inspect
+import pstats
+import threading
+import time
+from dataclasses import dataclass, field
+
+
+@dataclass
+class ThreadProfile:
+    stats: pstats.Stats | None = None
+    wall_s: float = 0.0
+    cpu_s: float = 0.0
+
+
+@dataclass
+class Profiler:
+    """The bench's window hooks (``measure_rtf(window=...)``): profiling starts and stops
+    inside the simulation thread and the event loop's thread themselves."""
+
+    sim: ThreadProfile = field(default_factory=ThreadProfile)
+    loop: ThreadProfile = field(default_factory=ThreadProfile)
+
+    def __post_init__(self) -> None:
+        self._sim_prof = cProfile.Profile()
+        self._loop_prof = cProfile.Profile()
+        self._marks: dict[str, float] = {}
+
+    def _on_sim(self, fn) -> None:
+        done = threading.Event()
+        self._facade.call(lambda sim: fn(), on_done=lambda r, e: done.set())
+        done.wait(60)
+
+    def _on_loop(self, app, fn) -> None:
+        done = threading.Event()
+
+        def run():
+            fn()
+            done.set()
+
+        app.control.loop.call_soon_threadsafe(run)
+        done.wait(60)
+
+    def start(self, app) -> None:
+        self._facade = app.facade
+
+        def sim_start():
+            self._marks["sim_wall"], self._marks["sim_cpu"] = time.perf_counter(), time.thread_time()
+            self._sim_prof.enable()
+
+        def loop_start():
+            self._marks["loop_wall"], self._marks["loop_cpu"] = time.perf_counter(), time.thread_time()
+            self._loop_prof.enable()
+
+        self._on_loop(app, loop_start)
+        self._on_sim(sim_start)
+
+    def stop(self, app) -> None:
+        def sim_stop():
+            self._sim_prof.disable()
+            self.sim.wall_s = time.perf_counter() - self._marks["sim_wall"]
+            self.sim.cpu_s = time.thread_time() - self._marks["sim_cpu"]
+
+        def loop_stop():
+            self._loop_prof.disable()
+            self.loop.wall_s = time.perf_counter() - self._marks["loop_wall"]
+            self.loop.cpu_s = time.thread_time() - self._marks["loop_cpu"]
+
+        self._on_sim(sim_stop)
+        self._on_loop(app, loop_stop)
+        self.sim.stats = pstats.Stats(self._sim_prof)
+        self.loop.stats = pstats.Stats(self._loop_prof)
+
+
+def _where(fn) -> tuple[str, int, str]:
+    code = inspect.unwrap(fn).__code__
+    return code.co_filename, code.co_firstlineno, code.co_name
+
+
+def _cum(stats: pstats.Stats, keys) -> float:
+    """Cumulative time of the functions ``keys`` (file, line, name); recursion counted once."""
+    total = 0.0
+    for k in keys:
+        entry = stats.stats.get(k)
+        if entry is not None:
+            total += entry[3]
+    return total
+
+
+def _matching(stats: pstats.Stats, pred) -> list[tuple]:
+    return [k for k in stats.stats if pred(k)]
+
+
+def breakdown(p: Profiler) -> dict:
+    """The shares: {"sim": [(what, seconds)], "loop": [(what, seconds)], "sim_wall_s", ...}."""
+    from usarsim.sensors import SENSORS
+    from usarsim.sim import health, raycaster, reports, runner
+    from usarsim.sim.simulation import Simulation
+
+    s = p.sim.stats
+    rows: list[tuple[str, float]] = []
+    physics = _cum(s, [_where(health.BlowUpGuard.step)])
+    rows.append(("physics (MuJoCo steps)", physics))
+    sensor_total = 0.0
+    per_type = []
+    seen = set()
+    for name in SENSORS.names():
+        cls = SENSORS.get(name)
+        if cls in seen:
+            continue
+        seen.add(cls)
+        keys = {_where(getattr(cls, m)) for m in ("measure", "measure_group") if m in cls.__dict__}
+        t = _cum(s, keys)
+        if t > 0:
+            per_type.append((f"sensor {cls.__name__}", t))
+            sensor_total += t
+    per_type.sort(key=lambda r: -r[1])
+    rows += per_type
+    cast_keys = _matching(s, lambda k: k[0] == raycaster.__file__ and k[2] in ("cast", "cast_from", "count_walls"))
+    rows.append(("  of which ray casting (all sensors)", _cum(s, cast_keys)))
+    sched = _cum(s, _matching(s, lambda k: k[0] == reports.__file__ and k[2] in ("take_due", "next_due")))
+    rows.append(("report scheduling", sched))
+    fire = _cum(s, [_where(Simulation._fire_due)])
+    rows.append(("building readings, besides the sensors", max(0.0, fire - sensor_total - sched)))
+    systems = _cum(s, _matching(s, lambda k: k[2] == "pre_step" and "/sim/systems/" in k[0]))
+    rows.append(("world systems", systems))
+    flush = _cum(s, [_where(runner.SimulationRunner._flush)])
+    rows.append(("handing outputs to the server", flush))
+    accounted = physics + sensor_total + sched + max(0.0, fire - sensor_total - sched) + systems + flush
+    rows.append(("the rest (requests, clock)", max(0.0, p.sim.wall_s - accounted)))
+
+    lp = p.loop.stats
+    from usarsim.protocol import messages
+
+    loop_rows = []
+    fmt = _cum(lp, [_where(messages.format_message)])
+    loop_rows.append(("formatting lines", fmt))
+    writes = _cum(lp, _matching(lp, lambda k: k[2] == "write" and k[0].endswith("selector_events.py")))
+    loop_rows.append(("socket writes", writes))
+    reads = _cum(lp, _matching(lp, lambda k: k[2] == "data_received" and "/usarsim/server/" in k[0]))
+    loop_rows.append(("reading and handling clients' lines", reads))
+    waiting = _cum(lp, _matching(lp, lambda k: k[2] == "select" and k[0].endswith("selectors.py")))
+    loop_rows.append(("waiting for sockets (idle)", waiting))
+    loop_rows.append(("the rest", max(0.0, p.loop.wall_s - fmt - writes - reads - waiting)))
+    return {"sim": rows, "loop": loop_rows, "sim_wall_s": p.sim.wall_s, "sim_cpu_s": p.sim.cpu_s,
+            "loop_wall_s": p.loop.wall_s, "loop_cpu_s": p.loop.cpu_s}
+
+
+def format_breakdown(b: dict, sim_seconds: float) -> str:
+    """The breakdown as a table: milliseconds of wall time per simulated second and shares."""
+    out = []
+    sw = b["sim_wall_s"] or 1e-9
+    out.append(f"simulation thread: {sw:.2f} s wall, {b['sim_cpu_s']:.2f} s CPU "
+               f"(waiting for the interpreter lock or sleeping: {100 * (1 - b['sim_cpu_s'] / sw):.0f} %)")
+    for what, t in b["sim"]:
+        out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / sw:5.1f} %")
+    lw = b["loop_wall_s"] or 1e-9
+    out.append(f"event loop (server): {lw:.2f} s wall, {b['loop_cpu_s']:.2f} s CPU")
+    for what, t in b["loop"]:
+        out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / lw:5.1f} %")
+    return "\n".join(out)
