@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--lockstep", action="store_true",
                    help="the world stands still until a client sends STEP {Time seconds}; the server then "
                         "advances that much simulated time and replies STEPPED {Time t}")
-    s.add_argument("--max-connections", type=int, default=64, help="control connections at most; one more is "
+    s.add_argument("--max-connections", type=int, default=256, help="control connections at most; one more is "
                    "refused and logged (default: %(default)s)")
     s.add_argument("--max-robots", type=int, default=None,
                    help="robots in the world at most; an INIT beyond it is refused and logged (default: "
