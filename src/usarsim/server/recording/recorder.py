@@ -487,7 +487,7 @@ class Recorder:
             waiting = self._waiting.pop(r.uid, None)
             for o in waiting or ():
                 self._write_output(name, o)
-        if len(present) != len(self._seen):
+        if present != self._seen.keys():  # a robot left (another may have come in its place)
             for gone in [n for n in self._seen if n not in present]:
                 del self._seen[gone]
                 self._log(ROBOTS_TOPIC, _SCENE, scene.robot_deletion(gone, t), t)
