@@ -527,10 +527,12 @@ def write_world(objs, poses, path: Path) -> None:
              f"  - {{name: sun, type: directional, direction: {vec(SUN_DIRECTION)}, color: [1.0, 1.0, 1.0], "
              f"intensity: {fmt(SUN_INTENSITY)}, cast_shadows: false}}",
              "materials:",
-             "  ground: {rgba: [0.72, 0.63, 0.48, 1.0], friction: 0.8}      # desert soil around the town",
-             "  asphalt: {rgba: [0.22, 0.22, 0.24, 1.0], friction: 1.0}     # dry asphalt",
-             "  sidewalk: {rgba: [0.68, 0.68, 0.66, 1.0], friction: 1.0}    # concrete",
-             "  building: {rgba: [0.80, 0.74, 0.62, 1.0], friction: 0.8}    # stucco walls",
+             "  ground: {rgba: [0.42, 0.48, 0.26, 1.0], friction: 0.8, texture: grass}"
+             "      # dry grass around the town",
+             "  asphalt: {rgba: [0.22, 0.22, 0.24, 1.0], friction: 1.0, texture: road}"
+             "     # dry asphalt, lane markings and stop lines",
+             "  sidewalk: {rgba: [0.68, 0.68, 0.66, 1.0], friction: 1.0, texture: concrete}    # concrete",
+             "  building: {rgba: [0.80, 0.74, 0.62, 1.0], friction: 0.8, texture: concrete}    # stucco walls",
              "  metal: {rgba: [0.45, 0.47, 0.50, 1.0], friction: 0.6}       # light poles",
              "  car: {rgba: [0.60, 0.12, 0.12, 1.0], friction: 0.8}         # parked cars",
              "objects:"]

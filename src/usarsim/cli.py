@@ -196,6 +196,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "http://HOST:P/ in a browser to watch the world, spawn and drive robots with their video "
                         "and sensors, and send any command")
     s.add_argument("--no-web", action="store_true", help="do not serve the operator console")
+    s.add_argument("--shadows", action="store_true",
+                   help="cameras draw the shadows of the lights that cast them (about half the pictures a second "
+                        "on a machine without a GPU; default: off)")
+    s.add_argument("--no-textures", action="store_true",
+                   help="cameras see plain colours instead of the materials' textures (the quickest pictures)")
     s.add_argument("--record", default=None, metavar="FILE.mcap",
                    help="record the run to an MCAP file: every line each client sent and received on every port "
                         "(for 'usarsim replay'), and the world, robots, lasers, poses, battery, radio links and "
@@ -362,6 +367,11 @@ def cmd_serve(args) -> int:
             model=args.wireless_model, config=layer, debug=bool(wfile and wfile.debug),
             max_connections=max(1, args.max_wireless_connections))
     control_port = ports["port"]
+    # what cameras draw: read when the world is built and by the render threads
+    if args.shadows:
+        os.environ["USARSIM_SHADOWS"] = "1"
+    if args.no_textures:
+        os.environ["USARSIM_TEXTURES"] = "0"
     app = Application(world, host=args.host, port=control_port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
                       robot_dirs=tuple(args.robot_dir), truth_port=ports["truth_port"],

@@ -24,6 +24,10 @@ OBJECT_SHAPES = (*SHAPES, "ramp", "stairs")
 MESH_SUFFIXES = (".obj", ".stl")
 # Sensor kinds a material can let rays through (glass: IR and cameras, manual 3.2.1).
 SEE_THROUGH_KINDS = ("ir", "camera", "laser", "sonar")
+# Textures a material can name (usarsim.sim.textures.TEXTURES, which draws them; listed here
+# so that reading a world file loads no NumPy).
+TEXTURE_NAMES = ("osb", "plywood", "painted_panel", "concrete", "tile", "cinder", "brick", "paper", "pipe",
+                 "rubble", "gravel", "asphalt", "road", "grass")
 # Light types of the world's ``lights`` (MuJoCo's mjtLightType without image lights).
 LIGHT_TYPES = ("point", "spot", "directional")
 # The steepest ramp or flight of stairs a world may hold (degrees): steeper than this is a
@@ -58,6 +62,10 @@ class Material:
     # the fraction ``porosity`` of laser, IR and camera rays through
     mirror: bool = False
     porosity: float = 0.0
+    # what cameras see (usarsim.sim.textures): a procedural texture made around ``rgba``, and
+    # how many of its tiles cover a metre along its width and height (None: its natural size)
+    texture: str = ""
+    texture_scale: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -547,9 +555,22 @@ def _world(data: dict, path: str) -> WorldConfig:
         porosity = ms.float("porosity", md.porosity, min=0.0, max=1.0)
         if mirror and porosity > 0:
             raise ms.error("porosity", "a mirror cannot be porous: give either mirror: true or a porosity")
+        texture = ms.str("texture", md.texture)
+        if texture and texture not in TEXTURE_NAMES:
+            raise ms.error("texture", f"unknown texture '{texture}'{did_you_mean(texture, TEXTURE_NAMES)}")
+        scale = md.texture_scale
+        if ms.has("texture_scale"):
+            if not texture:
+                raise ms.error("texture_scale", "a texture_scale needs a texture")
+            raw = ms.raw("texture_scale")
+            scale = (ms.vec("texture_scale", 2) if isinstance(raw, list)
+                     else (ms.float("texture_scale"),) * 2)
+            if not all(0.001 <= c <= 1000.0 for c in scale):
+                raise ms.error("texture_scale", f"tiles per metre must be within [0.001, 1000], got {raw!r}")
         materials[str(mname)] = Material(name=str(mname), rgba=rgba,
                                          friction=ms.float("friction", md.friction, min=0.0, max=10.0),
-                                         see_through=tuple(see), mirror=mirror, porosity=porosity)
+                                         see_through=tuple(see), mirror=mirror, porosity=porosity,
+                                         texture=texture, texture_scale=scale)
         ms.finish()
 
     def check_material(sec: Section, key: str, value: str) -> None:

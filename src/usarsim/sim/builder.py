@@ -5,6 +5,7 @@ carries the state of everything else over)."""
 from __future__ import annotations
 
 import math
+import os
 
 import mujoco
 import numpy as np
@@ -13,7 +14,7 @@ from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.sensors.camera import CAMERAS
 from usarsim.sensors.touch import PROBE_MARGIN_M, PROBE_RADIUS_M, probe_name
-from usarsim.sim import frames
+from usarsim.sim import frames, textures
 from usarsim.sim.constants import (
     GROUP_MOVABLE,
     GROUP_ROBOT,
@@ -49,6 +50,77 @@ TREAD_WHEEL_CONTYPE, TREAD_WHEEL_CONAFFINITY = 0, SOLID_CONTYPE
 # The largest picture the image server renders (the offscreen buffer the model reserves).
 MAX_PICTURE_WIDTH, MAX_PICTURE_HEIGHT = 1920, 1080
 
+# Textures on the world's surfaces (usarsim.sim.textures): on unless the environment variable
+# USARSIM_TEXTURES is 0, off, false or no (plain colours: the quickest pictures on a machine
+# that renders in software).  What is seen only: no geom's size, contact or friction changes.
+TEXTURES_ENV = "USARSIM_TEXTURES"
+# The side of each light's shadow map (pixels).  A software renderer (Mesa llvmpipe) draws
+# the scene once more into it for every light that casts shadows; 1024 pixels over an
+# arena's 20 m gives shadows about 2 cm sharp, and costs a third of MuJoCo's 4096 default.
+SHADOW_MAP_PX = 1024
+# A fitted texture (a road's markings) is laid on boxes at least this many times as long as
+# they are wide; a squarer box of its material (a parking lot) shows plain asphalt.
+FITTED_MIN_RATIO = 4.0
+
+
+def textures_enabled() -> bool:
+    return os.environ.get(TEXTURES_ENV, "1").strip().lower() not in ("0", "off", "false", "no")
+
+
+def _dress(spec: mujoco.MjSpec, g, mat, box_size=None) -> None:
+    """The look of a world geom of material ``mat``: its colour, and its texture when the
+    material names one (a MuJoCo material whose texture is made around the colour; the
+    colour then comes from the texture, the geom keeps the material's opacity).  A fitted
+    texture (a road's markings) runs along the longer horizontal side of the box of full
+    extents ``box_size``, once across its width."""
+    g.rgba = list(mat.rgba)
+    if not mat.texture or not textures_enabled():
+        return
+    kind = textures.TEXTURES[mat.texture]
+    texture = mat.texture
+    if kind.fitted and (box_size is None
+                        or max(box_size[0], box_size[1]) < FITTED_MIN_RATIO * min(box_size[0], box_size[1])):
+        # not a strip (a parking lot, a cylinder): the surface without its markings
+        texture, kind = "asphalt", textures.TEXTURES["asphalt"]
+    rgb = tuple(int(round(float(c) * 255)) for c in mat.rgba[:3])
+    colour = "".join(f"{c:02x}" for c in rgb)
+    scale = mat.texture_scale or (1.0 / kind.size_m[0], 1.0 / kind.size_m[1])
+    if kind.fitted:
+        along_x = box_size[0] >= box_size[1]
+        tex_name = f"texture/{texture}/{colour}/{'x' if along_x else 'y'}"
+        mat_name = f"material/{mat.name}/{g.name}"
+        length, width = (box_size[0], box_size[1]) if along_x else (box_size[1], box_size[0])
+        repeat = [length * scale[0], width * scale[1]] if along_x else [width * scale[1], length * scale[0]]
+        uniform = False
+    else:
+        along_x = True
+        tex_name = f"texture/{texture}/{colour}"
+        mat_name = f"material/{mat.name}/{texture}"
+        repeat, uniform = [scale[0], scale[1]], True
+    if spec.texture(tex_name) is None:
+        img = textures.texture_image(texture, mat.rgba)
+        if not along_x:
+            # a box along Y shows the image's rows along the box, its first column at the
+            # right-hand kerb of the way the rows run (the same side as along X)
+            img = np.ascontiguousarray(img[::-1, :].transpose(1, 0, 2))
+        t = spec.add_texture()
+        t.name = tex_name
+        t.type = mujoco.mjtTexture.mjTEXTURE_2D
+        t.height, t.width = img.shape[0], img.shape[1]
+        t.nchannel = 3
+        t.data = img.tobytes()
+    if spec.material(mat_name) is None:
+        m = spec.add_material()
+        m.name = mat_name
+        m.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = tex_name
+        m.texrepeat = repeat
+        m.texuniform = uniform
+        m.rgba = [1.0, 1.0, 1.0, float(mat.rgba[3])]
+        m.specular = kind.specular
+        m.shininess = 0.2
+    g.material = mat_name
+    g.rgba = [1.0, 1.0, 1.0, float(mat.rgba[3])]
+
 
 def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     s = mujoco.MjSpec()
@@ -65,6 +137,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     o.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     s.visual.global_.offwidth = MAX_PICTURE_WIDTH
     s.visual.global_.offheight = MAX_PICTURE_HEIGHT
+    s.visual.quality.shadowsize = SHADOW_MAP_PX
     # a sky for the cameras (a pale gradient, lighter at the horizon) instead of black
     sky = s.add_texture()
     sky.name = "sky"
@@ -83,7 +156,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     g.type = mujoco.mjtGeom.mjGEOM_PLANE
     g.size = [fl.size[0] / 2.0, fl.size[1] / 2.0, 0.1]
     g.pos = [fl.center[0], -fl.center[1], 0.0]
-    g.rgba = list(floor_mat.rgba)
+    _dress(s, g, floor_mat)
     g.friction = [floor_mat.friction, SPIN_FRICTION, ROLL_FRICTION]
     if floor_mat.friction < 1.0:
         g.priority = SLIPPERY_PRIORITY
@@ -128,7 +201,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         else:
             g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
             g.size = [obj.radius_m, obj.length_m / 2.0, 0.0]
-        g.rgba = list(mat.rgba)
+        _dress(s, g, mat, obj.size if obj.shape == "box" else None)
         g.friction = [mat.friction, SPIN_FRICTION, ROLL_FRICTION]
         if mat.friction < 1.0:
             g.priority = SLIPPERY_PRIORITY
@@ -144,7 +217,9 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         g.size = [a.size[0] / 2.0, a.size[1] / 2.0, a.size[2] / 2.0]
         g.pos = frames.to_mj_vec(a.center).tolist()
         g.quat = frames.usar_euler_to_mj_quat(a.rotation).tolist()
-        g.rgba = list(mat.rgba)
+        _dress(s, g, mat)
+        if a.material == "default":
+            add_false_alarm_look(s, g, a)
         g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
 
@@ -170,6 +245,41 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     for lt in world.lights:
         add_world_light(s, lt)
     return s
+
+
+# What a false alarm of the default material looks like: the thing it imitates (a doll's
+# head of pink plastic with painted eyes, a tan leather work glove, a black rubber boot, a
+# mannequin's leg), colours estimated from product photographs.
+FALSE_ALARM_LOOKS = {"Head": (0.93, 0.74, 0.66), "Hand": (0.72, 0.55, 0.30), "Foot": (0.10, 0.10, 0.10),
+                     "Leg": (0.88, 0.72, 0.60), "Arm": (0.88, 0.72, 0.60), "Chest": (0.88, 0.72, 0.60),
+                     "Pelvis": (0.88, 0.72, 0.60)}
+
+
+def add_false_alarm_look(spec: mujoco.MjSpec, g, alarm) -> None:
+    """Colours a false alarm's box as what it imitates; a doll's head gets eyes and a mouth
+    on its +X face (decorations seen by cameras only)."""
+    from usarsim.sim.victims import EYE, LOOK_GROUP, MOUTH
+
+    g.rgba = [*FALSE_ALARM_LOOKS.get(alarm.part, (0.88, 0.72, 0.60)), 1.0]
+    if alarm.part != "Head":
+        return
+    hx, hy, hz = (c / 2.0 for c in alarm.size)
+    for name, local, size, rgb in ((f"look/falsealarm/{alarm.name}/eye0", (hx, -0.3 * hy, -0.2 * hz),
+                                    (0.004, 0.015, 0.015), EYE),
+                                   (f"look/falsealarm/{alarm.name}/eye1", (hx, 0.3 * hy, -0.2 * hz),
+                                    (0.004, 0.015, 0.015), EYE),
+                                   (f"look/falsealarm/{alarm.name}/mouth", (hx, 0.0, 0.35 * hz),
+                                    (0.004, 0.03, 0.008), MOUTH)):
+        d = spec.worldbody.add_geom()
+        d.name = name
+        d.type = mujoco.mjtGeom.mjGEOM_BOX
+        rot = frames.euler_to_mat(*alarm.rotation)
+        d.pos = frames.to_mj_vec(np.array(alarm.center) + rot @ np.array(local)).tolist()
+        d.quat = g.quat
+        d.size = list(size)
+        d.rgba = [*rgb, 1.0]
+        d.group = LOOK_GROUP
+        d.contype = d.conaffinity = 0
 
 
 # MuJoCo light types of the world file's light types.
@@ -528,10 +638,25 @@ def _add_piece(body, name: str, piece, robot) -> None:
         # a caster ball stays slippery on any floor
         g.friction = [piece.friction, SPIN_FRICTION, ROLL_FRICTION]
         g.priority = 1
-    g.rgba = [0.75, 0.1, 0.1, 1.0]
+    g.rgba = list(robot_rgba(robot))
     g.group = GROUP_ROBOT
     g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
     return g
+
+
+# Body colours of robots as their real counterparts are painted (the makers' photographs):
+# the Pioneers' red aluminium (MobileRobots/ActivMedia), the Talon's olive drab (Foster-Miller,
+# a military robot), the Humvee's desert tan, the Submarine's safety yellow, the Passarola
+# airship's white envelope, Sony's QRIO and AIBO ERS-7 pearl white; any other robot is red.
+ROBOT_COLOURS = {"P2AT": (0.75, 0.10, 0.10), "P2DX": (0.75, 0.10, 0.10), "P3AT": (0.75, 0.10, 0.10),
+                 "GripperP2AT": (0.75, 0.10, 0.10), "RollerP2AT": (0.75, 0.10, 0.10),
+                 "StereoP2AT": (0.75, 0.10, 0.10), "Talon": (0.33, 0.36, 0.22), "Hummer": (0.76, 0.66, 0.48),
+                 "Submarine": (0.95, 0.78, 0.10), "Passarola": (0.92, 0.92, 0.90), "QRIO": (0.88, 0.88, 0.90),
+                 "ERS": (0.90, 0.90, 0.88), "AirRobot": (0.25, 0.25, 0.27), "Sedan": (0.70, 0.72, 0.75)}
+
+
+def robot_rgba(robot: RobotConfig) -> tuple[float, float, float, float]:
+    return (*ROBOT_COLOURS.get(robot.class_name, (0.75, 0.10, 0.10)), 1.0)
 
 
 def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import queue
 import threading
 import time
@@ -46,6 +47,28 @@ MAX_RENDERERS = 8
 # which in a large world cuts away everything close to the camera: 5 m in a town 300 m
 # across, where a road robot's camera then sees the sky through the road ahead of it.
 NEAR_CLIP_M = 0.02
+
+# Shadows of the world's lights that cast them: off unless the environment variable
+# USARSIM_SHADOWS is 1, on, true or yes (a RenderService's ``shadows`` overrides it).  Each
+# light that casts shadows draws the scene once more, into its shadow map: on a software
+# renderer (Mesa llvmpipe, 2 cores) that halves the image server's frames per second.
+SHADOWS_ENV = "USARSIM_SHADOWS"
+
+
+def shadows_enabled() -> bool:
+    return os.environ.get(SHADOWS_ENV, "0").strip().lower() in ("1", "on", "true", "yes")
+
+
+def _seen_groups() -> mujoco.MjvOption:
+    """What pictures show: every geom group a camera sees (world, robots, movable objects,
+    wheels, water and the victims' faces: groups 0 to 4; MuJoCo draws 0 to 2 by default).  Geoms
+    that only carry contacts (tread capsules, probes) are transparent."""
+    opt = mujoco.MjvOption()
+    opt.geomgroup[:5] = 1
+    return opt
+
+
+SEEN = _seen_groups()
 
 
 @dataclass(frozen=True)
@@ -109,9 +132,10 @@ class RenderService:
     simulation thread and call ``on_done(snapshot, error)``; ``render`` returns a Future
     of an RGB picture (height x width x 3, uint8, rows top to bottom)."""
 
-    def __init__(self, take_snapshot, max_fps: float = 30.0):
+    def __init__(self, take_snapshot, max_fps: float = 30.0, shadows: bool | None = None):
         self._take_snapshot = take_snapshot
         self.max_fps = max_fps
+        self.shadows = shadows_enabled() if shadows is None else bool(shadows)
         self._queue: queue.Queue[_Job | None] = queue.Queue()
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
@@ -233,8 +257,8 @@ class RenderService:
                 self.error = f"no OpenGL context for rendering ({exc}); set MUJOCO_GL=egl or osmesa"
                 raise RuntimeError(self.error) from exc
             self.available = True
-            # shadows and reflections cost more than they tell an operator
-            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+            # reflections cost more than they tell an operator; shadows as asked
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(self.shadows)
             r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
         self._renderers[(width, height)] = r  # (again) the most recently used
         return r
@@ -261,7 +285,7 @@ class RenderService:
         if not cam.omni:
             model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, width, height)
             r = self._renderer(model, width, height)
-            r.update_scene(data, camera=cam.cam_id)
+            r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
             return r.render()
         # a panorama: four quarter views, each turned about the camera's own up axis
         edges = [round(k * width / 4) for k in range(5)]
@@ -276,7 +300,7 @@ class RenderService:
                 data.cam_xmat[cam.cam_id] = (base @ about_up).ravel()
                 model.cam_fovy[cam.cam_id] = camera_fovy_deg(math.pi / 2, w, height)
                 r = self._renderer(model, w, height)
-                r.update_scene(data, camera=cam.cam_id)
+                r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
                 out[:, edges[k]:edges[k + 1]] = r.render()
         finally:
             data.cam_xmat[cam.cam_id] = base.ravel()
@@ -302,7 +326,7 @@ class RenderService:
         cam.elevation = v.elevation
         cam.distance = v.distance
         r = self._renderer(model, v.width, v.height)
-        r.update_scene(data, camera=cam)
+        r.update_scene(data, camera=cam, scene_option=SEEN)
         picture = r.render()
         return picture, {"lookat": [round(float(c), 4) for c in lookat], "azimuth": v.azimuth,
                          "elevation": v.elevation, "distance": v.distance,

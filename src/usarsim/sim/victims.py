@@ -35,6 +35,79 @@ VICTIM_LYING = (
 SHOULDER = (0.62, 0.24, 0.0)  # the right shoulder, victim frame
 VICTIM_RGBA = [0.87, 0.68, 0.55, 1.0]
 
+# What cameras see of a victim: skin on the head and hands, clothes on the body, shoes, and
+# a face.  Skin tones span light to dark skin (sRGB, within the spread of skin colours
+# measured by K. Xiao et al., "Characterising the variations in ethnic skin colours",
+# Color Research & Application 42(2), 2017); every one has a hue of 18-21 degrees and a
+# saturation of 0.30-0.52, the skin cluster of colour-based detectors (Kovac, Peer and
+# Solina, "Human skin colour clustering for face detection", EUROCON 2003: R > G > B,
+# R - G > 15 of 255), and away from wood and cardboard (hue 30-40 degrees).
+SKIN_TONES = ((0.92, 0.72, 0.62), (0.80, 0.57, 0.45), (0.66, 0.44, 0.33), (0.47, 0.31, 0.23))
+# Clothes: jeans blue, work-shirt colours, a grey hoodie, a green jacket (saturated or dark
+# enough, hue outside 10-26 degrees, never to pass for skin).
+SHIRTS = ((0.20, 0.35, 0.62), (0.25, 0.50, 0.30), (0.55, 0.55, 0.58), (0.70, 0.15, 0.40), (0.90, 0.90, 0.92))
+TROUSERS = ((0.16, 0.22, 0.38), (0.22, 0.22, 0.24), (0.35, 0.38, 0.25))
+SHOES = (0.12, 0.10, 0.09)
+HAIR = ((0.10, 0.07, 0.05), (0.30, 0.20, 0.12), (0.05, 0.05, 0.05))
+EYE = (0.08, 0.06, 0.05)
+MOUTH = (0.55, 0.18, 0.18)
+# Decorations (the face, the hair) are seen by cameras only: the ray groups and the victim
+# sensor never see them (constants.GROUP_WATER is the camera-only group).
+LOOK_GROUP = 4
+
+
+def victim_colours(name: str) -> dict[str, tuple[float, float, float]]:
+    """The colours of a victim, chosen from its name (the same victim looks the same in every
+    run): skin, shirt, trousers, hair."""
+    k = sum((i + 1) * ord(c) for i, c in enumerate(name))
+    return {"skin": SKIN_TONES[k % len(SKIN_TONES)], "shirt": SHIRTS[(k // 4) % len(SHIRTS)],
+            "trousers": TROUSERS[(k // 20) % len(TROUSERS)], "hair": HAIR[(k // 7) % len(HAIR)]}
+
+
+def part_colour(part: str, colours: dict) -> list[float]:
+    if part in ("Head", "Hand"):
+        rgb = colours["skin"]
+    elif part in ("Chest", "Arm"):
+        rgb = colours["shirt"]
+    elif part in ("Pelvis", "Leg"):
+        rgb = colours["trousers"]
+    else:
+        rgb = SHOES
+    return [*rgb, 1.0]
+
+
+def _look(body, name: str, kind, pos, size, rgb) -> None:
+    g = body.add_geom()
+    g.name = name
+    g.type = kind
+    g.pos = frames.to_mj_vec(pos).tolist()
+    g.size = list(size)
+    g.rgba = [*rgb, 1.0]
+    g.group = LOOK_GROUP
+    g.contype = g.conaffinity = 0
+    g.mass = 0.0
+    g.density = 0.0
+
+
+def add_face(body, victim, colours) -> None:
+    """Eyes, a mouth and hair on the victim's head (victim frame; lying: the face up,
+    sitting: the face forward)."""
+    (hx, hy, hz), _ = victim_part_pose(victim.posture, VICTIM_LYING[0][2], None, None)
+    r = VICTIM_LYING[0][3][0]
+    if victim.posture == "sitting":
+        def at(fwd, side, up):  # a point on the head: towards the face, the right, the crown
+            return (hx + fwd, hy + side, hz - up)
+    else:
+        def at(fwd, side, up):
+            return (hx + up, hy + side, hz - fwd)
+    prefix = f"look/victim/{victim.name}"
+    sphere, box, ellipsoid = mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_ELLIPSOID
+    for k, side in enumerate((-0.035, 0.035)):
+        _look(body, f"{prefix}/eye{k}", sphere, at(0.93 * r, side, 0.025), (0.014, 0, 0), EYE)
+    _look(body, f"{prefix}/mouth", box, at(0.94 * r, 0.0, -0.045), (0.008, 0.025, 0.006), MOUTH)
+    # hair: a cap over the crown and the back of the head
+    _look(body, f"{prefix}/hair", ellipsoid, at(-0.02, 0.0, 0.02), (r * 1.02, r * 1.03, r * 0.98), colours["hair"])
+
 
 def victim_part_pose(posture: str, centre, size, shape):
     """Centre and rotation (USARSim rpy) of a part for a posture: sitting raises the
@@ -47,6 +120,7 @@ def victim_part_pose(posture: str, centre, size, shape):
 
 
 def add_victim(spec: mujoco.MjSpec, victim) -> None:
+    colours = victim_colours(victim.name)
     body = spec.worldbody.add_body()
     body.name = f"victim/{victim.name}"
     body.pos = frames.to_mj_vec(victim.location).tolist()
@@ -86,6 +160,7 @@ def add_victim(spec: mujoco.MjSpec, victim) -> None:
             g.type = mujoco.mjtGeom.mjGEOM_BOX
             g.size = [size[0] / 2.0, size[1] / 2.0, size[2] / 2.0]
             g.quat = frames.usar_euler_to_mj_quat(rot).tolist()
-        g.rgba = VICTIM_RGBA
+        g.rgba = part_colour(part, colours)
         g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+    add_face(body, victim, colours)

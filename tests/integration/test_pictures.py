@@ -1,0 +1,248 @@
+"""Camera pictures that a vision pipeline can use: every shipped world is lit without black
+or washed-out areas from every start pose, a classical skin-colour detector finds a victim
+a robot faces at 2 m and nothing where no victim is in view, and a threshold finds the lane
+markings of the road world.  Pictures come from the simulator's own render service (the one
+the image server uses).  Rendering needs an OpenGL context; where none can be made these
+tests are skipped, with the reason."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from helpers import gl_problem
+
+GL_PROBLEM = gl_problem()
+pytestmark = pytest.mark.skipif(bool(GL_PROBLEM), reason=GL_PROBLEM or "ok")
+
+WIDTH, HEIGHT = 320, 240
+WORLDS = ("DM-USAR_yellow", "DM-USAR_orange", "DM-USAR_red", "DM-CollapsedBuilding", "DM-Harbour",
+          "DM-Road_UrbanChallenge")
+# Picture statistics: a pixel is nearly black when its brightness (the mean of R, G and B,
+# 0..255) is below 12, nearly white above 248: detail is lost there (a camera's dark noise and
+# clipping).  Neither share may pass 2 % of a start pose's view.
+NEARLY_BLACK, NEARLY_WHITE = 12, 248
+MAX_SHARE = 0.02
+
+# The skin detector: HSV thresholds on the skin cluster (hue 8-28 degrees, the red-orange of
+# blood under skin of every tone; saturation 0.2-0.6; value at least 0.2), after Kovac, Peer
+# and Solina (EUROCON 2003) and the HSV skin models reviewed by Kakumanu, Makrogiannis and
+# Bourbakis, "A survey of skin-color modeling and detection methods", Pattern Recognition
+# 40(3), 2007.  A detection is at least MIN_SKIN_PIXELS such pixels (a head 0.2 m across at
+# 2 m covers about 800 pixels of a 320 x 240 picture of 50 degrees), after an erosion that
+# removes lines one or two pixels wide.
+HUE_DEG = (8.0, 28.0)
+SATURATION = (0.2, 0.6)
+MIN_VALUE = 0.2
+MIN_SKIN_PIXELS = 80
+
+
+def skin_mask(rgb: np.ndarray) -> np.ndarray:
+    p = rgb.astype(float) / 255.0
+    mx, mn = p.max(axis=2), p.min(axis=2)
+    chroma = mx - mn
+    r, g, b = p[..., 0], p[..., 1], p[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sat = np.where(mx > 0, chroma / mx, 0.0)
+        # hue of a pixel whose red is the largest channel (skin's): 60 (G - B) / chroma
+        hue = np.where(chroma > 0, 60.0 * (g - b) / chroma, -1.0)
+    red_max = (r >= g) & (r >= b)
+    return (red_max & (hue >= HUE_DEG[0]) & (hue <= HUE_DEG[1]) & (sat >= SATURATION[0])
+            & (sat <= SATURATION[1]) & (mx >= MIN_VALUE))
+
+
+def skin_blobs(rgb: np.ndarray) -> np.ndarray:
+    """The skin mask opened by a 3 x 3 erosion: edges one or two pixels wide (a seam between
+    two boards, where colours blend) go, a face or a hand stays."""
+    m = skin_mask(rgb)
+    out = m.copy()
+    out[1:-1, 1:-1] = (m[1:-1, 1:-1] & m[:-2, 1:-1] & m[2:, 1:-1] & m[1:-1, :-2] & m[1:-1, 2:]
+                       & m[:-2, :-2] & m[:-2, 2:] & m[2:, :-2] & m[2:, 2:])
+    out[0], out[-1], out[:, 0], out[:, -1] = False, False, False, False
+    return out
+
+
+def finds_skin(rgb: np.ndarray) -> bool:
+    return int(skin_blobs(rgb).sum()) >= MIN_SKIN_PIXELS
+
+
+class Camera:
+    """A simulation of a world with a P2AT at each pose, and its render service."""
+
+    def __init__(self, world, poses):
+        from usarsim.config.catalog import resolve_robot
+        from usarsim.sim.render import RenderService
+        from usarsim.sim.simulation import Simulation
+
+        self.sim = Simulation(world)
+        robot = resolve_robot("P2AT")
+        for k, (location, rotation) in enumerate(poses, start=1):
+            self.sim.spawn(k, robot, f"R{k}", location, rotation, set_down=True)
+        self.sim.advance(0.5)  # every robot landed
+        self.service = RenderService(lambda reuse, done: done(self.sim.cameras.render_snapshot(reuse), None),
+                                     max_fps=0)
+
+    def picture(self, uid: int) -> np.ndarray:
+        from usarsim.sim.render import Tile
+
+        return self.service.render(WIDTH, HEIGHT, [Tile(uid, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=60)
+
+    def sees_victim(self, uid: int) -> bool:
+        """Whether any victim or false alarm is in the robot camera's view (a segmentation
+        picture of the same view)."""
+        import mujoco
+
+        from usarsim.sim.builder import camera_fovy_deg, camera_name
+
+        snap = self.sim.cameras.render_snapshot()
+        m = snap.model
+        cam = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, camera_name(f"robot{uid}", "Camera"))
+        m.cam_fovy[cam] = camera_fovy_deg(math.radians(50.0), WIDTH, HEIGHT)
+        r = mujoco.Renderer(m, HEIGHT, WIDTH)
+        try:
+            r.enable_segmentation_rendering()
+            r.update_scene(snap.data, camera=cam)
+            seg = r.render()
+        finally:
+            r.close()
+        ids = np.unique(seg[..., 0][seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)])
+        names = [m.geom(int(g)).name for g in ids if g >= 0]
+        return any(n.startswith(("victim/", "falsealarm/", "look/")) for n in names)
+
+    def close(self):
+        self.service.stop()
+
+
+@pytest.fixture(scope="module")
+def start_pose_views():
+    """Every start pose of every shipped world: (world, pose, picture, whether it sees a victim)."""
+    from usarsim.config.catalog import resolve_world
+
+    out = []
+    for name in WORLDS:
+        world = resolve_world(name)
+        cam = Camera(world, [(p.location, p.rotation) for p in world.start_poses])
+        try:
+            for uid, pose in enumerate(world.start_poses, start=1):
+                out.append((name, pose.name, cam.picture(uid), cam.sees_victim(uid)))
+        finally:
+            cam.close()
+    return out
+
+
+def picture_shares(rgb: np.ndarray) -> tuple[float, float]:
+    """(share of nearly black pixels, share of nearly white pixels)."""
+    brightness = rgb.astype(float).mean(axis=2)
+    return float((brightness < NEARLY_BLACK).mean()), float((brightness > NEARLY_WHITE).mean())
+
+
+def test_every_start_pose_sees_neither_black_nor_washed_out_areas(start_pose_views):
+    failures = []
+    for world, pose, rgb, _ in start_pose_views:
+        black, white = picture_shares(rgb)
+        if black > MAX_SHARE or white > MAX_SHARE:
+            failures.append(f"{world} {pose}: {black:.1%} nearly black, {white:.1%} nearly white")
+    assert not failures, failures
+
+
+def test_the_skin_detector_finds_nothing_where_no_victim_is_in_view(start_pose_views):
+    clear = [(w, p, rgb) for w, p, rgb, sees in start_pose_views if not sees]
+    assert len(clear) >= 20  # most start poses face no victim
+    found = [(w, p, int(skin_blobs(rgb).sum())) for w, p, rgb in clear if finds_skin(rgb)]
+    assert not found, found
+
+
+VICTIM_WORLD = """\
+name: VictimAhead
+description: a victim lying across the view of a robot 2 m away, among arena walls (tests only)
+floor: {center: [0.0, 0.0], size: [20.0, 20.0], material: floor}
+ambient_light: [0.3, 0.3, 0.3]
+lights:
+  - {name: lamp, type: spot, position: [0.0, 0.0, -4.0], cutoff_deg: 70, exponent: 2, intensity: 0.45}
+materials:
+  floor: {rgba: [0.55, 0.55, 0.52, 1.0], texture: concrete}
+  wall: {rgba: [0.93, 0.84, 0.42, 1.0], texture: painted_panel}
+  wood: {rgba: [0.78, 0.64, 0.44, 1.0], texture: plywood}
+  osb: {rgba: [0.62, 0.47, 0.30, 1.0], texture: osb}
+objects:
+  - {name: back_wall, shape: box, center: [3.5, 0.0, -0.6], size: [0.1, 6.0, 1.2], material: wall}
+  - {name: crate, shape: box, center: [2.6, -1.6, -0.3], size: [0.6, 0.6, 0.6], material: osb}
+  - {name: deck, shape: box, center: [2.6, 1.7, -0.1], size: [1.0, 1.0, 0.2], material: wood}
+start_poses:
+  - {name: Facing, location: [0.0, 0.0, -0.25]}
+  - {name: Away, location: [0.0, 0.0, -0.25], rotation: [0.0, 0.0, 3.1416]}
+victims:
+  - {name: V, location: [2.0, -0.6, -0.1], rotation: [0.0, 0.0, 1.5708]}  # head 2 m ahead, body to the left
+"""
+
+
+@pytest.mark.parametrize("victim", ["Anna", "Ben", "Dora", "Lea"])
+def test_the_skin_detector_finds_a_victim_2_m_ahead(tmp_path, victim):
+    """Victims of every skin tone (their names choose it), seen by a robot 2 m away."""
+    from usarsim.config.world import load_world
+    from usarsim.sim.victims import victim_colours
+
+    p = tmp_path / "VictimAhead.yaml"
+    p.write_text(VICTIM_WORLD.replace("{name: V,", f"{{name: {victim},"))
+    world = load_world(p)
+    cam = Camera(world, [(s.location, s.rotation) for s in world.start_poses])
+    try:
+        facing, away = cam.picture(1), cam.picture(2)
+        assert cam.sees_victim(1) and not cam.sees_victim(2)
+    finally:
+        cam.close()
+    assert finds_skin(facing), (victim, victim_colours(victim)["skin"], int(skin_blobs(facing).sum()))
+    assert not finds_skin(away), int(skin_blobs(away).sum())
+    # the skin found is where the victim is: in the middle third of the picture, below the horizon
+    rows, cols = np.nonzero(skin_blobs(facing))
+    assert HEIGHT / 2 < np.median(rows) and WIDTH / 3 < np.median(cols) < 2 * WIDTH / 3
+
+
+def test_the_victims_show_every_skin_tone():
+    from usarsim.sim.victims import SKIN_TONES, victim_colours
+
+    assert {victim_colours(n)["skin"] for n in ("Anna", "Ben", "Dora", "Lea")} == set(SKIN_TONES)
+    for tone in SKIN_TONES:
+        assert finds_skin(np.full((10, 10, 3), np.array(tone) * 255, dtype=np.uint8).repeat(3, 0).repeat(3, 1))
+
+
+def test_lane_markings_are_found_down_the_road():
+    """A robot on its lane looks down the avenue: the white and yellow lines are bright,
+    saturated (yellow) or near white, on dark asphalt, and run towards the horizon."""
+    from usarsim.config.catalog import resolve_world
+
+    world = resolve_world("DM-Road_UrbanChallenge")
+    pose = world.start_pose("PlayerStart1")
+    cam = Camera(world, [(pose.location, pose.rotation)])
+    try:
+        rgb = cam.picture(1)
+    finally:
+        cam.close()
+    p = rgb.astype(float)
+    road = p[HEIGHT // 2 + 8:]  # the ground ahead, below the horizon
+    brightness = road.mean(axis=2)
+    asphalt = np.median(brightness)
+    white = (brightness > asphalt + 60) & (road.max(axis=2) - road.min(axis=2) < 40)
+    yellow = (road[..., 0] > asphalt + 40) & (road[..., 2] < road[..., 0] - 60)
+    assert asphalt < 110  # dark asphalt
+    # the markings are lines: long runs of marking pixels, the yellow centre line on the left
+    # of a robot on its lane, the white edge line on its right
+    ys, xs = np.nonzero(yellow)
+    ws, wx = np.nonzero(white)
+    assert len(xs) > 60 and len(wx) > 60, (len(xs), len(wx))
+    assert np.median(xs) < WIDTH / 2 < np.median(wx), (np.median(xs), np.median(wx))
+    assert np.ptp(xs) > WIDTH / 6 and np.ptp(wx) > WIDTH / 6  # lines running into the distance
+
+
+def test_the_texture_names_of_world_files_are_the_textures_drawn():
+    from usarsim.config.world import TEXTURE_NAMES
+    from usarsim.sim.textures import TEXTURES, texture_image
+
+    assert set(TEXTURE_NAMES) == set(TEXTURES)
+    a = texture_image("brick", (0.62, 0.27, 0.2))
+    b = texture_image("brick", (0.62, 0.27, 0.2))
+    assert a is b and a.dtype == np.uint8 and a.ndim == 3
+    # a texture's average colour is its material's colour
+    assert np.allclose(a.reshape(-1, 3).mean(axis=0) / 255.0, (0.62, 0.27, 0.2), atol=0.08)
