@@ -279,6 +279,9 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--timeout", type=float, default=10.0, metavar="S",
                     help="how long to wait for a recorded server line before calling it missing "
                          "(default: %(default)s)")
+    from usarsim.sweep.cli import add_parsers as add_sweep_parsers
+
+    add_sweep_parsers(sub)  # 'usarsim sweep' and 'usarsim report' (docs/experiments.md)
     for command in (s, v, w, r, b, rp):  # -v and -vv after the command too: 'usarsim serve -v'
         _add_verbose(command, "verbose_after")
     return p
@@ -600,6 +603,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
+    if hasattr(args, "handler"):  # sweep, report
+        return args.handler(args)
     handler = {"serve": cmd_serve, "validate": cmd_validate, "worlds": cmd_worlds, "robots": cmd_robots,
                "bench": cmd_bench, "replay": cmd_replay}[args.command]
     return handler(args)

@@ -1,0 +1,552 @@
+"""The experiment file: what to run, read strictly into the list of runs of a sweep.
+
+An experiment file is YAML.  Its top-level keys give the value every run has unless a
+``grid`` or a ``runs`` entry says otherwise::
+
+    name: yellow-vs-red
+    world: DM-USAR_yellow
+    seeds: [1, 2, 3]
+    team: P2AT
+    duration: 60
+    clock: lockstep
+    controller: usarsim.brains.frontier:FrontierExplorer
+    grid:
+      world: [DM-USAR_yellow, DM-USAR_red]
+
+The configurations are every combination of the ``grid``'s lists, then each entry of
+``runs``; each configuration runs once per seed.  docs/experiments.md lists every key.
+
+Errors name the file, the key and what is allowed, with "did you mean" for a misspelt key,
+world, robot class, start pose, brain or brain parameter (:class:`usarsim.errors.ConfigError`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import inspect
+import itertools
+import json
+import math
+import re
+import shlex
+import shutil
+import string
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+from usarsim.config.reader import Section, did_you_mean, load_yaml
+from usarsim.errors import ConfigError
+
+# The run parameters a grid or a runs entry may vary, and what each key is called in a row.
+AXES = ("world", "team", "wireless", "duration", "clock", "controller")
+CLOCKS = ("lockstep", "max")
+# "world": the world's own radio model (its ``wireless:`` section, else WAF); "off": no
+# wireless servers (ComServer, WSS); a model name: that model (serve --wireless-model).
+WIRELESS = ("world", "off", "waf", "waf2009", "distance", "perfect")
+DEFAULTS = {"world": "DM-USAR_yellow", "team": "P2AT", "wireless": "world", "duration": 60.0,
+            "clock": "lockstep", "controller": "usarsim.brains.wander:Wander"}
+DEFAULT_TIMEOUT_S = 600.0
+DEFAULT_PERIOD_S = 0.1
+# What a controller command may name between braces; each is also an environment variable
+# USARSIM_<NAME> of the command.
+PLACEHOLDERS = ("host", "port", "truth_port", "wcs_port", "seconds", "seed", "world", "lockstep", "robot",
+                "name", "start", "team")
+# The parameters a brain is given by the sweep itself, never in ``params``.
+SWEEP_GIVES = ("robot", "origin")
+_BRAIN_TARGET = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+
+
+@dataclass(frozen=True)
+class Member:
+    """One robot of a run's team: its class, its name (R1, R2...) and where it starts: a
+    start pose by name, or a location (metres, USARSim frame) and a yaw (radians)."""
+
+    robot: str
+    name: str
+    start: str | None = None
+    location: tuple[float, float, float] | None = None
+    yaw: float = 0.0
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"robot": self.robot, "name": self.name, "start": self.start,
+                "location": None if self.location is None else list(self.location), "yaw": self.yaw}
+
+
+@dataclass(frozen=True)
+class Controller:
+    """What drives a run's robots: a Python brain (``kind`` "brain", ``target``
+    ``module:callable``, called once per robot with ``params``, stepped every ``period``
+    simulated seconds) or an external command (``kind`` "command", ``target`` the command
+    line with placeholders)."""
+
+    kind: str
+    target: str
+    params: str = "{}"  # JSON text (sorted keys): hashable, and the same in every row
+    period: float = DEFAULT_PERIOD_S
+    label: str = ""
+
+    @property
+    def param_dict(self) -> dict[str, Any]:
+        return json.loads(self.params)
+
+    def identity(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"kind": self.kind, "target": self.target}
+        if self.kind == "brain":
+            out.update(params=self.param_dict, period=self.period)
+        return out
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a sweep: everything that decides its outcome, and how it is labelled."""
+
+    experiment: str
+    world: str  # a shipped world's name, or the absolute path of a world file
+    seed: int
+    team: tuple[Member, ...]
+    team_label: str
+    wireless: str
+    duration_s: float
+    clock: str
+    controller: Controller
+    timeout_s: float = DEFAULT_TIMEOUT_S
+    robot_dirs: tuple[str, ...] = ()
+    cwd: str = "."  # the experiment file's folder: where a controller command runs
+
+    def identity(self) -> dict[str, Any]:
+        """What makes two runs the same run (the label, timeout and folder do not)."""
+        return {"world": self.world, "seed": self.seed, "team": [m.as_dict() for m in self.team],
+                "wireless": self.wireless, "duration_s": self.duration_s, "clock": self.clock,
+                "controller": self.controller.identity(), "robot_dirs": list(self.robot_dirs)}
+
+    @property
+    def run_id(self) -> str:
+        """A hash of the run's configuration: the key of its row in the results."""
+        text = json.dumps(self.identity(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def columns(self) -> dict[str, Any]:
+        """The configuration columns of the run's row."""
+        return {"run_id": self.run_id, "experiment": self.experiment, "world": self.world, "seed": self.seed,
+                "team": self.team_label, "robots_n": len(self.team), "wireless": self.wireless,
+                "duration_s": self.duration_s, "clock": self.clock, "controller": self.controller.label,
+                "config": json.dumps(self.identity(), sort_keys=True)}
+
+
+@dataclass(frozen=True)
+class Experiment:
+    name: str
+    path: str
+    description: str
+    runs: tuple[Run, ...]
+    axes: tuple[str, ...] = field(default=())  # the row columns the configurations differ in
+
+
+# ---------------------------------------------------------------- reading the file
+
+
+def load_experiment(path: str | Path) -> Experiment:
+    """Read and check an experiment file; every run it describes, in order."""
+    p = Path(path)
+    data = load_yaml(p)
+    return Reader(p).read(data)
+
+
+@dataclass
+class _MemberSpec:
+    robot: str
+    count: int
+    starts: tuple[str | None, ...]  # one per robot (None: the next free start pose)
+    location: tuple[float, float, float] | None
+    yaw: float
+    key: str
+
+
+class Reader:
+    """Reads one experiment file: the base values, the grid, the runs."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.file = str(path)
+        self.folder = path.resolve().parent
+        self.robot_dirs: tuple[str, ...] = ()
+
+    def error(self, key: str, message: str) -> ConfigError:
+        return ConfigError(message, path=self.file, key=key)
+
+    def read(self, data: dict) -> Experiment:
+        top = Section(data, path=self.file)
+        name = top.str("name", self.path.stem)
+        if not re.match(r"^[\w.\-]+$", name):
+            raise top.error("name", f"use letters, digits, '.', '-' and '_' only (it names the results' "
+                                    f"folder), got {name!r}")
+        description = top.raw("description", "")
+        if not isinstance(description, str):
+            raise top.error("description", f"expected a text, got {description!r}")
+        self.robot_dirs = tuple(self._robot_dirs(top.list("robot_dirs", [])))
+        timeout = top.float("timeout", DEFAULT_TIMEOUT_S, min=0.0, min_exclusive=True)
+        seeds = self.seeds(top.raw("seeds", [0]), "seeds")
+        base = {axis: self.value(axis, top.raw(axis, DEFAULTS[axis]), axis) for axis in AXES}
+        grid_raw = top.raw("grid", None)
+        runs_raw = top.raw("runs", None)
+        top.finish()
+
+        configs: list[tuple[dict[str, Any], tuple[int, ...], str]] = []  # (values, seeds, key for errors)
+        if grid_raw is not None:
+            if not isinstance(grid_raw, dict) or not grid_raw:
+                raise self.error("grid", "expected a mapping of run parameters to lists of values "
+                                         f"({', '.join(AXES)}), got {grid_raw!r}")
+            lists: list[tuple[str, list[Any]]] = []
+            for k, values in grid_raw.items():
+                key = f"grid.{k}"
+                if k == "seeds":
+                    raise self.error(key, "seeds are not a grid axis: every configuration runs with every seed "
+                                          "of the top-level 'seeds' (or of its 'runs' entry)")
+                if k not in AXES:
+                    raise self.error(key, f"unknown run parameter '{k}'{did_you_mean(str(k), AXES)}")
+                if not isinstance(values, list) or not values:
+                    raise self.error(key, f"expected a non-empty list of values, got {values!r}")
+                lists.append((k, [self.value(k, v, f"{key}[{i}]") for i, v in enumerate(values)]))
+            for combo in itertools.product(*(vals for _, vals in lists)):
+                values = dict(base)
+                values.update({k: v for (k, _), v in zip(lists, combo)})
+                configs.append((values, seeds, "grid"))
+        if runs_raw is not None:
+            if not isinstance(runs_raw, list) or not runs_raw:
+                raise self.error("runs", f"expected a non-empty list of runs (mappings of run parameters), "
+                                         f"got {runs_raw!r}")
+            for i, entry in enumerate(runs_raw):
+                key = f"runs[{i}]"
+                s = Section(entry, path=self.file, key=key)
+                values = dict(base)
+                for axis in AXES:
+                    if s.has(axis):
+                        values[axis] = self.value(axis, s.raw(axis), f"{key}.{axis}")
+                    else:
+                        s.raw(axis, None)  # known key: read, so that a misspelling of it is named
+                run_seeds = self.seeds(s.raw("seeds"), f"{key}.seeds") if s.has("seeds") else seeds
+                s.raw("seeds", None)
+                s.finish()
+                configs.append((values, run_seeds, key))
+        if not configs:
+            configs.append((base, seeds, ""))
+
+        runs: list[Run] = []
+        seen: set[str] = set()
+        for values, run_seeds, key in configs:
+            team = self.place_team(values["team"], values["world"], key)
+            for seed in run_seeds:
+                run = Run(experiment=name, world=values["world"][0], seed=seed, team=team,
+                          team_label=team_label(values["team"]), wireless=values["wireless"],
+                          duration_s=values["duration"], clock=values["clock"], controller=values["controller"],
+                          timeout_s=timeout, robot_dirs=self.robot_dirs, cwd=str(self.folder))
+                if run.run_id not in seen:  # a configuration given twice runs once
+                    seen.add(run.run_id)
+                    runs.append(run)
+        return Experiment(name=name, path=self.file, description=description, runs=tuple(runs),
+                          axes=varying_axes([r.columns() for r in runs]))
+
+    # -- one value of each run parameter
+
+    def value(self, axis: str, v: Any, key: str) -> Any:
+        return {"world": self.world, "team": self.team, "wireless": self.wireless, "duration": self.duration,
+                "clock": self.clock, "controller": self.controller}[axis](v, key)
+
+    def world(self, v: Any, key: str) -> tuple[str, Any]:
+        """(the world as a run names it, its WorldConfig)."""
+        from usarsim.config.catalog import resolve_world, world_files
+
+        if not isinstance(v, str) or not v.strip():
+            raise self.error(key, f"expected a world name or the path of a world file, got {v!r}")
+        looks_like_path = v.endswith((".yaml", ".yml")) or "/" in v or "\\" in v
+        if looks_like_path:
+            p = Path(v) if Path(v).is_absolute() else self.folder / v
+            if not p.exists():
+                raise self.error(key, f"no such world file {str(p)!r}; or give a shipped world: "
+                                      f"{', '.join(world_files())}")
+            try:
+                cfg = _world_at(str(p.resolve()))
+            except ConfigError as exc:
+                raise self.error(key, f"the world file does not load: {exc}") from exc
+            return str(p.resolve()), cfg
+        try:
+            cfg = resolve_world(v)
+        except ConfigError as exc:
+            raise self.error(key, exc.message) from None
+        return cfg.name, cfg
+
+    def team(self, v: Any, key: str) -> tuple[_MemberSpec, ...]:
+        entries = [v] if isinstance(v, (str, dict)) else v
+        if not isinstance(entries, list) or not entries:
+            raise self.error(key, f"expected a robot class (P2AT) or a list of team members "
+                                  f"({{robot: P2AT, count: 2, start: PlayerStart1}}), got {v!r}")
+        out = []
+        for i, entry in enumerate(entries):
+            k = key if isinstance(v, (str, dict)) else f"{key}[{i}]"
+            if isinstance(entry, str):
+                out.append(_MemberSpec(self.robot_class(entry, k), 1, (None,), None, 0.0, k))
+                continue
+            s = Section(entry, path=self.file, key=k)
+            robot = self.robot_class(s.str("robot"), f"{k}.robot")
+            count = s.int("count", 1, min=1)
+            start = s.raw("start", "auto")
+            location = s.vec("location", 3, None) if s.has("location") else None
+            yaw = s.float("yaw", 0.0)
+            s.finish()
+            if location is not None:
+                if s.has("start"):
+                    raise self.error(f"{k}.start", "give either a start pose or a location, not both")
+                if count != 1:
+                    raise self.error(f"{k}.count", "robots placed at a location come one to an entry: "
+                                                   f"give one entry per robot, got count {count}")
+                out.append(_MemberSpec(robot, 1, (None,), location, yaw, k))
+                continue
+            starts = [start] if isinstance(start, str) else start
+            if not isinstance(starts, list) or not all(isinstance(x, str) and x.strip() for x in starts):
+                raise self.error(f"{k}.start", f"expected a start pose name, a list of them (one per robot) or "
+                                               f"'auto', got {start!r}")
+            if starts == ["auto"]:
+                starts = ["auto"] * count
+            if len(starts) != count:
+                raise self.error(f"{k}.start", f"{len(starts)} start poses for {count} robots: give one per robot, "
+                                               f"or 'auto'")
+            out.append(_MemberSpec(robot, count, tuple(None if x == "auto" else x for x in starts), None, yaw, k))
+        return tuple(out)
+
+    def robot_class(self, name: Any, key: str) -> str:
+        from usarsim.config.catalog import resolve_robot
+
+        if not isinstance(name, str) or not name.strip():
+            raise self.error(key, f"expected a robot class name (see 'usarsim robots'), got {name!r}")
+        try:
+            return resolve_robot(name, extra_dirs=self.robot_dirs).class_name
+        except ConfigError as exc:
+            raise self.error(key, exc.message if exc.path is None else str(exc)) from None
+
+    def wireless(self, v: Any, key: str) -> str:
+        if v is False or v is None:
+            v = "off"
+        if not isinstance(v, str) or v.lower() not in WIRELESS:
+            raise self.error(key, f"'{v}' is not a wireless setting{did_you_mean(str(v), WIRELESS)}")
+        return v.lower()
+
+    def duration(self, v: Any, key: str) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise self.error(key, f"expected simulated seconds > 0, got {v!r}")
+        return float(v)
+
+    def clock(self, v: Any, key: str) -> str:
+        if not isinstance(v, str) or v.lower() not in CLOCKS:
+            raise self.error(key, f"'{v}' is not a clock: lockstep (the controller steps the world: reproducible) "
+                                  f"or max (the simulator runs as fast as it can){did_you_mean(str(v), CLOCKS)}")
+        return v.lower()
+
+    def seeds(self, v: Any, key: str) -> tuple[int, ...]:
+        if isinstance(v, int) and not isinstance(v, bool):
+            if v < 1:
+                raise self.error(key, f"a number of seeds must be >= 1, got {v}")
+            return tuple(range(v))
+        if isinstance(v, list) and v and all(isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in v):
+            if len(set(v)) != len(v):
+                raise self.error(key, f"a seed is given twice: {v}")
+            return tuple(v)
+        raise self.error(key, f"expected a list of seeds (integers >= 0) or a number of seeds N (0 ... N-1), "
+                              f"got {v!r}")
+
+    def controller(self, v: Any, key: str) -> Controller:
+        if isinstance(v, str):
+            v = {"brain": v.strip()} if _BRAIN_TARGET.match(v.strip()) else {"command": v}
+        s = Section(v, path=self.file, key=key)
+        if s.has("brain") == s.has("command"):
+            raise self.error(key, "give either 'brain: module:callable' (a Python brain) or 'command: ...' "
+                                  "(any program, with {host} and {port} placeholders)")
+        label = s.str("label", "")
+        if s.has("brain"):
+            target = s.str("brain").strip()
+            params = s.section("params", {}).data
+            period = s.float("period", DEFAULT_PERIOD_S, min=0.0, min_exclusive=True)
+            s.finish()
+            factory = self.brain(target, f"{key}.brain")
+            self.check_params(factory, target, params, f"{key}.params")
+            try:
+                text = json.dumps(params, sort_keys=True)
+            except TypeError as exc:
+                raise self.error(f"{key}.params", f"parameters must be plain values: {exc}") from None
+            if not label:
+                short = ", ".join(f"{k}={json.dumps(params[k])}" for k in sorted(params))
+                label = target.rsplit(":", 1)[1] + (f"({short})" if short else "")
+            return Controller("brain", target, text, period, label)
+        command = s.str("command")
+        s.finish()
+        self.check_command(command, f"{key}.command")
+        return Controller("command", command, "{}", DEFAULT_PERIOD_S, label or command)
+
+    def brain(self, target: str, key: str) -> Callable[..., Any]:
+        if not _BRAIN_TARGET.match(target):
+            raise self.error(key, f"a brain is 'module:callable' (usarsim.brains.frontier:FrontierExplorer), "
+                                  f"got {target!r}")
+        try:
+            return resolve_brain(target)
+        except (ImportError, AttributeError, TypeError) as exc:
+            raise self.error(key, str(exc)) from None
+
+    def check_params(self, factory: Callable[..., Any], target: str, params: dict, key: str) -> None:
+        allowed = brain_parameters(factory)
+        for name, value in params.items():
+            if name in SWEEP_GIVES:
+                raise self.error(f"{key}.{name}", f"'{name}' is given by the sweep (each robot and its start pose)")
+            if allowed is not None and name not in allowed:
+                raise self.error(f"{key}.{name}", f"{target} has no parameter '{name}'"
+                                                  f"{did_you_mean(name, allowed - set(SWEEP_GIVES))}")
+            if name == "bounds" and value != "auto":
+                ok = isinstance(value, list) and len(value) == 4 and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
+                if not ok or not (value[0] < value[2] and value[1] < value[3]):
+                    raise self.error(f"{key}.bounds", f"expected [xmin, ymin, xmax, ymax] (metres, xmin < xmax, "
+                                                      f"ymin < ymax) or 'auto' (the world's solids), got {value!r}")
+
+    def check_command(self, command: str, key: str) -> None:
+        try:
+            names = [f for _, f, _, _ in string.Formatter().parse(command) if f is not None]
+        except ValueError as exc:
+            raise self.error(key, f"{exc} (write a literal brace as {{{{ or }}}})") from None
+        for n in names:
+            if n not in PLACEHOLDERS:
+                raise self.error(key, f"unknown placeholder '{{{n}}}'{did_you_mean(n, PLACEHOLDERS)}")
+        try:
+            argv = shlex.split(command)
+        except ValueError as exc:
+            raise self.error(key, f"cannot split the command into words: {exc}") from None
+        if not argv:
+            raise self.error(key, "the command is empty")
+        program = argv[0]
+        if "{" not in program and shutil.which(program) is None and not (self.folder / program).exists():
+            raise self.error(key, f"no program '{program}' on the PATH or in {self.folder}")
+
+    def place_team(self, specs: tuple[_MemberSpec, ...], world: tuple[str, Any], key: str) -> tuple[Member, ...]:
+        """The team's robots with their names and start poses in ``world``: a start pose
+        named in the file, or the world's next start pose no other robot of the team takes."""
+        cfg = world[1]
+        poses = [p.name for p in cfg.start_poses]
+        taken: set[str] = set()
+        for spec in specs:
+            for s in spec.starts:
+                if s is None:
+                    continue
+                pose = cfg.start_pose(s)
+                if pose is None:
+                    raise self.error(f"{spec.key}.start", f"world {cfg.name} has no start pose '{s}'"
+                                                          f"{did_you_mean(s, poses)}" + (f" (in {key})" if key else ""))
+                if pose.name in taken:
+                    raise self.error(f"{spec.key}.start", f"start pose '{pose.name}' is taken twice")
+                taken.add(pose.name)
+        free = [p for p in poses if p not in taken]
+        members: list[Member] = []
+        for spec in specs:
+            for s in spec.starts:
+                n = f"R{len(members) + 1}"
+                if spec.location is not None:
+                    members.append(Member(spec.robot, n, None, spec.location, spec.yaw))
+                    continue
+                if s is None:
+                    if not free:
+                        raise self.error(spec.key, f"the team has more robots than world {cfg.name} has start poses "
+                                                   f"({len(poses)}): place the others with 'location'")
+                    start = free.pop(0)
+                else:
+                    start = cfg.start_pose(s).name
+                members.append(Member(spec.robot, n, start))
+        return tuple(members)
+
+    def _robot_dirs(self, dirs: list) -> list[str]:
+        out = []
+        for i, d in enumerate(dirs):
+            if not isinstance(d, str):
+                raise self.error(f"robot_dirs[{i}]", f"expected a folder, got {d!r}")
+            p = Path(d) if Path(d).is_absolute() else self.folder / d
+            if not p.is_dir():
+                raise self.error(f"robot_dirs[{i}]", f"no such folder {str(p)!r}")
+            out.append(str(p.resolve()))
+        return out
+
+
+@cache
+def _world_at(path: str) -> Any:
+    from usarsim.config.catalog import resolve_world
+
+    return resolve_world(path)
+
+
+def team_label(specs: tuple[_MemberSpec, ...]) -> str:
+    """``P2AT``, ``2xP2AT``, ``P2AT+P3AT``, ``P2AT@PlayerStart3``: the team as a row shows it."""
+    parts = []
+    for s in specs:
+        text = s.robot if s.count == 1 else f"{s.count}x{s.robot}"
+        named = [x for x in s.starts if x is not None]
+        if s.location is not None:
+            text += "@" + ",".join(f"{v:g}" for v in s.location)
+        elif named:
+            text += "@" + ",".join(x if x is not None else "auto" for x in s.starts)
+        parts.append(text)
+    return "+".join(parts)
+
+
+def varying_axes(rows: list[dict[str, Any]]) -> tuple[str, ...]:
+    """The configuration columns (besides the seed) that take more than one value."""
+    return tuple(c for c in CONFIG_COLUMNS if len({r.get(c) for r in rows}) > 1)
+
+
+# The columns of a row that, with the seed, make a configuration.
+CONFIG_COLUMNS = ("world", "team", "wireless", "duration_s", "clock", "controller")
+
+
+# ---------------------------------------------------------------- brains
+
+
+def resolve_brain(target: str) -> Callable[..., Any]:
+    """The callable ``module:name`` names; ImportError or AttributeError with what is there."""
+    module_name, attr = target.split(":", 1)
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        hint = ""
+        if module_name.startswith("usarsim.brains.") or "." not in module_name:
+            shipped = ["usarsim.brains." + n for n in ("frontier", "victim", "wall_follower", "wander")]
+            hint = did_you_mean(module_name, shipped)
+        raise ImportError(f"cannot import module '{module_name}' ({exc}){hint}") from None
+    obj: Any = module
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            names = [n for n in dir(obj) if not n.startswith("_") and callable(getattr(obj, n, None))
+                     and getattr(getattr(obj, n), "__module__", None) == module_name]
+            raise AttributeError(f"module '{module_name}' has no '{attr}'{did_you_mean(part, names)}")
+        obj = getattr(obj, part)
+    if not callable(obj):
+        raise TypeError(f"'{target}' is not callable: a brain is a class or function called with the robot")
+    return obj
+
+
+def brain_parameters(factory: Callable[..., Any]) -> set[str] | None:
+    """The keyword parameters a brain accepts (a class: its ``__init__`` and, while each
+    passes ``**kw`` on, its bases'); None when it takes any keyword."""
+    targets = [c.__init__ for c in factory.__mro__ if "__init__" in vars(c)] if inspect.isclass(factory) \
+        else [factory]
+    names: set[str] = set()
+    for fn in targets:
+        try:
+            sig = inspect.signature(fn)
+        except (TypeError, ValueError):
+            return None
+        params = list(sig.parameters.values())
+        names |= {p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+        if not any(p.kind is p.VAR_KEYWORD for p in params):
+            break
+    else:
+        if not inspect.isclass(factory):
+            return None
+    names -= {"self"}
+    return names

@@ -1,0 +1,307 @@
+"""The report of a sweep: per configuration (the runs that differ only in their seed), the
+mean, standard deviation and 95 % confidence interval of every score; plots of the score,
+the victims found and the area explored against the sweep's axes; and one self-contained
+HTML page with both (the plots embedded as data URIs), ``report.html`` beside the results.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from usarsim.sweep.experiment import CONFIG_COLUMNS, varying_axes
+from usarsim.sweep.results import SCORE_COLUMNS, read_rows
+
+# The scores the summary gives, with their names for people.
+METRICS = {"score": "score", "victims_found": "victims found", "victims_reported": "victims reported",
+           "false_reports": "false reports", "area_m2": "area explored (m²)", "distance_m": "distance (m)",
+           "collisions": "collisions", "robots_lost": "robots lost", "radio_contact_share": "radio contact share"}
+PLOTTED = ("score", "victims_found", "area_m2")
+AXIS_NAMES = {"world": "world", "team": "team", "wireless": "wireless model", "duration_s": "duration (s)",
+              "clock": "clock", "controller": "controller"}
+
+# Student's t, two-sided 95 % (the 0.975 quantile), by degrees of freedom; beyond 30 it is
+# interpolated in 1/df towards the normal's 1.960.
+_T975 = (12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145,
+         2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045,
+         2.042)
+_T975_FAR = ((30, 2.042), (40, 2.021), (60, 2.000), (120, 1.980), (math.inf, 1.960))
+
+
+def t975(df: int) -> float:
+    """The 0.975 quantile of Student's t with ``df`` degrees of freedom (df >= 1)."""
+    if df < 1:
+        raise ValueError(f"degrees of freedom must be >= 1, got {df}")
+    if df <= len(_T975):
+        return _T975[df - 1]
+    for (d0, t0), (d1, t1) in zip(_T975_FAR, _T975_FAR[1:]):
+        if df <= d1:
+            a, b = 1.0 / d0, (0.0 if math.isinf(d1) else 1.0 / d1)
+            return t0 + (t1 - t0) * (a - 1.0 / df) / (a - b)
+    return 1.960
+
+
+@dataclass
+class Stat:
+    """Mean, sample standard deviation and the 95 % confidence interval of the mean (None
+    where there are too few values: the deviation and interval need two)."""
+
+    n: int
+    mean: float | None
+    sd: float | None
+    ci_low: float | None
+    ci_high: float | None
+
+    @classmethod
+    def of(cls, values: list[float]) -> Stat:
+        n = len(values)
+        if n == 0:
+            return cls(0, None, None, None, None)
+        mean = sum(values) / n
+        if n == 1:
+            return cls(1, mean, None, None, None)
+        sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1))
+        half = t975(n - 1) * sd / math.sqrt(n)
+        return cls(n, mean, sd, mean - half, mean + half)
+
+
+@dataclass
+class Group:
+    """The runs of one configuration."""
+
+    config: dict[str, Any]
+    seeds: list[int] = field(default_factory=list)
+    failed: int = 0
+    values: dict[str, list[float]] = field(default_factory=dict)
+
+    def stat(self, metric: str) -> Stat:
+        return Stat.of(self.values.get(metric, []))
+
+
+def summarize(rows: list[dict[str, Any]]) -> list[Group]:
+    """The configurations of ``rows`` in the order they first appear, each with the scores
+    of its successful runs (a failed run is counted, never averaged)."""
+    groups: dict[tuple, Group] = {}
+    for r in rows:
+        key = tuple(r.get(c) for c in CONFIG_COLUMNS)
+        g = groups.setdefault(key, Group({c: r.get(c) for c in CONFIG_COLUMNS}))
+        if r.get("error"):
+            g.failed += 1
+            continue
+        g.seeds.append(r.get("seed"))
+        for m in METRICS:
+            v = r.get(m)
+            if v is not None and not (isinstance(v, float) and math.isnan(v)):
+                g.values.setdefault(m, []).append(float(v))
+    return list(groups.values())
+
+
+def short(value: Any, limit: int = 32) -> str:
+    """A configuration value as a label: a world file by its name, long texts cut."""
+    text = f"{value:g}" if isinstance(value, float) else str(value)
+    if "/" in text and text.endswith((".yaml", ".yml")):
+        text = Path(text).stem
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def fmt(v: float | None, digits: int = 1) -> str:
+    if v is None:
+        return "–"
+    return f"{v:.{digits}f}" if abs(v) < 1e6 else f"{v:.3g}"
+
+
+def _digits(metric: str) -> int:
+    return 3 if metric == "radio_contact_share" else 2 if metric in ("collisions", "robots_lost", "victims_found",
+                                                                       "victims_reported", "false_reports") else 1
+
+
+# ---------------------------------------------------------------- plots
+
+
+def plot(rows: list[dict[str, Any]], metric: str, axis: str | None, axes: tuple[str, ...]) -> bytes:
+    """A PNG: the mean of ``metric`` with its 95 % interval against the values of ``axis``
+    (None: every configuration in one group), one series per combination of the other
+    axes, each run a faint dot."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = [r for r in rows if not r.get("error") and r.get(metric) is not None]
+    others = [a for a in axes if a != axis]
+    xs = _ordered([r.get(axis) for r in ok] if axis else ["all runs"])
+    series = _ordered([tuple(r.get(a) for a in others) for r in ok]) or [()]
+    fig, ax = plt.subplots(figsize=(6.0, 3.8), dpi=100)
+    width = 0.7 / max(1, len(series))
+    for si, combo in enumerate(series):
+        offset = (si - (len(series) - 1) / 2) * width
+        label = ", ".join(short(v, 24) for v in combo) if combo else None
+        mx, my, lo, hi = [], [], [], []
+        for xi, x in enumerate(xs):
+            vals = [float(r[metric]) for r in ok if (axis is None or r.get(axis) == x)
+                    and tuple(r.get(a) for a in others) == combo]
+            if not vals:
+                continue
+            s = Stat.of(vals)
+            mx.append(xi + offset)
+            my.append(s.mean)
+            lo.append(s.mean - (s.ci_low if s.ci_low is not None else s.mean))
+            hi.append((s.ci_high if s.ci_high is not None else s.mean) - s.mean)
+            ax.scatter([xi + offset] * len(vals), vals, s=12, alpha=0.35, color=f"C{si % 10}", zorder=2)
+        ax.errorbar(mx, my, yerr=[lo, hi], fmt="o", capsize=4, color=f"C{si % 10}", label=label, zorder=3)
+    ax.set_xticks(range(len(xs)))
+    ax.set_xticklabels([short(x, 28) for x in xs], rotation=15 if len(xs) > 3 else 0, ha="right" if len(xs) > 3
+                       else "center")
+    ax.set_xlim(-0.6, len(xs) - 0.4)
+    ax.set_xlabel(AXIS_NAMES.get(axis, axis) if axis else "")
+    ax.set_ylabel(METRICS[metric])
+    ax.set_title(f"{METRICS[metric]}" + (f" by {AXIS_NAMES.get(axis, axis)}" if axis else "")
+                 + " (mean, 95 % CI; dots: runs)", fontsize=10)
+    ax.grid(axis="y", alpha=0.3)
+    if len(series) > 1:
+        ax.legend(title=", ".join(AXIS_NAMES.get(a, a) for a in others), fontsize=8, title_fontsize=8)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _ordered(values: list) -> list:
+    """The distinct values in the order they first appear (numbers sorted)."""
+    distinct = list(dict.fromkeys(values))
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in distinct):
+        return sorted(distinct)
+    return distinct
+
+
+# ---------------------------------------------------------------- the report
+
+
+@dataclass
+class Report:
+    folder: Path
+    html_path: Path
+    summary_csv: Path
+    plots: list[Path]
+    groups: list[Group]
+    axes: tuple[str, ...]
+    rows: list[dict[str, Any]]
+
+
+def build_report(folder: str | Path) -> Report:
+    """Write ``summary.csv``, the plots (``plot-<score>-by-<axis>.png``) and ``report.html``
+    into the results folder ``folder``."""
+    folder = Path(folder)
+    rows = read_rows(folder)
+    groups = summarize(rows)
+    axes = varying_axes(rows)
+    summary_csv = folder / "summary.csv"
+    _write_summary_csv(groups, summary_csv)
+    plots: list[tuple[Path, str, bytes]] = []
+    for metric in PLOTTED:
+        for axis in axes or (None,):
+            png = plot(rows, metric, axis, axes)
+            name = f"plot-{metric}" + (f"-by-{axis}" if axis else "") + ".png"
+            caption = METRICS[metric] + (f" by {AXIS_NAMES.get(axis, axis)}" if axis else "")
+            (folder / name).write_bytes(png)
+            plots.append((folder / name, caption, png))
+    html_path = folder / "report.html"
+    html_path.write_text(_html(folder, rows, groups, axes, plots), encoding="utf-8")
+    return Report(folder, html_path, summary_csv, [p for p, _, _ in plots], groups, axes, rows)
+
+
+def _write_summary_csv(groups: list[Group], path: Path) -> None:
+    import csv
+
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        header = [*CONFIG_COLUMNS, "runs", "failed", "seeds"]
+        for m in SCORE_COLUMNS:
+            header += [f"{m}_mean", f"{m}_sd", f"{m}_ci95_low", f"{m}_ci95_high"]
+        w.writerow(header)
+        for g in groups:
+            line = [g.config[c] for c in CONFIG_COLUMNS] + [len(g.seeds), g.failed, " ".join(map(str, sorted(g.seeds)))]
+            for m in SCORE_COLUMNS:
+                s = g.stat(m)
+                line += ["" if v is None else round(v, 6) for v in (s.mean, s.sd, s.ci_low, s.ci_high)]
+            w.writerow(line)
+
+
+_CSS = """
+body { font: 14px/1.45 system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2em auto; max-width: 1320px;
+       padding: 0 1em; color: #1d2330; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { font-size: 1.2em; margin-top: 1.6em; }
+.meta { color: #5a6375; }
+table { border-collapse: collapse; margin: 0.5em 0; font-variant-numeric: tabular-nums; }
+th, td { border: 1px solid #d5dae3; padding: 0.3em 0.6em; text-align: left; vertical-align: top; }
+th { background: #eef1f6; } td.num { text-align: right; white-space: nowrap; }
+td.cfg { white-space: nowrap; } td .ci { color: #6b7385; font-size: 0.85em; }
+.plots { display: flex; flex-wrap: wrap; gap: 1em; }
+figure { margin: 0; border: 1px solid #d5dae3; padding: 0.5em; background: #fff; }
+figure img { display: block; max-width: 100%; height: auto; }
+figcaption { color: #5a6375; font-size: 0.9em; margin-top: 0.3em; }
+td.err { font-family: ui-monospace, monospace; font-size: 0.85em; white-space: pre-wrap; max-width: 60em; }
+"""
+
+
+def _html(folder: Path, rows: list[dict[str, Any]], groups: list[Group], axes: tuple[str, ...],
+          plots: list[tuple[Path, str, bytes]]) -> str:
+    e = html.escape
+    names = sorted({str(r.get("experiment")) for r in rows}) or [folder.name]
+    failed = [r for r in rows if r.get("error")]
+    seeds = sorted({r.get("seed") for r in rows if r.get("seed") is not None})
+    shown = [c for c in CONFIG_COLUMNS if c in axes] or list(CONFIG_COLUMNS)
+    fixed = [c for c in CONFIG_COLUMNS if c not in shown]
+    out = ["<!doctype html>", '<html lang="en"><head><meta charset="utf-8">',
+           '<meta name="viewport" content="width=device-width, initial-scale=1">',
+           '<link rel="icon" href="data:,">',
+           f"<title>usarsim sweep report: {e(', '.join(names))}</title>", f"<style>{_CSS}</style></head><body>",
+           f"<h1>Sweep report: {e(', '.join(names))}</h1>",
+           f'<p class="meta">{len(rows)} runs ({len(failed)} failed) in {len(groups)} configurations; seeds '
+           f"{e(', '.join(map(str, seeds)))}; written {datetime.now(UTC).strftime('%Y-%m-%d %H:%M UTC')} "
+           f"from {e(str(folder.resolve() / 'results.parquet'))}</p>"]
+    if fixed and rows:
+        first = rows[0]
+        out.append('<p class="meta">Every run: ' + "; ".join(
+            f"{e(AXIS_NAMES[c])}: {e(short(first.get(c), 80))}" for c in fixed) + "</p>")
+    out.append("<h2>Summary</h2>")
+    out.append('<p class="meta">Per configuration, over its seeds: mean ± standard deviation, and under it the '
+               "95 % confidence interval of the mean (Student's t). Failed runs are counted, not averaged.</p>")
+    out.append("<table id=\"summary\"><thead><tr>")
+    out += [f"<th>{e(AXIS_NAMES[c])}</th>" for c in shown]
+    out += ["<th>runs</th>", "<th>failed</th>"] + [f"<th>{e(METRICS[m])}</th>" for m in SCORE_COLUMNS]
+    out.append("</tr></thead><tbody>")
+    for g in groups:
+        out.append("<tr>" + "".join(f'<td class="cfg">{e(short(g.config[c], 60))}</td>' for c in shown))
+        out.append(f'<td class="num">{len(g.seeds)}</td><td class="num">{g.failed}</td>')
+        for m in SCORE_COLUMNS:
+            s, d = g.stat(m), _digits(m)
+            sd = f" ± {fmt(s.sd, d)}" if s.sd is not None else ""
+            ci = f'<br><span class="ci">[{fmt(s.ci_low, d)}, {fmt(s.ci_high, d)}]</span>' if s.ci_low is not None \
+                else ""
+            out.append(f'<td class="num">{fmt(s.mean, d)}{sd}{ci}</td>')
+        out.append("</tr>")
+    out.append("</tbody></table>")
+    out.append("<h2>Plots</h2><div class=\"plots\">")
+    for path, caption, png in plots:
+        data = base64.b64encode(png).decode("ascii")
+        out.append(f'<figure><img src="data:image/png;base64,{data}" alt="{e(caption)}">'
+                   f"<figcaption>{e(caption)} ({e(path.name)})</figcaption></figure>")
+    out.append("</div>")
+    if failed:
+        out.append("<h2>Failed runs</h2><table id=\"failed\"><thead><tr><th>run</th><th>world</th><th>seed</th>"
+                   "<th>controller</th><th>error</th></tr></thead><tbody>")
+        for r in failed:
+            out.append(f"<tr><td>{e(str(r.get('run_id')))}</td><td>{e(short(r.get('world')))}</td>"
+                       f"<td>{e(str(r.get('seed')))}</td><td>{e(short(r.get('controller'), 60))}</td>"
+                       f'<td class="err">{e(str(r.get("error")))}</td></tr>')
+        out.append("</tbody></table>")
+    out.append("</body></html>")
+    return "\n".join(out)
