@@ -277,3 +277,15 @@ def test_the_summary_gives_mean_deviation_and_a_t_interval_per_configuration(tmp
 def test_report_without_results_says_so(tmp_path, capsys):
     assert main(["report", str(tmp_path)]) == 1
     assert "no results.parquet here" in capsys.readouterr().err
+
+
+def test_a_two_by_two_sweep_of_a_simulated_minute_with_the_explorer(local_ray, tmp_path):
+    """The issue's CI sweep: 2 worlds x 2 seeds of 60 simulated seconds, the shipped frontier
+    explorer, lock-step; every run scored, the explorer sweeping more floor in a minute than in
+    half of one."""
+    exp = load_experiment(write(tmp_path, TWO_BY_TWO.replace("duration: 30", "duration: 60")))
+    result = run_sweep(exp, tmp_path / "minute", workers=2, progress=False)
+    assert len(result.rows) == 4 and result.failed == 0
+    for r in result.rows:
+        assert r["error"] is None and 60.0 <= r["time_s"] <= 60.5
+        assert r["area_m2"] > 30.0 and r["distance_m"] > 2.0
