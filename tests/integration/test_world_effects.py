@@ -350,7 +350,11 @@ def test_world_lights_are_in_the_compiled_model(world):
 
 
 def test_a_world_without_lights_keeps_the_default_lighting(yellow_world):
-    m = builder.world_spec(yellow_world).compile()
+    import dataclasses
+
+    # the arena without its lamps and ambient light (DM-USAR_yellow has its own)
+    bare = dataclasses.replace(yellow_world, lights=(), ambient_light=None)
+    m = builder.world_spec(bare).compile()
     assert m.nlight == 1 and m.light(0).name == "sun"
     assert m.light_type[0] == mujoco.mjtLightType.mjLIGHT_SPOT
     np.testing.assert_allclose(m.light_dir[0], [0.0, 0.0, -1.0])
