@@ -454,5 +454,68 @@ def logging_quiet() -> None:
     logging.getLogger("usarsim").setLevel(logging.WARNING)
 
 
+ROUND_TRIP_STEP_S = 0.004  # one physics step of the shipped worlds (their timestep_s)
+
+
+def _round_trip_client(port: int, robot: bool, count: int) -> None:
+    """Child process: optionally spawn a P2AT, then ``count`` STEP/STEPPED round trips, one at
+    a time, as a lock-step controller does; prints the round trips a second."""
+    import socket
+
+    s = socket.create_connection(("127.0.0.1", port))
+    s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    f = s.makefile("rb")
+    f.readline()  # NFO
+    if robot:
+        s.sendall(b"INIT {ClassName USARBot.P2AT} {Name R1}\r\nPING {Id spawned}\r\n")
+        while not f.readline().startswith(b"PONG"):
+            pass
+    line = b"STEP {Time %g}\r\n" % ROUND_TRIP_STEP_S
+    for _ in range(min(200, count // 10)):  # warm up
+        s.sendall(line)
+        while not f.readline().startswith(b"STEPPED"):
+            pass
+    t0 = time.perf_counter()
+    for _ in range(count):
+        s.sendall(line)
+        while not f.readline().startswith(b"STEPPED"):
+            pass
+    print(json.dumps({"round_trips_per_s": count / (time.perf_counter() - t0)}), flush=True)
+
+
+def run_round_trip_bench(args) -> int:
+    """``bench --round-trips``: lock-step STEP/STEPPED round trips per second of a client in
+    another process over loopback, with no robot and with one P2AT (4 ms steps)."""
+    from usarsim.config.catalog import resolve_world
+    from usarsim.server.app import Application
+
+    logging_quiet()
+    world = resolve_world(args.world)
+    count = max(100, int(args.count))
+    result = {"world": world.name, "step_s": ROUND_TRIP_STEP_S, "count": count, "cpu_count": os.cpu_count()}
+    for robot in (False, True):
+        app = Application(world, host="127.0.0.1", port=0, seed=0, lockstep=True, truth_port=None, image_port=None,
+                          web_port=None)
+        served = _ServedApp(app)
+        try:
+            out = subprocess.run([sys.executable, "-m", "usarsim.bench", "--round-trip-client", str(app.control.port),
+                                  "1" if robot else "0", str(count)], capture_output=True, text=True, timeout=600)
+        finally:
+            served.stop()
+        if out.returncode != 0:
+            print(f"usarsim bench: the client failed: {out.stderr.strip()[-500:]}", file=sys.stderr)
+            return 1
+        rate = json.loads(out.stdout.strip().splitlines()[-1])["round_trips_per_s"]
+        result["one_p2at" if robot else "no_robot"] = round(rate, 1)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"lock-step STEP/STEPPED round trips of {ROUND_TRIP_STEP_S * 1000:g} ms, one client in another "
+              f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT")
+    return 0
+
+
 if __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "--client":
     asyncio.run(_client_main(int(sys.argv[2]), json.loads(sys.argv[3]), float(sys.argv[4])))
+elif __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "--round-trip-client":
+    _round_trip_client(int(sys.argv[2]), sys.argv[3] == "1", int(sys.argv[4]))

@@ -251,6 +251,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
                    help="with --cameras: picture sizes (default: 320x240 640x480)")
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
+    b.add_argument("--round-trips", action="store_true",
+                   help="measure lock-step STEP/STEPPED round trips a second (4 ms steps) of a client in another "
+                        "process, with no robot and with one P2AT")
+    b.add_argument("--count", type=int, default=5000,
+                   help="with --round-trips: round trips timed (default: %(default)s)")
     b.add_argument("--profile", action="store_true",
                    help="profile the simulation thread and the server's event loop during the run and print "
                         "where the time goes (physics, each sensor type, ray casting, report scheduling, "
@@ -563,6 +568,10 @@ def cmd_bench(args) -> int:
 
     if args.env:
         return run_env_bench(args)
+    if args.round_trips:
+        from usarsim.bench import run_round_trip_bench
+
+        return run_round_trip_bench(args)
     return run_camera_bench(args) if args.cameras else run_bench(args)
 
 

@@ -386,6 +386,16 @@ def test_bench_reports_real_time_factors_as_json():
     assert 50 < result["peak_rss_mb"] < 4000 and 0 <= result["rss_per_robot_mb"] < 200
 
 
+def test_bench_round_trips_counts_lock_step_steps_a_second():
+    import json
+
+    out = usarsim("bench", "--round-trips", "--count", "200", "--json", timeout=180)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["step_s"] == 0.004 and r["count"] == 200
+    assert r["no_robot"] > 100 and r["one_p2at"] > 100  # hundreds a second at the very least, anywhere
+
+
 def test_bench_profile_says_where_the_time_goes():
     import json
 
