@@ -544,3 +544,13 @@ def test_robot_only_a_biped_sways(tmp_path):
     f.write_text(text)
     with pytest.raises(ConfigError, match=r"gait\.sway_m: only a biped sways"):
         load_robot(f)
+
+
+def test_a_robot_files_colour_is_its_body_colour_in_pictures(tmp_path):
+    assert resolve_robot("P2AT").color == (0.75, 0.10, 0.10)  # the default: the Pioneers' red
+    assert resolve_robot("Talon").color == (0.33, 0.36, 0.22)
+    text = (ROBOTS_DIR / "P2AT.yaml").read_text()
+    bad = tmp_path / "P2AT.yaml"
+    bad.write_text(text.replace("vehicle_type:", "color: [1.5, 0, 0]\nvehicle_type:", 1))
+    with pytest.raises(Exception, match="color"):
+        load_robot(bad)

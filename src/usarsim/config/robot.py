@@ -225,6 +225,9 @@ class RobotConfig:
     # how far above the surface below a start pose the robot's lowest point is set (the
     # per-robot Z of USARSim's start poses; manual section 5.3)
     spawn_clearance_m: float = 0.02
+    # the body's colour (red, green, blue from 0 to 1) in camera pictures only: the Pioneers'
+    # red aluminium by default
+    color: tuple[float, float, float] = (0.75, 0.10, 0.10)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -472,6 +475,9 @@ def _robot(data: dict, path: str) -> RobotConfig:
     spawn_clearance = top.float("spawn_clearance_m", d.spawn_clearance_m, min=0.0, max=2.0)
     wheel_friction = top.float("wheel_friction", d.wheel_friction, min=0.0, max=10.0)
     chained = top.bool("chained", d.chained)
+    color = top.vec("color", 3, d.color)
+    if not all(0.0 <= c <= 1.0 for c in color):
+        raise top.error("color", f"a colour is red, green, blue from 0 to 1, got {list(color)}")
     wheel_gain = top.float("wheel_gain", d.wheel_gain, min=0.0, min_exclusive=True)
     wheel_torque = top.float("wheel_torque_nm", d.wheel_torque_nm, min=0.0, min_exclusive=True)
     steer_torque = top.float("steer_torque_nm", d.steer_torque_nm, min=0.0, min_exclusive=True)
@@ -550,7 +556,7 @@ def _robot(data: dict, path: str) -> RobotConfig:
                        wheel_friction=wheel_friction, chained=chained, wheel_gain=wheel_gain,
                        wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
                        mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints,
-                       nautical=nautical, gait=gait)
+                       nautical=nautical, gait=gait, color=tuple(float(c) for c in color))
 
 
 def class_name_problem(cfg: RobotConfig) -> str | None:

@@ -644,19 +644,9 @@ def _add_piece(body, name: str, piece, robot) -> None:
     return g
 
 
-# Body colours of robots as their real counterparts are painted (the makers' photographs):
-# the Pioneers' red aluminium (MobileRobots/ActivMedia), the Talon's olive drab (Foster-Miller,
-# a military robot), the Humvee's desert tan, the Submarine's safety yellow, the Passarola
-# airship's white envelope, Sony's QRIO and AIBO ERS-7 pearl white; any other robot is red.
-ROBOT_COLOURS = {"P2AT": (0.75, 0.10, 0.10), "P2DX": (0.75, 0.10, 0.10), "P3AT": (0.75, 0.10, 0.10),
-                 "GripperP2AT": (0.75, 0.10, 0.10), "RollerP2AT": (0.75, 0.10, 0.10),
-                 "StereoP2AT": (0.75, 0.10, 0.10), "Talon": (0.33, 0.36, 0.22), "Hummer": (0.76, 0.66, 0.48),
-                 "Submarine": (0.95, 0.78, 0.10), "Passarola": (0.92, 0.92, 0.90), "QRIO": (0.88, 0.88, 0.90),
-                 "ERS": (0.90, 0.90, 0.88), "AirRobot": (0.25, 0.25, 0.27), "Sedan": (0.70, 0.72, 0.75)}
-
-
 def robot_rgba(robot: RobotConfig) -> tuple[float, float, float, float]:
-    return (*ROBOT_COLOURS.get(robot.class_name, (0.75, 0.10, 0.10)), 1.0)
+    """The body's colour in pictures: the robot file's ``color`` (opaque)."""
+    return (*robot.color, 1.0)
 
 
 def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
