@@ -27,7 +27,6 @@ import json
 import logging
 import math
 import queue
-import struct
 import threading
 import time
 from collections.abc import Callable
@@ -35,16 +34,11 @@ from dataclasses import dataclass
 
 import foxglove
 import numpy as np
-from foxglove import channels as fch
 from foxglove.messages import (
     CompressedImage,
     FrameTransform,
     FrameTransforms,
     Log,
-    LogLevel,
-    PackedElementField,
-    PackedElementFieldNumericType,
-    PointCloud,
     Pose,
     PoseInFrame,
     SceneUpdate,
@@ -54,20 +48,14 @@ from PIL import Image
 
 from usarsim.config.world import WorldConfig
 from usarsim.readings import OdometryReading, RangeScan3DReading, RangeScanReading, RobotStatus
-from usarsim.sim.types import Output, RadioModel, WorldFrame
+from usarsim.sim.types import Output, RadioModel, Tile, WorldFrame
 
+from . import channels as ch
 from . import scene
-from .transcript import METADATA_NAME, SCHEMA, SCHEMA_NAME, TOPIC, Chunk, encode_chunk
+from .transcript import METADATA_NAME, TOPIC, Chunk, encode_chunk
 
 log = logging.getLogger("usarsim.record")
 
-# Topics (docs/recording.md).
-WORLD_TOPIC = "/usarsim/world"
-ROBOTS_TOPIC = "/usarsim/robots"
-OBJECTS_TOPIC = "/usarsim/objects"
-TF_TOPIC = "/tf"
-LOG_TOPIC = "/usarsim/log"
-RADIO_PREFIX = "/usarsim/radio/"
 
 # Frames of the world handed to the recorder per simulated second by default (10 Hz, the
 # rate of most USARSim sensors, protocol.md 5).
@@ -84,24 +72,6 @@ CAMERA_JPEG_QUALITY = 75  # the image server's "normal" (usarsim.server.image.JP
 LIVE_BACKLOG = 1024  # messages per live viewer before its oldest are dropped (foxglove-sdk's default)
 BACKLOG_WARNING = 200_000  # items queued for the recorder's thread before a warning
 
-STATE_SCHEMA = {
-    "title": "usarsim.RobotState", "type": "object",
-    "properties": {"battery_s": {"type": "number", "description": "battery left, s"},
-                   "speed_m_s": {"type": "number", "description": "ground speed from the ground truth, m/s"},
-                   "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"},
-                   "yaw": {"type": "number", "description": "USARSim yaw, rad"}}}
-STATUS_SCHEMA = {
-    "title": "usarsim.RobotStatus", "type": "object",
-    "properties": {"battery_s": {"type": "integer", "description": "STA's Battery, s"},
-                   "front_steer": {"type": "number"}, "rear_steer": {"type": "number"},
-                   "light": {"type": "boolean"}}}
-LINK_SCHEMA = {
-    "title": "usarsim.RadioLink", "type": "object",
-    "properties": {"signal_dbm": {"type": "number"}, "distance_m": {"type": "number"},
-                   "walls": {"type": "integer"}, "holds": {"type": "boolean"}}}
-
-_LEVELS = ((logging.ERROR, LogLevel.Error), (logging.WARNING, LogLevel.Warning), (logging.INFO, LogLevel.Info))
-
 
 def _write_options():
     """Chunks compressed with zstd at its fastest level, on the writer's own thread only: the
@@ -109,15 +79,6 @@ def _write_options():
     from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
     return MCAPWriteOptions(compression=MCAPCompression.Zstd, compression_level=1, compression_threads=0)
-
-
-def _level(levelno: int) -> LogLevel:
-    if levelno >= logging.CRITICAL:
-        return LogLevel.Fatal
-    for at, lv in _LEVELS:
-        if levelno >= at:
-            return lv
-    return LogLevel.Debug
 
 
 class _LogTap(logging.Handler):
@@ -191,35 +152,10 @@ class _Sink:
         self.channels: dict[str, object] = {}
 
     def channel(self, topic: str, make: Callable[[str, foxglove.Context], object]):
-        ch = self.channels.get(topic)
-        if ch is None:
-            ch = self.channels[topic] = make(topic, self.ctx)
-        return ch
-
-
-def _json_channel(schema: dict) -> Callable[[str, foxglove.Context], object]:
-    return lambda topic, ctx: foxglove.Channel(topic, schema=foxglove.Schema(
-        name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()), message_encoding="json",
-        context=ctx)
-
-
-def _typed(cls) -> Callable[[str, foxglove.Context], object]:
-    return lambda topic, ctx: cls(topic, context=ctx)
-
-
-_TRANSCRIPT = _json_channel(SCHEMA)
-assert SCHEMA["title"] == SCHEMA_NAME
-# the makers of each kind of channel, made once
-_SCENE = _typed(fch.SceneUpdateChannel)
-_LOG = _typed(fch.LogChannel)
-_LASER = _typed(fch.LaserScanChannel)
-_CLOUD = _typed(fch.PointCloudChannel)
-_POSE = _typed(fch.PoseInFrameChannel)
-_TF = _typed(fch.FrameTransformsChannel)
-_IMAGE = _typed(fch.CompressedImageChannel)
-_STATE = _json_channel(STATE_SCHEMA)
-_STATUS = _json_channel(STATUS_SCHEMA)
-_LINK = _json_channel(LINK_SCHEMA)
+        channel = self.channels.get(topic)
+        if channel is None:
+            channel = self.channels[topic] = make(topic, self.ctx)
+        return channel
 
 
 class Recorder:
@@ -402,11 +338,11 @@ class Recorder:
             return
         port, peer = where or ("?", "?")
         c = Chunk(seq, conn, port, peer, kind, sim_time, wall_time, bytes(data).decode("latin-1"), size)
-        self._file_sink.channel(TOPIC, _TRANSCRIPT).log(encode_chunk(c), log_time=scene.to_ns(sim_time))
+        self._file_sink.channel(TOPIC, ch.TRANSCRIPT).log(encode_chunk(c), log_time=scene.to_ns(sim_time))
         self.chunks += 1
 
     def _write_world(self, sinks: list[_Sink] | None = None) -> None:
-        self._log(WORLD_TOPIC, _SCENE, scene.world_scene(self.world, 0.0), 0.0, sinks)
+        self._log(ch.WORLD_TOPIC, ch.SCENE, scene.world_scene(self.world, 0.0), 0.0, sinks)
 
     def _resend_static(self) -> None:
         """A live viewer subscribed to the world: it gets the static geometry now."""
@@ -414,7 +350,7 @@ class Recorder:
             self._write_world([self._live_sink])
 
     def _write_log(self, t: float, levelno: int, name: str, msg: str, path: str, line: int) -> None:
-        self._log(LOG_TOPIC, _LOG, Log(timestamp=scene.timestamp(t), level=_level(levelno),
+        self._log(ch.LOG_TOPIC, ch.LOG, Log(timestamp=scene.timestamp(t), level=ch.log_level(levelno),
                                                           message=msg, name=name, file=path, line=line), t)
 
     # outputs ------------------------------------------------------------------------
@@ -436,17 +372,17 @@ class Recorder:
             half = (n - 1) * v.resolution_rad / 2.0 if n > 1 else 0.0
             # USARSim sends the rightmost beam first: counter-clockwise from -half seen from above;
             # the ranges as the SEN line gives them (4 decimals, protocol.md 5)
-            self._log(f"/{robot}/{v.name}", _LASER, FLaserScan(
+            self._log(f"/{robot}/{v.name}", ch.LASER, FLaserScan(
                 timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", start_angle=-half, end_angle=half,
                 ranges=np.round(np.asarray(v.ranges_m, dtype=float), 4).tolist()), t)
         elif isinstance(v, RangeScan3DReading):
-            self._log(f"/{robot}/{v.name}", _CLOUD, _point_cloud(robot, v, t), t)
+            self._log(f"/{robot}/{v.name}", ch.CLOUD, ch.point_cloud(robot, v, t), t)
         elif isinstance(v, OdometryReading):
-            self._log(f"/{robot}/odometry", _POSE, PoseInFrame(
+            self._log(f"/{robot}/odometry", ch.POSE, PoseInFrame(
                 timestamp=scene.timestamp(t), frame_id=f"{robot}/odom",
                 pose=scene.pose((v.x_m, v.y_m, 0.0), (0.0, 0.0, v.theta_rad))), t)
         elif isinstance(v, RobotStatus):
-            self._log(f"/{robot}/status", _STATUS, json.dumps(
+            self._log(f"/{robot}/status", ch.STATUS, json.dumps(
                 {"battery_s": v.battery_s, "front_steer": v.front_steer, "rear_steer": v.rear_steer,
                  "light": v.light_toggle}).encode(), t)
 
@@ -468,7 +404,7 @@ class Recorder:
             if new:
                 seen = self._seen[name] = self._appears(r, t)
             if new or refresh:
-                self._log(ROBOTS_TOPIC, _SCENE, SceneUpdate(entities=[
+                self._log(ch.ROBOTS_TOPIC, ch.SCENE, SceneUpdate(entities=[
                     scene.robot_entity(name, seen.class_name, seen.dimensions, t)]), t)
                 tfs.append(scene.transform(scene.WORLD_FRAME, f"{name}/odom", seen.start[0], seen.start[1], t))
                 tfs += [scene.transform(name, f"{name}/{n}", loc, rot, t) for n, loc, rot in seen.mounts]
@@ -479,9 +415,9 @@ class Recorder:
             dt = t - seen.time
             speed = math.dist(r.location, seen.location) / dt if dt > 0 else 0.0
             seen.location, seen.time = r.location, t
-            self._log(seen.pose_topic, _POSE, PoseInFrame(timestamp=ts, frame_id=scene.WORLD_FRAME,
+            self._log(seen.pose_topic, ch.POSE, PoseInFrame(timestamp=ts, frame_id=scene.WORLD_FRAME,
                                                           pose=Pose(position=position, orientation=rotation)), t)
-            self._log(seen.state_topic, _STATE, (
+            self._log(seen.state_topic, ch.STATE, (
                 '{"battery_s":%.3f,"speed_m_s":%.4f,"x":%.4f,"y":%.4f,"z":%.4f,"yaw":%.4f}' % (
                     r.battery_s, speed, r.location[0], r.location[1], r.location[2], r.rotation[2])).encode(), t)
             waiting = self._waiting.pop(r.uid, None)
@@ -490,10 +426,10 @@ class Recorder:
         if present != self._seen.keys():  # a robot left (another may have come in its place)
             for gone in [n for n in self._seen if n not in present]:
                 del self._seen[gone]
-                self._log(ROBOTS_TOPIC, _SCENE, scene.robot_deletion(gone, t), t)
+                self._log(ch.ROBOTS_TOPIC, ch.SCENE, scene.robot_deletion(gone, t), t)
             self._names = {u: n for u, n in self._names.items() if n in present}
         if tfs:
-            self._log(TF_TOPIC, _TF, FrameTransforms(transforms=tfs), t)
+            self._log(ch.TF_TOPIC, ch.TF, FrameTransforms(transforms=tfs), t)
         if f.objects:
             # movable objects: those that moved (by a millimetre or a milliradian), all of them
             # every REFRESH_S
@@ -501,9 +437,9 @@ class Recorder:
             if moved:
                 for o in moved:
                     self._objects[o.name] = o
-                self._log(OBJECTS_TOPIC, _SCENE, scene.objects_scene(self.world, moved, t), t)
+                self._log(ch.OBJECTS_TOPIC, ch.SCENE, scene.objects_scene(self.world, moved, t), t)
         for ln in f.links or ():
-            self._log(f"{RADIO_PREFIX}{ln.a}-{ln.b}", _LINK, json.dumps(
+            self._log(f"{ch.RADIO_PREFIX}{ln.a}-{ln.b}", ch.LINK, json.dumps(
                 {"signal_dbm": round(ln.signal_dbm, 3), "distance_m": round(ln.distance_m, 3), "walls": ln.walls,
                  "holds": ln.holds}).encode(), t)
         if self._renderer is not None and t - self._last_pictures >= 1.0 / self.camera_fps - 1e-9:
@@ -527,8 +463,6 @@ class Recorder:
     def _ask_pictures(self) -> None:
         """Ask the render thread for a picture of every robot camera, except those whose last
         picture is not back yet (a slow renderer skips pictures, it does not queue them)."""
-        from usarsim.sim.types import Tile
-
         w, h = self.camera_size
         for robot, seen in self._seen.items():
             for cam in seen.cameras:
@@ -566,31 +500,8 @@ class Recorder:
                 log.warning("recording: no camera pictures: %s", error)
             return
         self.pictures += 1
-        self._log(f"/{robot}/{cam}", _IMAGE, CompressedImage(
+        self._log(f"/{robot}/{cam}", ch.IMAGE, CompressedImage(
             timestamp=scene.timestamp(t), frame_id=f"{robot}/{cam}", data=jpeg, format="jpeg"), t)
-
-
-_XYZ = [PackedElementField(name="x", offset=0, type=PackedElementFieldNumericType.Float32),
-        PackedElementField(name="y", offset=4, type=PackedElementFieldNumericType.Float32),
-        PackedElementField(name="z", offset=8, type=PackedElementFieldNumericType.Float32)]
-
-
-def _point_cloud(robot: str, v: RangeScan3DReading, t: float) -> PointCloud:
-    """A 3-D sweep as points in the scanner's frame: rows from the top, each from the right
-    (the order of the SEN lines, usarsim.sensors.scanner.RangeScanner3D)."""
-    vres, hres = v.resolution_rad
-    vfov, hfov = v.fov_rad
-    rows = v.frames or (max(1, int(round(vfov / vres)) + 1) if vres > 0 else 1)
-    cols = max(1, len(v.ranges_m) // rows)
-    buf = bytearray()
-    for k, r in enumerate(v.ranges_m):
-        i, j = divmod(k, cols)
-        pitch = vfov / 2.0 - vres * i
-        yaw = hfov / 2.0 - hres * j  # USARSim yaw: to the right
-        c = math.cos(pitch)
-        buf += struct.pack("<3f", r * c * math.cos(yaw), -r * c * math.sin(yaw), r * math.sin(pitch))
-    return PointCloud(timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", point_stride=12, fields=_XYZ,
-                      data=bytes(buf))
 
 
 class _Listener:
@@ -600,5 +511,5 @@ class _Listener:
         self.rec = rec
 
     def on_subscribe(self, client, channel) -> None:
-        if channel.topic == WORLD_TOPIC:
+        if channel.topic == ch.WORLD_TOPIC:
             self.rec._q.put(("resend",))
