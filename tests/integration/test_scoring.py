@@ -168,3 +168,22 @@ def test_serve_score_prints_the_live_score(tmp_path):
     lines = [ln for ln in out.splitlines() if ln.startswith("usarsim: score t=")]
     assert [ln.split("t=")[1].split(" ")[0] for ln in lines[:2]] == ["10.0", "20.0"], out
     assert "victims 1 found" in lines[-1] and lines[-1].startswith("usarsim: score t=25.0"), lines[-1]
+
+
+def test_the_recording_and_the_score_share_the_frames_and_each_gets_what_it_asked(tmp_path):
+    """With --record and --score-file and no wireless servers: the score counts radio contact
+    under the world's model, the recording (which asked for no links) has no radio channels."""
+    from mcap.reader import make_reader
+
+    rec, score = tmp_path / "run.mcap", tmp_path / "score.json"
+    with launch(record=rec, extra_args=("--score-file", str(score))) as srv, srv.connect() as w:
+        w.spawn("P2AT", name="R1", start="PlayerStart1")
+        w.spawn("P2AT", name="R2", start="PlayerStart2")
+        for _ in range(25):
+            w.step(0.1)
+    result = json.loads(score.read_text())
+    assert result["team"]["radio_contact_share"] > 0.5  # two robots side by side at the start
+    with rec.open("rb") as f:
+        topics = {c.topic for c in make_reader(f).get_summary().channels.values()}
+    assert "/R1/pose" in topics and "/R2/pose" in topics
+    assert not any(t.startswith("/usarsim/radio/") for t in topics)

@@ -44,6 +44,7 @@ class SimFacade:
         self._descriptions: dict[str, list[ItemDescription]] = {}
         self._radio: RadioNet | None = None
         self._watchers: tuple[Callable[[list[Output]], None], ...] = ()
+        self._frame_watches: dict[tuple[float, float], FrameWatch] = {}  # (period, links period) -> watch
 
     def set_deliver(self, deliver: Callable[[list[Output]], None]) -> None:
         self._deliver = deliver
@@ -236,7 +237,12 @@ class SimFacade:
         movable object (:class:`usarsim.sim.snapshot.WorldFrame`) each time the simulated
         clock reaches a multiple of ``period_s``, and with the radio links under ``radio_model`` every
         ``links_period_s``.  It must return quickly.  Call before :meth:`start`."""
-        self.sim.every(period_s, FrameWatch(on_frame, radio_model=radio_model, links_period_s=links_period_s))
+        key = (float(period_s), float(links_period_s))
+        watch = self._frame_watches.get(key)
+        if watch is None:  # observers with the same periods share one frame (the recording, the score)
+            watch = self._frame_watches[key] = FrameWatch(links_period_s)
+            self.sim.every(period_s, watch)
+        watch.add(on_frame, radio_model)
 
     def describe_robot(self, robot: RobotConfig) -> tuple[RobotNumbers, list[ItemDescription]]:
         """What GETGEO reports of a robot class and of its mounted items (cached)."""

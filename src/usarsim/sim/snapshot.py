@@ -143,20 +143,35 @@ def wall_forces(sim: Simulation) -> dict[int, float]:
 
 
 class FrameWatch:
-    """Hands a :class:`WorldFrame` to ``on_frame`` (on the simulation thread) each time the
-    simulated clock reaches a multiple of its period (:meth:`Simulation.every`); radio links
-    in the frames that fall ``links_period_s`` after the last ones that had them."""
+    """Hands a :class:`WorldFrame` to each of its observers (on the simulation thread) each
+    time the simulated clock reaches a multiple of its period (:meth:`Simulation.every`): one
+    frame taken for all of them.  Radio links are in the frames that fall ``links_period_s``
+    after the last ones that had them, for the observers that asked for them (with a radio
+    model); the others get those frames without links."""
 
-    def __init__(self, on_frame: Callable[[WorldFrame], None], *, radio_model: RadioModel | None = None,
-                 links_period_s: float = 1.0):
-        self.on_frame = on_frame
+    def __init__(self, links_period_s: float = 1.0):
         self.links_period_s = links_period_s
-        self._radio = RadioNet(radio_model) if radio_model is not None else None  # its own wall cache
+        self._observers: list[tuple[Callable[[WorldFrame], None], bool]] = []
+        self._radio: RadioNet | None = None  # its own wall cache
         self._last_links = -math.inf
+
+    def add(self, on_frame: Callable[[WorldFrame], None], radio_model: RadioModel | None = None) -> None:
+        """Also hand frames to ``on_frame``; with ``radio_model``, with the links under it (the
+        first model given is the one used)."""
+        if radio_model is not None and self._radio is None:
+            self._radio = RadioNet(radio_model)
+        self._observers.append((on_frame, radio_model is not None))
 
     def __call__(self, sim: Simulation) -> None:
         now = sim.time
         radio = None
         if self._radio is not None and now - self._last_links >= self.links_period_s - 1e-9:
             radio, self._last_links = self._radio, now
-        self.on_frame(take_frame(sim, radio))
+        frame = take_frame(sim, radio)
+        bare = None
+        for on_frame, links in self._observers:
+            if frame.links is not None and not links:
+                bare = bare or WorldFrame(frame.time, frame.robots, frame.objects, None)
+                on_frame(bare)
+            else:
+                on_frame(frame)
