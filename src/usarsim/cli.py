@@ -38,6 +38,14 @@ def _port(text: str) -> int:
     return v
 
 
+def _threads(text: str) -> str:
+    """``--physics-threads``: a number of threads (0: none) or 'auto'."""
+    value = text.strip().lower()
+    if value == "auto" or (value.isdigit() and int(value) <= 256):
+        return value
+    raise argparse.ArgumentTypeError(f"expected a number of threads from 0 to 256 or 'auto', got {text!r}")
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -199,6 +207,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--shadows", action="store_true",
                    help="cameras draw the shadows of the lights that cast them (about half the pictures a second "
                         "on a machine without a GPU; default: off)")
+    s.add_argument("--physics-threads", type=_threads, default=None, metavar="N",
+                   help="threads of MuJoCo's own pool, which solves robots that do not touch on several cores "
+                        "(the same results bit for bit): 0 for none, 'auto' (default) for one a core from 32 "
+                        "robots on")
     s.add_argument("--no-textures", action="store_true",
                    help="cameras see plain colours instead of the materials' textures (the quickest pictures)")
     s.add_argument("--record", default=None, metavar="FILE.mcap",
@@ -380,6 +392,8 @@ def cmd_serve(args) -> int:
         os.environ["USARSIM_SHADOWS"] = "1"
     if args.no_textures:
         os.environ["USARSIM_TEXTURES"] = "0"
+    if args.physics_threads is not None:
+        os.environ["USARSIM_PHYSICS_THREADS"] = str(args.physics_threads)
     app = Application(world, host=args.host, port=control_port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
                       robot_dirs=tuple(args.robot_dir), truth_port=ports["truth_port"],

@@ -106,6 +106,34 @@ class RayCaster:
             else:
                 raycast.warm_up()
         self.backend = backend
+        # the compiled kernel's grid of geoms, and the time and joint positions it was filed at
+        self._grid = None
+        self._grid_time = None
+        self._grid_qpos = np.empty(0)
+        self.grid_builds = 0
+
+
+    def _filed(self) -> tuple:
+        """The grid of the visible geoms where they are now: filed again when the clock
+        or any joint position changed since it was last filed."""
+        from usarsim.sim import raycast
+
+        d = self.d
+        if self._grid is None or d.time != self._grid_time or not raycast.same_values(d.qpos, self._grid_qpos):
+            self._grid = raycast.build_grid(self._gtype, self.m.geom_size, self._visible, d.geom_xpos, d.geom_xmat,
+                                            raycast.GRID_CELL_M, raycast.GRID_MAX_CELLS)
+            self._grid_time = d.time
+            self._grid_qpos = d.qpos.copy()
+            self.grid_builds += 1
+        return self._grid
+
+    def _kernel(self, origins, dirs, max_range, mask, exclude_body, normals, dist, gid, nrm) -> None:
+        """The compiled kernel through the grid."""
+        from usarsim.sim.raycast import cast_grid_kernel
+
+        m, d = self.m, self.d
+        cast_grid_kernel(origins, dirs, float(max_range), self._gtype, m.geom_size, m.geom_rbound, self._gbody, mask,
+                         d.geom_xpos, d.geom_xmat, int(exclude_body), bool(normals), dist, gid, nrm, *self._filed())
 
     def cast(self, origin: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
              normals: bool = False, kind: str | None = None,
@@ -145,13 +173,9 @@ class RayCaster:
                 self._cast_effects(origins, dirs, float(max_range), int(exclude_body), kind, reflect, porous,
                                    dist, gid, nrm)
                 return dist, (nrm if normals else None), gid
-        if self.backend == "compiled":  # the fast path, inline
-            from usarsim.sim.raycast import cast_kernel
-
-            m, d = self.m, self.d
+        if self.backend == "compiled":  # the fast path
             mask = self._masks.get(kind, self._visible) if kind else self._visible
-            cast_kernel(origins, dirs, float(max_range), self._gtype, m.geom_size, m.geom_rbound, self._gbody,
-                        mask, d.geom_xpos, d.geom_xmat, int(exclude_body), normals, dist, gid, nrm)
+            self._kernel(origins, dirs, max_range, mask, exclude_body, normals, dist, gid, nrm)
         else:
             self._cast_plain(origins, dirs, float(max_range), int(exclude_body), normals, kind, dist, gid, nrm)
         return dist, (nrm if normals else None), gid
@@ -209,11 +233,7 @@ class RayCaster:
     def _cast_solid(self, origins, dirs, max_range, mask, dist, gid, nrm) -> None:
         """Straight rays against the geoms of ``mask`` only (no body excluded), with normals."""
         if self.backend == "compiled":
-            from usarsim.sim.raycast import cast_kernel
-
-            m, d = self.m, self.d
-            cast_kernel(origins, dirs, max_range, self._gtype, m.geom_size, m.geom_rbound, self._gbody, mask,
-                        d.geom_xpos, d.geom_xmat, -1, True, dist, gid, nrm)
+            self._kernel(origins, dirs, max_range, mask, -1, True, dist, gid, nrm)
             return
         # mj_multiRay filters by group only: hide every other visible geom in an unseen group
         hide = self._visible & ~mask
@@ -227,12 +247,8 @@ class RayCaster:
     def _cast_plain(self, origins, dirs, max_range, exclude_body, normals, kind, dist, gid, nrm) -> None:
         """Straight rays: the nearest surface that ``kind`` does not see through."""
         if self.backend == "compiled":
-            from usarsim.sim.raycast import cast_kernel
-
-            m, d = self.m, self.d
             mask = self._masks.get(kind, self._visible) if kind else self._visible
-            cast_kernel(origins, dirs, max_range, self._gtype, m.geom_size, m.geom_rbound, self._gbody,
-                        mask, d.geom_xpos, d.geom_xmat, exclude_body, normals, dist, gid, nrm)
+            self._kernel(origins, dirs, max_range, mask, exclude_body, normals, dist, gid, nrm)
         elif kind in self._see_through:
             # mj_multiRay filters by group only: hide the see-through geoms in an unseen group
             hide = self._see_through[kind]
