@@ -122,3 +122,21 @@ def test_a_ray_from_inside_a_body_far_outside_the_grid_and_only_planes():
     dist, _, g = c.cast(np.array([100.0, -40.0, 2.0]), np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]), 10.0, -1)
     assert dist[0] == pytest.approx(2.0) and g[0] == 0
     assert np.isinf(dist[1])
+
+
+def test_a_turned_mocap_body_is_filed_again():
+    """A waving victim's arm is a mocap body turned at the same instant: its geom moves."""
+    m = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><body name="arm" mocap="true" pos="0 0 0.5">'
+        '<geom type="box" size="0.1 0.1 0.1" pos="2 0 0"/></body></worldbody></mujoco>')
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    c = RayCaster(m, d, "compiled")
+    at = np.array([0.0, 0.0, 0.5])
+    along_x, along_y = np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]])
+    assert c.cast(at, along_x, 5.0, -1)[0][0] == pytest.approx(1.9)
+    assert np.isinf(c.cast(at, along_y, 5.0, -1)[0][0])
+    d.mocap_quat[0] = [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)]  # a quarter turn about z
+    mujoco.mj_forward(m, d)
+    assert c.cast(at, along_y, 5.0, -1)[0][0] == pytest.approx(1.9)
+    assert np.isinf(c.cast(at, along_x, 5.0, -1)[0][0])

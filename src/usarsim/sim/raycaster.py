@@ -110,20 +110,24 @@ class RayCaster:
         self._grid = None
         self._grid_time = None
         self._grid_qpos = np.empty(0)
+        self._grid_mocap = np.empty(0)
         self.grid_builds = 0
 
 
     def _filed(self) -> tuple:
-        """The grid of the visible geoms where they are now: filed again when the clock
-        or any joint position changed since it was last filed."""
+        """The grid of the visible geoms where they are now: filed again when the clock,
+        any joint position or the orientation of a mocap body (a waving victim's arm)
+        changed since it was last filed (mocap bodies are turned, not moved)."""
         from usarsim.sim import raycast
 
         d = self.d
-        if self._grid is None or d.time != self._grid_time or not raycast.same_values(d.qpos, self._grid_qpos):
+        if (self._grid is None or d.time != self._grid_time or not raycast.same_values(d.qpos, self._grid_qpos)
+                or not raycast.same_values(d.mocap_quat.ravel(), self._grid_mocap)):
             self._grid = raycast.build_grid(self._gtype, self.m.geom_size, self._visible, d.geom_xpos, d.geom_xmat,
                                             raycast.GRID_CELL_M, raycast.GRID_MAX_CELLS)
             self._grid_time = d.time
             self._grid_qpos = d.qpos.copy()
+            self._grid_mocap = d.mocap_quat.ravel().copy()
             self.grid_builds += 1
         return self._grid
 
