@@ -236,7 +236,11 @@ def _profile_bench(args, world, n: int, seconds: float, progress: bool) -> int:
         print(json.dumps({"robots": n, "sim_seconds": run["sim_seconds"], "rtf_profiled": run["rtf"],
                           "sim_wall_s": round(b["sim_wall_s"], 3), "sim_cpu_s": round(b["sim_cpu_s"], 3),
                           "loop_wall_s": round(b["loop_wall_s"], 3), "loop_cpu_s": round(b["loop_cpu_s"], 3),
-                          "sim": {k: round(v, 4) for k, v in b["sim"]}, "loop": {k: round(v, 4) for k, v in b["loop"]},
+                          "sensors_wall_s": round(b["sensors_wall_s"], 3),
+                          "sensors_cpu_s": round(b["sensors_cpu_s"], 3),
+                          "sim": {k: round(v, 4) for k, v in b["sim"]},
+                          "sensors": {k: round(v, 4) for k, v in b["sensors"]},
+                          "loop": {k: round(v, 4) for k, v in b["loop"]},
                           "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}))
     else:
         print(f"robots {n}: {run['sim_seconds']:.1f} simulated s in {run['wall_seconds']:.2f} s wall under the "

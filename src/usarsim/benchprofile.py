@@ -1,13 +1,16 @@
-"""``usarsim bench --profile``: where the time of the simulation thread and of the server's
-event loop goes during the bench's measured stretch.
+"""``usarsim bench --profile``: where the time of the simulation thread, of the measuring
+thread (sensor readings, usarsim.sim.measuring) and of the server's event loop goes during
+the bench's measured stretch.
 
-Both threads are profiled with ``cProfile`` (deterministic profiling: it slows Python code
+The threads are profiled with ``cProfile`` (deterministic profiling: it slows Python code
 down, native code such as MuJoCo's step and the ray-cast kernel not, so the shares of Python
 work come out somewhat high; compare runs with each other, not with the bench's plain real-time
 factor).  The simulation thread's time is split by entry point: the physics (the guarded
 ``mj_step`` calls), each sensor type's measurement (its ray casting included, which is also
 given on its own line), report scheduling, the rest of building the outputs, world systems,
-handing the outputs to the server and the rest.  Its CPU time beside its wall time tells how
+handing the outputs to the server and the rest; with a measuring thread, the sensors' lines
+are that thread's, and the simulation thread's own line is handing each instant over to it
+(copying the world's state, waiting for a free copy).  Its CPU time beside its wall time tells how
 long it waited for the interpreter lock (the GIL) or slept.  The event loop's time is split
 into formatting lines, socket writes, reading clients' lines and the rest (mostly waiting).
 """
@@ -36,11 +39,14 @@ class Profiler:
 
     sim: ThreadProfile = field(default_factory=ThreadProfile)
     loop: ThreadProfile = field(default_factory=ThreadProfile)
+    sensors: ThreadProfile = field(default_factory=ThreadProfile)  # the measuring thread, when there is one
 
     def __post_init__(self) -> None:
         self._sim_prof = cProfile.Profile()
         self._loop_prof = cProfile.Profile()
+        self._sensors_prof = cProfile.Profile()
         self._marks: dict[str, float] = {}
+        self._measurer = None
 
     def _on_sim(self, fn) -> None:
         done = threading.Event()
@@ -68,7 +74,14 @@ class Profiler:
             self._marks["loop_wall"], self._marks["loop_cpu"] = time.perf_counter(), time.thread_time()
             self._loop_prof.enable()
 
+        def sensors_start():
+            self._marks["sensors_wall"], self._marks["sensors_cpu"] = time.perf_counter(), time.thread_time()
+            self._sensors_prof.enable()
+
         self._on_loop(app, loop_start)
+        self._measurer = app.facade.sim.measurer
+        if self._measurer is not None:
+            self._measurer.call(sensors_start).result(60)
         self._on_sim(sim_start)
 
     def stop(self, app) -> None:
@@ -82,7 +95,15 @@ class Profiler:
             self.loop.wall_s = time.perf_counter() - self._marks["loop_wall"]
             self.loop.cpu_s = time.thread_time() - self._marks["loop_cpu"]
 
+        def sensors_stop():
+            self._sensors_prof.disable()
+            self.sensors.wall_s = time.perf_counter() - self._marks["sensors_wall"]
+            self.sensors.cpu_s = time.thread_time() - self._marks["sensors_cpu"]
+
         self._on_sim(sim_stop)
+        if self._measurer is not None:
+            self._measurer.call(sensors_stop).result(60)
+            self.sensors.stats = pstats.Stats(self._sensors_prof)
         self._on_loop(app, loop_stop)
         self.sim.stats = pstats.Stats(self._sim_prof)
         self.loop.stats = pstats.Stats(self._loop_prof)
@@ -107,17 +128,13 @@ def _matching(stats: pstats.Stats, pred) -> list[tuple]:
     return [k for k in stats.stats if pred(k)]
 
 
-def breakdown(p: Profiler) -> dict:
-    """The shares: {"sim": [(what, seconds)], "loop": [(what, seconds)], "sim_wall_s", ...}."""
+def _sensor_rows(s: pstats.Stats) -> tuple[list[tuple[str, float]], float]:
+    """Each sensor type's measurements (largest first), then the ray casting among them; and
+    their total."""
     from usarsim.sensors import SENSORS
-    from usarsim.sim import health, raycaster, reports, runner
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim import raycaster
 
-    s = p.sim.stats
-    rows: list[tuple[str, float]] = []
-    physics = _cum(s, [_where(health.BlowUpGuard.step)])
-    rows.append(("physics (MuJoCo steps)", physics))
-    sensor_total = 0.0
+    total = 0.0
     per_type = []
     seen = set()
     for name in SENSORS.names():
@@ -129,21 +146,43 @@ def breakdown(p: Profiler) -> dict:
         t = _cum(s, keys)
         if t > 0:
             per_type.append((f"sensor {cls.__name__}", t))
-            sensor_total += t
+            total += t
     per_type.sort(key=lambda r: -r[1])
-    rows += per_type
     cast_keys = _matching(s, lambda k: k[0] == raycaster.__file__ and k[2] in ("cast", "cast_from", "count_walls"))
-    rows.append(("  of which ray casting (all sensors)", _cum(s, cast_keys)))
+    return per_type + [("  of which ray casting (all sensors)", _cum(s, cast_keys))], total
+
+
+def breakdown(p: Profiler) -> dict:
+    """The shares: {"sim": [(what, seconds)], "sensors": [...], "loop": [...], "sim_wall_s", ...}
+    ("sensors": the measuring thread's, empty without one)."""
+    from usarsim.sim import health, measuring, reports, runner
+    from usarsim.sim.simulation import Simulation
+
+    s = p.sim.stats
+    rows: list[tuple[str, float]] = []
+    physics = _cum(s, [_where(health.BlowUpGuard.step)])
+    rows.append(("physics (MuJoCo steps)", physics))
+    sensor_rows, sensor_total = _sensor_rows(s)
+    rows += [r for r in sensor_rows if r[1] > 0]
+    handing = _cum(s, [_where(measuring.Measurer.submit)])
+    if handing > 0:
+        rows.append(("handing instants to the measuring thread", handing))
     sched = _cum(s, _matching(s, lambda k: k[0] == reports.__file__ and k[2] in ("take_due", "next_due")))
     rows.append(("report scheduling", sched))
     fire = _cum(s, [_where(Simulation._fire_due)])
-    rows.append(("building readings, besides the sensors", max(0.0, fire - sensor_total - sched)))
+    building = max(0.0, fire - sensor_total - sched - handing)
+    rows.append(("building readings, besides the sensors", building))
     systems = _cum(s, _matching(s, lambda k: k[2] == "pre_step" and "/sim/systems/" in k[0]))
     rows.append(("world systems", systems))
     flush = _cum(s, [_where(runner.SimulationRunner._flush)])
     rows.append(("handing outputs to the server", flush))
-    accounted = physics + sensor_total + sched + max(0.0, fire - sensor_total - sched) + systems + flush
+    accounted = physics + sensor_total + handing + sched + building + systems + flush
     rows.append(("the rest (requests, clock)", max(0.0, p.sim.wall_s - accounted)))
+
+    sensors: list[tuple[str, float]] = []
+    if p.sensors.stats is not None:
+        sensor_rows, sensor_total = _sensor_rows(p.sensors.stats)
+        sensors = sensor_rows + [("waiting for instants (idle)", max(0.0, p.sensors.wall_s - sensor_total))]
 
     lp = p.loop.stats
     from usarsim.protocol import messages
@@ -158,7 +197,8 @@ def breakdown(p: Profiler) -> dict:
     waiting = _cum(lp, _matching(lp, lambda k: k[2] == "select" and k[0].endswith("selectors.py")))
     loop_rows.append(("waiting for sockets (idle)", waiting))
     loop_rows.append(("the rest", max(0.0, p.loop.wall_s - fmt - writes - reads - waiting)))
-    return {"sim": rows, "loop": loop_rows, "sim_wall_s": p.sim.wall_s, "sim_cpu_s": p.sim.cpu_s,
+    return {"sim": rows, "sensors": sensors, "loop": loop_rows, "sim_wall_s": p.sim.wall_s, "sim_cpu_s": p.sim.cpu_s,
+            "sensors_wall_s": p.sensors.wall_s, "sensors_cpu_s": p.sensors.cpu_s,
             "loop_wall_s": p.loop.wall_s, "loop_cpu_s": p.loop.cpu_s}
 
 
@@ -170,6 +210,11 @@ def format_breakdown(b: dict, sim_seconds: float) -> str:
                f"(waiting for the interpreter lock or sleeping: {100 * (1 - b['sim_cpu_s'] / sw):.0f} %)")
     for what, t in b["sim"]:
         out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / sw:5.1f} %")
+    if b.get("sensors"):
+        mw = b["sensors_wall_s"] or 1e-9
+        out.append(f"measuring thread (sensor readings): {mw:.2f} s wall, {b['sensors_cpu_s']:.2f} s CPU")
+        for what, t in b["sensors"]:
+            out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / mw:5.1f} %")
     lw = b["loop_wall_s"] or 1e-9
     out.append(f"event loop (server): {lw:.2f} s wall, {b['loop_cpu_s']:.2f} s CPU")
     for what, t in b["loop"]:

@@ -211,6 +211,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="threads of MuJoCo's own pool, which solves robots that do not touch on several cores "
                         "(the same results bit for bit): 0 for none, 'auto' (default) for one a core from 32 "
                         "robots on")
+    s.add_argument("--sensors-inline", action="store_true",
+                   help="take sensor readings on the simulation thread itself instead of a thread of their own "
+                        "that works while the physics runs on (the same readings either way; slower)")
     s.add_argument("--no-textures", action="store_true",
                    help="cameras see plain colours instead of the materials' textures (the quickest pictures)")
     s.add_argument("--record", default=None, metavar="FILE.mcap",
@@ -394,6 +397,8 @@ def cmd_serve(args) -> int:
         os.environ["USARSIM_TEXTURES"] = "0"
     if args.physics_threads is not None:
         os.environ["USARSIM_PHYSICS_THREADS"] = str(args.physics_threads)
+    if args.sensors_inline:
+        os.environ["USARSIM_SENSOR_THREAD"] = "0"
     app = Application(world, host=args.host, port=control_port, seed=args.seed, speed=args.speed,
                       lockstep=args.lockstep, max_connections=args.max_connections,
                       robot_dirs=tuple(args.robot_dir), truth_port=ports["truth_port"],

@@ -139,7 +139,7 @@ class _FakeSim:
     def advance(self, seconds):
         self.time += seconds
 
-    def take_outputs(self):
+    def take_outputs(self, wait=True):
         return []
 
 

@@ -134,11 +134,11 @@ class SimFacade:
     def drive(self, uid: int, command: DriveCommand) -> None:
         """One DRIVE: its parts go to the robot's drive model, which applies those its kind
         understands; Flip, Light and joint orders apply to any robot."""
-        self.runner.submit(Request(lambda sim: sim.drive(uid, command)))
+        self.runner.submit(Request(lambda sim: sim.drive(uid, command), concurrent=True))
 
     def drive_joints(self, uid: int, orders: list[JointOrder]) -> None:
         """Joint orders (MULTIDRIVE, MISPKG, SET Joint, CAMERA), applied together."""
-        self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders)))
+        self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders), concurrent=True))
 
     def operate(self, uid: int, item_type, name, opcode, params) -> None:
         """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF)."""
@@ -162,7 +162,8 @@ class SimFacade:
     def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
         """Everything the ground-truth service knows now (rows of
         :func:`usarsim.sim.truth.truth_rows`), filtered by class and name."""
-        self.runner.submit(Request(lambda sim: sim.truth(class_name, name), immediate=True, on_done=on_done))
+        self.runner.submit(Request(lambda sim: sim.truth(class_name, name), immediate=True, on_done=on_done,
+                                   concurrent=True))
 
     def set_multiview_cameras(self, count: int) -> None:
         """How many robot cameras the MultiView shows at most (before the simulation starts)."""
@@ -171,7 +172,7 @@ class SimFacade:
     def render_snapshot(self, reuse, on_done: Done) -> None:
         """A copy of the state for the render thread (``reuse``: the previous one)."""
         self.runner.submit(Request(lambda sim: sim.cameras.render_snapshot(reuse), immediate=True,
-                                   on_done=on_done))
+                                   on_done=on_done, concurrent=True))
 
     def render_service(self, max_fps: float):
         """The render thread of the image server, fed with snapshots of this simulation."""

@@ -4,6 +4,7 @@ mirrors and grid fenders (manual 3.2.1) and wall counting (protocol.md 12.3)."""
 
 from __future__ import annotations
 
+import copy
 import os
 import zlib
 
@@ -113,6 +114,17 @@ class RayCaster:
         self._grid_mocap = np.empty(0)
         self.grid_builds = 0
 
+
+    def bound_to(self, data: mujoco.MjData) -> RayCaster:
+        """This caster for another MjData of the same model (a copy of the world's state):
+        the same masks and materials, a grid of its own."""
+        other = copy.copy(self)
+        other.d = data
+        other.rays_cast = 0
+        other._grid, other._grid_time = None, None
+        other._grid_qpos, other._grid_mocap = np.empty(0), np.empty(0)
+        other.grid_builds = 0
+        return other
 
     def _filed(self) -> tuple:
         """The grid of the visible geoms where they are now: filed again when the clock,

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from usarsim.errors import UsarsimError
+from usarsim.sim.measuring import sensor_thread_wanted
 from usarsim.sim.simulation import Output, Simulation
 
 log = logging.getLogger("usarsim.sim")
@@ -39,12 +40,17 @@ class Request:
 
     ``action(sim)`` runs on the simulation thread; ``immediate`` requests (spawn,
     remove, queries) run at once even in lock-step mode; ``on_done(result, error)`` is
-    called on the simulation thread afterwards.
+    called on the simulation thread afterwards; ``concurrent`` ones need not wait for the
+    sensor readings being taken.
     """
 
     action: Callable[[Simulation], Any]
     immediate: bool = False
     on_done: Callable[[Any, BaseException | None], None] | None = None
+    # runs while sensor readings are still being taken on the measuring thread: it changes
+    # nothing a sensor reads besides the live state (drive commands, queries); the others
+    # wait for every reading first (usarsim.sim.measuring)
+    concurrent: bool = False
 
 
 @dataclass
@@ -116,6 +122,7 @@ class SimulationRunner:
     # Thread body -------------------------------------------------------------------
     def _run(self) -> None:
         try:
+            self.sim.measure_on_thread(sensor_thread_wanted())
             if self.lockstep:
                 self._run_lockstep()
             else:
@@ -123,11 +130,18 @@ class SimulationRunner:
         except BaseException as exc:  # the thread must never die silently
             self.error = exc
             log.exception("the simulation thread stopped on an unexpected error")
+        finally:
+            try:
+                self.sim.measure_on_thread(False)
+            except BaseException:  # a sensor's error was logged with the one that stopped the thread
+                log.debug("closing the measuring thread", exc_info=True)
 
     def _execute(self, req: Request) -> None:
         if self._stopping.is_set():
             return  # shutting down: nobody waits for it (see stop)
         result, error = None, None
+        if not req.concurrent:
+            self.sim.settle()
         try:
             result = req.action(self.sim)
         except UsarsimError as exc:
@@ -138,8 +152,10 @@ class SimulationRunner:
         if req.on_done is not None:
             req.on_done(result, error)
 
-    def _flush(self) -> None:
-        outs = self.sim.take_outputs()
+    def _flush(self, wait: bool = True) -> None:
+        """Hand the outputs over; ``wait=False``: as far as the readings are taken (the
+        clock runs on meanwhile; the rest go with a later flush)."""
+        outs = self.sim.take_outputs(wait)
         if outs:
             self.deliver(outs)
 
@@ -207,7 +223,7 @@ class SimulationRunner:
                 self._execute(item)
             if self.speed is None:
                 sim.advance(self.CHUNK_S)
-                self._flush()
+                self._flush(wait=False)
                 continue
             now = time.perf_counter()
             target = sim0 + (now - wall0) * self.speed
@@ -221,7 +237,7 @@ class SimulationRunner:
                 ahead = max_lag
             if ahead >= sim.dt:
                 sim.advance(min(ahead, self.CHUNK_S))
-                self._flush()
+                self._flush(wait=False)
                 continue
             wait = (sim.dt - ahead) / self.speed
             try:

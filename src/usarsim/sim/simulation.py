@@ -37,6 +37,7 @@ from usarsim.sim.cameras import Cameras
 from usarsim.sim.constants import GROUND_GROUPS
 from usarsim.sim.entities import Entities
 from usarsim.sim.health import BlowUpGuard
+from usarsim.sim.measuring import Due, Measurer, OrderedOutbox, measure_report
 from usarsim.sim.outputs import Output
 from usarsim.sim.raycaster import RayCaster
 from usarsim.sim.reports import EPS, ReportSchedule
@@ -92,7 +93,10 @@ class Simulation:
         self.step_count = 0
         self.physics_steps = 0
         self.robots: dict[int, SimRobot] = {}
-        self.outbox: list[Output] = []
+        # what the simulation outputs, in order; readings being taken on the measuring thread
+        # hold back what comes after them (usarsim.sim.measuring)
+        self.outbox = OrderedOutbox()
+        self.measurer: Measurer | None = None
         self.entities = Entities(world)
         self.entities.resolve(self.model)
         self.caster = RayCaster(self.model, self.data, see_through=self.entities.see_through)
@@ -144,6 +148,7 @@ class Simulation:
 
     # Model changes ------------------------------------------------------------
     def _rebuild(self) -> None:
+        self.settle()  # the sensors are configured anew for the new model
         self.model, self.data = self.spec.recompile(self.model, self.data)
         threads = physics_threads(len(self.robots))
         if threads != self.threads:
@@ -366,32 +371,57 @@ class Simulation:
 
     def _fire_due(self) -> None:
         now = self.time
-        view = None
-        for rep in self.reports.take_due(now):
+        due = self.reports.take_due(now)
+        if not due:
+            return
+        items: list[Due] = []
+        for rep in due:
             r = rep.robot
             if rep.status:
-                self.outbox.append(Output(r.uid, now, self.status_of(r), "STA"))
+                items.append(Output(r.uid, now, self.status_of(r), "STA"))
             elif r.battery_empty:
                 continue
             elif rep.package is not None:
-                self.outbox.append(Output(r.uid, now, joints.package_state(self.data, r, rep.package), rep.key))
+                items.append(Output(r.uid, now, joints.package_state(self.data, r, rep.package), rep.key))
             else:
-                if view is None:
-                    view = self.view()
-                self._emit(r, rep.sensors, rep.key, view)
+                items.append((r.uid, rep.sensors, rep.key))
+        if self.measurer is not None and any(not isinstance(i, Output) for i in items):
+            self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
+                                                  self.entities, items))
+            return
+        view = None
+        for item in items:
+            if isinstance(item, Output):
+                self.outbox.append(item)
+                continue
+            if view is None:
+                view = self.view()
+            o = measure_report(item[0], item[1], item[2], view)
+            if o is not None:
+                self.outbox.append(o)
 
     def _emit(self, r: SimRobot, sensors: list[Sensor], key: str, view: WorldView | None = None) -> None:
-        view = view or self.view()
-        first = sensors[0]
-        if first.PACKED:
-            cls = type(first)
-            value = cls.combine(cls.measure_group(sensors, view))
-        else:
-            value = first.measure(view)
-        if value is None:  # nothing to report this tick (e.g. a sensor that accumulates scans)
-            return
-        t = view.time if first.config.with_time_stamp else None
-        self.outbox.append(Output(r.uid, t, value, key))
+        o = measure_report(r.uid, sensors, key, view or self.view())
+        if o is not None:
+            self.outbox.append(o)
+
+    # The measuring thread ---------------------------------------------------------
+    def measure_on_thread(self, on: bool) -> None:
+        """Take sensor readings on a thread of their own (usarsim.sim.measuring), or again
+        on the calling thread; the simulation thread turns it on while it runs.  Readings
+        are then handed out by :meth:`take_outputs` as they are ready."""
+        if on and self.measurer is None:
+            self.measurer = Measurer()
+        elif not on and self.measurer is not None:
+            self.settle()
+            self.measurer.close()
+            self.measurer = None
+
+    def settle(self) -> None:
+        """Wait until every reading handed to the measuring thread has been taken (before
+        anything that changes what sensors read: the model, an item's settings)."""
+        if self.outbox.waiting:
+            self.outbox.settle()
 
     # Reports and queries --------------------------------------------------------
     def status_of(self, r: SimRobot) -> RobotStatus:
@@ -412,9 +442,10 @@ class Simulation:
         if uid in self.robots:
             self.outbox.append(Output(uid, self.time, value, "RES", periodic=False))
 
-    def take_outputs(self) -> list[Output]:
-        out, self.outbox = self.outbox, []
-        return out
+    def take_outputs(self, wait: bool = True) -> list[Output]:
+        """Everything output so far, in order; ``wait=False``: only as far as the readings
+        being taken on the measuring thread are ready (the rest on a later call)."""
+        return self.outbox.take(wait)
 
     def pose_of(self, uid: int) -> tuple[tuple[float, float, float], tuple[float, float, float]] | None:
         r = self.robots.get(uid)

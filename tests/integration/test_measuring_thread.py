@@ -1,0 +1,91 @@
+"""Sensor readings taken on the measuring thread (usarsim.sim.measuring) are the very
+readings the simulation thread takes itself, in the same order; in the clocked modes they
+come out in time order, and requests that change what sensors read wait for them."""
+
+from __future__ import annotations
+
+import pytest
+
+from helpers import segments, sen_type
+
+ROBOTS = ("INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}",
+          "INIT {ClassName USARBot.Kurt3D} {Name R2} {Start PlayerStart2}")
+# STEPs of one physics step, of less than a report period, of several report periods and
+# of odd lengths, so that report instants fall inside and at the ends of STEPs
+STEPS = (0.004, 0.004, 0.1, 0.37, 0.2, 1.0, 0.052, 0.5, 0.004, 2.0)
+
+
+def lockstep_session(server_factory, monkeypatch, thread: str) -> tuple[list[str], bool]:
+    monkeypatch.setenv("USARSIM_SENSOR_THREAD", thread)
+    srv = server_factory(lockstep=True)
+    clients = []
+    for init in ROBOTS:
+        c = srv.connect()
+        c.nfo()
+        c.send(init)
+        c.sync()  # spawned before the next client's robot, and before the first STEP
+        clients.append(c)
+    lines: list[str] = []
+    for who, (c, drive) in enumerate(zip(clients, ("DRIVE {Left 1.5} {Right 0.5}", "DRIVE {Left -1.0} {Right 1.0}"))):
+        c.send(drive)
+        lines += [f"{who} {ln.text}" for ln in c.sync()]
+    for seconds in STEPS:
+        lines += [f"0 {ln.text}" for ln in clients[0].step(seconds)]
+        # the other client's lines of that STEP: all of them were sent before its STEPPED
+        lines += [f"1 {ln.text}" for ln in clients[1].sync()]
+    threaded = srv.on_sim(lambda sim: sim.measurer is not None)
+    return lines, threaded
+
+
+def test_the_measuring_thread_gives_the_same_lines_as_the_simulation_thread(server_factory, monkeypatch):
+    inline, inline_threaded = lockstep_session(server_factory, monkeypatch, "0")
+    threaded, threaded_threaded = lockstep_session(server_factory, monkeypatch, "1")
+    assert not inline_threaded and threaded_threaded
+    kinds = {sen_type(ln.split(" ", 1)[1]) for ln in inline if " SEN " in f" {ln.split(' ', 1)[1]}"}
+    assert {"Sonar", "RangeScanner", "GPS", "INS", "GroundTruth", "Encoder"} <= kinds, kinds
+    assert len(inline) > 300
+    assert threaded == inline
+
+
+def test_clocked_readings_come_in_time_order_and_settings_wait_for_them(server_factory, monkeypatch):
+    monkeypatch.setenv("USARSIM_SENSOR_THREAD", "1")
+    srv = server_factory(lockstep=False, speed=None)
+    c = srv.connect()
+    c.nfo()
+    c.send(ROBOTS[0])
+    c.send("DRIVE {Left 1.0} {Right 1.0}")
+    assert srv.on_sim(lambda sim: sim.measurer is not None)
+    stamps: dict[str, float] = {}
+    last = 0.0
+    for _ in range(400):
+        ln = c.next_line()
+        t = segments(ln.text).get("Time")
+        if t is None:
+            continue
+        key = ln.text.split(" ", 1)[0] + str(sen_type(ln))
+        # every stream's stamps grow, and no line is older than one already seen by more than
+        # what one instant's readings may trail a status of the same instant (nothing)
+        assert float(t) >= stamps.get(key, 0.0)
+        assert float(t) >= last - 1e-9, ln.text
+        stamps[key] = float(t)
+        last = max(last, float(t))
+    # a query that waits for the readings under way comes after them, still in time order
+    c.send("GETGEO {Type Sonar}")
+    before = c.lines_until("GEO")
+    times = [float(segments(ln.text)["Time"]) for ln in before if "Time" in segments(ln.text)]
+    assert all(b >= a - 1e-9 for a, b in zip(times, times[1:]))
+
+
+@pytest.mark.parametrize("thread", ["0", "1"])
+def test_sensors_read_the_world_with_or_without_the_measuring_thread(server_factory, monkeypatch, thread):
+    """A robot facing a wall reads it on its laser either way."""
+    monkeypatch.setenv("USARSIM_SENSOR_THREAD", thread)
+    srv = server_factory(lockstep=True)
+    c = srv.connect()
+    c.nfo()
+    c.send(ROBOTS[0])
+    lines = c.step(1.0)
+    scans = [ln for ln in lines if sen_type(ln) == "RangeScanner"]
+    assert scans
+    ranges = [float(v) for v in segments(scans[-1].text)["Range"].split(",")]
+    assert min(ranges) < 20.0  # something of the arena is in sight
