@@ -42,7 +42,8 @@ def exhaustive(c: RayCaster, orig, dirs, cutoff, exclude=-1):
     dist, gid, nrm = np.empty(n), np.empty(n, np.int32), np.zeros((n, 3))
     planes = np.flatnonzero(c._visible & (c._gtype == raycast.PLANE))
     others = np.flatnonzero(c._visible & (c._gtype != raycast.PLANE))
-    one_cell = (-1e9, -1e9, 2e9, 1, 1, np.array([0, len(others)]), others.astype(np.int64), planes.astype(np.int64))
+    one_cell = (-1e9, -1e9, 2e9, 1, 1, np.array([0, len(others)]), others.astype(np.int64), planes.astype(np.int64),
+                -1e9, 1e9)
     raycast.cast_grid_kernel(orig, dirs, cutoff, c._gtype, c.m.geom_size, c.m.geom_rbound, c._gbody, c._visible,
                              c.d.geom_xpos, c.d.geom_xmat, exclude, True, dist, gid, nrm, *one_cell)
     return dist, gid, nrm

@@ -25,18 +25,20 @@ def from_mj_vec(v) -> tuple[float, float, float]:
     return (float(v[0]), float(-v[1]), float(-v[2]))
 
 
-def euler_to_mat(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """ZYX (yaw, then pitch, then roll about body axes) rotation matrix, same frame."""
+def _euler_rows(roll: float, pitch: float, yaw: float) -> list[list[float]]:
     cr, sr = math.cos(roll), math.sin(roll)
     cp, sp = math.cos(pitch), math.sin(pitch)
     cy, sy = math.cos(yaw), math.sin(yaw)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
+    return [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+
+
+def euler_to_mat(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """ZYX (yaw, then pitch, then roll about body axes) rotation matrix, same frame."""
+    return np.array(_euler_rows(roll, pitch, yaw))
 
 
 def mat_to_euler(m) -> tuple[float, float, float]:
@@ -58,28 +60,34 @@ def mj_mat_to_usar_euler(mat) -> tuple[float, float, float]:
     return roll, -pitch, -yaw
 
 
-def mat_to_quat(m) -> np.ndarray:
-    """Rotation matrix -> unit quaternion (w, x, y, z)."""
-    m = np.asarray(m, dtype=float).reshape(3, 3)
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
+def _quat_of_rows(m: list[list[float]]) -> np.ndarray:
+    tr = m[0][0] + m[1][1] + m[2][2]
     if tr > 0:
         s = math.sqrt(tr + 1.0) * 2
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+        q = [0.25 * s, (m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s]
+    elif m[0][0] > m[1][1] and m[0][0] > m[2][2]:
+        s = math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]) * 2
+        q = [(m[2][1] - m[1][2]) / s, 0.25 * s, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s]
+    elif m[1][1] > m[2][2]:
+        s = math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]) * 2
+        q = [(m[0][2] - m[2][0]) / s, (m[0][1] + m[1][0]) / s, 0.25 * s, (m[1][2] + m[2][1]) / s]
     else:
-        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+        s = math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2
+        q = [(m[1][0] - m[0][1]) / s, (m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s]
     q = np.array(q)
     return q / np.linalg.norm(q)
 
 
+def mat_to_quat(m) -> np.ndarray:
+    """Rotation matrix -> unit quaternion (w, x, y, z)."""
+    return _quat_of_rows(np.asarray(m, dtype=float).reshape(3, 3).tolist())
+
+
 def usar_euler_to_mj_quat(rpy) -> np.ndarray:
-    return mat_to_quat(usar_euler_to_mj_mat(rpy))
+    """Orientation given in the USARSim frame -> unit quaternion in the MuJoCo frame (the
+    same numbers as ``mat_to_quat(usar_euler_to_mj_mat(rpy))``, without the arrays between:
+    the waving victims' arms are turned with it before every stretch of physics steps)."""
+    return _quat_of_rows(_euler_rows(rpy[0], -rpy[1], -rpy[2]))
 
 
 # An angle this close below 2 pi is reported as 0: a level robot's pitch of -1e-9 rad would

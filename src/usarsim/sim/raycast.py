@@ -197,17 +197,19 @@ def _cell_span(lo, hi, g, x0, y0, cell, nx, ny):
 def build_grid(gtype, gsize, use, xpos, xmat, cell_m, max_cells):
     """File the geoms of ``use`` (planes apart) in a grid over x and y.
 
-    Returns (x0, y0, cell, nx, ny, start, items, planes): the geoms of cell
+    Returns (x0, y0, cell, nx, ny, start, items, planes, z0, z1): the geoms of cell
     (cx, cy) are items[start[c]:start[c + 1]] with c = cy * nx + cx; planes are
-    tested by every ray.
+    tested by every ray; z0..z1 is the height every filed geom lies within (a ray is
+    done with the grid where it leaves that layer: one that climbs to a satellite
+    crosses no cell above the walls).
     """
     ng = gtype.shape[0]
     lo = np.empty((ng, 2))
     hi = np.empty((ng, 2))
     inside = np.zeros(ng, np.bool_)
     nplanes = 0
-    x0 = y0 = math.inf
-    x1 = y1 = -math.inf
+    x0 = y0 = z0 = math.inf
+    x1 = y1 = z1 = -math.inf
     for g in range(ng):
         if not use[g]:
             continue
@@ -218,6 +220,9 @@ def build_grid(gtype, gsize, use, xpos, xmat, cell_m, max_cells):
         m = xmat[g]
         ex = abs(m[0]) * h0 + abs(m[1]) * h1 + abs(m[2]) * h2 + GRID_PAD_M
         ey = abs(m[3]) * h0 + abs(m[4]) * h1 + abs(m[5]) * h2 + GRID_PAD_M
+        ez = abs(m[6]) * h0 + abs(m[7]) * h1 + abs(m[8]) * h2 + GRID_PAD_M
+        z0 = min(z0, xpos[g, 2] - ez)
+        z1 = max(z1, xpos[g, 2] + ez)
         lo[g, 0] = xpos[g, 0] - ex
         lo[g, 1] = xpos[g, 1] - ey
         hi[g, 0] = xpos[g, 0] + ex
@@ -234,7 +239,7 @@ def build_grid(gtype, gsize, use, xpos, xmat, cell_m, max_cells):
             planes[k] = g
             k += 1
     if x0 > x1:  # nothing but planes
-        return 0.0, 0.0, 1.0, 0, 0, np.zeros(1, np.int64), np.empty(0, np.int64), planes
+        return 0.0, 0.0, 1.0, 0, 0, np.zeros(1, np.int64), np.empty(0, np.int64), planes, 0.0, 0.0
     cell = cell_m
     while math.ceil((x1 - x0) / cell) * math.ceil((y1 - y0) / cell) > max_cells:
         cell *= 2.0
@@ -261,7 +266,7 @@ def build_grid(gtype, gsize, use, xpos, xmat, cell_m, max_cells):
                 c = cy * nx + cx
                 items[fill[c]] = g
                 fill[c] += 1
-    return x0, y0, cell, nx, ny, count, items, planes
+    return x0, y0, cell, nx, ny, count, items, planes, z0, z1
 
 
 @njit(cache=True, nogil=True)
@@ -309,7 +314,8 @@ def _stepping(o, v, lo, c, cell):
 
 @njit(cache=True, nogil=True)
 def cast_grid_kernel(orig, dirs, cutoff, gtype, gsize, grbound, gbody, gok, xpos, xmat, exclude_body,
-                     want_normals, out_dist, out_geom, out_normal, x0, y0, cell, nx, ny, start, items, planes):
+                     want_normals, out_dist, out_geom, out_normal, x0, y0, cell, nx, ny, start, items, planes,
+                     z0, z1):
     """Cast ray i from orig[i] along dirs[i] (n x 3 each, MuJoCo world frame) through the
     grid of :func:`build_grid` (filed from the same positions).
 
@@ -344,6 +350,7 @@ def cast_grid_kernel(orig, dirs, cutoff, gtype, gsize, grbound, gbody, gok, xpos
         if nx > 0:
             ta, tb = _slab(ox, vx, x0, x1, ta, tb)
             ta, tb = _slab(oy, vy, y0, y1, ta, tb)
+            ta, tb = _slab(oz, vz, z0, z1, ta, tb)
         else:
             tb = -1.0
         if ta <= tb and ta <= best:
