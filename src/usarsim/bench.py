@@ -359,11 +359,13 @@ def run_camera_bench(args) -> int:
                 import mujoco
 
                 from usarsim.sim.builder import camera_fovy_deg
+                from usarsim.sim.render import nearest_mipmap
 
                 cam = next(iter(snap.cameras.values()))
                 r = mujoco.Renderer(snap.model, h, w)
                 r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
                 r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+                nearest_mipmap(r)  # as the image server draws
                 snap.model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, w, h)
                 while (count := jobs.get()) is not None:
                     t = time.perf_counter()

@@ -71,6 +71,33 @@ def _seen_groups() -> mujoco.MjvOption:
 SEEN = _seen_groups()
 
 
+# Textures are sampled from the nearest of their mipmaps (GL_LINEAR_MIPMAP_NEAREST) instead of
+# blending the two nearest (MuJoCo's GL_LINEAR_MIPMAP_LINEAR): on a software renderer the
+# blend is most of what textures cost (2-core machine, 640x480: 25-27 % fewer frames a second
+# than plain colours with the blend, 16-21 % without), for pictures that differ by 2 levels
+# of 255 on average.
+MIN_FILTER_NEAREST_MIPMAP = 0x2701  # GL_LINEAR_MIPMAP_NEAREST (OpenGL 1.0)
+
+
+def nearest_mipmap(r: mujoco.Renderer) -> None:
+    """Sample ``r``'s 2-D textures from their nearest mipmap (see MIN_FILTER_NEAREST_MIPMAP);
+    left as MuJoCo made them where its renderer's context cannot be reached."""
+    ctx, gl = getattr(r, "_mjr_context", None), getattr(r, "_gl_context", None)
+    if ctx is None or gl is None:
+        return
+    try:
+        from OpenGL import GL
+
+        gl.make_current()
+        for i in range(ctx.ntexture):
+            if ctx.textureType[i] == int(mujoco.mjtTexture.mjTEXTURE_2D):
+                GL.glBindTexture(GL.GL_TEXTURE_2D, int(ctx.texture[i]))
+                GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, MIN_FILTER_NEAREST_MIPMAP)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+    except Exception as exc:  # a GL binding missing or refusing: keep MuJoCo's filtering
+        log.debug("texture filtering left as MuJoCo made it: %s", exc)
+
+
 @dataclass(frozen=True)
 class Tile:
     """One camera's place in a picture: its robot, its name, and the rectangle it fills."""
@@ -260,6 +287,7 @@ class RenderService:
             # reflections cost more than they tell an operator; shadows as asked
             r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(self.shadows)
             r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+            nearest_mipmap(r)
         self._renderers[(width, height)] = r  # (again) the most recently used
         return r
 
