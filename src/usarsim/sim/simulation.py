@@ -47,15 +47,20 @@ from usarsim.sim.view import RobotHandle, WorldView
 
 log = logging.getLogger("usarsim.sim")
 
-# MuJoCo's thread pool (mju_threadpool) solves the constraint islands of robots that do
-# not touch, and parts of collision detection, on several cores; the results are the
-# same bit for bit.  Below this many robots the pool's overhead outweighs what it saves
-# (2-core machine: bare mj_step 20.8 -> 19.5 times real time with 16 P2ATs, 3.6 -> 4.9
-# with 64, 0.74 -> 1.09 with 256).  USARSIM_PHYSICS_THREADS (serve --physics-threads)
-# sets the pool's threads: 0 or 1 for none, "auto" (the default) for one a core, at most
-# PHYSICS_THREADS_MAX, from PHYSICS_POOL_MIN_ROBOTS robots on.
+# MuJoCo's thread pool (mju_threadpool) solves the constraint islands of robots that do not
+# touch, and parts of collision detection, on several cores; the results are the same bit for
+# bit.  Alone, on the 2-core machine, it takes bare mj_step from 3.6 to 4.9 times real time
+# with 64 P2ATs and from 0.74 to 1.09 with 256 (and costs more than it saves with 16: 20.8 ->
+# 19.5).  Beside the measuring thread (usarsim.sim.measuring) and the event loop, which want
+# a core too, the bench (2 runs each, alternately) lost 5-15 % with it with 64 robots and 30 %
+# with 16, gained nothing with 128 and gained 7-15 % with 256, where the physics outweighs
+# everything else.  So it gets every core but one from PHYSICS_POOL_MIN_ROBOTS robots on (none
+# on two cores), and every core from PHYSICS_POOL_ALL_CORES_ROBOTS on.  USARSIM_PHYSICS_THREADS
+# (serve --physics-threads) sets its threads: 0 or 1 for none, "auto" (the default) for that
+# rule, at most PHYSICS_THREADS_MAX.
 PHYSICS_THREADS_ENV = "USARSIM_PHYSICS_THREADS"
 PHYSICS_POOL_MIN_ROBOTS = 32
+PHYSICS_POOL_ALL_CORES_ROBOTS = 160
 PHYSICS_THREADS_MAX = 8
 
 
@@ -75,7 +80,9 @@ def physics_threads(robots: int) -> int:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
-    return min(cores, PHYSICS_THREADS_MAX) if cores > 1 else 0
+    spare = 0 if robots >= PHYSICS_POOL_ALL_CORES_ROBOTS else 1  # a core for the measuring thread and the server
+    threads = min(cores - spare, PHYSICS_THREADS_MAX)
+    return threads if threads > 1 else 0
 
 __all__ = ["Output", "SimRobot", "Simulation", "describe_items"]
 
