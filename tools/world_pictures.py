@@ -23,7 +23,7 @@ ROBOT_VIEWS = {"DM-USAR_yellow": "PlayerStart1", "DM-USAR_orange": "PlayerStart5
                "DM-Road_UrbanChallenge": "PlayerStart1"}
 # The view from above: (look-at point in the USARSim frame, azimuth and elevation in degrees,
 # distance in metres); None: the floor's centre, from the south-west, 0.75 of its size away.
-TOP_VIEWS = {"DM-Road_UrbanChallenge": ((-82.0, -123.0, 0.0), 60.0, -35.0, 40.0),
+TOP_VIEWS = {"DM-Road_UrbanChallenge": ((-41.0, -41.0, 0.0), 0.0, -90.0, 55.0),  # a crossing, north up
              "DM-CollapsedBuilding": ((0.0, 0.0, 0.0), 45.0, -40.0, 38.0),
              "DM-Harbour": ((-5.0, 0.0, 0.0), 45.0, -40.0, 70.0)}
 WIDTH, HEIGHT = 480, 360

@@ -246,3 +246,53 @@ def test_the_texture_names_of_world_files_are_the_textures_drawn():
     assert a is b and a.dtype == np.uint8 and a.ndim == 3
     # a texture's average colour is its material's colour
     assert np.allclose(a.reshape(-1, 3).mean(axis=0) / 255.0, (0.62, 0.27, 0.2), atol=0.08)
+
+
+def crossing_from_above(size: int = 400, span_m: float = 45.6) -> tuple[np.ndarray, float]:
+    """The road world's crossing of Avenue B and Second Street (USARSim X = Y = -41) seen
+    straight from above, north up and east right, as the picture and its pixels a metre."""
+    import mujoco
+
+    from usarsim.config.catalog import resolve_world
+    from usarsim.sim.render import SEEN, nearest_mipmap
+    from usarsim.sim.simulation import Simulation
+
+    sim = Simulation(resolve_world("DM-Road_UrbanChallenge"), seed=1)
+    m, d = sim.model, sim.data
+    r = mujoco.Renderer(m, size, size)
+    nearest_mipmap(r)
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.lookat[:] = [-41.0, 41.0, 0.0]  # USARSim (X, Y) is MuJoCo (x, -y)
+    cam.azimuth, cam.elevation = 0.0, -90.0  # looking down, +x (north) up the picture
+    # the distance that shows span_m metres of the ground across the picture
+    cam.distance = span_m / 2 / math.tan(math.radians(m.vis.global_.fovy) / 2)
+    try:
+        r.update_scene(d, camera=cam, scene_option=SEEN)
+        return r.render(), size / span_m
+    finally:
+        r.close()
+
+
+def test_every_approach_to_a_crossing_has_its_stop_line_on_its_own_lane():
+    """Right-hand traffic: each approach lane stops 7.5 m before the crossing street's centre
+    line (the RNDF's stop waypoints), so the four stop lines make a pinwheel; on the streets
+    running north-south and on those running east-west alike.  Each quarter turn of the
+    picture brings the next approach to the bottom, its own lane then on the right."""
+    if gl_problem():
+        pytest.skip(gl_problem())
+    rgb, px_m = crossing_from_above()
+    centre = rgb.shape[0] / 2
+    shares = {}
+    approaches = {"from the south": rgb, "from the north": np.rot90(rgb, 2),
+                  "from the west": np.rot90(rgb, 1), "from the east": np.rot90(rgb, -1)}
+    for name, pic in approaches.items():
+        p = pic.astype(float)
+        white = (p.min(axis=2) > 190) & (p.max(axis=2) - p.min(axis=2) < 40)
+        rows = slice(int(centre + 6.5 * px_m), int(centre + 8.5 * px_m))  # 7.5 m down the approach
+        own = white[rows, int(centre + 0.6 * px_m):int(centre + 3.1 * px_m)]  # its own lane (right)
+        other = white[rows, int(centre - 3.1 * px_m):int(centre - 0.6 * px_m)]  # the oncoming lane
+        assert own.mean() > 0.06, (name, own.mean())  # a line 0.45 m wide across a band of 2 m
+        assert other.mean() < 0.01, (name, other.mean())
+        shares[name] = (own.mean(), other.mean())
+    assert len(shares) == 4, shares
