@@ -296,3 +296,30 @@ def test_every_approach_to_a_crossing_has_its_stop_line_on_its_own_lane():
         assert other.mean() < 0.01, (name, other.mean())
         shares[name] = (own.mean(), other.mean())
     assert len(shares) == 4, shares
+
+
+@pytest.mark.parametrize("waving", [True, False])
+def test_a_waving_victim_moves_in_the_picture(tmp_path, waving):
+    """Half a wave apart (its arm at either end of its swing), the pictures of a waving victim
+    2 m ahead differ over a patch of the victim's size; those of a still one do not."""
+    from usarsim.config.world import load_world
+    from usarsim.sim.constants import WAVE_PERIOD_S
+
+    p = tmp_path / "VictimAhead.yaml"
+    p.write_text(VICTIM_WORLD.replace("rotation: [0.0, 0.0, 1.5708]}", f"rotation: [0.0, 0.0, 1.5708], waving: {str(waving).lower()}}}"))
+    world = load_world(p)
+    cam = Camera(world, [(world.start_poses[0].location, world.start_poses[0].rotation)])
+    try:
+        cam.sim.advance(WAVE_PERIOD_S - cam.sim.time % WAVE_PERIOD_S)  # a whole period: the arm down
+        first = cam.picture(1).astype(int)
+        cam.sim.advance(WAVE_PERIOD_S / 2)  # half a period on: the arm at its highest
+        second = cam.picture(1).astype(int)
+    finally:
+        cam.close()
+    moved = np.abs(first - second).max(axis=2) > 40
+    if not waving:
+        assert moved.sum() < 20, int(moved.sum())
+        return
+    rows, cols = np.nonzero(moved)
+    assert moved.sum() > 0.004 * WIDTH * HEIGHT, int(moved.sum())  # a patch, not a few pixels
+    assert WIDTH / 4 < np.median(cols) < 3 * WIDTH / 4  # where the victim is

@@ -22,8 +22,10 @@ GROUND_GROUPS = np.array([1, 1, 1, 1, 0, 1], dtype=np.uint8)
 SOLID_CONTYPE, SOLID_CONAFFINITY = 1, 3
 WHEEL_CONTYPE, WHEEL_CONAFFINITY = 2, 0
 
-# Waving victims: the right arm swings about the shoulder, 0.6 rad either way, once every
-# 2 s (the manual's victims wave an arm to draw attention, section 3.2.1).
+# Waving victims: the right arm rises about the shoulder's own left-right axis from where it
+# lies (along the body) to 2 x 0.6 rad, and back, once every 2 s (the manual's victims wave an
+# arm to draw attention, section 3.2.1).  A roll about the body's long axis, along which the
+# arm lies, would turn the arm about itself and show nothing.
 WAVE_AMPLITUDE_RAD = 0.6
 WAVE_PERIOD_S = 2.0
 

@@ -113,11 +113,13 @@ class Entities:
 
     # Each stretch of physics steps ------------------------------------------------------
     def update(self, d: mujoco.MjData, time: float) -> None:
-        """Move the waving victims' arms to their angle at ``time``."""
+        """Move the waving victims' arms to their angle at ``time``: raised (a negative pitch, about
+        the shoulder's left-right axis) from 0 at whole periods to twice the amplitude half a
+        period later."""
+        lift = WAVE_AMPLITUDE_RAD * (1.0 - math.cos(2.0 * math.pi * time / WAVE_PERIOD_S))
         for mocap, v in self._wavers:
-            swing = WAVE_AMPLITUDE_RAD * math.sin(2.0 * math.pi * time / WAVE_PERIOD_S)
             roll, pitch, yaw = v.rotation
-            d.mocap_quat[mocap] = frames.usar_euler_to_mj_quat((roll + swing, pitch, yaw))
+            d.mocap_quat[mocap] = frames.usar_euler_to_mj_quat((roll, pitch - lift, yaw))
 
     @property
     def has_motion(self) -> bool:
