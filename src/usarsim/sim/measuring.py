@@ -66,7 +66,8 @@ def measure_report(uid: int, sensors: list[Sensor], key: str, view: WorldView) -
 Due = Output | tuple[int, list, str]
 
 
-def _measure_all(items: list[Due], view: WorldView) -> list[Output]:
+def measure_all(items: list[Due], view: WorldView) -> list[Output]:
+    """An instant's outputs in order: those made already, and the reports measured from ``view``."""
     out = []
     for item in items:
         if isinstance(item, Output):
@@ -109,7 +110,7 @@ class Measurer:
             slot.future.result()  # the copy is free once its instant is measured
         mujoco.mj_copyData(slot.data, model, data)
         view = WorldView(model, slot.data, time, slot.caster, world, entities)
-        slot.future = self._executor.submit(_measure_all, items, view)
+        slot.future = self._executor.submit(measure_all, items, view)
         return slot.future
 
     def call(self, fn) -> Future:

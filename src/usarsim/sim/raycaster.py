@@ -107,13 +107,16 @@ class RayCaster:
             else:
                 raycast.warm_up()
         self.backend = backend
-        # the compiled kernel's grid of geoms, and the time and joint positions it was filed at
+        self._new_grid()
+
+    def _new_grid(self) -> None:
+        """No grid of geoms yet (the compiled kernel's; filed at its first cast), and the
+        time, joint positions and mocap orientations it will have been filed at."""
         self._grid = None
         self._grid_time = None
         self._grid_qpos = np.empty(0)
         self._grid_mocap = np.empty(0)
         self.grid_builds = 0
-
 
     def bound_to(self, data: mujoco.MjData) -> RayCaster:
         """This caster for another MjData of the same model (a copy of the world's state):
@@ -121,9 +124,7 @@ class RayCaster:
         other = copy.copy(self)
         other.d = data
         other.rays_cast = 0
-        other._grid, other._grid_time = None, None
-        other._grid_qpos, other._grid_mocap = np.empty(0), np.empty(0)
-        other.grid_builds = 0
+        other._new_grid()
         return other
 
     def _filed(self) -> tuple:

@@ -37,7 +37,7 @@ from usarsim.sim.cameras import Cameras
 from usarsim.sim.constants import GROUND_GROUPS
 from usarsim.sim.entities import Entities
 from usarsim.sim.health import BlowUpGuard
-from usarsim.sim.measuring import Due, Measurer, OrderedOutbox, measure_report
+from usarsim.sim.measuring import Due, Measurer, OrderedOutbox, measure_all, measure_report
 from usarsim.sim.outputs import Output
 from usarsim.sim.raycaster import RayCaster
 from usarsim.sim.reports import EPS, ReportSchedule
@@ -396,16 +396,8 @@ class Simulation:
             self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
                                                   self.entities, items))
             return
-        view = None
-        for item in items:
-            if isinstance(item, Output):
-                self.outbox.append(item)
-                continue
-            if view is None:
-                view = self.view()
-            o = measure_report(item[0], item[1], item[2], view)
-            if o is not None:
-                self.outbox.append(o)
+        for o in measure_all(items, self.view()):
+            self.outbox.append(o)
 
     def _emit(self, r: SimRobot, sensors: list[Sensor], key: str, view: WorldView | None = None) -> None:
         o = measure_report(r.uid, sensors, key, view or self.view())
