@@ -48,5 +48,7 @@ def test_a_number_of_threads_overrides_and_nonsense_is_auto(monkeypatch):
     assert simulation.physics_threads(1) == 5
     monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "1")
     assert simulation.physics_threads(256) == 0
+    monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "100000")
+    assert simulation.physics_threads(1) == 256  # held to what serve --physics-threads takes
     monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "lots")
     assert simulation.physics_threads(64) == 3

@@ -62,6 +62,7 @@ PHYSICS_THREADS_ENV = "USARSIM_PHYSICS_THREADS"
 PHYSICS_POOL_MIN_ROBOTS = 32
 PHYSICS_POOL_ALL_CORES_ROBOTS = 160
 PHYSICS_THREADS_MAX = 8
+PHYSICS_THREADS_LIMIT = 256  # a number asked for is held to this (serve --physics-threads takes no more)
 
 
 def physics_threads(robots: int) -> int:
@@ -73,7 +74,10 @@ def physics_threads(robots: int) -> int:
         except ValueError:
             log.warning("%s=%r is neither a number nor 'auto'; using 'auto'", PHYSICS_THREADS_ENV, value)
         else:
-            return n if n > 1 else 0
+            if n > PHYSICS_THREADS_LIMIT:
+                log.warning("%s=%d: MuJoCo's pool gets %d threads at most", PHYSICS_THREADS_ENV, n,
+                            PHYSICS_THREADS_LIMIT)
+            return min(n, PHYSICS_THREADS_LIMIT) if n > 1 else 0
     if robots < PHYSICS_POOL_MIN_ROBOTS:
         return 0
     try:
