@@ -262,7 +262,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     b.add_argument("--cameras", action="store_true",
                    help="measure the image server instead: frames per second a client gets of a P2AT's camera, "
-                        "beside bare MuJoCo rendering plus JPEG encoding of the same view, and their ratio")
+                        "beside bare MuJoCo rendering plus JPEG encoding of the same view, and their ratio; and "
+                        "what textures cost: the same camera served from the world in plain colours")
     b.add_argument("--sizes", type=_size, nargs="+", default=[(320, 240), (640, 480)], metavar="WxH",
                    help="with --cameras: picture sizes (default: 320x240 640x480)")
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")

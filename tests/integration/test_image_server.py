@@ -259,6 +259,10 @@ def test_the_camera_bench_reports_served_and_bare_frame_rates():
     (row,) = json.loads(out.stdout)
     assert row["size"] == "64x48" and row["served_fps"] > 0 and row["bare_render_jpeg_fps"] > 0
     assert row["ratio"] == pytest.approx(row["served_fps"] / row["bare_render_jpeg_fps"], rel=0.01)
+    # the same run serves the camera from the world in plain colours too, and says what textures cost
+    assert row["served_plain_fps"] > 0
+    assert row["textures_cost_percent"] == pytest.approx(100 * (1 - row["served_fps"] / row["served_plain_fps"]),
+                                                         abs=0.2)
 
 
 def test_the_stereo_robot_renders_both_eyes(server_factory, image_world):
