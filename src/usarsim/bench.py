@@ -23,13 +23,44 @@ import time
 
 import numpy as np
 
+Spot = tuple[float, float, float, float]  # x, y, z, yaw
 
-def free_spots(world, n: int, clearance: float = 0.4, spacing: float = 0.7) -> list[tuple[float, float, float]]:
-    """Start poses first, then grid points at least ``clearance`` from every static object."""
+
+def free_spots(world, n: int, clearance: float = 0.4, spacing: float = 0.7) -> list[Spot]:
+    """Start poses first, then points of a grid ``spacing`` apart at least ``clearance`` from
+    every static object and ``spacing`` from every start pose."""
+    spots = _spots(world, clearance, spacing, limit=None)
+    if len(spots) < n:
+        raise SystemExit(f"usarsim bench: the world has room for {len(spots)} robots, {n} asked")
+    return spots[:n]
+
+
+def spread_spots(world, n: int, clearance: float = 0.4, spacing: float = 0.7) -> list[Spot]:
+    """``n`` spots as far apart as the world's free floor allows: the start poses, then a grid
+    of the widest spacing (at least ``spacing``, to the centimetre) that still has room for
+    ``n``.  Robots started on a tight grid in one corner of an arena jam into each other as they
+    turn; the bench measures robots that meet now and then, not one pile-up."""
+    if len(_spots(world, clearance, spacing, limit=n)) < n:
+        raise SystemExit(f"usarsim bench: the world has room for {len(_spots(world, clearance, spacing))} "
+                         f"robots, {n} asked")
+    lo, hi = spacing, spacing * 2
+    while len(_spots(world, clearance, hi, limit=n)) >= n and hi < 1e3:
+        lo, hi = hi, hi * 2
+    while hi - lo > 0.01:  # the room for n shrinks (roughly) as the spacing grows: bisect
+        mid = (lo + hi) / 2
+        if len(_spots(world, clearance, mid, limit=n)) >= n:
+            lo = mid
+        else:
+            hi = mid
+    return _spots(world, clearance, lo, limit=n)
+
+
+def _spots(world, clearance: float, spacing: float, limit: int | None = None) -> list[Spot]:
+    """Free spots (x, y, z, yaw): the start poses, then grid points; at most ``limit``."""
     from usarsim.sim.frames import euler_to_mat
 
     spots = [tuple(p.location) + (p.rotation[2],) for p in world.start_poses]
-    boxes = []
+    centers, halves = [], []
     for o in world.objects:
         if o.shape == "box":
             half = np.abs(euler_to_mat(*o.rotation)) @ (np.array(o.size) / 2.0)
@@ -37,21 +68,25 @@ def free_spots(world, n: int, clearance: float = 0.4, spacing: float = 0.7) -> l
             half = np.abs(euler_to_mat(*o.rotation)) @ np.array([o.radius_m, o.radius_m, o.length_m / 2.0])
         center = np.array(o.center)
         if center[2] - half[2] < -0.02:  # objects lower than 2 cm (plates, ramps' feet) do not block
-            boxes.append((center[:2], half[:2]))
+            centers.append(center[:2])
+            halves.append(half[:2])
     fl = world.floor
     xs = np.arange(fl.center[0] - fl.size[0] / 2 + 1.0, fl.center[0] + fl.size[0] / 2 - 1.0, spacing)
     ys = np.arange(fl.center[1] - fl.size[1] / 2 + 1.0, fl.center[1] + fl.size[1] / 2 - 1.0, spacing)
-    taken = [np.array(s[:2]) for s in spots]
-    for x in xs:
-        for y in ys:
-            p = np.array([x, y])
-            free = all(np.any(np.abs(p - c) > h + clearance) for c, h in boxes)
-            if free and all(np.linalg.norm(p - t) >= spacing * 0.99 for t in taken):
-                spots.append((float(x), float(y), -0.25, 0.0))
-                taken.append(p)
-    if len(spots) < n:
-        raise SystemExit(f"usarsim bench: the world has room for {len(spots)} robots, {n} asked")
-    return [s for s in spots[:n]]
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    grid = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    free = np.ones(len(grid), dtype=bool)
+    if centers:  # outside every object's footprint grown by the clearance, along x or along y
+        c, h = np.array(centers), np.array(halves) + clearance
+        free = ~np.any(np.all(np.abs(grid[:, None, :] - c[None, :, :]) <= h[None, :, :], axis=2), axis=1)
+    if spots:  # grid points lie ``spacing`` apart already; keep them as far from the start poses
+        starts = np.array([sp[:2] for sp in spots])
+        free &= np.all(np.linalg.norm(grid[:, None, :] - starts[None, :, :], axis=2) >= spacing * 0.99, axis=1)
+    for x, y in grid[free]:
+        if limit is not None and len(spots) >= limit:
+            break
+        spots.append((float(x), float(y), -0.25, 0.0))
+    return spots if limit is None else spots[:limit]
 
 
 async def _client_main(port: int, poses: list, seconds_hint: float) -> None:
@@ -139,7 +174,7 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
     another): the memory figures are the simulator's."""
     from usarsim.server.app import Application
 
-    poses = free_spots(world, n)
+    poses = spread_spots(world, n)
     app = Application(world, host="127.0.0.1", port=0, seed=0, speed=speed, lockstep=False, max_connections=max(64, n),
                       truth_port=None, image_port=None, web_port=None, record=record, record_cameras_fps=cameras_fps)
     served = _ServedApp(app)
@@ -486,25 +521,34 @@ def snapshot_state(sim, runner=None) -> np.ndarray:
     return box.get("state")
 
 
+RAW_REPEATS = 3  # bare mj_step is timed this many times from the same state; the median counts
+
+
 def raw_mujoco_rtf(model, seconds: float, state: np.ndarray | None = None) -> float:
-    """Real-time factor of bare ``mj_step`` on ``model``, from ``state`` (the scene the
-    benchmark ended with, robots driving as they were) or, without it, from the
-    initial state with every wheel turning."""
+    """Real-time factor of bare ``mj_step`` on ``model`` (one thread), from ``state`` (the
+    scene the benchmark ended with, robots driving as they were) or, without it, from the
+    initial state with every wheel turning: the median of RAW_REPEATS runs of ``seconds``
+    each from that same state (a single short run of a few robots varied by 20 %)."""
     import mujoco
 
-    d = mujoco.MjData(model)
     spec = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) | int(mujoco.mjtState.mjSTATE_CTRL)
-    if state is not None and state.size == mujoco.mj_stateSize(model, spec):
-        mujoco.mj_setState(model, d, state, spec)
-    else:
+    d = mujoco.MjData(model)
+    if state is None or state.size != mujoco.mj_stateSize(model, spec):
         d.ctrl[:] = 2.0
-    mujoco.mj_forward(model, d)
+        state = np.empty(mujoco.mj_stateSize(model, spec))
+        mujoco.mj_getState(model, d, state, spec)
     steps = max(1, int(round(seconds / model.opt.timestep)))
-    mujoco.mj_step(model, d, min(steps, 50))  # warm up
-    t0 = time.perf_counter()
-    mujoco.mj_step(model, d, steps)
-    wall = time.perf_counter() - t0
-    return steps * model.opt.timestep / wall
+    rates = []
+    for _ in range(RAW_REPEATS):
+        mujoco.mj_setState(model, d, state, spec)
+        mujoco.mj_forward(model, d)
+        mujoco.mj_step(model, d, min(steps, 50))  # warm up
+        mujoco.mj_setState(model, d, state, spec)
+        mujoco.mj_forward(model, d)
+        t0 = time.perf_counter()
+        mujoco.mj_step(model, d, steps)
+        rates.append(steps * model.opt.timestep / (time.perf_counter() - t0))
+    return statistics.median(rates)
 
 
 def logging_quiet() -> None:

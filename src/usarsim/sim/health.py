@@ -42,6 +42,7 @@ class BlowUpGuard:
         self.resets = 0
         self._sane = MAX_SANE_VELOCITY
         self._snapshot: np.ndarray | None = None
+        self._snapshot_model: mujoco.MjModel | None = None
 
     def index(self, robots: Iterable[SimRobot]) -> None:
         """After a model build: the fastest speed any robot of the world may reach."""
@@ -52,9 +53,9 @@ class BlowUpGuard:
 
     def step(self, m: mujoco.MjModel, d: mujoco.MjData, n: int, robots: Iterable[SimRobot]) -> None:
         """``n`` physics steps in one call, repaired as needed."""
-        size = mujoco.mj_stateSize(m, STATE)
-        if self._snapshot is None or self._snapshot.size != size:
-            self._snapshot = np.empty(size)
+        if self._snapshot is None or self._snapshot_model is not m:  # a model rebuilt: its state's size
+            self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
+            self._snapshot_model = m
         mujoco.mj_getState(m, d, self._snapshot, STATE)
         mujoco.mj_step(m, d, n)
         if self._healthy(d):
