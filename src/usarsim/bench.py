@@ -355,22 +355,30 @@ class _ServedCamera:
                                    truth_port=None, image_port=0,
                                    image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0), web_port=None)
             self.server = _ServedApp(self.app)
-            self.ctl = socket.create_connection(("127.0.0.1", self.app.control.port), timeout=30)
-            pose = world.start_poses[0]
-            self.ctl.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
-                             "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode())
-            sim = self.app.facade.sim
-            deadline = time.monotonic() + 30
-            while not sim.robots and time.monotonic() < deadline:
-                time.sleep(0.01)
-            time.sleep(0.5)
+            try:
+                self.ctl = socket.create_connection(("127.0.0.1", self.app.control.port), timeout=30)
+                pose = world.start_poses[0]
+                self.ctl.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
+                                 "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode())
+                sim = self.app.facade.sim
+                deadline = time.monotonic() + 30
+                while not sim.robots and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                time.sleep(0.5)
+            except BaseException:
+                self.close()  # the server's thread and sockets go with a failed start
+                raise
         finally:
             if before is None:
                 os.environ.pop(TEXTURES_ENV, None)
             else:
                 os.environ[TEXTURES_ENV] = before
-        self.viewer = socket.create_connection(("127.0.0.1", self.app.image.port), timeout=60)
-        self.frame()  # the first picture opens the GL context
+        try:
+            self.viewer = socket.create_connection(("127.0.0.1", self.app.image.port), timeout=60)
+            self.frame()  # the first picture opens the GL context
+        except BaseException:
+            self.close()
+            raise
 
     def frame(self) -> None:
         import struct
@@ -417,19 +425,14 @@ class _BareRenderer:
         self.fps(1)  # its context is open
 
     def _run(self) -> None:
-        import mujoco
-
         from usarsim.server.image import encode_picture
         from usarsim.sim.builder import camera_fovy_deg
-        from usarsim.sim.render import nearest_mipmap
+        from usarsim.sim.render import camera_renderer
 
         w, h = self.size
         snap = self.snap
         cam = next(iter(snap.cameras.values()))
-        r = mujoco.Renderer(snap.model, h, w)
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
-        nearest_mipmap(r)
+        r = camera_renderer(snap.model, w, h, shadows=False)
         snap.model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, w, h)
         while (count := self.jobs.get()) is not None:
             t = time.perf_counter()

@@ -98,6 +98,16 @@ def nearest_mipmap(r: mujoco.Renderer) -> None:
         log.debug("texture filtering left as MuJoCo made it: %s", exc)
 
 
+def camera_renderer(model: mujoco.MjModel, width: int, height: int, shadows: bool) -> mujoco.Renderer:
+    """An offscreen renderer drawing the way cameras draw: shadows as asked, no reflections
+    (they cost more than they tell an operator), textures from their nearest mipmap."""
+    r = mujoco.Renderer(model, height, width)
+    r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(shadows)
+    r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+    nearest_mipmap(r)
+    return r
+
+
 @dataclass(frozen=True)
 class Tile:
     """One camera's place in a picture: its robot, its name, and the rectangle it fills."""
@@ -278,16 +288,12 @@ class RenderService:
             while len(self._renderers) >= MAX_RENDERERS:  # the least recently used goes
                 self._renderers.pop(next(iter(self._renderers))).close()
             try:
-                r = mujoco.Renderer(model, height, width)
+                r = camera_renderer(model, width, height, self.shadows)
             except Exception as exc:
                 self.available = False
                 self.error = f"no OpenGL context for rendering ({exc}); set MUJOCO_GL=egl or osmesa"
                 raise RuntimeError(self.error) from exc
             self.available = True
-            # reflections cost more than they tell an operator; shadows as asked
-            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(self.shadows)
-            r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
-            nearest_mipmap(r)
         self._renderers[(width, height)] = r  # (again) the most recently used
         return r
 
