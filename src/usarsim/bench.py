@@ -125,8 +125,10 @@ class _ServedApp:
     """An Application served by its own event loop on a thread, until ``stop()``."""
 
     def __init__(self, app):
+        from usarsim.server.polling import LOCKSTEP_POLL_S, new_event_loop
+
         self.app = app
-        self.loop = asyncio.new_event_loop()
+        self.loop = new_event_loop(LOCKSTEP_POLL_S if app.facade.lockstep else 0.0)  # as `serve` makes it
         ready = threading.Event()
 
         def serve():

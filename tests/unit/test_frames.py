@@ -140,3 +140,17 @@ def test_wrapping_keeps_every_other_angle():
     assert frames.wrap_2pi(-0.001) == pytest.approx(2 * math.pi - 0.001)
     assert frames.wrap_2pi(7.0) == pytest.approx(7.0 - 2 * math.pi)
     assert frames.wrap_2pi(math.pi) == math.pi
+
+
+@settings(max_examples=300, deadline=None)
+@given(angle, pitch_angle, angle, st.floats(min_value=0.0, max_value=1.2))
+def test_a_waving_arm_turns_as_its_euler_angles_say(roll, pitch, yaw, lift):
+    """The waving victims' arms are turned by cos(lift/2) A + sin(lift/2) B: the rotation of
+    (roll, pitch - lift, yaw) in the USARSim frame."""
+    from usarsim.sim.entities import _waving_terms
+
+    at_rest, lifting = _waving_terms([(roll, pitch, yaw)])
+    q = math.cos(0.5 * lift) * at_rest[0] + math.sin(0.5 * lift) * lifting[0]
+    expected = frames.usar_euler_to_mj_quat((roll, pitch - lift, yaw))
+    assert np.linalg.norm(q) == pytest.approx(1.0, abs=1e-12)
+    assert abs(float(q @ expected)) == pytest.approx(1.0, abs=1e-12)  # the same rotation (q or -q)

@@ -606,3 +606,39 @@ def test_parse_command_raises_only_protocol_error(line: str) -> None:
         parse_command(line)
     except ProtocolError:
         pass
+
+
+# --------------------------------------------------------------------------- STEP, read directly
+
+def _general(line: str):
+    """What the general path (split, then typed) makes of a line, or the error it raises."""
+    from usarsim.protocol.grammar import parse_line
+
+    try:
+        return c.command_from_raw(parse_line(line))
+    except ProtocolError as exc:
+        return type(exc)
+
+
+def _either(line: str):
+    try:
+        return parse_command(line)
+    except ProtocolError as exc:
+        return type(exc)
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.one_of(st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(repr),
+                 st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(lambda x: f"{x:g}"),
+                 st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(lambda x: f"{x:.3E}"),
+                 st.integers(min_value=0, max_value=10**6).map(str),
+                 st.sampled_from(["0", "1e-400", "1e999", ".5", "5.", "00.1", "1E+2", "-0.1", "nan", "0x1"])))
+def test_a_plain_step_line_reads_as_the_general_path_reads_it(text):
+    for line in (f"STEP {{Time {text}}}", f"STEP {{Time  {text}}}", f"step {{time {text}}}"):
+        assert _either(line) == _general(line), line
+
+
+def test_a_plain_step_line_is_a_step():
+    assert parse_command("STEP {Time 0.004}") == c.Step(time_s=0.004)
+    with pytest.raises(ProtocolError, match="greater than 0"):
+        parse_command("STEP {Time 0}")

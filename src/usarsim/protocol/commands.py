@@ -890,12 +890,22 @@ def command_from_raw(raw: RawMessage) -> Command:
     return parser(raw)
 
 
+# ``STEP {Time s}`` as lock-step controllers write it, thousands of times a second: read
+# without splitting the line (anything else, a STEP written otherwise included, is split).
+_PLAIN_STEP = re.compile(r"STEP \{Time ((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\}")
+
+
 def parse_command(line: str) -> Command:
     """Parse one client line (without its terminator) into a command.
 
     Raises :class:`~usarsim.errors.ProtocolError` for a malformed line or a bad value of a
     known key, and nothing else.
     """
+    m = _PLAIN_STEP.fullmatch(line)
+    if m is not None:
+        seconds = float(m.group(1))
+        if 0.0 < seconds < math.inf:  # else the general path says what is wrong
+            return Step(time_s=seconds)
     return command_from_raw(parse_line(line))
 
 

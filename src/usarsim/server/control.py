@@ -64,6 +64,7 @@ class Connection(ServerConnection):
         self._held: dict[str, bytes] = {}  # latest periodic line per stream while not writable
         self.dropped_periodic = 0
         self._backlog: deque[str] = deque()  # lines received, not handled yet
+        self._step_out: list[bytes] = []  # outputs while a STEP runs: sent with the next reply
 
     @property
     def repeats_skipped(self) -> int:
@@ -147,7 +148,21 @@ class Connection(ServerConnection):
 
     # Output ----------------------------------------------------------------------------
     def send_reply(self, msg) -> None:
-        self.write_text(M.format_message(msg))
+        data = M.format_message(msg).encode("ascii", "replace")
+        if self._step_out:  # the outputs held for it first, in the same write
+            self._step_out.append(data)
+            data, self._step_out = b"".join(self._step_out), []
+        self.write(data)
+
+    def send_outputs(self, data: bytes) -> None:
+        """The robot's outputs (sensor lines, statuses, results); while a STEP of its client
+        runs they are held and sent with its STEPPED in one write: a lock-step controller reads
+        them all before the STEPPED anyway, and one write to the socket costs what two do."""
+        session = self.session
+        if session is not None and session.steps_waiting > 0:
+            self._step_out.append(data)
+        else:
+            self.write(data)
 
     def send_periodic(self, key: str, data: bytes) -> None:
         if self.writable:
@@ -216,4 +231,4 @@ class ControlServer(TcpListener):
             else:
                 batches.setdefault(o.uid, []).append(data)
         for uid, chunks in batches.items():
-            conns[uid].write(chunks[0] if len(chunks) == 1 else b"".join(chunks))
+            conns[uid].send_outputs(chunks[0] if len(chunks) == 1 else b"".join(chunks))

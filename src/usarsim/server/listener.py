@@ -9,8 +9,13 @@ import asyncio
 
 
 def call_on_loop(loop: asyncio.AbstractEventLoop | None, fn, *args) -> None:
-    """Have ``loop`` call ``fn(*args)``, from any thread; dropped once the loop is closed."""
+    """Have ``loop`` call ``fn(*args)``, from any thread; dropped once the loop is closed.
+    On the loop's own thread (a lock-step STEP run there) it is queued without waking the
+    loop, behind what other threads queued before."""
     if loop is not None and not loop.is_closed():
+        if asyncio._get_running_loop() is loop:
+            loop.call_soon(fn, *args)
+            return
         try:
             loop.call_soon_threadsafe(fn, *args)
         except RuntimeError:  # the loop closed meanwhile

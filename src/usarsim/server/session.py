@@ -95,7 +95,10 @@ class Session:
         self.actuator_api = False
         self.reports = 0  # REPORTs so far (one without a Name is named Victim<n>)
         self._spawn_done = ctx.threadsafe(self.spawn_done)
-        self._stepped = ctx.threadsafe(lambda t: self.send(M.Stepped(time=t)))
+        self._stepped = ctx.threadsafe(self._step_done)
+        # STEPs asked for and not answered yet: the outputs of the robot meanwhile go out with
+        # the next reply (its STEPPED), in one write (usarsim.server.control)
+        self.steps_waiting = 0
 
     @property
     def facade(self) -> SimFacade:
@@ -549,4 +552,9 @@ class Session:
             self.log_once("step", "STEP {Time %g} is longer than %g s; the world was not advanced", seconds,
                           self.MAX_STEP_S)
             seconds = 0.0
+        self.steps_waiting += 1
         self.facade.step(seconds, self._stepped)
+
+    def _step_done(self, time_s: float) -> None:
+        self.steps_waiting -= 1
+        self.send(M.Stepped(time=time_s))

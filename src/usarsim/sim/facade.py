@@ -1,9 +1,11 @@
 """The narrow, thread-safe door from the servers into the simulation.
 
 Servers (asyncio) call these named, typed methods from their own thread; every change of
-the world runs on the simulation thread, in the order the calls were made.  Results come
-back through callbacks ``on_done(result, error)``, called on the simulation thread.  The
-servers import nothing else from the simulation layer but :mod:`usarsim.sim.types`.
+the world runs on the simulation thread, one at a time, in the order the calls were made (a
+short lock-step STEP, and the requests that waited for it, run on the thread that asked for
+it when the simulation thread has nothing to do: :mod:`usarsim.sim.runner`).  Results come
+back through callbacks ``on_done(result, error)``, called on the thread that ran the request.
+The servers import nothing else from the simulation layer but :mod:`usarsim.sim.types`.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from usarsim.readings import CommandResult
 from usarsim.robots import drive_class
 from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
-from usarsim.sim.runner import Request, SimulationRunner, StepRequest
+from usarsim.sim.runner import Request, SimulationRunner
 from usarsim.sim.simulation import Simulation, describe_items
 from usarsim.sim.snapshot import FrameWatch, WorldFrame
 
@@ -156,7 +158,9 @@ class SimFacade:
         self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True))
 
     def step(self, seconds: float, on_done: Callable[[float], None]) -> None:
-        self.runner.submit(StepRequest(seconds, on_done))
+        """Lock-step STEP: ``on_done(time)`` once ``seconds`` more have run (at once, on the
+        calling thread, when it is short and the simulation has nothing else to do)."""
+        self.runner.step(seconds, on_done)
 
     # Ground truth and pictures -----------------------------------------------------
     def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
@@ -251,7 +255,8 @@ class SimFacade:
 
     # Tools, tests and benchmarks ---------------------------------------------------
     def call(self, fn: Callable[[Simulation], Any], on_done: Done | None = None, immediate: bool = True) -> None:
-        """Run ``fn(sim)`` on the simulation thread (tools, tests, benchmarks; not servers)."""
+        """Run ``fn(sim)`` in the simulation (tools, tests, benchmarks; not servers): at once
+        on the simulation thread, or (``immediate=False`` in lock-step) at the next STEP."""
         self.runner.submit(Request(fn, immediate=immediate, on_done=on_done))
 
 

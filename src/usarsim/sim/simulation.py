@@ -340,12 +340,16 @@ class Simulation:
         return CommandResult(t, name or "", ok=False)
 
     # Stepping -----------------------------------------------------------------
-    def advance(self, seconds: float) -> None:
+    def advance(self, seconds: float, *, waited: bool = False) -> None:
         """Run whole physics steps covering ``seconds`` of simulated time, sending every
-        report that falls due (including at the final instant)."""
+        report that falls due (including at the final instant).
+
+        ``waited``: the caller waits for every reading right after (a lock-step STEP), so
+        the final instant's readings are taken on this thread: nothing would run meanwhile,
+        and handing them to the measuring thread and back costs two thread wake-ups."""
         target = self.step_count + max(0, int(round(seconds / self.dt)))
         while True:
-            self._fire_due()
+            self._fire_due(inline=waited and self.step_count >= target)
             if self._samplers:
                 self._sample_due()
             if self.step_count >= target:
@@ -380,7 +384,7 @@ class Simulation:
             joints.apply_all(self.model, self.data, r)
             log.info("robot '%s' (id %d): battery empty at t=%.3f", r.name, r.uid, self.time)
 
-    def _fire_due(self) -> None:
+    def _fire_due(self, inline: bool = False) -> None:
         now = self.time
         due = self.reports.take_due(now)
         if not due:
@@ -397,9 +401,11 @@ class Simulation:
             else:
                 items.append((r.uid, rep.sensors, rep.key))
         if self.measurer is not None and any(not isinstance(i, Output) for i in items):
-            self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
-                                                  self.entities, items))
-            return
+            if not inline:
+                self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
+                                                      self.entities, items))
+                return
+            self.settle()  # the earlier instants first: a sensor is read by one thread at a time, in order
         for o in measure_all(items, self.view()):
             self.outbox.append(o)
 
