@@ -81,8 +81,7 @@ class RFID(Sensor):
         c = self.config
         d = view.data
         pos, rot = self.handle.sensor_frame(d, self.item.location, self.item.orientation, self.item.mount)
-        ids = list(ents.tags)
-        world = np.array([frames.to_mj_vec(ents.tags[i].location) for i in ids])
+        ids, world = ents.tag_positions()
         delta = world - pos
         dist = np.linalg.norm(delta, axis=1)
         near = np.flatnonzero(dist <= c.max_range_m)

@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from usarsim.config.world import SEE_THROUGH_KINDS, WorldConfig
+from usarsim.sim import frames
 from usarsim.sim.constants import WAVE_AMPLITUDE_RAD, WAVE_PERIOD_S
 
 # Tag ids handed to tags dropped by an RFIDReleaser start here (world tags keep theirs).
@@ -67,6 +68,7 @@ class Entities:
         self.world = world
         self.tags: dict[int, Tag] = {t.tag_id: Tag(t.tag_id, tuple(t.location), t.memory) for t in world.rfid_tags}
         self._next_id = max([RELEASED_TAG_FIRST_ID - 1, *self.tags]) + 1
+        self._tag_rows: tuple[list[int], np.ndarray] | None = None  # see tag_positions
         self.parts: dict[int, PartHit] = {}
         self._part_ids: np.ndarray | None = None
         self._part_rbound = np.empty(0)
@@ -162,6 +164,17 @@ class Entities:
         return self._victims.get(name)
 
     # RFID --------------------------------------------------------------------------------
+    def tag_positions(self) -> tuple[list[int], np.ndarray]:
+        """The id and position (MuJoCo frame, one row each) of every tag, in the order of
+        ``tags``.  Tags are only ever added and never move, so the rows are made again only
+        when their number changes (every RFID reading of every robot used to make them)."""
+        rows = self._tag_rows
+        if rows is None or len(rows[0]) != len(self.tags):
+            ids = list(self.tags)
+            rows = (ids, np.array([frames.to_mj_vec(self.tags[i].location) for i in ids], dtype=float).reshape(-1, 3))
+            self._tag_rows = rows
+        return rows
+
     def release_tag(self, location: tuple[float, float, float]) -> Tag:
         tag = Tag(self._next_id, tuple(float(v) for v in location), "")
         self._next_id += 1

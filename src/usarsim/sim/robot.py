@@ -41,9 +41,23 @@ class SimRobot:
     # MultiView shows; empty: the robot's first camera
     viewports: tuple[str, ...] = ()
     in_water: bool = False
-    battery_used_s: float = 0.0
     rated_power_w: float = 1.0
     flip_until: float = -1.0  # self-righting torque applied until this simulated time
+    # the seconds of battery used: a place in an array of every robot's (usarsim.sim.battery)
+    _battery: np.ndarray = field(default_factory=lambda: np.zeros(1), repr=False)
+    _battery_at: int = 0
+
+    @property
+    def battery_used_s(self) -> float:
+        return float(self._battery[self._battery_at])
+
+    @battery_used_s.setter
+    def battery_used_s(self, seconds: float) -> None:
+        self._battery[self._battery_at] = seconds
+
+    def bind_battery(self, used: np.ndarray, at: int) -> None:
+        """Keep the seconds of battery used at ``used[at]`` from now on."""
+        self._battery, self._battery_at = used, at
 
     def battery_left(self) -> float:
         return max(0.0, self.config.battery_s - self.battery_used_s)
