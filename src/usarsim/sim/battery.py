@@ -14,6 +14,9 @@ if TYPE_CHECKING:
 # At the rated mechanical power of all its motors a battery drains this much faster than
 # at rest (one extra second per second): our model of UT2004's faster drain under load.
 BATTERY_LOAD_FACTOR = 1.0
+# From this many robots on, the batteries are drained as one array; fewer cost less one by one
+# (a numpy call costs more than a robot's few float operations).
+VECTOR_MIN_ROBOTS = 16
 
 
 class Batteries:
@@ -65,18 +68,22 @@ class Batteries:
         twice as fast at the rated mechanical power of all the robot's motors (the battery
         ran down "faster under load" in UT2004, protocol.md 6.2).  Returns the robots whose
         battery has just run out."""
+        if not robots:
+            return []
         known = self._robots
-        if len(robots) != len(known) or (robots and (robots[0] is not known[0] or robots[-1] is not known[-1])):
-            return self._drain_each(robots, seconds)  # not indexed for these robots (a rebuild indexes them)
-        used = self._used
-        if seconds > 0 and robots:
+        if len(robots) != len(known) or robots[0] is not known[0] or robots[-1] is not known[-1]:
+            return self._drain_each(robots, None, seconds)  # not indexed for these robots (a rebuild indexes them)
+        power = None
+        if seconds > 0:
             owners = self._owner
             if owners is not None and len(owners) == m.nu and m.nu:
                 power = np.bincount(owners, weights=np.abs(d.actuator_force * d.actuator_velocity),
                                     minlength=self._count)
-                load = np.minimum(power[1:] / self._rated, 1.0)
-            else:
-                load = np.zeros(len(robots))
+        if len(robots) < VECTOR_MIN_ROBOTS:
+            return self._drain_each(robots, power, seconds)
+        used = self._used
+        if seconds > 0:
+            load = np.minimum(power[1:] / self._rated, 1.0) if power is not None else np.zeros(len(robots))
             # element by element the very operations of _drain_each, so the same numbers
             used += seconds * (1.0 + load * BATTERY_LOAD_FACTOR)
         empty = np.flatnonzero(~(self._capacity - used > 0.0))  # battery_left() <= 0 (NaN too)
@@ -89,11 +96,13 @@ class Batteries:
         return out
 
     @staticmethod
-    def _drain_each(robots: list[SimRobot], seconds: float) -> list[SimRobot]:
-        """:meth:`drain` one robot at a time, as at rest (robots not indexed together)."""
+    def _drain_each(robots: list[SimRobot], power: np.ndarray | None, seconds: float) -> list[SimRobot]:
+        """:meth:`drain` one robot at a time (a few robots, or robots not indexed together:
+        ``power`` None, drained as at rest)."""
         if seconds > 0:
             for r in robots:
-                r.battery_used_s += seconds
+                load = float(power[r.owner_index]) / r.rated_power_w if power is not None else 0.0
+                r.battery_used_s += seconds * (1.0 + min(load, 1.0) * BATTERY_LOAD_FACTOR)
         out = []
         for r in robots:
             if not r.battery_empty and r.battery_left() <= 0.0:

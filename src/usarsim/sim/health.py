@@ -56,6 +56,13 @@ class BlowUpGuard:
         if not robots:  # nothing the guard could put back (a world without robots)
             mujoco.mj_step(m, d, n)
             return
+        if n == 1:  # one step: repaired where it ended (the same as replaying it from its start)
+            mujoco.mj_step(m, d)
+            if self._healthy(d):
+                self.good_qpos = d.qpos.copy()
+            else:
+                self._repair(m, d, robots)
+            return
         if self._snapshot is None or self._snapshot_model is not m:  # a model rebuilt: its state's size
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
             self._snapshot_model = m

@@ -54,7 +54,10 @@ class Righting(System):
         return bool(sim.robots)
 
     def active(self) -> bool:
-        return any(r.flip_until >= 0 for r in self.sim.robots.values())
+        for r in self.sim.robots.values():  # a loop, not any(): asked twice every stretch of steps
+            if r.flip_until >= 0:
+                return True
+        return False
 
     def pre_step(self) -> None:
         if not self.active():
