@@ -215,7 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--physics-threads", type=_threads, default=None, metavar="N",
                    help="threads of MuJoCo's own pool, which solves robots that do not touch on several cores "
                         "(the same results bit for bit): 0 for none, 'auto' (default) for one a core but one "
-                        "from 32 robots on (none on a 2-core machine), one a core from 160 robots on")
+                        "from 32 robots on (none on a 2-core machine: the sensors and the server need the other)")
     s.add_argument("--sensors-inline", action="store_true",
                    help="take sensor readings on the simulation thread itself instead of a thread of their own "
                         "that works while the physics runs on (the same readings either way; slower)")

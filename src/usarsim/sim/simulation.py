@@ -53,14 +53,15 @@ log = logging.getLogger("usarsim.sim")
 # with 64 P2ATs and from 0.74 to 1.09 with 256 (and costs more than it saves with 16: 20.8 ->
 # 19.5).  Beside the measuring thread (usarsim.sim.measuring) and the event loop, which want
 # a core too, the bench (2 runs each, alternately) lost 5-15 % with it with 64 robots and 30 %
-# with 16, gained nothing with 128 and gained 7-15 % with 256, where the physics outweighs
-# everything else.  So it gets every core but one from PHYSICS_POOL_MIN_ROBOTS robots on (none
-# on two cores), and every core from PHYSICS_POOL_ALL_CORES_ROBOTS on.  USARSIM_PHYSICS_THREADS
-# (serve --physics-threads) sets its threads: 0 or 1 for none, "auto" (the default) for that
-# rule, at most PHYSICS_THREADS_MAX.
+# with 16, gained nothing with 128 and 7-15 % with 256 while the robots started packed in one
+# corner.  Spread over the floor, with 256 robots the pool on both cores lost 4-13 % (four pairs
+# alternately, 2026-11-25: 0.92-1.03 times real time with it, 1.04-1.09 without): the
+# measuring thread and the server's Python need the second core as much.  So it gets every
+# core but one from PHYSICS_POOL_MIN_ROBOTS robots on (none on two cores).
+# USARSIM_PHYSICS_THREADS (serve --physics-threads) sets its threads: 0 or 1 for none, "auto"
+# (the default) for that rule, at most PHYSICS_THREADS_MAX.
 PHYSICS_THREADS_ENV = "USARSIM_PHYSICS_THREADS"
 PHYSICS_POOL_MIN_ROBOTS = 32
-PHYSICS_POOL_ALL_CORES_ROBOTS = 160
 PHYSICS_THREADS_MAX = 8
 PHYSICS_THREADS_LIMIT = 256  # a number asked for is held to this (serve --physics-threads takes no more)
 
@@ -84,8 +85,7 @@ def physics_threads(robots: int) -> int:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
-    spare = 0 if robots >= PHYSICS_POOL_ALL_CORES_ROBOTS else 1  # a core for the measuring thread and the server
-    threads = min(cores - spare, PHYSICS_THREADS_MAX)
+    threads = min(cores - 1, PHYSICS_THREADS_MAX)  # a core for the measuring thread and the server
     return threads if threads > 1 else 0
 
 __all__ = ["Output", "SimRobot", "Simulation", "describe_items"]
