@@ -126,10 +126,10 @@ class _ServedApp:
     """An Application served by its own event loop on a thread, until ``stop()``."""
 
     def __init__(self, app):
-        from usarsim.server.polling import LOCKSTEP_POLL_S, new_event_loop
+        from usarsim.server.polling import new_event_loop, poll_seconds
 
         self.app = app
-        self.loop = new_event_loop(LOCKSTEP_POLL_S if app.facade.lockstep else 0.0)  # as `serve` makes it
+        self.loop = new_event_loop(poll_seconds(app.facade.lockstep))  # as `serve` makes it
         ready = threading.Event()
 
         def serve():

@@ -448,9 +448,9 @@ def cmd_serve(args) -> int:
             print(f"usarsim: recorded {args.record}: {os.path.getsize(args.record) / 1e6:.1f} MB, {rec.chunks} "
                   f"transcript chunks, {rec.messages} other messages, {rec.pictures} camera pictures", flush=True)
 
-    from usarsim.server.polling import LOCKSTEP_POLL_S, new_event_loop
+    from usarsim.server.polling import new_event_loop, poll_seconds
 
-    poll_s = (LOCKSTEP_POLL_S if args.lockstep else 0.0) if args.poll_us is None else max(0, args.poll_us) / 1e6
+    poll_s = poll_seconds(args.lockstep, args.poll_us)
     try:
         with asyncio.Runner(loop_factory=lambda: new_event_loop(poll_s)) as runner:
             runner.run(main())

@@ -4,7 +4,9 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import socket
+import threading
 import time
 
 from usarsim.server.polling import PollingSelector, new_event_loop
@@ -19,14 +21,26 @@ def cpu_during(fn) -> tuple[float, float, object]:
     return time.thread_time() - c0, time.perf_counter() - w0, out
 
 
-def test_it_polls_after_finding_something_and_sleeps_after_finding_nothing():
+@contextlib.contextmanager
+def busy_selector(poll_s: float):
+    """A polling selector watching one end of a socket pair, which has just found a byte
+    there (so its next select polls); yields (selector, the other end)."""
     a, b = socket.socketpair()
-    sel = PollingSelector(POLL_S)
+    sel = PollingSelector(poll_s)
     try:
         sel.register(a, 1)  # EVENT_READ
         b.send(b"x")
-        assert sel.select(1.0)  # found something: the next select polls
+        assert sel.select(1.0)
         a.recv(1)
+        yield sel, b
+    finally:
+        sel.close()
+        a.close()
+        b.close()
+
+
+def test_it_polls_after_finding_something_and_sleeps_after_finding_nothing():
+    with busy_selector(POLL_S) as (sel, _):
         cpu, wall, ready = cpu_during(lambda: sel.select(0.2))
         assert ready == []
         assert wall >= 0.19
@@ -35,31 +49,15 @@ def test_it_polls_after_finding_something_and_sleeps_after_finding_nothing():
         cpu, wall, ready = cpu_during(lambda: sel.select(0.2))
         assert ready == [] and wall >= 0.19
         assert cpu < 0.3 * POLL_S, f"slept, yet used {cpu:.3f} s of processor time"
-    finally:
-        sel.close()
-        a.close()
-        b.close()
 
 
 def test_what_arrives_while_it_polls_is_returned_at_once():
-    a, b = socket.socketpair()
-    sel = PollingSelector(0.5)
-    try:
-        sel.register(a, 1)
-        b.send(b"x")
-        sel.select(1.0)
-        a.recv(1)
+    with busy_selector(0.5) as (sel, b):
         # a look with no wait (the loop has callbacks ready) neither polls nor ends the polling
         assert sel.select(0) == []
-        import threading
-
         threading.Timer(0.01, lambda: b.send(b"y")).start()
         _, wall, ready = cpu_during(lambda: sel.select(5.0))
         assert len(ready) == 1 and wall < 0.4
-    finally:
-        sel.close()
-        a.close()
-        b.close()
 
 
 def test_a_polling_loop_serves_a_lock_step_conversation():
@@ -102,3 +100,13 @@ def test_a_polling_loop_serves_a_lock_step_conversation():
         assert type(plain._selector) is not PollingSelector  # noqa: SLF001
     finally:
         plain.close()
+
+
+def test_a_wait_shorter_than_the_polling_ends_it_when_nothing_came():
+    """A loop whose next timer is due sooner than the polling would end (a timer ticking every
+    fraction of a millisecond) polls through that wait once, then sleeps: a tick is not a request."""
+    with busy_selector(POLL_S) as (sel, _):
+        assert sel.select(0.2 * POLL_S) == []  # polled all of it: nothing came
+        cpu, wall, ready = cpu_during(lambda: sel.select(0.2))
+        assert ready == [] and wall >= 0.19
+        assert cpu < 0.3 * POLL_S, f"still polling: {cpu:.3f} s of processor time"

@@ -36,6 +36,7 @@ class PollingSelector(selectors.DefaultSelector):
         self._busy = False  # the last select found something
 
     def select(self, timeout: float | None = None):
+        waits = timeout is None or timeout > 0  # a look with no wait (callbacks are ready) changes nothing
         if self._busy and self.poll_s > 0 and (timeout is None or timeout > 0):
             start = time.perf_counter()
             end = start + (self.poll_s if timeout is None else min(timeout, self.poll_s))
@@ -49,9 +50,16 @@ class PollingSelector(selectors.DefaultSelector):
             if timeout is not None:
                 timeout = max(0.0, timeout - (now - start))
         ready = super().select(timeout)
-        if ready or timeout is None or timeout > 0:  # a look with no wait (callbacks are ready) changes nothing
+        if waits:  # also when polling used up all of a short wait: a timer's tick is not a request
             self._busy = bool(ready)
         return ready
+
+
+def poll_seconds(lockstep: bool, poll_us: int | None = None) -> float:
+    """How long a server polls (``serve --poll-us``, else LOCKSTEP_POLL_S in lock-step, 0 outside it)."""
+    if poll_us is not None:
+        return max(0, poll_us) / 1e6
+    return LOCKSTEP_POLL_S if lockstep else 0.0
 
 
 def new_event_loop(poll_s: float = 0.0) -> asyncio.AbstractEventLoop:

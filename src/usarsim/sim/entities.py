@@ -75,7 +75,6 @@ class Entities:
         # per sensor kind: the geoms its rays pass through; plus "mirror" (bool per geom) and
         # "porosity" (fraction of rays let through, per geom) when the world has such materials
         self.see_through: dict[str, np.ndarray] = {}
-        self._wavers: list[tuple[int, object]] = []
         # per waving arm: its mocap body, and the quaternions A and B of _waving_terms
         self._wave_terms: list[tuple[int, tuple, tuple]] = []
         self._victims = {v.name: v for v in world.victims}
@@ -114,14 +113,10 @@ class Entities:
         self.see_through = see
         self._part_ids = np.array(sorted(self.parts), dtype=np.intp)
         self._part_rbound = m.geom_rbound[self._part_ids] if len(self._part_ids) else np.empty(0)
-        self._wavers = []
-        for v in self.world.victims:
-            if v.waving:
-                b = m.body(f"victim/{v.name}/shoulder")
-                self._wavers.append((int(m.body_mocapid[b.id]), v))
-        at_rest, lifting = _waving_terms([v.rotation for _, v in self._wavers])
-        self._wave_terms = [(mocap, tuple(a.tolist()), tuple(b.tolist()))
-                            for (mocap, _), a, b in zip(self._wavers, at_rest, lifting)]
+        wavers = [v for v in self.world.victims if v.waving]
+        at_rest, lifting = _waving_terms([v.rotation for v in wavers])
+        self._wave_terms = [(int(m.body_mocapid[m.body(f"victim/{v.name}/shoulder").id]), tuple(a.tolist()),
+                             tuple(b.tolist())) for v, a, b in zip(wavers, at_rest, lifting)]
 
     def parts_within(self, d: mujoco.MjData, pos: np.ndarray, reach: float, forward: np.ndarray | None = None,
                      half_angle: float = math.pi) -> bool:
@@ -146,7 +141,7 @@ class Entities:
         """Move the waving victims' arms to their angle at ``time``: raised (a negative pitch, about
         the shoulder's left-right axis) from 0 at whole periods to twice the amplitude half a
         period later."""
-        if not self._wavers:
+        if not self._wave_terms:
             return
         lift = WAVE_AMPLITUDE_RAD * (1.0 - math.cos(2.0 * math.pi * time / WAVE_PERIOD_S))
         # the arm's orientation (roll, pitch - lift, yaw), as cos(lift/2) A + sin(lift/2) B
@@ -158,7 +153,7 @@ class Entities:
 
     @property
     def has_motion(self) -> bool:
-        return bool(self._wavers)
+        return bool(self._wave_terms)
 
     def victim(self, name: str):
         return self._victims.get(name)

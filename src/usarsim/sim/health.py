@@ -57,11 +57,7 @@ class BlowUpGuard:
             mujoco.mj_step(m, d, n)
             return
         if n == 1:  # one step: repaired where it ended (the same as replaying it from its start)
-            mujoco.mj_step(m, d)
-            if self._healthy(d):
-                self.good_qpos = d.qpos.copy()
-            else:
-                self._repair(m, d, robots)
+            self._step_one(m, d, robots)
             return
         if self._snapshot is None or self._snapshot_model is not m:  # a model rebuilt: its state's size
             self._snapshot = np.empty(mujoco.mj_stateSize(m, STATE))
@@ -75,11 +71,15 @@ class BlowUpGuard:
         robots = list(robots)
         self._repair(m, d, robots)
         for _ in range(n):
-            mujoco.mj_step(m, d)
-            if self._healthy(d):
-                self.good_qpos = d.qpos.copy()
-            else:
-                self._repair(m, d, robots)
+            self._step_one(m, d, robots)
+
+    def _step_one(self, m: mujoco.MjModel, d: mujoco.MjData, robots: list[SimRobot]) -> None:
+        """One physics step, each robot that went wrong in it put back."""
+        mujoco.mj_step(m, d)
+        if self._healthy(d):
+            self.good_qpos = d.qpos.copy()
+        else:
+            self._repair(m, d, robots)
 
     def _healthy(self, d: mujoco.MjData) -> bool:
         """No velocity beyond the sane one and nothing non-finite (a NaN or an infinity
