@@ -8,8 +8,6 @@ instants, so that the physics runs in long stretches between them.
 
 from __future__ import annotations
 
-import heapq
-import itertools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -25,7 +23,8 @@ EPS = 1e-9
 @dataclass(eq=False)
 class Report:
     """A scheduled report: the robot's status (STA), a mission package's state (MISSTA),
-    one sensor, or all packed sensors of a type on the robot."""
+    one sensor, or all packed sensors of a type on the robot.  It falls due at
+    ``t0 + k * interval`` for k = 0, 1, 2..."""
 
     robot: SimRobot
     sensors: list[Sensor]
@@ -34,7 +33,20 @@ class Report:
     key: str
     status: bool = False
     package: object = None  # a MissionPackage: MISSTA
-    k: int = 0
+    item: tuple = ()  # what the measuring thread is given: (robot id, sensors, key)
+
+    def __post_init__(self) -> None:
+        self.item = (self.robot.uid, self.sensors, self.key)
+
+
+class _Cohort:
+    """Reports that fall due together: the same first instant and period (so the same
+    instants, to the bit), in the order they were scheduled; ``k``: the next is the k-th."""
+
+    __slots__ = ("t0", "interval", "k", "reports")
+
+    def __init__(self, t0: float, interval: float, reports: list[Report]):
+        self.t0, self.interval, self.k, self.reports = t0, interval, 0, reports
 
     @property
     def due(self) -> float:
@@ -42,14 +54,37 @@ class Report:
 
 
 class ReportSchedule:
-    """The reports of every robot, soonest first."""
+    """The reports of every robot, soonest first, and those due at one instant in the order
+    they were last scheduled.
+
+    Reports are kept by the instant they fall due (the float itself: two reports of one
+    instant reached by different sums may differ in the last bit, and the earlier comes
+    first), in the order they were scheduled, as runs of reports of one cohort (the same
+    first instant and period, see :class:`_Cohort`).  That is the order of a heap of (due,
+    order of scheduling), without a heap operation per report: with 256 P2ATs some 19,000
+    reports a simulated second fall due, in a few runs an instant.
+    """
 
     def __init__(self) -> None:
-        self._heap: list[tuple[float, int, Report]] = []
-        self._seq = itertools.count()
+        self._lists: dict[float, list[_Cohort]] = {}
+        self._next: float | None = None  # the soonest instant a list is kept for
 
     def next_due(self) -> float | None:
-        return self._heap[0][0] if self._heap else None
+        return self._next
+
+    def _schedule(self, run: _Cohort) -> None:
+        due = run.due
+        runs = self._lists.get(due)
+        if runs is None:
+            self._lists[due] = [run]
+            if self._next is None or due < self._next:
+                self._next = due
+            return
+        last = runs[-1]
+        if last.t0 == run.t0 and last.interval == run.interval:  # the same cohort: one run
+            last.reports.extend(run.reports)
+        else:
+            runs.append(run)
 
     def add_robot(self, r: SimRobot, now: float) -> None:
         """Every report of ``r`` on its own period, from the first grid instant at or after
@@ -78,20 +113,39 @@ class ReportSchedule:
                                       f"SEN:{s.TYPE}:{s.name}"))
         r.reports = reports
         for rep in reports:
-            heapq.heappush(self._heap, (rep.due, next(self._seq), rep))
+            self._schedule(_Cohort(rep.t0, rep.interval, [rep]))
+
+    def remove_robot(self, r: SimRobot) -> None:
+        """Forget every report of ``r`` (removed): nothing here keeps it alive."""
+        for due in list(self._lists):
+            runs = []
+            for run in self._lists[due]:
+                run.reports = [rep for rep in run.reports if rep.robot is not r]
+                if run.reports:
+                    runs.append(run)
+            if runs:
+                self._lists[due] = runs
+            else:
+                del self._lists[due]
+        self._next = min(self._lists) if self._lists else None
+        r.reports = []
 
     def take_due(self, now: float) -> list[Report]:
         """The reports due at ``now`` (of robots still there), in order; each is scheduled
         again at the first multiple of its interval after ``now``."""
-        heap = self._heap
-        out = []
-        while heap and heap[0][0] <= now + EPS:
-            _, _, rep = heapq.heappop(heap)
-            if rep.robot.removed:
-                continue
-            rep.k += 1
-            while rep.due <= now + EPS:
-                rep.k += 1
-            heapq.heappush(heap, (rep.due, next(self._seq), rep))
-            out.append(rep)
+        out: list[Report] = []
+        lists = self._lists
+        limit = now + EPS
+        while self._next is not None and self._next <= limit:
+            for run in lists.pop(self._next):
+                live = [rep for rep in run.reports if not rep.robot.removed]
+                if not live:
+                    continue
+                out.extend(live)
+                run.reports = live
+                run.k += 1
+                while run.t0 + run.k * run.interval <= limit:
+                    run.k += 1
+                self._schedule(run)
+            self._next = min(lists) if lists else None
         return out

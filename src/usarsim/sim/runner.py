@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from usarsim.errors import UsarsimError
+from usarsim.sim.interpreter import InterpreterTuning
 from usarsim.sim.measuring import sensor_thread_wanted
 from usarsim.sim.simulation import Output, Simulation
 
@@ -118,6 +119,7 @@ class SimulationRunner:
         self._wall_per_s: float | None = None
         self._rate_model: object = None
         self._running = False  # the simulation thread is running
+        self._interpreter = InterpreterTuning()  # collector and switch interval (sim/interpreter.py)
 
     # Thread-safe API ---------------------------------------------------------------
     def submit(self, req: Request | StepRequest) -> None:
@@ -187,6 +189,7 @@ class SimulationRunner:
     def _run(self) -> None:
         try:
             self.sim.measure_on_thread(sensor_thread_wanted())
+            self._interpreter.start(self.sim)
             self._running = True
             if self.lockstep:
                 self._run_lockstep()
@@ -202,6 +205,7 @@ class SimulationRunner:
                     self.sim.measure_on_thread(False)
                 except BaseException:  # a sensor's error was logged with the one that stopped the thread
                     log.debug("closing the measuring thread", exc_info=True)
+                self._interpreter.stop()
 
     def _execute(self, req: Request) -> None:
         if self._stopping.is_set():
@@ -216,6 +220,8 @@ class SimulationRunner:
         except Exception as exc:  # a bad request must not stop the world
             log.exception("request failed")
             error = exc
+        if not req.concurrent:  # it may have changed the model (a spawn, a removal)
+            self._interpreter.after_change(self.sim)
         if req.on_done is not None:
             req.on_done(result, error)
 
@@ -243,6 +249,7 @@ class SimulationRunner:
                     else:
                         with self._count_lock:
                             self._pending.append(item)
+                    self._interpreter.tick()
                 finally:
                     with self._count_lock:
                         self._handled += 1
@@ -264,6 +271,7 @@ class SimulationRunner:
                 self._rate_model, self._wall_per_s = self.sim.model, took
             else:  # a running mean: one slow STEP (a stall) does not keep the next ones off
                 self._wall_per_s = 0.8 * self._wall_per_s + 0.2 * took
+        self._interpreter.tick()
         on_done(self.sim.time)
 
     def _whole_steps(self, seconds: float) -> float:
@@ -297,6 +305,7 @@ class SimulationRunner:
         sim0 = sim.time
         chunk = self.CHUNK_S  # as fast as it goes: grown toward FAST_LOOK_WALL_S of wall time
         while True:
+            self._interpreter.tick()
             # apply everything that arrived
             while True:
                 try:

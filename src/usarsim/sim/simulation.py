@@ -260,6 +260,7 @@ class Simulation:
         if r is None:
             return
         r.removed = True
+        self.reports.remove_robot(r)
         for key in [k for k in self.live_conf if k[0] == uid]:
             del self.live_conf[key]
         builder.remove_robot(self.spec, r.prefix)
@@ -399,7 +400,7 @@ class Simulation:
             elif rep.package is not None:
                 items.append(Output(r.uid, now, joints.package_state(self.data, r, rep.package), rep.key))
             else:
-                items.append((r.uid, rep.sensors, rep.key))
+                items.append(rep.item)
         if self.measurer is not None and any(not isinstance(i, Output) for i in items):
             if not inline:
                 self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
