@@ -119,3 +119,19 @@ def test_a_removed_robots_reports_are_forgotten_and_the_others_keep_their_order(
             assert 1 not in {uid for uid, _ in got}
     assert pairs[1][0].reports == []
     assert all(rep.robot is not pairs[1][0] for runs in kept._lists.values() for run in runs for rep in run.reports)
+
+
+def test_plans_hand_on_a_sensors_item_and_a_status_report_itself_in_order():
+    by_report, by_plan = ReportSchedule(), ReportSchedule()
+    for uid in range(3):
+        by_report.add_robot(_robot(uid, [(0.1, "Sonar"), (0.2, "GPS")], 0.2), 0.03 * uid)
+        by_plan.add_robot(_robot(uid, [(0.1, "Sonar"), (0.2, "GPS")], 0.2), 0.03 * uid)
+    seen_status = False
+    for step in range(150):
+        now = step * 0.004
+        want = [rep if rep.status else rep.item for rep in by_report.take_due(now)]
+        got = [x for plan in by_plan.take_due_plans(now) for x in plan]
+        assert [x if x.__class__ is tuple else (x.robot.uid, x.key) for x in got] == \
+            [x if x.__class__ is tuple else (x.robot.uid, x.key) for x in want]
+        seen_status = seen_status or any(x.__class__ is not tuple for x in got)
+    assert seen_status

@@ -41,16 +41,30 @@ class Report:
 
 class _Cohort:
     """Reports that fall due together: the same first instant and period (so the same
-    instants, to the bit), in the order they were scheduled; ``k``: the next is the k-th."""
+    instants, to the bit), in the order they were scheduled; ``k``: the next is the k-th.
+    Its list of reports is replaced, never changed in place."""
 
-    __slots__ = ("t0", "interval", "k", "reports")
+    __slots__ = ("t0", "interval", "k", "reports", "_plan")
 
     def __init__(self, t0: float, interval: float, reports: list[Report]):
-        self.t0, self.interval, self.k, self.reports = t0, interval, 0, reports
+        self.t0, self.interval, self.k = t0, interval, 0
+        self.set_reports(reports)
+
+    def set_reports(self, reports: list[Report]) -> None:
+        self.reports = reports
+        self._plan: list | None = None
 
     @property
     def due(self) -> float:
         return self.t0 + self.k * self.interval
+
+    def plan(self) -> list:
+        """Its reports as the simulation hands them on: the measuring thread's
+        (robot id, sensors, key) for a sensor's, the Report itself for a status or a
+        mission package's (made on the simulation thread); kept until its reports change."""
+        if self._plan is None:
+            self._plan = [rep if rep.status or rep.package is not None else rep.item for rep in self.reports]
+        return self._plan
 
 
 class ReportSchedule:
@@ -82,7 +96,7 @@ class ReportSchedule:
             return
         last = runs[-1]
         if last.t0 == run.t0 and last.interval == run.interval:  # the same cohort: one run
-            last.reports.extend(run.reports)
+            last.set_reports(last.reports + run.reports)
         else:
             runs.append(run)
 
@@ -120,7 +134,7 @@ class ReportSchedule:
         for due in list(self._lists):
             runs = []
             for run in self._lists[due]:
-                run.reports = [rep for rep in run.reports if rep.robot is not r]
+                run.set_reports([rep for rep in run.reports if rep.robot is not r])
                 if run.reports:
                     runs.append(run)
             if runs:
@@ -133,7 +147,16 @@ class ReportSchedule:
     def take_due(self, now: float) -> list[Report]:
         """The reports due at ``now`` (of robots still there), in order; each is scheduled
         again at the first multiple of its interval after ``now``."""
-        out: list[Report] = []
+        return [rep for reports, _ in self._take(now) for rep in reports]
+
+    def take_due_plans(self, now: float) -> list[list]:
+        """:meth:`take_due` as the plans of its runs (:meth:`_Cohort.plan`), in order."""
+        return [plan for _, plan in self._take(now)]
+
+    def _take(self, now: float) -> list[tuple[list[Report], list]]:
+        """The reports and the plan of each run due at ``now``, as it fell due (a run
+        scheduled again may be joined by another of its cohort: it then gets a new list)."""
+        out: list[tuple[list[Report], list]] = []
         lists = self._lists
         limit = now + EPS
         while self._next is not None and self._next <= limit:
@@ -141,8 +164,9 @@ class ReportSchedule:
                 live = [rep for rep in run.reports if not rep.robot.removed]
                 if not live:
                     continue
-                out.extend(live)
-                run.reports = live
+                if len(live) != len(run.reports):
+                    run.set_reports(live)
+                out.append((run.reports, run.plan()))
                 run.k += 1
                 while run.t0 + run.k * run.interval <= limit:
                     run.k += 1

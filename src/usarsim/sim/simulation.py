@@ -40,7 +40,7 @@ from usarsim.sim.health import BlowUpGuard
 from usarsim.sim.measuring import Due, Measurer, OrderedOutbox, measure_all, measure_report
 from usarsim.sim.outputs import Output
 from usarsim.sim.raycaster import RayCaster
-from usarsim.sim.reports import EPS, ReportSchedule
+from usarsim.sim.reports import EPS, Report, ReportSchedule
 from usarsim.sim.robot import SimRobot, describe_items
 from usarsim.sim.systems.righting import start_righting
 from usarsim.sim.view import RobotHandle, WorldView
@@ -387,20 +387,22 @@ class Simulation:
 
     def _fire_due(self, inline: bool = False) -> None:
         now = self.time
-        due = self.reports.take_due(now)
-        if not due:
+        plans = self.reports.take_due_plans(now)
+        if not plans:
             return
         items: list[Due] = []
-        for rep in due:
-            r = rep.robot
-            if rep.status:
-                items.append(Output(r.uid, now, self.status_of(r), "STA"))
-            elif r.battery_empty:
-                continue
-            elif rep.package is not None:
-                items.append(Output(r.uid, now, joints.package_state(self.data, r, rep.package), rep.key))
-            else:
-                items.append(rep.item)
+        made_now = self._made_now
+        if not any(r.battery_empty for r in self.robots.values()):
+            for plan in plans:  # a sensor's report as it is, a status or a package's state made now
+                items += [x if x.__class__ is tuple else made_now(x, now) for x in plan]
+        else:  # a robot whose battery is empty reports its status only
+            for plan in plans:
+                for x in plan:
+                    if x.__class__ is not tuple:
+                        if x.status or not x.robot.battery_empty:
+                            items.append(made_now(x, now))
+                    elif not self.robots[x[0]].battery_empty:
+                        items.append(x)
         if self.measurer is not None and any(not isinstance(i, Output) for i in items):
             if not inline:
                 self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
@@ -409,6 +411,13 @@ class Simulation:
             self.settle()  # the earlier instants first: a sensor is read by one thread at a time, in order
         for o in measure_all(items, self.view()):
             self.outbox.append(o)
+
+    def _made_now(self, rep: Report, now: float) -> Output:
+        """A status or mission package report, made on the simulation thread at ``now``."""
+        r = rep.robot
+        if rep.status:
+            return Output(r.uid, now, self.status_of(r), "STA")
+        return Output(r.uid, now, joints.package_state(self.data, r, rep.package), rep.key)
 
     def _emit(self, r: SimRobot, sensors: list[Sensor], key: str, view: WorldView | None = None) -> None:
         o = measure_report(r.uid, sensors, key, view or self.view())
