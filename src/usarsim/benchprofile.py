@@ -167,7 +167,8 @@ def breakdown(p: Profiler) -> dict:
     handing = _cum(s, [_where(measuring.Measurer.submit)])
     if handing > 0:
         rows.append(("handing instants to the measuring thread", handing))
-    sched = _cum(s, _matching(s, lambda k: k[0] == reports.__file__ and k[2] in ("take_due", "next_due")))
+    taking = ("take_due", "take_due_plans", "next_due")
+    sched = _cum(s, _matching(s, lambda k: k[0] == reports.__file__ and k[2] in taking))
     rows.append(("report scheduling", sched))
     fire = _cum(s, [_where(Simulation._fire_due)])
     building = max(0.0, fire - sensor_total - sched - handing)
