@@ -10,17 +10,17 @@ Two things kept it waiting (256 P2ATs on a 2-core machine, 2026-11-25):
   live as long as the model does.  Readings in flight to the clients outlive the younger
   generations of CPython's collector and are promoted to the oldest, and every tenth
   collection of the middle generation then ran a full collection, which walks the whole
-  heap holding the lock: eight in ten simulated seconds, 60 to 80 ms each.  So after every
-  change of the model (a spawn, a removal, a rebuild) the simulation thread collects the
-  young generations and moves everything left to the collector's permanent generation
-  (``gc.freeze``), which later collections do not walk: the full collections of the same
-  run took 2 to 4 ms each, and the simulation thread waited for the lock after its physics
+  heap holding the lock: eight in ten simulated seconds, 60 to 80 ms each.  So once the
+  model stands still after a change (a spawn, a removal, a rebuild) the simulation thread
+  collects the young generations and moves everything left to the collector's permanent
+  generation (``gc.freeze``), which later collections do not walk: the full collections of
+  the same run took 2 to 4 ms each, and the simulation thread waited for the lock after its physics
   calls 0.2 to 0.35 s of ten simulated seconds instead of 0.65 to 0.85 s.  Frozen objects
   that are, or later become, cyclic garbage are not collected while frozen; so a removal,
   whose robot's objects may be such garbage, thaws the heap, and the next freeze collects in
   full first; the heap is thawed when the runner stops.  Robots come and go in bursts (a
-  team connecting, a controller reconnecting in a loop), so the heap is frozen only once the
-  model has stood still for half a second.
+  team connecting, a controller reconnecting in a loop), so "still" means for half a second
+  of wall time: a burst costs no collection per robot.
 * *The switch interval.*  A thread that wants the lock waits up to the interpreter's
   switch interval (5 ms by default) before the holder is asked to let go.  While a
   simulation runs it is :data:`SWITCH_INTERVAL_S`: four pairs of 256-robot bench runs
