@@ -30,6 +30,10 @@ class HeapSchedule:
             self.k[id(rep)] = 0
             self._push(rep)
 
+    def remove(self, robot) -> None:
+        self.heap = [e for e in self.heap if e[2].robot is not robot]
+        heapq.heapify(self.heap)
+
     def next_due(self):
         return self.heap[0][0] if self.heap else None
 
@@ -37,8 +41,6 @@ class HeapSchedule:
         out = []
         while self.heap and self.heap[0][0] <= now + EPS:
             _, _, rep = heapq.heappop(self.heap)
-            if rep.robot.removed:
-                continue
             self.k[id(rep)] += 1
             while rep.t0 + self.k[id(rep)] * rep.interval <= now + EPS:
                 self.k[id(rep)] += 1
@@ -80,7 +82,8 @@ def test_the_same_reports_in_the_same_order_as_a_heap(robots):
                 ref.add(b.reports)
                 twins[uid] = (a, b)
             if gone is not None and gone == step and uid in twins:
-                twins[uid][0].removed = twins[uid][1].removed = True
+                new.remove_robot(twins[uid][0])
+                ref.remove(twins[uid][1])
         assert new.next_due() == ref.next_due()
         got = [(rep.robot.uid, rep.key) for rep in new.take_due(now)]
         want = [(rep.robot.uid, rep.key) for rep in ref.take_due(now)]
@@ -102,19 +105,20 @@ def test_reports_of_one_instant_reached_by_different_sums_come_in_float_order():
 
 
 def test_a_removed_robots_reports_are_forgotten_and_the_others_keep_their_order():
-    kept, flagged = ReportSchedule(), ReportSchedule()
-    pairs = [(_robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2), _robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2))
-             for uid in range(4)]
+    kept, ref = ReportSchedule(), HeapSchedule()
+    pairs = [(_robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2),
+              _robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2)) for uid in range(4)]
     for i, (a, b) in enumerate(pairs):
         kept.add_robot(a, 0.05 * i)
-        flagged.add_robot(b, 0.05 * i)
+        ReportSchedule().add_robot(b, 0.05 * i)
+        ref.add(b.reports)
     for step in range(200):
         now = step * 0.004
         if step == 60:
-            pairs[1][0].removed = pairs[1][1].removed = True
             kept.remove_robot(pairs[1][0])
+            ref.remove(pairs[1][1])
         got = [(rep.robot.uid, rep.key) for rep in kept.take_due(now)]
-        assert got == [(rep.robot.uid, rep.key) for rep in flagged.take_due(now)]
+        assert got == [(rep.robot.uid, rep.key) for rep in ref.take_due(now)]
         if step > 60:
             assert 1 not in {uid for uid, _ in got}
     assert pairs[1][0].reports == []

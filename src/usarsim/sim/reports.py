@@ -145,7 +145,7 @@ class ReportSchedule:
         r.reports = []
 
     def take_due(self, now: float) -> list[Report]:
-        """The reports due at ``now`` (of robots still there), in order; each is scheduled
+        """The reports due at ``now``, in order; each is scheduled
         again at the first multiple of its interval after ``now``."""
         return [rep for reports, _ in self._take(now) for rep in reports]
 
@@ -160,12 +160,7 @@ class ReportSchedule:
         lists = self._lists
         limit = now + EPS
         while self._next is not None and self._next <= limit:
-            for run in lists.pop(self._next):
-                live = [rep for rep in run.reports if not rep.robot.removed]
-                if not live:
-                    continue
-                if len(live) != len(run.reports):
-                    run.set_reports(live)
+            for run in lists.pop(self._next):  # a removed robot's are gone already (remove_robot)
                 out.append((run.reports, run.plan()))
                 run.k += 1
                 while run.t0 + run.k * run.interval <= limit:
