@@ -192,6 +192,26 @@ def test_the_multiview_tiles_four_robots_where_their_sta_view_says(server_factor
     viewer.close()
 
 
+def test_sta_view_follows_the_robots_that_come_and_go(server_factory, image_world):
+    srv = serve(server_factory, image_world, image_type=0)
+    red = spawn(srv, "RobotRed", "Red")
+    red.step(0.05)
+    green = spawn(srv, "RobotGreen", "Green")
+
+    def view_of(c) -> int:
+        return int(segments([ln.text for ln in c.step(0.5) if ln.text.startswith("STA")][-1])["View"])
+
+    assert view_of(green) == 1
+    red.close()  # its robot is removed: Green moves up to the first tile
+    for _ in range(50):
+        if srv.on_sim(lambda sim: len(sim.robots)) == 1:
+            break
+        green.step(0.05)
+    assert view_of(green) == 0
+    blue = spawn(srv, "RobotBlue", "Blue")
+    assert view_of(blue) == 1 and view_of(green) == 0
+
+
 def test_two_viewers_bound_to_two_robots_see_two_pictures(server_factory, image_world):
     srv = serve(server_factory, image_world, image_type=0, width=160, height=120)
     red = spawn(srv, "A", "Red")

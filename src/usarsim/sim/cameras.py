@@ -26,7 +26,9 @@ class Cameras:
         self.sim = sim
         self._multiview_cameras = 4
         self._multiview: list[tuple[int, str]] | None = None
-        self._multiview_robots: set[int] = set()
+        # the model the MultiView was chosen in: robots come and go only with a new model
+        # (a spawn or a removal builds it again), so a new model is when to choose again
+        self._multiview_model = None
 
     @staticmethod
     def cameras_of(r: SimRobot) -> list[CameraItem]:
@@ -46,7 +48,7 @@ class Cameras:
         """The robot cameras the MultiView shows, tile by tile: the first camera chosen by
         each robot's viewports (else its first camera), robots in the order they were
         spawned, at most ``multiview_cameras`` of them."""
-        if self._multiview is not None and self._multiview_robots == self.sim.robots.keys():
+        if self._multiview is not None and self._multiview_model is self.sim.model:
             return self._multiview
         out = []
         for uid in sorted(self.sim.robots):
@@ -57,7 +59,7 @@ class Cameras:
                 out.append((uid, (shown or cams)[0]))
             if len(out) >= self.multiview_cameras:
                 break
-        self._multiview, self._multiview_robots = out, set(self.sim.robots)
+        self._multiview, self._multiview_model = out, self.sim.model
         return out
 
     def view_index(self, uid: int) -> int:
