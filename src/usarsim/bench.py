@@ -186,15 +186,23 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
     client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
                                str(seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     sim = app.facade.sim
+    runner = app.facade.runner
+
+    def running() -> None:
+        if runner.error is not None:  # logged where it happened
+            raise SystemExit(f"usarsim bench: the simulation stopped on an error: {runner.error!r}")
+
     try:
         deadline = time.monotonic() + 120
         while len(sim.robots) < n:
             if time.monotonic() > deadline or client.poll() is not None:
                 raise SystemExit(f"usarsim bench: only {len(sim.robots)} of {n} robots spawned")
+            running()
             time.sleep(0.01)
         # let every robot land and its client start driving
         t_settle = sim.time + 1.0
         while sim.time < t_settle:
+            running()
             time.sleep(0.01)
 
         if window is not None:
@@ -202,6 +210,7 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
         sim_start, wall_start = sim.time, time.perf_counter()
         states = [snapshot_state(sim, app.facade.runner)]  # the scenes bare mj_step is timed from
         while sim.time - sim_start < seconds:
+            running()
             time.sleep(0.005)
             if len(states) == 1 and sim.time - sim_start >= seconds / 2:
                 states.append(snapshot_state(sim, app.facade.runner))

@@ -61,6 +61,37 @@ def test_flip_rights_an_overturned_robot_and_is_ignored_when_upright(server):
 
 
 
+def test_a_robot_removed_while_being_righted_is_forgotten_and_the_other_is_righted(server):
+    from usarsim.sim.systems.righting import Righting
+
+    first = spawn(server, rotation="3.1416,0,0", z=-0.5)
+    p = server.app.world.start_pose("PlayerStart2")
+    second = server.connect()
+    second.nfo()
+    second.send(f"INIT {{ClassName USARBot.P2AT}} {{Name R2}} {{Location {p.location[0]},{p.location[1]},-0.5}} "
+                "{Rotation 3.1416,0,0}")
+    second.step(2.0)
+
+    def righting():
+        return server.on_sim(lambda sim: sorted(uid for s in sim.systems if isinstance(s, Righting)
+                                                for uid in s.righting))
+
+    def up(uid):
+        return server.on_sim(lambda sim: float(sim.data.xmat[sim.robots[uid].handle.body_id][8]))
+
+    first.send("DRIVE {Flip True}")
+    second.send("DRIVE {Flip True}")
+    second.step(0.2)
+    assert righting() == [1, 2]
+    first.close()  # removed half way over
+    for _ in range(50):
+        if server.on_sim(lambda sim: len(sim.robots)) == 1:
+            break
+        second.step(0.05)
+    second.step(4.0)
+    assert up(2) > 0.95 and righting() == []
+
+
 TEST_GRIPPER = """\
 class_name: TestGripper
 description: a small robot with a lift and a two-finger gripper (tests only)

@@ -4,6 +4,8 @@ come out in time order, and requests that change what sensors read wait for them
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from helpers import segments, sen_type
@@ -89,3 +91,40 @@ def test_sensors_read_the_world_with_or_without_the_measuring_thread(server_fact
     assert scans
     ranges = [float(v) for v in segments(scans[-1].text)["Range"].split(",")]
     assert min(ranges) < 20.0  # something of the arena is in sight
+
+
+def test_a_status_made_on_the_measuring_thread_is_the_robots_status_at_its_instant(test_world):
+    """The measuring thread makes an instant's STA after the simulation has moved on: what it
+    shows (battery, headlight) is still what the robot had at the instant."""
+    import threading
+
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.simulation import Simulation
+
+    sim = Simulation(test_world, seed=1)
+    for uid, pose in ((1, "Open"), (2, "Far")):
+        p = test_world.start_pose(pose)
+        sim.spawn(uid, resolve_robot("P2AT"), f"R{uid}", p.location, p.rotation)
+    sim.advance(0.5)
+    sim.measure_on_thread(True)
+    try:
+        sim.take_outputs()
+        gate = threading.Event()
+        sim.measurer.call(gate.wait)  # the measuring thread waits until the instant is past
+        due = sim.reports.next_due()
+        sim.advance(due - sim.time + sim.dt / 2)
+        assert sim.time > due - 1e-9 and sim.outbox.waiting  # the instant was handed over, not measured yet
+        r = sim.robots[1]
+        used_then = r.battery_used_s
+        r.light = True
+        r.battery_used_s = r.config.battery_s - 0.5
+    finally:
+        gate.set()
+        outs = sim.take_outputs()
+        sim.measure_on_thread(False)
+    sta = [o for o in outs if o.key == "STA" and o.uid == 1 and abs(o.time - due) < 1e-9]
+    assert len(sta) == 1
+    value = sta[0].value
+    assert value.light_toggle is False and value.light_intensity == 0
+    assert value.battery_s == int(math.ceil(r.config.battery_s - used_then - 1e-6)) > 1
+    assert value.view == 0

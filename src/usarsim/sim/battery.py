@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
+from numba import njit
 
 if TYPE_CHECKING:
     from usarsim.sim.robot import SimRobot
@@ -14,9 +15,33 @@ if TYPE_CHECKING:
 # At the rated mechanical power of all its motors a battery drains this much faster than
 # at rest (one extra second per second): our model of UT2004's faster drain under load.
 BATTERY_LOAD_FACTOR = 1.0
-# From this many robots on, the batteries are drained as one array; fewer cost less one by one
-# (a numpy call costs more than a robot's few float operations).
-VECTOR_MIN_ROBOTS = 16
+
+
+@njit(cache=True)
+def _drain_all(owners: np.ndarray, force: np.ndarray, velocity: np.ndarray, rated: np.ndarray,
+               capacity: np.ndarray, used: np.ndarray, seconds: float, factor: float) -> int:
+    """Drain every robot's battery (``used``, in place) by ``seconds`` of use at the load of
+    its actuators now (``owners[a]``: the robot of actuator ``a``, counted from 1; 0: none);
+    returns how many batteries are out (``capacity - used`` not above 0, NaN too).
+
+    One compiled call that keeps the interpreter lock: the numpy calls it replaces each let
+    the lock go on arrays of a thousand actuators, and with hundreds of robots the
+    simulation thread then waited for it after every stretch of physics steps.  The
+    operations are those numpy did, element by element and in the same order, so the numbers
+    are the same to the bit."""
+    power = np.zeros(rated.size + 1)
+    for a in range(owners.size):
+        power[owners[a]] += abs(force[a] * velocity[a])
+    out = 0
+    for i in range(used.size):
+        if seconds > 0.0:
+            load = power[i + 1] / rated[i]
+            if load > 1.0:  # min(load, 1.0), NaN kept
+                load = 1.0
+            used[i] += seconds * (1.0 + load * factor)
+        if not capacity[i] - used[i] > 0.0:
+            out += 1
+    return out
 
 
 class Batteries:
@@ -63,6 +88,11 @@ class Batteries:
         self._capacity = np.array([r.config.battery_s for r in robots], dtype=float)
         self._rated = np.array([r.rated_power_w for r in robots], dtype=float)
 
+    def used_now(self) -> np.ndarray:
+        """A copy of the seconds every robot has used, by a robot's place (its battery as
+        it is now, for :meth:`usarsim.sim.robot.SimRobot.battery_left`)."""
+        return self._used.copy()
+
     def drain(self, m: mujoco.MjModel, d: mujoco.MjData, robots: list[SimRobot], seconds: float) -> list[SimRobot]:
         """Drain every battery by ``seconds`` of use: one second per second at rest, up to
         twice as fast at the rated mechanical power of all the robot's motors (the battery
@@ -72,20 +102,14 @@ class Batteries:
             return []
         known = self._robots
         if len(robots) != len(known) or robots[0] is not known[0] or robots[-1] is not known[-1]:
-            return self._drain_each(robots, None, seconds)  # not indexed for these robots (a rebuild indexes them)
-        power = None
-        if seconds > 0:
-            owners = self._owner
-            if owners is not None and len(owners) == m.nu and m.nu:
-                power = np.bincount(owners, weights=np.abs(d.actuator_force * d.actuator_velocity),
-                                    minlength=self._count)
-        if len(robots) < VECTOR_MIN_ROBOTS:
-            return self._drain_each(robots, power, seconds)
+            return self._drain_each(robots, seconds)  # not indexed for these robots (a rebuild indexes them)
+        owners = self._owner
+        if owners is None or len(owners) != m.nu:  # not indexed for this model: as at rest
+            owners = np.zeros(0, dtype=np.intp)
         used = self._used
-        if seconds > 0:
-            load = np.minimum(power[1:] / self._rated, 1.0) if power is not None else np.zeros(len(robots))
-            # element by element the very operations of _drain_each, so the same numbers
-            used += seconds * (1.0 + load * BATTERY_LOAD_FACTOR)
+        if not _drain_all(owners, d.actuator_force, d.actuator_velocity, self._rated, self._capacity, used,
+                          float(seconds), BATTERY_LOAD_FACTOR):
+            return []
         empty = np.flatnonzero(~(self._capacity - used > 0.0))  # battery_left() <= 0 (NaN too)
         out = []
         for i in empty.tolist():
@@ -96,13 +120,11 @@ class Batteries:
         return out
 
     @staticmethod
-    def _drain_each(robots: list[SimRobot], power: np.ndarray | None, seconds: float) -> list[SimRobot]:
-        """:meth:`drain` one robot at a time (a few robots, or robots not indexed together:
-        ``power`` None, drained as at rest)."""
+    def _drain_each(robots: list[SimRobot], seconds: float) -> list[SimRobot]:
+        """:meth:`drain` one robot at a time, as at rest (robots not indexed together)."""
         if seconds > 0:
             for r in robots:
-                load = float(power[r.owner_index]) / r.rated_power_w if power is not None else 0.0
-                r.battery_used_s += seconds * (1.0 + min(load, 1.0) * BATTERY_LOAD_FACTOR)
+                r.battery_used_s += seconds  # at rest: one second per second
         out = []
         for r in robots:
             if not r.battery_empty and r.battery_left() <= 0.0:

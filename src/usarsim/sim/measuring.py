@@ -3,8 +3,10 @@
 At a report instant the simulation thread copies the world's state (``mj_copyData``) into
 one of a few spare ``MjData`` and hands the instant's reports to the measuring thread,
 which reads every due sensor from that copy, exactly as the simulation thread would have
-read them at that instant, while the simulation thread steps the physics on (MuJoCo
-releases the interpreter lock while it steps, and the ray-cast kernel while it casts).
+read them at that instant, and makes the robots' statuses from it and from what the
+simulation thread took of the rest then (:mod:`usarsim.sim.status`), while the simulation
+thread steps the physics on (MuJoCo releases the interpreter lock while it steps, and the
+ray-cast kernel while it casts).
 Readings are the same, bit for bit, and come out in the same order: one thread measures,
 in the order the instants came, and each sensor's own state (its noise, its scan
 accumulators) is only ever touched by it.  The simulation keeps everything it outputs
@@ -24,16 +26,18 @@ from __future__ import annotations
 import os
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Union
 
 import mujoco
 
 from usarsim.sim.outputs import Output
+from usarsim.sim.status import Standing, status_output
 from usarsim.sim.view import WorldView
 
 if TYPE_CHECKING:
     from usarsim.sensors import Sensor
     from usarsim.sim.raycaster import RayCaster
+    from usarsim.sim.reports import Report
 
 SENSOR_THREAD_ENV = "USARSIM_SENSOR_THREAD"
 # Copies of the world in use at once: instants measured, or waiting to be, while the
@@ -61,21 +65,21 @@ def measure_report(uid: int, sensors: list[Sensor], key: str, view: WorldView) -
     return Output(uid, t, value, key)
 
 
-# What an instant's job holds: outputs made on the simulation thread (statuses), and the
-# sensor reports to measure, in the order they fall due.
-Due = Output | tuple[int, list, str]
+# What an instant's job holds, in the order they fall due: sensor reports to measure
+# (robot id, sensors, key), and status and mission package reports (usarsim.sim.status).
+Due = Union["Report", tuple[int, list, str]]
 
 
-def measure_all(items: list[Due], view: WorldView) -> list[Output]:
-    """An instant's outputs in order: those made already, and the reports measured from ``view``."""
+def measure_all(items: list[Due], view: WorldView, standing: Standing) -> list[Output]:
+    """An instant's outputs in order, measured from ``view`` and ``standing`` (of the instant)."""
     out = []
     for item in items:
-        if isinstance(item, Output):
-            out.append(item)
-        else:
+        if item.__class__ is tuple:
             o = measure_report(item[0], item[1], item[2], view)
             if o is not None:
                 out.append(o)
+        else:
+            out.append(status_output(item, view.data, standing, view.time))
     return out
 
 
@@ -98,8 +102,9 @@ class Measurer:
         self._next = 0
 
     def submit(self, model: mujoco.MjModel, data: mujoco.MjData, caster: RayCaster, time: float, world,
-               entities, items: list[Due]) -> Future:
-        """Measure ``items`` at simulated ``time`` from a copy of ``data`` taken now."""
+               entities, items: list[Due], standing: Standing) -> Future:
+        """Measure ``items`` at simulated ``time`` from a copy of ``data`` taken now (and
+        ``standing``, taken now)."""
         if model is not self._model:
             self._model, self._slots, self._next = model, [], 0
         if len(self._slots) < SLOTS:
@@ -110,7 +115,7 @@ class Measurer:
             slot.future.result()  # the copy is free once its instant is measured
         mujoco.mj_copyData(slot.data, model, data)
         view = WorldView(model, slot.data, time, slot.caster, world, entities)
-        slot.future = self._executor.submit(measure_all, items, view)
+        slot.future = self._executor.submit(measure_all, items, view, standing)
         return slot.future
 
     def call(self, fn) -> Future:

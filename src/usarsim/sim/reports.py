@@ -61,7 +61,7 @@ class _Cohort:
     def plan(self) -> list:
         """Its reports as the simulation hands them on: the measuring thread's
         (robot id, sensors, key) for a sensor's, the Report itself for a status or a
-        mission package's (made on the simulation thread); kept until its reports change."""
+        mission package's (usarsim.sim.status); kept until its reports change."""
         if self._plan is None:
             self._plan = [rep if rep.status or rep.package is not None else rep.item for rep in self.reports]
         return self._plan

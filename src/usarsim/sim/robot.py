@@ -59,8 +59,11 @@ class SimRobot:
         """Keep the seconds of battery used at ``used[at]`` from now on."""
         self._battery, self._battery_at = used, at
 
-    def battery_left(self) -> float:
-        return max(0.0, self.config.battery_s - self.battery_used_s)
+    def battery_left(self, used: np.ndarray | None = None) -> float:
+        """Seconds of battery left now; from ``used``, a copy of the array the robot's
+        battery is kept in taken at an instant (:meth:`Batteries.used_now`), then."""
+        spent = self.battery_used_s if used is None else float(used[self._battery_at])
+        return max(0.0, self.config.battery_s - spent)
 
 
 def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:

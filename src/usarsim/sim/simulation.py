@@ -28,7 +28,7 @@ from usarsim.config.world import WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.effecters import Effecter
 from usarsim.errors import ConfigError, SimulationError
-from usarsim.readings import CommandResult, ItemParams, Refusal, RobotStatus, ZoomResult
+from usarsim.readings import CommandResult, ItemParams, Refusal, ZoomResult
 from usarsim.robots import make_drive
 from usarsim.sensors import Sensor, make_item
 from usarsim.sim import builder, frames, joints, systems, truth
@@ -40,8 +40,9 @@ from usarsim.sim.health import BlowUpGuard
 from usarsim.sim.measuring import Due, Measurer, OrderedOutbox, measure_all, measure_report
 from usarsim.sim.outputs import Output
 from usarsim.sim.raycaster import RayCaster
-from usarsim.sim.reports import EPS, Report, ReportSchedule
+from usarsim.sim.reports import EPS, ReportSchedule
 from usarsim.sim.robot import SimRobot, describe_items
+from usarsim.sim.status import Standing
 from usarsim.sim.systems.righting import start_righting
 from usarsim.sim.view import RobotHandle, WorldView
 
@@ -391,33 +392,31 @@ class Simulation:
         if not plans:
             return
         items: list[Due] = []
-        made_now = self._made_now
         if not any(r.battery_empty for r in self.robots.values()):
-            for plan in plans:  # a sensor's report as it is, a status or a package's state made now
-                items += [x if x.__class__ is tuple else made_now(x, now) for x in plan]
+            for plan in plans:  # sensors' reports (tuples), statuses and packages' states (Reports)
+                items += plan
         else:  # a robot whose battery is empty reports its status only
             for plan in plans:
                 for x in plan:
                     if x.__class__ is not tuple:
                         if x.status or not x.robot.battery_empty:
-                            items.append(made_now(x, now))
+                            items.append(x)
                     elif not self.robots[x[0]].battery_empty:
                         items.append(x)
-        if self.measurer is not None and any(not isinstance(i, Output) for i in items):
+        standing = self.standing()
+        if self.measurer is not None and any(x.__class__ is tuple for x in items):
             if not inline:
                 self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
-                                                      self.entities, items))
+                                                      self.entities, items, standing))
                 return
             self.settle()  # the earlier instants first: a sensor is read by one thread at a time, in order
-        for o in measure_all(items, self.view()):
+        for o in measure_all(items, self.view(), standing):
             self.outbox.append(o)
 
-    def _made_now(self, rep: Report, now: float) -> Output:
-        """A status or mission package report, made on the simulation thread at ``now``."""
-        r = rep.robot
-        if rep.status:
-            return Output(r.uid, now, self.status_of(r), "STA")
-        return Output(r.uid, now, joints.package_state(self.data, r, rep.package), rep.key)
+    def standing(self) -> Standing:
+        """What a robot's status reads now besides the physics (usarsim.sim.status)."""
+        return Standing(self.batteries.used_now(), frozenset(uid for uid, r in self.robots.items() if r.light),
+                        tuple(self.cameras.multiview()))
 
     def _emit(self, r: SimRobot, sensors: list[Sensor], key: str, view: WorldView | None = None) -> None:
         o = measure_report(r.uid, sensors, key, view or self.view())
@@ -443,14 +442,6 @@ class Simulation:
             self.outbox.settle()
 
     # Reports and queries --------------------------------------------------------
-    def status_of(self, r: SimRobot) -> RobotStatus:
-        left = r.battery_left()
-        front, rear = r.drive.steer_angles(self.data, r.handle)
-        joint_angles = tuple((n, joints.position(self.data, r, n)) for n in r.config.status_joints)
-        return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
-                           front_steer=front, rear_steer=rear, joints=joint_angles, light_toggle=r.light,
-                           light_intensity=100 if r.light else 0, view=self.cameras.view_index(r.uid))
-
     def truth(self, class_name: str | None = None, name: str | None = None) -> list[tuple]:
         """The ground truth now (:func:`usarsim.sim.truth.truth_rows`)."""
         return truth.truth_rows(self, class_name, name)

@@ -37,6 +37,9 @@ def start_righting(sim: Simulation, r: SimRobot) -> bool:
     if up_z > OVERTURNED_COS:
         return False
     r.flip_until = sim.time + FLIP_TIME_S
+    for system in sim.systems:
+        if isinstance(system, Righting):
+            system.righting[r.uid] = r
     log.info("robot '%s' (id %d): self-righting for %.0f s", r.name, r.uid, FLIP_TIME_S)
     return True
 
@@ -49,23 +52,28 @@ class Righting(System):
 
     ORDER = 20
 
+    def __init__(self, sim: Simulation):
+        super().__init__(sim)
+        # the robots being righted, by id (asked twice every stretch of steps: with hundreds
+        # of robots, looking at each of them then cost more than the rest of the stretch's
+        # bookkeeping)
+        self.righting: dict[int, SimRobot] = {}
+
     @classmethod
     def wanted(cls, sim) -> bool:
         return bool(sim.robots)
 
     def active(self) -> bool:
-        for r in self.sim.robots.values():  # a loop, not any(): asked twice every stretch of steps
-            if r.flip_until >= 0:
-                return True
-        return False
+        return bool(self.righting)
 
     def pre_step(self) -> None:
-        if not self.active():
+        if not self.righting:
             return
         sim = self.sim
         d = sim.data
-        for r in sim.robots.values():
-            if r.flip_until < 0:
+        for uid, r in list(self.righting.items()):
+            if r.flip_until < 0 or sim.robots.get(uid) is not r:  # done, or removed
+                del self.righting[uid]
                 continue
             b = r.handle.body_id
             rot = d.xmat[b].reshape(3, 3)
@@ -76,6 +84,7 @@ class Righting(System):
             if sim.time >= r.flip_until or (tilt < math.radians(25.0) and abs(roll_rate) < 0.5):
                 r.flip_until = -1.0
                 d.xfrc_applied[b, 3:] = 0.0
+                del self.righting[uid]
                 continue
             sign = 1.0 if sense >= -1e-3 else -1.0
             dims = r.config.geometry.dimensions
