@@ -122,31 +122,42 @@ async def _client_main(port: int, poses: list, seconds_hint: float) -> None:
     await asyncio.gather(*(drive(i, r, w) for i, (r, w) in enumerate(conns)))
 
 
-class _ServedApp:
-    """An Application served by its own event loop on a thread, until ``stop()``."""
+class _LoopThread:
+    """An event loop on a thread of its own (polling as a lock-step server's does, with
+    ``lockstep``), running from once ``start()`` has run on it until ``stop_loop()``."""
 
-    def __init__(self, app):
+    def __init__(self, lockstep: bool, name: str, start) -> None:
         from usarsim.server.polling import new_event_loop, poll_seconds
 
-        self.app = app
-        self.loop = new_event_loop(poll_seconds(app.facade.lockstep))  # as `serve` makes it
+        self.loop = new_event_loop(poll_seconds(lockstep))  # as `serve` makes it
         ready = threading.Event()
 
         def serve():
             asyncio.set_event_loop(self.loop)
-            self.loop.run_until_complete(app.start())
+            self.loop.run_until_complete(start())
             ready.set()
             self.loop.run_forever()
 
-        self.thread = threading.Thread(target=serve, name="bench-server", daemon=True)
+        self.thread = threading.Thread(target=serve, name=name, daemon=True)
         self.thread.start()
         ready.wait(30)
 
-    def stop(self) -> None:
-        asyncio.run_coroutine_threadsafe(self.app.stop(), self.loop).result(120)
+    def stop_loop(self) -> None:
         self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(5)
         self.loop.close()
+
+
+class _ServedApp(_LoopThread):
+    """An Application served by its own event loop on a thread, until ``stop()``."""
+
+    def __init__(self, app):
+        self.app = app
+        super().__init__(app.facade.lockstep, "bench-server", app.start)
+
+    def stop(self) -> None:
+        asyncio.run_coroutine_threadsafe(self.app.stop(), self.loop).result(120)
+        self.stop_loop()
 
 
 def rss_mb() -> float:
@@ -616,9 +627,49 @@ def _round_trip_client(port: int, robot: bool, count: int) -> None:
     print(json.dumps({"round_trips_per_s": count / (time.perf_counter() - t0)}), flush=True)
 
 
+class _EchoServer(_LoopThread):
+    """The least a lock-step server does, on the event loop a lock-step server runs: it
+    greets a client with one line and answers each line with a fixed STEPPED line (no
+    parsing, no simulation).  Its round trips are what the machine and the client allow."""
+
+    REPLY = b"STEPPED {Time 0.004}\r\n"
+
+    def __init__(self) -> None:
+        self.port = 0
+        self._server: asyncio.base_events.Server | None = None
+        super().__init__(True, "bench-echo", self._start)
+
+    async def _start(self) -> None:
+        async def handle(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+            writer.write(b"NFO {Gametype BotDeathMatch} {Level echo} {TimeLimit 0}\r\n")
+            while await reader.readline():
+                writer.write(self.REPLY)
+            writer.close()
+
+        self._server = await asyncio.start_server(handle, "127.0.0.1", 0)
+        self.port = self._server.sockets[0].getsockname()[1]
+
+    def stop(self) -> None:
+        if self._server is not None:
+            self.loop.call_soon_threadsafe(self._server.close)
+        self.stop_loop()
+
+
+def _round_trips(port: int, robot: bool, count: int) -> float | None:
+    """Round trips a second of :func:`_round_trip_client` against ``port`` (None: it failed)."""
+    out = subprocess.run([sys.executable, "-m", "usarsim.bench", "--round-trip-client", str(port),
+                          "1" if robot else "0", str(count)], capture_output=True, text=True, timeout=600)
+    if out.returncode != 0:
+        print(f"usarsim bench: the client failed: {out.stderr.strip()[-500:]}", file=sys.stderr)
+        return None
+    return json.loads(out.stdout.strip().splitlines()[-1])["round_trips_per_s"]
+
+
 def run_round_trip_bench(args) -> int:
     """``bench --round-trips``: lock-step STEP/STEPPED round trips per second of a client in
-    another process over loopback, with no robot and with one P2AT (4 ms steps)."""
+    another process over loopback, with no robot and with one P2AT (4 ms steps), and of the
+    same client against a bare echo server on the same event loop (:class:`_EchoServer`):
+    what the machine allows, to read the others against."""
     from usarsim.config.catalog import resolve_world
     from usarsim.server.app import Application
 
@@ -631,20 +682,26 @@ def run_round_trip_bench(args) -> int:
                           web_port=None)
         served = _ServedApp(app)
         try:
-            out = subprocess.run([sys.executable, "-m", "usarsim.bench", "--round-trip-client", str(app.control.port),
-                                  "1" if robot else "0", str(count)], capture_output=True, text=True, timeout=600)
+            rate = _round_trips(app.control.port, robot, count)
         finally:
             served.stop()
-        if out.returncode != 0:
-            print(f"usarsim bench: the client failed: {out.stderr.strip()[-500:]}", file=sys.stderr)
+        if rate is None:
             return 1
-        rate = json.loads(out.stdout.strip().splitlines()[-1])["round_trips_per_s"]
         result["one_p2at" if robot else "no_robot"] = round(rate, 1)
+    echo = _EchoServer()
+    try:
+        rate = _round_trips(echo.port, False, count)
+    finally:
+        echo.stop()
+    if rate is None:
+        return 1
+    result["bare_echo"] = round(rate, 1)
     if args.json:
         print(json.dumps(result))
     else:
         print(f"lock-step STEP/STEPPED round trips of {ROUND_TRIP_STEP_S * 1000:g} ms, one client in another "
-              f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT")
+              f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT; "
+              f"a bare echo server on the same event loop: {result['bare_echo']:.0f}")
     return 0
 
 

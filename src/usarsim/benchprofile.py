@@ -129,10 +129,10 @@ def _matching(stats: pstats.Stats, pred) -> list[tuple]:
 
 
 def _sensor_rows(s: pstats.Stats) -> tuple[list[tuple[str, float]], float]:
-    """Each sensor type's measurements (largest first), then the ray casting among them; and
-    their total."""
+    """Each sensor type's measurements and the robots' statuses (largest first), then the ray
+    casting among them; and their total."""
     from usarsim.sensors import SENSORS
-    from usarsim.sim import raycaster
+    from usarsim.sim import raycaster, status
 
     total = 0.0
     per_type = []
@@ -147,6 +147,10 @@ def _sensor_rows(s: pstats.Stats) -> tuple[list[tuple[str, float]], float]:
         if t > 0:
             per_type.append((f"sensor {cls.__name__}", t))
             total += t
+    statuses = _cum(s, [_where(status.status_output)])  # made where the sensors are read
+    if statuses > 0:
+        per_type.append(("statuses (STA, MISSTA)", statuses))
+        total += statuses
     per_type.sort(key=lambda r: -r[1])
     cast_keys = _matching(s, lambda k: k[0] == raycaster.__file__ and k[2] in ("cast", "cast_from", "count_walls"))
     return per_type + [("  of which ray casting (all sensors)", _cum(s, cast_keys))], total

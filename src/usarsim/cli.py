@@ -274,7 +274,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--frames", type=int, default=60, help="with --cameras: frames per size (default: %(default)s)")
     b.add_argument("--round-trips", action="store_true",
                    help="measure lock-step STEP/STEPPED round trips a second (4 ms steps) of a client in another "
-                        "process, with no robot and with one P2AT")
+                        "process, with no robot and with one P2AT, and against a bare echo server on the same "
+                        "event loop (what the machine allows)")
     b.add_argument("--count", type=int, default=5000,
                    help="with --round-trips: round trips timed (default: %(default)s)")
     b.add_argument("--profile", action="store_true",

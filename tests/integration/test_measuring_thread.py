@@ -5,6 +5,7 @@ come out in time order, and requests that change what sensors read wait for them
 from __future__ import annotations
 
 import math
+import os
 
 import pytest
 
@@ -128,3 +129,26 @@ def test_a_status_made_on_the_measuring_thread_is_the_robots_status_at_its_insta
     assert value.light_toggle is False and value.light_intensity == 0
     assert value.battery_s == int(math.ceil(r.config.battery_s - used_then - 1e-6)) > 1
     assert value.view == 0
+
+
+@pytest.mark.skipif(not hasattr(os, "setpriority"), reason="no thread priorities on this system")
+def test_the_measuring_thread_yields_processors_to_the_simulation_thread():
+    """The measuring thread runs MEASURING_NICE nicer than the thread that made it, so that
+    the kernel gives the simulation thread, the critical path, the larger share of a busy
+    machine; the thread that made it keeps its own priority."""
+    import threading
+
+    from usarsim.sim.measuring import MEASURING_NICE, Measurer
+
+    def nice() -> int:
+        return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+
+    own = nice()
+    measurer = Measurer()
+    try:
+        theirs = measurer.call(nice).result(10)
+    finally:
+        measurer.close()
+    assert MEASURING_NICE > 0
+    assert theirs == min(19, own + MEASURING_NICE)
+    assert nice() == own
