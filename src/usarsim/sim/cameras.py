@@ -62,13 +62,6 @@ class Cameras:
         self._multiview, self._multiview_model = out, self.sim.model
         return out
 
-    def view_index(self, uid: int) -> int:
-        """A robot's tile in the MultiView (STA ``View``), -1 when it is not shown."""
-        for i, (u, _) in enumerate(self.multiview()):
-            if u == uid:
-                return i
-        return -1
-
     def set_viewports(self, uid: int, names: list[str | None]) -> list[tuple[str, str]]:
         """SET {Type Viewports}: viewport n shows the robot's camera ``names[n]`` (None or
         ``Disable``: off).  Returns (what viewport n shows: the camera, ``Disabled`` or
