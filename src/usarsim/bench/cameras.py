@@ -1,0 +1,181 @@
+"""``usarsim bench --cameras``: frames per second a client gets through the image server,
+beside bare MuJoCo rendering plus JPEG encoding of the same view, and what textures cost."""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import statistics
+import threading
+import time
+
+from usarsim.bench.serving import ServedApp, logging_quiet
+
+ROUNDS = 5  # the camera bench alternates this many served and bare runs and takes the medians
+
+
+class _ServedCamera:
+    """A P2AT's camera (its physics running in real time) served by the image server of an
+    Application of its own, its world built with or without textures; ``frame()`` asks for
+    one JPEG picture and reads it whole.  The robot stands at its start pose, so that every
+    picture compared (textured, plain, bare) shows the same view: a robot driving would
+    bring a wall nearer, and what a picture costs changes with what fills it."""
+
+    def __init__(self, world, w: int, h: int, textures: bool):
+        import socket
+
+        from usarsim.server.app import Application
+        from usarsim.server.image import ImageSettings
+        from usarsim.sim.builder import TEXTURES_ENV
+
+        before = os.environ.get(TEXTURES_ENV)
+        os.environ[TEXTURES_ENV] = "1" if textures else "0"  # read while the world is built
+        try:
+            self.app = Application(world, host="127.0.0.1", port=0, seed=0, speed=1.0, lockstep=False,
+                                   truth_port=None, image_port=0,
+                                   image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0), web_port=None)
+            self.server = ServedApp(self.app)
+            try:
+                self.ctl = socket.create_connection(("127.0.0.1", self.app.control.port), timeout=30)
+                pose = world.start_poses[0]
+                self.ctl.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
+                                 "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode())
+                sim = self.app.facade.sim
+                deadline = time.monotonic() + 30
+                while not sim.robots and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                time.sleep(0.5)
+            except BaseException:
+                self.close()  # the server's thread and sockets go with a failed start
+                raise
+        finally:
+            if before is None:
+                os.environ.pop(TEXTURES_ENV, None)
+            else:
+                os.environ[TEXTURES_ENV] = before
+        try:
+            self.viewer = socket.create_connection(("127.0.0.1", self.app.image.port), timeout=60)
+            self.frame()  # the first picture opens the GL context
+        except BaseException:
+            self.close()
+            raise
+
+    def frame(self) -> None:
+        import struct
+
+        self.viewer.sendall(b"OK")
+        head = b""
+        while len(head) < 5:
+            head += self.viewer.recv(5 - len(head))
+        n = struct.unpack(">I", head[1:5])[0]
+        got = 0
+        while got < n:
+            got += len(self.viewer.recv(min(1 << 20, n - got)))
+
+    def fps(self, count: int) -> float:
+        t0 = time.perf_counter()
+        for _ in range(count):
+            self.frame()
+        return count / (time.perf_counter() - t0)
+
+    def close(self) -> None:
+        for s in (getattr(self, "viewer", None), getattr(self, "ctl", None)):
+            if s is not None:
+                s.close()
+        self.server.stop()
+
+
+class _BareRenderer:
+    """The served camera's view rendered and JPEG-encoded directly with MuJoCo's offscreen
+    renderer, on a thread of its own (its own GL context), from a snapshot of the same scene,
+    drawn the way the image server draws (no shadows or reflections, nearest mipmap)."""
+
+    def __init__(self, served: _ServedCamera, w: int, h: int):
+        box = {}
+        done = threading.Event()
+        served.app.facade.call(lambda s: s.cameras.render_snapshot(),
+                               on_done=lambda r, e: (box.update(r=r), done.set()))
+        done.wait(30)
+        self.snap = box["r"]
+        self.size = (w, h)
+        self.jobs: queue.Queue[int | None] = queue.Queue()
+        self.times: queue.Queue[float] = queue.Queue()
+        self.thread = threading.Thread(target=self._run, name="bench-bare-render")
+        self.thread.start()
+        self.fps(1)  # its context is open
+
+    def _run(self) -> None:
+        from usarsim.server.image import encode_picture
+        from usarsim.sim.builder import camera_fovy_deg
+        from usarsim.sim.render import camera_renderer
+
+        w, h = self.size
+        snap = self.snap
+        cam = next(iter(snap.cameras.values()))
+        r = camera_renderer(snap.model, w, h, shadows=False)
+        snap.model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, w, h)
+        while (count := self.jobs.get()) is not None:
+            t = time.perf_counter()
+            for _ in range(count):
+                r.update_scene(snap.data, camera=cam.cam_id)
+                encode_picture(r.render(), 3)
+            self.times.put(count / (time.perf_counter() - t))
+        r.close()
+
+    def fps(self, count: int) -> float:
+        self.jobs.put(count)
+        return self.times.get()
+
+    def close(self) -> None:
+        self.jobs.put(None)
+        self.thread.join()
+
+
+def run_camera_bench(args) -> int:
+    """Frames per second a client gets through the image server (a P2AT's camera bound to
+    it, physics running in real time beside it) against bare MuJoCo rendering plus JPEG
+    encoding of the same view in the same process, at each picture size; and, in the same
+    run, what the world's textures cost: the same camera served from the world built with
+    plain colours.  The three are measured in alternate runs so that all see the same load."""
+    from usarsim.config.catalog import resolve_world
+
+    logging_quiet()
+    world = resolve_world(args.world)
+    frames = max(5, int(args.frames))
+    results = []
+    for size in args.sizes:
+        w, h = size
+        opened = []
+        try:
+            textured = _ServedCamera(world, w, h, textures=True)
+            opened.append(textured)
+            plain = _ServedCamera(world, w, h, textures=False)
+            opened.append(plain)
+            bare = _BareRenderer(textured, w, h)
+            opened.append(bare)
+            served_runs, plain_runs, bare_runs = [], [], []
+            per_round = max(5, frames // ROUNDS)
+            for _ in range(ROUNDS):
+                served_runs.append(textured.fps(per_round))
+                plain_runs.append(plain.fps(per_round))
+                bare_runs.append(bare.fps(per_round))
+        finally:
+            for o in reversed(opened):
+                o.close()
+        served = statistics.median(served_runs)
+        plain_fps = statistics.median(plain_runs)
+        bare_fps = statistics.median(bare_runs)
+        cost = 100.0 * (1.0 - served / plain_fps)
+        row = {"size": f"{w}x{h}", "served_fps": round(served, 2), "bare_render_jpeg_fps": round(bare_fps, 2),
+               "ratio": round(served / bare_fps, 3), "served_plain_fps": round(plain_fps, 2),
+               "textures_cost_percent": round(cost, 1), "frames": frames, "world": world.name,
+               "cpu_count": os.cpu_count()}
+        results.append(row)
+        if not args.json:
+            print(f"camera {w}x{h}: served {served:.1f} frames/s through the image server; bare MuJoCo render + "
+                  f"JPEG {bare_fps:.1f} frames/s; ratio {served / bare_fps:.2f}; plain colours served "
+                  f"{plain_fps:.1f} frames/s, textures cost {cost:.1f} %")
+    if args.json:
+        print(json.dumps(results))
+    return 0
