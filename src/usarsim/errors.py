@@ -50,3 +50,8 @@ class PhysicsError(UsarsimError):
 
 class SimulationError(UsarsimError):
     """A request to the simulation cannot be carried out (unknown robot class, bad pose...)."""
+
+
+class SimulationStopped(SimulationError):
+    """A request the simulation will never carry out: it has stopped, or is stopping (the
+    server is shutting down, or the simulation stopped on an error)."""

@@ -32,7 +32,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from usarsim.errors import UsarsimError
+from usarsim.errors import SimulationStopped, UsarsimError
 from usarsim.sim.interpreter import InterpreterTuning
 from usarsim.sim.measuring import sensor_thread_wanted
 from usarsim.sim.simulation import Output, Simulation
@@ -119,10 +119,24 @@ class SimulationRunner:
         self._wall_per_s: float | None = None
         self._rate_model: object = None
         self._running = False  # the simulation thread is running
+        # set (under _closing_lock) once the thread no longer takes requests: later ones are
+        # answered at once, those still queued are answered as it ends (see _close)
+        self._closing_lock = threading.Lock()
+        self._closed = False
         self._interpreter = InterpreterTuning()  # collector and switch interval (sim/interpreter.py)
 
     # Thread-safe API ---------------------------------------------------------------
     def submit(self, req: Request | StepRequest) -> None:
+        """Queue ``req`` for the simulation thread.  A request that will never run (the
+        simulation has stopped or is stopping) is answered at once with
+        :class:`~usarsim.errors.SimulationStopped`, so that nobody waits for it."""
+        with self._closing_lock:  # held to the end: the thread cannot close between the look and the put
+            if not self._closed:
+                self._put(req)
+                return
+        self._refuse(req)  # outside the lock: its answer may ask the runner again
+
+    def _put(self, req: Request | StepRequest) -> None:
         if not self.lockstep:
             self.queue.put(req)
             return
@@ -167,14 +181,17 @@ class SimulationRunner:
         """Stop the simulation thread and wait until it has ended.
 
         Requests still queued (the removals of every robot whose client the server just
-        closed, say) are dropped rather than run: rebuilding the model once per removed robot
-        is work nobody will see.  The thread must have ended before the interpreter finalises:
+        closed, say) are not run: rebuilding the model once per removed robot is work nobody
+        will see.  Each is answered with :class:`~usarsim.errors.SimulationStopped` instead,
+        as is any asked for later, so that nobody waits for them (a STEP's client is gone
+        with the server).  The thread must have ended before the interpreter finalises:
         a daemon thread still inside MuJoCo (a model compiling) when Python exits is unwound
         by force through native frames, and the process dies with a segmentation fault after
         its work is done."""
         self._stopping.set()
         self.queue.put(_Stop())
         if not self._thread.is_alive():
+            self._close()  # never started: what was asked of it is answered all the same
             return
         self._thread.join(self.STOP_TIMEOUT_S if timeout is None else timeout)
         if self._thread.is_alive():
@@ -199,6 +216,7 @@ class SimulationRunner:
             self.error = exc
             log.exception("the simulation thread stopped on an unexpected error")
         finally:
+            self._close()
             with self._lock:  # a STEP being run on another thread ends first; none starts after
                 self._running = False
                 try:
@@ -209,7 +227,8 @@ class SimulationRunner:
 
     def _execute(self, req: Request) -> None:
         if self._stopping.is_set():
-            return  # shutting down: nobody waits for it (see stop)
+            self._refuse(req)  # shutting down: not run (see stop), but answered
+            return
         result, error = None, None
         if not req.concurrent:
             self.sim.settle()
@@ -224,6 +243,30 @@ class SimulationRunner:
             self._interpreter.after_change(self.sim)
         if req.on_done is not None:
             req.on_done(result, error)
+
+    @staticmethod
+    def _refuse(req: Request | StepRequest | _Stop) -> None:
+        """Answer a request that will not run (a STEP's client is gone with the server)."""
+        if isinstance(req, Request) and req.on_done is not None:
+            try:
+                req.on_done(None, SimulationStopped("the simulation has stopped: the request was not carried out"))
+            except Exception:  # one waiter's error must not keep the others waiting
+                log.exception("answering a request the simulation did not carry out")
+
+    def _close(self) -> None:
+        """The thread is ending: it takes no more requests, and answers those it still has
+        (queued, or waiting in lock-step for a STEP that will not come)."""
+        with self._closing_lock:
+            self._closed = True
+        with self._count_lock:
+            left, self._pending = self._pending, []
+        while True:
+            try:
+                left.append(self.queue.get_nowait())
+            except queue.Empty:
+                break
+        for req in left:
+            self._refuse(req)
 
     def _flush(self, wait: bool = True) -> None:
         """Hand the outputs over; ``wait=False``: as far as the readings are taken (the
@@ -240,6 +283,7 @@ class SimulationRunner:
             with self._lock:
                 try:
                     if self._stopping.is_set():
+                        self._refuse(item)
                         continue
                     if isinstance(item, StepRequest):
                         self._step(item.seconds, item.on_done)
