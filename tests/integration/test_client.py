@@ -130,6 +130,18 @@ def test_a_silent_server_times_out_naming_what_did_not_come():
         connect("127.0.0.1", port, timeout=1.0)
 
 
+def test_launch_returns_with_every_listener_it_asked_for_and_each_answers():
+    with launch(world="DM-USAR_yellow", wireless=True, image=True) as srv:
+        assert set(srv.ports) == {"control", "truth", "image", "comserver", "wss", "cominterface"}
+        for port in srv.ports.values():  # each is listening already
+            socket.create_connection((srv.host, port), timeout=5).close()
+
+
+def test_a_simulator_that_cannot_start_is_an_error_with_its_reason():
+    with pytest.raises(ClientError, match="did not start.*no-such-world"):
+        launch(world="no-such-world")
+
+
 def test_killing_the_server_mid_run_raises_instead_of_hanging():
     srv = launch(world="DM-USAR_yellow", seed=1)
     world = None

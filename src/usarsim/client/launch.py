@@ -25,7 +25,11 @@ class Server:
     port in ``ports`` (``control``, ``truth``, and ``image``, ``web``, ``comserver``, ``wss``,
     ``cominterface`` when started)."""
 
-    def __init__(self, args: list[str], lockstep: bool, timeout: float):
+    def __init__(self, args: list[str], lockstep: bool, timeout: float,
+                 expected: frozenset[str] = frozenset({"control", "truth"}), more: bool = True):
+        """Start ``usarsim serve`` with ``args`` and wait until every listener in ``expected``
+        has said where it listens; ``more``: others may follow in the same burst (options
+        this class did not choose), which are given a tenth of a second."""
         self.lockstep = lockstep
         self.timeout = timeout
         self._stderr = tempfile.TemporaryFile(mode="w+")
@@ -35,7 +39,8 @@ class Server:
                                      stderr=self._stderr, stdin=subprocess.DEVNULL, text=True, env=env)
         self.ports: dict[str, int] = {}
         self.host = "127.0.0.1"
-        expected = {"control", "truth"}
+
+        ready = threading.Event()  # every expected listener has said where it listens, or stdout ended
 
         def read_ports() -> None:  # every stdout line, to the end (the pipe never fills)
             assert self.proc.stdout is not None
@@ -44,13 +49,15 @@ class Server:
                 if m:
                     self.host = m.group(2)
                     self.ports[m.group(1)] = int(m.group(3))
+                    if expected <= set(self.ports):
+                        ready.set()
+            ready.set()  # the process has ended (or closed its output): no more to wait for
 
         self._reader = threading.Thread(target=read_ports, name="usarsim-launch", daemon=True)
         self._reader.start()
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while time.monotonic() < deadline and self.proc.poll() is None and not expected <= set(self.ports):
-            time.sleep(0.02)
-        time.sleep(0.1)  # the other listener lines, printed in the same burst
+        ready.wait(START_TIMEOUT_S)
+        if more:
+            time.sleep(0.1)  # the other listener lines, printed in the same burst
         if not expected <= set(self.ports):
             self.close(keep_stderr=True)
             tail = self.stderr_tail()
@@ -107,6 +114,9 @@ def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = Tru
     Foxglove (its port in ``ports["foxglove"]``).  Use it in a ``with`` block, or call
     :meth:`Server.close`."""
     args = ["--world", str(world), "--seed", str(int(seed)), "--port", "0", "--truth-port", "0"]
+    expected = {"control", "truth"} | ({"image"} if image else set()) | ({"web"} if web else set())
+    expected |= {"comserver", "wss", "cominterface"} if wireless else set()
+    expected |= {"foxglove"} if foxglove else set()
     if lockstep:
         args.append("--lockstep")
     else:
@@ -121,4 +131,5 @@ def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = Tru
     if foxglove:
         args += ["--foxglove", "0"]
     args += list(extra_args)
-    return Server(args, lockstep, timeout)
+    # every listener asked for is waited for by name; options of the caller's may open others
+    return Server(args, lockstep, timeout, frozenset(expected), more=bool(extra_args))
