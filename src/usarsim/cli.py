@@ -286,6 +286,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="measure what recording costs: runs without and with 'serve --record' (every channel but "
                         "cameras), alternately; prints both real-time factors and the recording's size per "
                         "robot-minute")
+    b.add_argument("--targets", action="store_true",
+                   help="one sitting of every benchmark the scaling targets of a 2-core machine are judged by "
+                        "(16, 64 and 256 robots, round trips, cameras), --runs times in turn, and a table of each "
+                        "target against every run, with the machine and the time (about 10 minutes on 2 cores)")
+    b.add_argument("--runs", type=int, default=3, help="with --targets: runs of each benchmark (default: %(default)s)")
+    b.add_argument("--counts", type=int, nargs="+", default=[16, 64, 256], metavar="N",
+                   help="with --targets: robot counts (default: 16 64 256; the targets are set at those)")
     b.add_argument("--env", action="store_true",
                    help="measure the learning environments instead: Gymnasium steps per second of one P2AT at a "
                         "0.1 s control period in lock-step, and PettingZoo steps per second of a team (--team)")
@@ -598,6 +605,10 @@ def cmd_bench(args) -> int:
 
     if args.env:
         return run_env_bench(args)
+    if args.targets:
+        from usarsim.bench.targets import run_targets_bench
+
+        return run_targets_bench(args)
     if args.round_trips:
         from usarsim.bench import run_round_trip_bench
 

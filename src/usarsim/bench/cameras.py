@@ -142,40 +142,47 @@ def run_camera_bench(args) -> int:
 
     logging_quiet()
     world = resolve_world(args.world)
-    frames = max(5, int(args.frames))
     results = []
     for size in args.sizes:
-        w, h = size
-        opened = []
-        try:
-            textured = _ServedCamera(world, w, h, textures=True)
-            opened.append(textured)
-            plain = _ServedCamera(world, w, h, textures=False)
-            opened.append(plain)
-            bare = _BareRenderer(textured, w, h)
-            opened.append(bare)
-            served_runs, plain_runs, bare_runs = [], [], []
-            per_round = max(5, frames // ROUNDS)
-            for _ in range(ROUNDS):
-                served_runs.append(textured.fps(per_round))
-                plain_runs.append(plain.fps(per_round))
-                bare_runs.append(bare.fps(per_round))
-        finally:
-            for o in reversed(opened):
-                o.close()
-        served = statistics.median(served_runs)
-        plain_fps = statistics.median(plain_runs)
-        bare_fps = statistics.median(bare_runs)
-        cost = 100.0 * (1.0 - served / plain_fps)
-        row = {"size": f"{w}x{h}", "served_fps": round(served, 2), "bare_render_jpeg_fps": round(bare_fps, 2),
-               "ratio": round(served / bare_fps, 3), "served_plain_fps": round(plain_fps, 2),
-               "textures_cost_percent": round(cost, 1), "frames": frames, "world": world.name,
-               "cpu_count": os.cpu_count()}
+        row = camera_result(world, size, int(args.frames))
         results.append(row)
         if not args.json:
-            print(f"camera {w}x{h}: served {served:.1f} frames/s through the image server; bare MuJoCo render + "
-                  f"JPEG {bare_fps:.1f} frames/s; ratio {served / bare_fps:.2f}; plain colours served "
-                  f"{plain_fps:.1f} frames/s, textures cost {cost:.1f} %")
+            print(f"camera {row['size']}: served {row['served_fps']:.1f} frames/s through the image server; bare "
+                  f"MuJoCo render + JPEG {row['bare_render_jpeg_fps']:.1f} frames/s; ratio {row['ratio']:.2f}; "
+                  f"plain colours served {row['served_plain_fps']:.1f} frames/s, textures cost "
+                  f"{row['textures_cost_percent']:.1f} %")
     if args.json:
         print(json.dumps(results))
     return 0
+
+
+def camera_result(world, size: tuple[int, int], frames: int) -> dict:
+    """One picture size of the camera bench (``frames`` a camera, at least 5): what
+    ``usarsim bench --cameras --json`` prints for it."""
+    w, h = size
+    frames = max(5, int(frames))
+    opened = []
+    try:
+        textured = _ServedCamera(world, w, h, textures=True)
+        opened.append(textured)
+        plain = _ServedCamera(world, w, h, textures=False)
+        opened.append(plain)
+        bare = _BareRenderer(textured, w, h)
+        opened.append(bare)
+        served_runs, plain_runs, bare_runs = [], [], []
+        per_round = max(5, frames // ROUNDS)
+        for _ in range(ROUNDS):
+            served_runs.append(textured.fps(per_round))
+            plain_runs.append(plain.fps(per_round))
+            bare_runs.append(bare.fps(per_round))
+    finally:
+        for o in reversed(opened):
+            o.close()
+    served = statistics.median(served_runs)
+    plain_fps = statistics.median(plain_runs)
+    bare_fps = statistics.median(bare_runs)
+    cost = 100.0 * (1.0 - served / plain_fps)
+    return {"size": f"{w}x{h}", "served_fps": round(served, 2), "bare_render_jpeg_fps": round(bare_fps, 2),
+            "ratio": round(served / bare_fps, 3), "served_plain_fps": round(plain_fps, 2),
+            "textures_cost_percent": round(cost, 1), "frames": frames, "world": world.name,
+            "cpu_count": os.cpu_count()}

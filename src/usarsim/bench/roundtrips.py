@@ -57,11 +57,27 @@ def run_round_trip_bench(args) -> int:
     same client against a bare echo server on the same event loop (:class:`EchoServer`):
     what the machine allows, to read the others against."""
     from usarsim.config.catalog import resolve_world
-    from usarsim.server.app import Application
 
     logging_quiet()
-    world = resolve_world(args.world)
-    count = max(100, int(args.count))
+    result = round_trip_result(resolve_world(args.world), int(args.count))
+    if result is None:
+        return 1
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"lock-step STEP/STEPPED round trips of {ROUND_TRIP_STEP_S * 1000:g} ms, one client in another "
+              f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT; "
+              f"a bare echo server on the same event loop: {result['bare_echo']:.0f}")
+    return 0
+
+
+def round_trip_result(world, count: int) -> dict | None:
+    """Round trips a second with no robot, with one P2AT and against the bare echo server,
+    ``count`` each (at least 100): what ``usarsim bench --round-trips --json`` prints; None
+    when a client failed (said on stderr)."""
+    from usarsim.server.app import Application
+
+    count = max(100, int(count))
     result = {"world": world.name, "step_s": ROUND_TRIP_STEP_S, "count": count, "cpu_count": os.cpu_count()}
     for robot in (False, True):
         app = Application(world, host="127.0.0.1", port=0, seed=0, lockstep=True, truth_port=None, image_port=None,
@@ -72,7 +88,7 @@ def run_round_trip_bench(args) -> int:
         finally:
             served.stop()
         if rate is None:
-            return 1
+            return None
         result["one_p2at" if robot else "no_robot"] = round(rate, 1)
     echo = EchoServer()
     try:
@@ -80,12 +96,6 @@ def run_round_trip_bench(args) -> int:
     finally:
         echo.stop()
     if rate is None:
-        return 1
+        return None
     result["bare_echo"] = round(rate, 1)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(f"lock-step STEP/STEPPED round trips of {ROUND_TRIP_STEP_S * 1000:g} ms, one client in another "
-              f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT; "
-              f"a bare echo server on the same event loop: {result['bare_echo']:.0f}")
-    return 0
+    return result

@@ -120,21 +120,28 @@ def run_bench(args) -> int:
         return run_record_bench(args, world, n, seconds, progress)
     if getattr(args, "profile", False):
         return run_profile_bench(args, world, n, seconds, progress)
-    run = measure_rtf(world, n, seconds, progress=progress)
-    model = run["model"]
-    sim_s, wall_s, rtf = run["sim_seconds"], run["wall_seconds"], run["rtf"]
-    raw = raw_mujoco_rtf_over(model, min(seconds, 5.0), run["states"])
-    result = {"robots": n, "sim_seconds": sim_s, "wall_seconds": wall_s, "rtf": rtf,
-              "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
-              "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": run["physics_resets"],
-              "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}
+    result = rtf_result(world, n, seconds, progress=progress)
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"robots {n}: {sim_s:.1f} simulated s in {wall_s:.2f} s wall -> real-time factor {rtf:.2f}; "
-              f"bare mj_step {raw:.2f}; ratio {rtf / raw:.2f}; memory {run['peak_rss_mb']:.0f} MB at the peak, "
-              f"{run['rss_per_robot_mb']:.1f} MB a robot")
+        print(f"robots {n}: {result['sim_seconds']:.1f} simulated s in {result['wall_seconds']:.2f} s wall -> "
+              f"real-time factor {result['rtf']:.2f}; bare mj_step {result['raw_mujoco_rtf']:.2f}; ratio "
+              f"{result['ratio']:.2f}; memory {result['peak_rss_mb']:.0f} MB at the peak, "
+              f"{result['rss_per_robot_mb']:.1f} MB a robot")
     return 0
+
+
+def rtf_result(world, n: int, seconds: float, progress: bool = False) -> dict:
+    """One bench run of ``n`` robots for ``seconds`` (:func:`measure_rtf`) beside bare
+    ``mj_step`` on its scenes: what ``usarsim bench --json`` prints."""
+    run = measure_rtf(world, n, seconds, progress=progress)
+    model = run["model"]
+    rtf = run["rtf"]
+    raw = raw_mujoco_rtf_over(model, min(seconds, 5.0), run["states"])
+    return {"robots": n, "sim_seconds": run["sim_seconds"], "wall_seconds": run["wall_seconds"], "rtf": rtf,
+            "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
+            "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": run["physics_resets"],
+            "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}
 
 
 def run_profile_bench(args, world, n: int, seconds: float, progress: bool) -> int:
