@@ -601,6 +601,16 @@ def cmd_robots(args) -> int:
 
 
 def cmd_bench(args) -> int:
+    from usarsim.errors import ConfigError
+
+    try:
+        return _bench(args)
+    except ConfigError as exc:  # the world asked for: said in one line, as serve says it
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
+
+
+def _bench(args) -> int:
     from usarsim.bench import run_bench, run_camera_bench
 
     if args.env:

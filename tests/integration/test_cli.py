@@ -398,6 +398,14 @@ def test_bench_round_trips_counts_lock_step_steps_a_second():
     assert r["bare_echo"] > 100
 
 
+@pytest.mark.parametrize("mode", [[], ["--targets"], ["--cameras"], ["--round-trips"]])
+def test_bench_with_an_unknown_world_says_so_in_one_line(mode):
+    out = usarsim("bench", *mode, "--world", "nowhere")
+    assert out.returncode == 1
+    assert out.stderr.startswith("usarsim: error: --world: unknown world 'nowhere'; allowed: ")
+    assert "Traceback" not in out.stderr
+
+
 def test_bench_targets_runs_a_sitting_and_judges_every_target_it_measured():
     import json
 

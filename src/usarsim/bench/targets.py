@@ -7,7 +7,8 @@ memory, lock-step round trips with no robot and with one P2AT, and the image ser
 rate beside bare rendering plus JPEG.  A target is met when every run of the sitting meets
 it.  The sitting runs each robot count, then the round trips, then the cameras, ``runs``
 times over, in turn (16, 64, 256, round trips, cameras; 16, 64...), so that a machine whose
-speed drifts through the sitting weighs on every figure alike.  The machine (processor,
+speed drifts through the sitting weighs on every figure alike; each is ``usarsim bench`` in a
+process of its own, as a user runs it (the peak memory is then each run's own).  The machine (processor,
 cores, memory, MuJoCo) and the time are printed with the table: figures from two machines
 do not compare.
 """
@@ -17,18 +18,15 @@ from __future__ import annotations
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from usarsim.bench.cameras import camera_result
-from usarsim.bench.roundtrips import round_trip_result
-from usarsim.bench.rtf import rtf_result
-from usarsim.bench.serving import logging_quiet
-
 ROBOT_COUNTS = (16, 64, 256)
 RUNS = 3
+BENCH_TIMEOUT_S = 1800.0  # one benchmark of the sitting (256 robots spawn in a minute or two)
 
 
 @dataclass(frozen=True)
@@ -109,28 +107,38 @@ def machine() -> dict:
             "time_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
 
 
-def sitting(world, *, counts=ROBOT_COUNTS, runs: int = RUNS, seconds: float = 10.0, count: int = 5000,
+def _bench(*args: str) -> object:
+    """``usarsim bench ARGS --json`` in a process of its own (as a user runs it: each run's
+    memory is its own process's), its JSON."""
+    out = subprocess.run([sys.executable, "-m", "usarsim", "bench", *args, "--json"], capture_output=True, text=True,
+                         stdin=subprocess.DEVNULL, timeout=BENCH_TIMEOUT_S)
+    if out.returncode != 0:
+        raise SystemExit(f"usarsim bench {' '.join(args)} failed (exit code {out.returncode}): "
+                         f"{out.stderr.strip()[-1000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def sitting(world: str, *, counts=ROBOT_COUNTS, runs: int = RUNS, seconds: float = 10.0, count: int = 5000,
             sizes=((320, 240), (640, 480)), frames: int = 60, progress: Callable[[str], None] | None = None) -> dict:
-    """Every benchmark of the targets, ``runs`` times in turn; ``progress(what)`` is called
-    before each one."""
-    out: dict = {"world": world.name, "runs": runs, "seconds": seconds, "counts": list(counts), "rtf": {},
+    """Every benchmark of the targets, ``runs`` times in turn, each in a process of its own;
+    ``progress(what)`` is called before each one."""
+    out: dict = {"world": world, "runs": runs, "seconds": seconds, "counts": list(counts), "rtf": {},
                  "round_trips": [], "cameras": []}
     for k in range(runs):
         for n in counts:
             if progress:
                 progress(f"{n} robots, run {k + 1} of {runs}")
-            out["rtf"].setdefault(str(n), []).append(rtf_result(world, n, seconds))
+            out["rtf"].setdefault(str(n), []).append(
+                _bench("--world", world, "--robots", str(n), "--seconds", repr(float(seconds))))
         if count > 0:
             if progress:
                 progress(f"round trips, run {k + 1} of {runs}")
-            rt = round_trip_result(world, count)
-            if rt is None:
-                raise SystemExit("usarsim bench: the round-trip client failed")
-            out["round_trips"].append(rt)
+            out["round_trips"].append(_bench("--world", world, "--round-trips", "--count", str(count)))
         if sizes:
             if progress:
                 progress(f"cameras, run {k + 1} of {runs}")
-            out["cameras"].append([camera_result(world, size, frames) for size in sizes])
+            out["cameras"].append(_bench("--world", world, "--cameras", "--frames", str(frames), "--sizes",
+                                         *(f"{w}x{h}" for w, h in sizes)))
     return out
 
 
@@ -142,8 +150,8 @@ def run_targets_bench(args) -> int:
     """``usarsim bench --targets``: the sitting, then the table (or one JSON object)."""
     from usarsim.config.catalog import resolve_world
 
-    logging_quiet()
-    world = resolve_world(args.world)
+    resolve_world(args.world)  # a world that is not there: a clear error now, not in the first benchmark
+    world = str(args.world)
     counts = tuple(args.counts)
     runs, seconds = int(args.runs), float(args.seconds)
     if runs < 1 or not seconds > 0 or any(n < 1 for n in counts):
@@ -152,6 +160,7 @@ def run_targets_bench(args) -> int:
     show = sys.stderr.isatty() and not args.json
     kwargs = dict(counts=counts, runs=runs, seconds=seconds, count=int(args.count), sizes=tuple(args.sizes),
                   frames=int(args.frames))
+    info = machine()  # and the time the sitting started
     started = time.monotonic()
     if show:
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -171,7 +180,7 @@ def run_targets_bench(args) -> int:
             result = sitting(world, progress=note, **kwargs)
     else:
         result = sitting(world, **kwargs)
-    result["machine"] = machine()
+    result["machine"] = info
     result["wall_s"] = round(time.monotonic() - started, 1)
     result["targets"] = evaluate(result)
     if args.json:
