@@ -289,7 +289,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--targets", action="store_true",
                    help="one sitting of every benchmark the scaling targets of a 2-core machine are judged by "
                         "(16, 64 and 256 robots, round trips, cameras), --runs times in turn, and a table of each "
-                        "target against every run, with the machine and the time (about 10 minutes on 2 cores)")
+                        "target against every run, with the machine and the time (5 to 6 minutes on a 2-core machine)")
     b.add_argument("--runs", type=int, default=3, help="with --targets: runs of each benchmark (default: %(default)s)")
     b.add_argument("--counts", type=int, nargs="+", default=[16, 64, 256], metavar="N",
                    help="with --targets: robot counts (default: 16 64 256; the targets are set at those)")
