@@ -8,9 +8,9 @@ rate beside bare rendering plus JPEG.  A target is met when every run of the sit
 it.  The sitting runs each robot count, then the round trips, then the cameras, ``runs``
 times over, in turn (16, 64, 256, round trips, cameras; 16, 64...), so that a machine whose
 speed drifts through the sitting weighs on every figure alike; each is ``usarsim bench`` in a
-process of its own, as a user runs it (the peak memory is then each run's own).  The machine (processor,
-cores, memory, MuJoCo) and the time are printed with the table: figures from two machines
-do not compare.
+process of its own, as a user runs it (the peak memory is then each run's own).  The machine
+(processor, cores, memory, MuJoCo) and the time are printed with the table: figures from two
+machines do not compare.
 """
 
 from __future__ import annotations
