@@ -178,6 +178,40 @@ def test_test_script_puts_the_venv_bin_folder_first_on_path(tmp_path, venv):
         assert given == path and found == ""
 
 
+def _run_test_script(tmp_path: Path, *args: str, cores: int, failing: str = "") -> tuple[int, list[str]]:
+    """scripts/test.sh with a stand-in Python that writes each pytest command line it is given
+    to a file (and fails the one whose arguments contain ``failing``): its exit status and
+    those command lines, in order."""
+    log = tmp_path / "pytest.log"
+    folder = tmp_path / "env" / "bin"
+    folder.mkdir(parents=True)
+    python = folder / "python"
+    python.write_text('#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then shift 2; echo "$*" >> "$PYTEST_LOG"; '
+                      'case "$*" in *"$PYTEST_FAIL"*) [ -n "$PYTEST_FAIL" ] && exit 1;; esac; fi\nexit 0\n')
+    python.chmod(0o755)
+    tools = tmp_path / "tools"
+    tools.mkdir()
+    (tools / "chromium").write_text("#!/bin/sh\nexit 0\n")
+    (tools / "chromium").chmod(0o755)
+    env = {**os.environ, "PATH": f"{tools}{os.pathsep}{os.environ.get('PATH', '')}", "USARSIM_PYTHON": str(python),
+           "PYTEST_LOG": str(log), "PYTEST_FAIL": failing, "OMP_NUM_THREADS": str(cores)}  # nproc reads it
+    out = subprocess.run(["bash", str(ROOT / "scripts" / "test.sh"), *args], capture_output=True, text=True,
+                         timeout=60, check=False, env=env, cwd=tmp_path)
+    return out.returncode, log.read_text().splitlines() if log.exists() else []
+
+
+def test_test_script_shares_the_suite_among_the_cores_then_runs_the_wall_clock_tests_alone(tmp_path):
+    assert _run_test_script(tmp_path / "a", cores=2) == (0, ["-q -n 2 -m not alone", "-q -m alone"])
+    assert _run_test_script(tmp_path / "b", cores=16)[1][0] == "-q -n 4 -m not alone"  # at most 4 processes
+    assert _run_test_script(tmp_path / "c", cores=1) == (0, ["-q"])  # one core: one process, everything
+    # a failure among the shared tests fails the run, and the others still run
+    assert _run_test_script(tmp_path / "d", cores=2, failing="not alone") == (1, ["-q -n 2 -m not alone",
+                                                                                 "-q -m alone"])
+    assert _run_test_script(tmp_path / "e", cores=2, failing="-m alone")[0] == 1
+    # arguments select what runs, in one process, as given
+    assert _run_test_script(tmp_path / "f", "tests/unit", "-k", "lidar", cores=2) == (0, ["-q tests/unit -k lidar"])
+
+
 def test_readme_says_how_to_get_the_command_after_the_first_two():
     lines = (ROOT / "README.md").read_text().splitlines()
     assert lines[2:6] == [
@@ -431,6 +465,7 @@ def test_bench_targets_runs_a_sitting_and_judges_every_target_it_measured():
         assert targets[name]["values"] == [] and targets[name]["met"] is None
 
 
+@pytest.mark.alone  # wall-clock pacing: run by itself (scripts/test.sh)
 def test_bench_profile_says_where_the_time_goes():
     import json
 

@@ -27,6 +27,7 @@ def wall_seconds_for(server, sim_seconds: float) -> float:
     return time.perf_counter() - w0
 
 
+@pytest.mark.alone  # wall-clock pacing: run by itself (scripts/test.sh)
 @pytest.mark.parametrize("speed", [1.0, 4.0])
 def test_real_time_and_accelerated_clocks_follow_the_wall_clock(server_factory, speed):
     srv = server_factory(lockstep=False, speed=speed)
@@ -41,6 +42,7 @@ def test_real_time_and_accelerated_clocks_follow_the_wall_clock(server_factory, 
     assert times[1] - times[0] == pytest.approx(0.2, abs=1e-6) and times[2] - times[1] == pytest.approx(0.2, abs=1e-6)
 
 
+@pytest.mark.alone  # wall-clock pacing: run by itself (scripts/test.sh)
 def test_max_speed_runs_faster_than_real_time(server_factory):
     srv = server_factory(lockstep=False, speed=None)
     c = srv.connect()

@@ -37,6 +37,7 @@ def run_example(*args: str, timeout: float) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, str(EXAMPLE), *args], capture_output=True, text=True, timeout=timeout)
 
 
+@pytest.mark.alone  # a real-time closed loop: how far it drives before turning depends on its latency
 def test_the_example_spawns_at_the_first_pose_and_turns_before_the_wall(server_factory, tmp_path):
     (tmp_path / "WallAhead.yaml").write_text(WORLD)
     srv = server_factory(world=load_world(tmp_path / "WallAhead.yaml"), lockstep=False, speed=1.0)  # real time
@@ -60,7 +61,8 @@ def test_the_example_spawns_at_the_first_pose_and_turns_before_the_wall(server_f
     turns = [(float(m.group(1)), m.group(2)) for m in
              re.finditer(r"(\d+\.\d+) m ahead: turning (left|right) on the spot", out)]
     assert turns, out
-    assert all(ahead < 1.0 for ahead, _ in turns)  # it turns when something is near ahead
+    # it turns when something is nearer than 1 m ahead (printed to 2 decimals: 0.996 m reads 1.00)
+    assert all(ahead <= 1.0 for ahead, _ in turns)
     assert re.search(r"m ahead: forward\n(.*\n)*.*turning .* on the spot\n(.*\n)*.*m ahead: forward", out), out
     (x1, y1, _), (_, _, yaw1) = poses[-1]
     assert abs(math.remainder(yaw1 - yaw0, math.tau)) > math.radians(45)  # it really turned

@@ -37,6 +37,7 @@ def ran_on(facade: SimFacade) -> list[str]:
     return names
 
 
+@pytest.mark.alone  # wall-clock pacing: run by itself (scripts/test.sh)
 def test_a_short_step_runs_on_the_thread_that_asks_a_long_one_on_the_simulation_thread(facade):
     names = ran_on(facade)
     assert step(facade, 0.004) == pytest.approx(0.004)  # how long STEPs take is not known yet

@@ -354,6 +354,7 @@ def test_camera_pictures_are_recorded_when_asked(tmp_path):
     assert any(tf.child_frame_id == "R1/Camera" for _, _, m in topics["/tf"] for tf in m.transforms)
 
 
+@pytest.mark.alone  # wall-clock pacing: run by itself (scripts/test.sh)
 def test_a_viewer_that_does_not_read_never_holds_the_simulation_back():
     """A Foxglove viewer subscribed to every channel that stops reading: the server keeps at
     most its backlog for it and drops the oldest; the simulated clock keeps real time."""

@@ -11,9 +11,13 @@ import struct
 import threading
 import time
 
+import pytest
 from stress_scale import scaled
 
 from helpers import Client
+
+# wall-clock rates and deadlines: run by itself when the suite is shared among processes (scripts/test.sh)
+pytestmark = pytest.mark.alone
 
 
 def open_fds() -> int:
