@@ -61,3 +61,18 @@ def test_a_set_to_a_robot_without_power_is_answered(client):
     client.send("SET {Type Odometry} {Opcode RESET}")
     lines = client.step(0.2)
     assert errors(lines) == ["ERROR {Command SET} {Reason robot 'R' has no power: its battery is empty}"]
+
+
+def test_a_step_after_the_simulation_stopped_on_an_error_is_answered(client):
+    """A bug stops the simulation (its thread ends on the error, logged): a lock-step
+    controller's STEP gets an ERROR instead of a STEPPED that would never come."""
+    client.send("INIT {ClassName USARBot.P2AT} {Name R} {Location -6,0,-0.3}")
+    client.step(0.2)
+
+    def broken(seconds, *, waited=False):
+        raise RuntimeError("a physics bug")
+
+    client.srv.sim.advance = broken
+    for _ in range(2):  # the STEP it stopped on, and the next
+        reply = client.ask("STEP {Time 0.2}", lambda ln: ln.text.startswith(("ERROR", "STEPPED")))
+        assert reply.text == "ERROR {Command STEP} {Reason the simulation has stopped: the world was not advanced}"

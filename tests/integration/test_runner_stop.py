@@ -85,3 +85,41 @@ def test_the_render_service_stops_at_once_after_the_simulation(yellow_world):
         fut.result(WAIT_S)
     service.stop()
     assert time.monotonic() - t0 < 2.0
+
+
+def step(facade: SimFacade, seconds: float) -> tuple[str, object]:
+    """A lock-step STEP: ("stepped", time) or ("refused", error); fail if neither comes."""
+    done = threading.Event()
+    box: list = []
+    facade.step(seconds, lambda t: (box.append(("stepped", t)), done.set()),
+                lambda e: (box.append(("refused", e)), done.set()))
+    assert done.wait(WAIT_S), "the STEP was never answered"
+    return box[0]
+
+
+def test_a_step_after_the_stop_is_refused_at_once(yellow_world):
+    facade = SimFacade(yellow_world, seed=0, lockstep=True)
+    facade.start()
+    assert step(facade, 0.02) == ("stepped", pytest.approx(0.02))
+    facade.stop()
+    kind, error = step(facade, 0.02)
+    assert kind == "refused" and isinstance(error, SimulationStopped) and "not advanced" in str(error)
+
+
+def test_a_step_the_simulation_stops_on_is_refused_and_so_are_the_next(yellow_world, caplog):
+    """A STEP whose physics raises (a bug): the simulation thread ends on the error, logged,
+    and that STEP and every later one are refused instead of waiting for ever."""
+    facade = SimFacade(yellow_world, seed=0, lockstep=True)
+    facade.start()
+    try:
+        def broken(seconds, *, waited=False):
+            raise RuntimeError("a physics bug")
+
+        facade.sim.advance = broken  # the first STEP's wall time is unknown: it runs on the simulation thread
+        kind, error = step(facade, 0.02)
+        assert kind == "refused" and isinstance(error, SimulationStopped)
+        assert isinstance(facade.runner.error, RuntimeError)
+        assert "a physics bug" in caplog.text
+        assert step(facade, 0.02)[0] == "refused"
+    finally:
+        facade.stop()

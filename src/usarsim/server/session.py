@@ -96,6 +96,7 @@ class Session:
         self.reports = 0  # REPORTs so far (one without a Name is named Victim<n>)
         self._spawn_done = ctx.threadsafe(self.spawn_done)
         self._stepped = ctx.threadsafe(self._step_done)
+        self._step_refused = ctx.threadsafe(self._step_not_done)
         # STEPs asked for and not answered yet: the outputs of the robot meanwhile go out with
         # the next reply (its STEPPED), in one write (usarsim.server.control)
         self.steps_waiting = 0
@@ -534,8 +535,8 @@ class Session:
             if 1 <= index <= len(names):
                 names[index - 1] = cam
         def done(result, error):
-            if error is not None:
-                log.error("%s: SET Viewports: %s", self.ctx.peer, error)
+            if error is not None:  # the simulation has stopped
+                self.refuse("SET", "viewports-stopped", f"SET Viewports: {error}", level=logging.ERROR)
                 return
             time_s, states = result
             self.send(M.ViewportsResult(
@@ -553,8 +554,14 @@ class Session:
                           self.MAX_STEP_S)
             seconds = 0.0
         self.steps_waiting += 1
-        self.facade.step(seconds, self._stepped)
+        self.facade.step(seconds, self._stepped, self._step_refused)
 
     def _step_done(self, time_s: float) -> None:
         self.steps_waiting -= 1
         self.send(M.Stepped(time=time_s))
+
+    def _step_not_done(self, error: BaseException) -> None:
+        """The simulation has stopped (it stopped on an error, or the server is going down):
+        the STEP is answered with an ERROR instead of a STEPPED that would never come."""
+        self.steps_waiting -= 1
+        self.refuse("STEP", "step-stopped", str(error), level=logging.ERROR)

@@ -157,10 +157,12 @@ class SimFacade:
         result = CommandResult("Victim", name, True, (("Location", tuple(float(v) for v in location)),))
         self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True))
 
-    def step(self, seconds: float, on_done: Callable[[float], None]) -> None:
+    def step(self, seconds: float, on_done: Callable[[float], None],
+             on_refused: Callable[[BaseException], None] | None = None) -> None:
         """Lock-step STEP: ``on_done(time)`` once ``seconds`` more have run (at once, on the
-        calling thread, when it is short and the simulation has nothing else to do)."""
-        self.runner.step(seconds, on_done)
+        calling thread, when it is short and the simulation has nothing else to do), or
+        ``on_refused(error)`` when they will not (the simulation has stopped)."""
+        self.runner.step(seconds, on_done, on_refused)
 
     # Ground truth and pictures -----------------------------------------------------
     def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:

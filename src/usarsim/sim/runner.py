@@ -67,6 +67,9 @@ class Request:
 class StepRequest:
     seconds: float
     on_done: Callable[[float], None]
+    # called instead of ``on_done`` with the error when the STEP will not run (the simulation
+    # has stopped, or stopped on an error while running it)
+    on_refused: Callable[[BaseException], None] | None = None
 
 
 @dataclass
@@ -148,10 +151,13 @@ class SimulationRunner:
             self._queued += 1
             self.queue.put(req)
 
-    def step(self, seconds: float, on_done: Callable[[float], None]) -> None:
-        """Lock-step: run ``seconds`` of simulated time, then ``on_done(time)``.  A STEP
-        expected to be short runs at once on the calling thread when the simulation thread
-        has nothing to do (see the module's description); any other is queued."""
+    def step(self, seconds: float, on_done: Callable[[float], None],
+             on_refused: Callable[[BaseException], None] | None = None) -> None:
+        """Lock-step: run ``seconds`` of simulated time, then ``on_done(time)``; or, when it
+        will not run (the simulation has stopped), ``on_refused(error)``.  A STEP expected to
+        be short runs at once on the calling thread when the simulation thread has nothing
+        to do (see the module's description); any other is queued."""
+        req = StepRequest(seconds, on_done, on_refused)
         if self.lockstep and self._running and not self._stopping.is_set() and self._lock.acquire(blocking=False):
             try:
                 with self._count_lock:
@@ -165,10 +171,11 @@ class SimulationRunner:
                         log.exception("the simulation stopped on an unexpected error")
                         self._stopping.set()
                         self.queue.put(_Stop())
+                        self._refuse(req)
                     return
             finally:
                 self._lock.release()
-        self.submit(StepRequest(seconds, on_done))
+        self.submit(req)
 
     def start(self) -> None:
         self._thread.start()
@@ -246,12 +253,15 @@ class SimulationRunner:
 
     @staticmethod
     def _refuse(req: Request | StepRequest | _Stop) -> None:
-        """Answer a request that will not run (a STEP's client is gone with the server)."""
-        if isinstance(req, Request) and req.on_done is not None:
-            try:
+        """Answer a request that will not run, or did not run to its end, with
+        :class:`~usarsim.errors.SimulationStopped`."""
+        try:
+            if isinstance(req, Request) and req.on_done is not None:
                 req.on_done(None, SimulationStopped("the simulation has stopped: the request was not carried out"))
-            except Exception:  # one waiter's error must not keep the others waiting
-                log.exception("answering a request the simulation did not carry out")
+            elif isinstance(req, StepRequest) and req.on_refused is not None:
+                req.on_refused(SimulationStopped("the simulation has stopped: the world was not advanced"))
+        except Exception:  # one waiter's error must not keep the others waiting
+            log.exception("answering a request the simulation did not carry out")
 
     def _close(self) -> None:
         """The thread is ending: it takes no more requests, and answers those it still has
@@ -286,7 +296,11 @@ class SimulationRunner:
                         self._refuse(item)
                         continue
                     if isinstance(item, StepRequest):
-                        self._step(item.seconds, item.on_done)
+                        try:
+                            self._step(item.seconds, item.on_done)
+                        except BaseException:  # the thread ends on it (_run): its client is told
+                            self._refuse(item)
+                            raise
                     elif item.immediate:
                         self._execute(item)
                         self._flush()
