@@ -432,6 +432,9 @@ def cmd_serve(args) -> int:
         stop = asyncio.Event()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, stop.set)
+        # a simulation that stopped on an error (a bug) leaves nothing to serve: the server stops,
+        # so that its clients see the connection close instead of a world that stands still
+        app.facade.when_failed(lambda exc: loop.call_soon_threadsafe(stop.set))
         try:
             await app.start()
         except OSError as exc:
@@ -449,12 +452,18 @@ def cmd_serve(args) -> int:
         mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
         log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
         await stop.wait()
+        failure = app.facade.failure
+        if failure is not None:
+            print(f"usarsim: error: the simulation stopped on an unexpected error ({failure!r}; the log has the "
+                  "traceback): the server stops", file=sys.stderr, flush=True)
         log.info("shutting down")
         await app.stop()
         if app.recorder is not None and args.record and os.path.isfile(args.record):
             rec = app.recorder
             print(f"usarsim: recorded {args.record}: {os.path.getsize(args.record) / 1e6:.1f} MB, {rec.chunks} "
                   f"transcript chunks, {rec.messages} other messages, {rec.pictures} camera pictures", flush=True)
+        if failure is not None:
+            raise SystemExit(1)
 
     from usarsim.server.polling import new_event_loop, poll_seconds
 

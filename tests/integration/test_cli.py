@@ -34,10 +34,13 @@ def usarsim(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
 class Serve:
     """``python -m usarsim serve ...`` with its stdout read line by line under a deadline."""
 
-    def __init__(self, *args: str, stderr_path: Path):
+    def __init__(self, *args: str, stderr_path: Path, prelude: str = ""):
+        """``prelude``: Python run in the server's process before the command (a fault to inject)."""
         self._stderr = open(stderr_path, "wb")
         self.stderr_path = stderr_path
-        self.proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", *args], stdout=subprocess.PIPE,
+        command = ["-m", "usarsim"] if not prelude else [
+            "-c", f"{prelude}\nimport sys\nfrom usarsim.cli import main\nsys.exit(main(sys.argv[1:]))"]
+        self.proc = subprocess.Popen([sys.executable, *command, "serve", *args], stdout=subprocess.PIPE,
                                      stderr=self._stderr, stdin=subprocess.DEVNULL)
         self._sel = selectors.DefaultSelector()
         self._sel.register(self.proc.stdout, selectors.EVENT_READ)
@@ -80,8 +83,8 @@ class Serve:
 def serve(tmp_path):
     started: list[Serve] = []
 
-    def start(*args: str) -> Serve:
-        s = Serve(*args, *FREE_PORTS, stderr_path=tmp_path / f"serve{len(started)}.err")
+    def start(*args: str, prelude: str = "") -> Serve:
+        s = Serve(*args, *FREE_PORTS, stderr_path=tmp_path / f"serve{len(started)}.err", prelude=prelude)
         started.append(s)
         return s
 
@@ -284,6 +287,32 @@ def test_serve_listens_serves_and_exits_cleanly_on_signal(serve, sig):
         assert s.proc.wait(5) == 0, s.stderr()
         c.wait_closed(5)  # the server closed the connection (raises on timeout)
     assert "Traceback" not in s.stderr()
+
+
+BROKEN_PHYSICS = """
+from usarsim.sim.simulation import Simulation
+def advance(self, seconds, *, waited=False):
+    raise RuntimeError("a physics bug")
+Simulation.advance = advance
+"""
+
+
+def test_serve_stops_with_exit_1_when_the_simulation_stops_on_an_error(serve):
+    """A bug that stops the simulation (here its physics raises on the first STEP) stops the
+    server: the STEP is answered with an ERROR, the connection closes, the command says why
+    and exits 1, instead of serving a world that stands still."""
+    s = serve("--port", "0", "--lockstep", prelude=BROKEN_PHYSICS)
+    with Client(s.port()) as c:
+        c.nfo()
+        c.send("INIT {ClassName P2AT} {Name R1} {Start PlayerStart2}")
+        c.send("STEP {Time 0.2}")
+        assert c.wait_line(lambda ln: ln.text.startswith(("ERROR", "STEPPED"))).text == (
+            "ERROR {Command STEP} {Reason the simulation has stopped: the world was not advanced}")
+        c.wait_closed(10)
+    assert s.proc.wait(10) == 1
+    err = s.stderr()
+    assert "usarsim: error: the simulation stopped on an unexpected error (RuntimeError('a physics bug')" in err
+    assert "Traceback" in err and "a physics bug" in err  # the log has where it happened
 
 
 def test_serve_lockstep_with_seed(serve):

@@ -99,17 +99,23 @@ def step(facade: SimFacade, seconds: float) -> tuple[str, object]:
 
 def test_a_step_after_the_stop_is_refused_at_once(yellow_world):
     facade = SimFacade(yellow_world, seed=0, lockstep=True)
+    failed: list = []
+    facade.when_failed(failed.append)
     facade.start()
     assert step(facade, 0.02) == ("stepped", pytest.approx(0.02))
     facade.stop()
     kind, error = step(facade, 0.02)
     assert kind == "refused" and isinstance(error, SimulationStopped) and "not advanced" in str(error)
+    assert failed == [] and facade.failure is None  # a stop is no failure
 
 
 def test_a_step_the_simulation_stops_on_is_refused_and_so_are_the_next(yellow_world, caplog):
     """A STEP whose physics raises (a bug): the simulation thread ends on the error, logged,
     and that STEP and every later one are refused instead of waiting for ever."""
     facade = SimFacade(yellow_world, seed=0, lockstep=True)
+    failed: list[BaseException] = []
+    ended = threading.Event()
+    facade.when_failed(lambda exc: (failed.append(exc), ended.set()))  # the server stops on it (cli serve)
     facade.start()
     try:
         def broken(seconds, *, waited=False):
@@ -118,8 +124,8 @@ def test_a_step_the_simulation_stops_on_is_refused_and_so_are_the_next(yellow_wo
         facade.sim.advance = broken  # the first STEP's wall time is unknown: it runs on the simulation thread
         kind, error = step(facade, 0.02)
         assert kind == "refused" and isinstance(error, SimulationStopped)
-        assert isinstance(facade.runner.error, RuntimeError)
-        assert "a physics bug" in caplog.text
+        assert ended.wait(WAIT_S) and isinstance(failed[0], RuntimeError) and facade.failure is failed[0]
+        assert "a physics bug" in caplog.text  # logged before the thread ends
         assert step(facade, 0.02)[0] == "refused"
     finally:
         facade.stop()

@@ -77,6 +77,16 @@ class SimFacade:
     def stop(self) -> None:
         self.runner.stop()
 
+    def when_failed(self, fn: Callable[[BaseException], None]) -> None:
+        """``fn(error)``, on the simulation thread, if the simulation stops on an unexpected
+        error (a bug: it is logged where it happened); every request after it is refused."""
+        self.runner.on_failure = fn
+
+    @property
+    def failure(self) -> BaseException | None:
+        """The error the simulation stopped on, if it did."""
+        return self.runner.error
+
     # Static facts ------------------------------------------------------------------
     @property
     def world_name(self) -> str:

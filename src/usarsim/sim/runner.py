@@ -127,6 +127,8 @@ class SimulationRunner:
         self._closing_lock = threading.Lock()
         self._closed = False
         self._interpreter = InterpreterTuning()  # collector and switch interval (sim/interpreter.py)
+        # called with the error, on the simulation thread as it ends, when it stopped on one
+        self.on_failure: Callable[[BaseException], None] | None = None
 
     # Thread-safe API ---------------------------------------------------------------
     def submit(self, req: Request | StepRequest) -> None:
@@ -231,6 +233,11 @@ class SimulationRunner:
                 except BaseException:  # a sensor's error was logged with the one that stopped the thread
                     log.debug("closing the measuring thread", exc_info=True)
                 self._interpreter.stop()
+            if self.error is not None and self.on_failure is not None:
+                try:
+                    self.on_failure(self.error)
+                except Exception:
+                    log.exception("telling the server that the simulation stopped")
 
     def _execute(self, req: Request) -> None:
         if self._stopping.is_set():
