@@ -159,7 +159,6 @@ class SimulationRunner:
         will not run (the simulation has stopped), ``on_refused(error)``.  A STEP expected to
         be short runs at once on the calling thread when the simulation thread has nothing
         to do (see the module's description); any other is queued."""
-        req = StepRequest(seconds, on_done, on_refused)
         if self.lockstep and self._running and not self._stopping.is_set() and self._lock.acquire(blocking=False):
             try:
                 with self._count_lock:
@@ -173,11 +172,11 @@ class SimulationRunner:
                         log.exception("the simulation stopped on an unexpected error")
                         self._stopping.set()
                         self.queue.put(_Stop())
-                        self._refuse(req)
+                        self._refuse(StepRequest(seconds, on_done, on_refused))
                     return
             finally:
                 self._lock.release()
-        self.submit(req)
+        self.submit(StepRequest(seconds, on_done, on_refused))
 
     def start(self) -> None:
         self._thread.start()
