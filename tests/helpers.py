@@ -59,6 +59,11 @@ class Line:
         return segments(self.text).get(key)
 
 
+def broken_advance(seconds: float, *, waited: bool = False) -> None:
+    """A stand-in for ``Simulation.advance`` with a bug: the simulation stops on its error."""
+    raise RuntimeError("a physics bug")
+
+
 def segments(text: str) -> dict[str, str]:
     """``{Key Value}`` segments of a line as a dict (first occurrence of a key wins)."""
     out: dict[str, str] = {}

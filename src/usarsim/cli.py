@@ -348,6 +348,7 @@ def cmd_serve(args) -> int:
     from usarsim.config.catalog import resolve_world
     from usarsim.errors import UsarsimError
     from usarsim.server.app import Application
+    from usarsim.server.listener import call_on_loop
 
     try:
         world = resolve_world(args.world)
@@ -434,7 +435,7 @@ def cmd_serve(args) -> int:
             loop.add_signal_handler(sig, stop.set)
         # a simulation that stopped on an error (a bug) leaves nothing to serve: the server stops,
         # so that its clients see the connection close instead of a world that stands still
-        app.facade.when_failed(lambda exc: loop.call_soon_threadsafe(stop.set))
+        app.facade.when_failed(lambda exc: call_on_loop(loop, stop.set))
         try:
             await app.start()
         except OSError as exc:

@@ -157,15 +157,20 @@ def _fake_python(folder: Path, venv: bool) -> Path:
     return python
 
 
+def _fake_chromium(tools: Path) -> Path:
+    """A folder with a stand-in chromium, so that scripts/test.sh does not try to install one."""
+    tools.mkdir()
+    (tools / "chromium").write_text("#!/bin/sh\nexit 0\n")
+    (tools / "chromium").chmod(0o755)
+    return tools
+
+
 @pytest.mark.parametrize("venv", [True, False], ids=["venv", "not-a-venv"])
 def test_test_script_puts_the_venv_bin_folder_first_on_path(tmp_path, venv):
     """scripts/test.sh runs pytest with the virtual environment's bin folder first on PATH,
     so that the 'usarsim' console script is found (test_console_script_is_installed runs)."""
     python = _fake_python(tmp_path / "env", venv)
-    tools = tmp_path / "tools"  # a chromium, so that the script does not try to install one
-    tools.mkdir()
-    (tools / "chromium").write_text("#!/bin/sh\nexit 0\n")
-    (tools / "chromium").chmod(0o755)
+    tools = _fake_chromium(tmp_path / "tools")
     path = os.pathsep.join([str(tools)] + [d for d in os.environ.get("PATH", "").split(os.pathsep)
                                            if d and not (Path(d) / "usarsim").exists()])
     env = {**os.environ, "PATH": path, "USARSIM_PYTHON": str(python)}
@@ -192,10 +197,7 @@ def _run_test_script(tmp_path: Path, *args: str, cores: int, failing: str = "") 
     python.write_text('#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then shift 2; echo "$*" >> "$PYTEST_LOG"; '
                       'case "$*" in *"$PYTEST_FAIL"*) [ -n "$PYTEST_FAIL" ] && exit 1;; esac; fi\nexit 0\n')
     python.chmod(0o755)
-    tools = tmp_path / "tools"
-    tools.mkdir()
-    (tools / "chromium").write_text("#!/bin/sh\nexit 0\n")
-    (tools / "chromium").chmod(0o755)
+    tools = _fake_chromium(tmp_path / "tools")
     env = {**os.environ, "PATH": f"{tools}{os.pathsep}{os.environ.get('PATH', '')}", "USARSIM_PYTHON": str(python),
            "PYTEST_LOG": str(log), "PYTEST_FAIL": failing, "OMP_NUM_THREADS": str(cores)}  # nproc reads it
     out = subprocess.run(["bash", str(ROOT / "scripts" / "test.sh"), *args], capture_output=True, text=True,

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import pytest
 
+from helpers import broken_advance
+
 
 def errors(lines) -> list[str]:
     return [ln.text for ln in lines if ln.text.startswith("ERROR")]
@@ -69,10 +71,7 @@ def test_a_step_after_the_simulation_stopped_on_an_error_is_answered(client):
     client.send("INIT {ClassName USARBot.P2AT} {Name R} {Location -6,0,-0.3}")
     client.step(0.2)
 
-    def broken(seconds, *, waited=False):
-        raise RuntimeError("a physics bug")
-
-    client.srv.sim.advance = broken
+    client.srv.sim.advance = broken_advance
     for _ in range(2):  # the STEP it stopped on, and the next
         reply = client.ask("STEP {Time 0.2}", lambda ln: ln.text.startswith(("ERROR", "STEPPED")))
         assert reply.text == "ERROR {Command STEP} {Reason the simulation has stopped: the world was not advanced}"

@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+from helpers import broken_advance
 from usarsim.errors import SimulationStopped
 from usarsim.sim.facade import SimFacade
 
@@ -118,10 +119,7 @@ def test_a_step_the_simulation_stops_on_is_refused_and_so_are_the_next(yellow_wo
     facade.when_failed(lambda exc: (failed.append(exc), ended.set()))  # the server stops on it (cli serve)
     facade.start()
     try:
-        def broken(seconds, *, waited=False):
-            raise RuntimeError("a physics bug")
-
-        facade.sim.advance = broken  # the first STEP's wall time is unknown: it runs on the simulation thread
+        facade.sim.advance = broken_advance  # the first STEP's wall time is unknown: it runs on the simulation thread
         kind, error = step(facade, 0.02)
         assert kind == "refused" and isinstance(error, SimulationStopped)
         assert ended.wait(WAIT_S) and isinstance(failed[0], RuntimeError) and facade.failure is failed[0]
