@@ -75,3 +75,32 @@ def test_a_step_after_the_simulation_stopped_on_an_error_is_answered(client):
     for _ in range(2):  # the STEP it stopped on, and the next
         reply = client.ask("STEP {Time 0.2}", lambda ln: ln.text.startswith(("ERROR", "STEPPED")))
         assert reply.text == "ERROR {Command STEP} {Reason the simulation has stopped: the world was not advanced}"
+
+
+def test_a_set_or_report_after_the_simulation_stopped_on_an_error_is_answered(client):
+    """Once the simulation has stopped, a SET on an item and a REPORT get an ERROR instead of
+    the RES that would never come."""
+    client.send("INIT {ClassName USARBot.P2AT} {Name R} {Location -6,0,-0.3}")
+    client.step(0.2)
+
+    client.srv.sim.advance = broken_advance
+    client.ask("STEP {Time 0.2}", "ERROR")  # the STEP it stopped on
+    stopped = "{Reason the simulation has stopped: the request was not carried out}"
+    assert client.ask("SET {Type Odometry} {Opcode RESET}", "ERROR").text == f"ERROR {{Command SET}} {stopped}"
+    assert client.ask("REPORT {Type Victim} {Location 1,2,0}", "ERROR").text == f"ERROR {{Command REPORT}} {stopped}"
+
+
+def test_a_set_that_fails_on_an_unexpected_error_is_answered(client):
+    """A bug in an item's operation is logged and the SET answered, and the world goes on."""
+    client.send("INIT {ClassName USARBot.P2AT} {Name R} {Location -6,0,-0.3}")
+    client.step(0.2)
+
+    def broken_operate(*args, **kwargs):
+        raise RuntimeError("an operation that fails")
+
+    client.srv.sim.operate = broken_operate
+    client.send("SET {Type Odometry} {Opcode RESET}")
+    lines = client.step(0.2)
+    assert errors(lines) == ["ERROR {Command SET} {Reason the request failed on an unexpected error (RuntimeError; "
+                             "the server's log has the traceback)}"]
+    assert [ln for ln in client.step(0.2) if ln.text.startswith("STEPPED")]  # the world goes on

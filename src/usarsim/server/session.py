@@ -16,7 +16,7 @@ from typing import Any
 from usarsim.config.catalog import resolve_robot
 from usarsim.config.robot import RobotConfig
 from usarsim.controls import JointOrder
-from usarsim.errors import ConfigError, ProtocolError
+from usarsim.errors import ConfigError, ProtocolError, UsarsimError
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.readings import ItemParams
@@ -97,6 +97,8 @@ class Session:
         self._spawn_done = ctx.threadsafe(self.spawn_done)
         self._stepped = ctx.threadsafe(self._step_done)
         self._step_refused = ctx.threadsafe(self._step_not_done)
+        self._set_failed = ctx.threadsafe(lambda error: self._not_done("SET", error))
+        self._report_failed = ctx.threadsafe(lambda error: self._not_done("REPORT", error))
         # STEPs asked for and not answered yet: the outputs of the robot meanwhile go out with
         # the next reply (its STEPPED), in one write (usarsim.server.control)
         self.steps_waiting = 0
@@ -246,7 +248,8 @@ class Session:
             self.refuse("REPORT", "before-init-query", NO_ROBOT, level=logging.INFO)
             return
         self.reports += 1
-        self.facade.report_victim(self.uid, cmd.name or f"Victim{self.reports}", cmd.location)
+        self.facade.report_victim(self.uid, cmd.name or f"Victim{self.reports}", cmd.location,
+                                  on_error=self._report_failed)
 
     def on_drive(self, cmd: C.Drive) -> None:
         # SPAWNING too: the spawn request is ahead of this one in the simulation's queue
@@ -500,7 +503,8 @@ class Session:
         if t == "viewports":
             self.on_viewports(cmd)
             return
-        self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, ItemParams(values=cmd.values, text=cmd.params))
+        self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, ItemParams(values=cmd.values, text=cmd.params),
+                            on_error=self._set_failed)
 
     def on_bind_camera(self, cmd: C.Set) -> None:
         """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that
@@ -559,6 +563,14 @@ class Session:
     def _step_done(self, time_s: float) -> None:
         self.steps_waiting -= 1
         self.send(M.Stepped(time=time_s))
+
+    def _not_done(self, command: str, error: BaseException) -> None:
+        """A SET or REPORT the simulation did not carry out (it has stopped, or the request
+        failed on an unexpected error, logged with its traceback): an ERROR instead of the RES
+        that will not come."""
+        reason = str(error) if isinstance(error, UsarsimError) else (
+            f"the request failed on an unexpected error ({type(error).__name__}; the server's log has the traceback)")
+        self.refuse(command, f"{command.lower()}-not-done", reason, level=logging.ERROR)
 
     def _step_not_done(self, error: BaseException) -> None:
         """The simulation has stopped (it stopped on an error, or the server is going down):

@@ -28,6 +28,19 @@ from usarsim.sim.snapshot import FrameWatch, WorldFrame
 log = logging.getLogger("usarsim.sim")
 
 Done = Callable[[Any, BaseException | None], None]
+
+
+def _errors_only(on_error: Callable[[BaseException], None] | None) -> Done | None:
+    """A request's ``on_done`` that tells ``on_error`` of an error and says nothing of a
+    success (whose answer is an output of the simulation)."""
+    if on_error is None:
+        return None
+
+    def done(result: Any, error: BaseException | None) -> None:
+        if error is not None:
+            on_error(error)
+
+    return done
 Position = tuple[str, tuple[float, float, float], bool]
 
 # Outside lock-step the radio links are evaluated at most this often (simulated seconds).
@@ -152,20 +165,27 @@ class SimFacade:
         """Joint orders (MULTIDRIVE, MISPKG, SET Joint, CAMERA), applied together."""
         self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders), concurrent=True))
 
-    def operate(self, uid: int, item_type, name, opcode, params) -> None:
-        """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF)."""
-        self.runner.submit(Request(lambda sim: sim.operate(uid, item_type, name, opcode, params)))
+    def operate(self, uid: int, item_type, name, opcode, params,
+                on_error: Callable[[BaseException], None] | None = None) -> None:
+        """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF);
+        ``on_error(error)`` when it was not carried out (the simulation has stopped, or the
+        operation failed on an unexpected error)."""
+        self.runner.submit(Request(lambda sim: sim.operate(uid, item_type, name, opcode, params),
+                                   on_done=_errors_only(on_error)))
 
     def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
         """SET {Type Viewports}: ``on_done((time, [(camera, status), ...]), error)``."""
         self.runner.submit(Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)),
                                    immediate=True, on_done=on_done))
 
-    def report_victim(self, uid: int, name: str, location) -> None:
+    def report_victim(self, uid: int, name: str, location,
+                      on_error: Callable[[BaseException], None] | None = None) -> None:
         """``REPORT {Type Victim}``: recorded at the simulated instant it is carried out, as a
-        RES output for the robot's client (observers such as the score see it too)."""
+        RES output for the robot's client (observers such as the score see it too);
+        ``on_error(error)`` when it was not (the simulation has stopped)."""
         result = CommandResult("Victim", name, True, (("Location", tuple(float(v) for v in location)),))
-        self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True))
+        self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True,
+                                   on_done=_errors_only(on_error)))
 
     def step(self, seconds: float, on_done: Callable[[float], None],
              on_refused: Callable[[BaseException], None] | None = None) -> None:
