@@ -279,9 +279,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--count", type=int, default=5000,
                    help="with --round-trips: round trips timed (default: %(default)s)")
     b.add_argument("--profile", action="store_true",
-                   help="profile the simulation thread and the server's event loop during the run and print "
-                        "where the time goes (physics, each sensor type, ray casting, report scheduling, "
-                        "building readings, formatting, socket writes, waiting for the interpreter lock)")
+                   help="profile the simulation thread, the measuring thread and the server's event loop during "
+                        "the run and print where the time goes (physics, split by MuJoCo's timers into collision, "
+                        "making and solving the constraints and the rest; each sensor type, ray casting, report "
+                        "scheduling, building readings, formatting, socket writes, waiting for the interpreter lock)")
     b.add_argument("--record", action="store_true",
                    help="measure what recording costs: runs without and with 'serve --record' (every channel but "
                         "cameras), alternately; prints both real-time factors and the recording's size per "

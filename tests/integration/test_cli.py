@@ -506,6 +506,14 @@ def test_bench_profile_says_where_the_time_goes():
     sim, sensors, loop = r["sim"], r["sensors"], r["loop"]
     # the sensors are read on the measuring thread; the simulation thread hands instants over
     assert sim["physics (MuJoCo steps)"] > 0 and sim["handing instants to the measuring thread"] > 0
+    # the physics split by MuJoCo's own timers: its parts fit in it, and the solver has work
+    parts = {k: v for k, v in sim.items() if k.startswith("  of which")}
+    assert set(parts) == {"  of which collision, broad phase", "  of which collision, narrow phase",
+                          "  of which making constraints", "  of which solving constraints",
+                          "  of which kinematics, inertia", "  of which the rest of its step"}
+    assert parts["  of which solving constraints"] > 0 and parts["  of which collision, narrow phase"] > 0
+    assert sum(parts.values()) <= sim["physics (MuJoCo steps)"] * 1.05
+    assert r["contacts"]["contacts"] >= 8 and r["contacts"]["islands"] >= 1  # two P2ATs on their wheels
     assert "sensor RangeScanner" not in sim
     assert sensors["sensor RangeScanner"] > 0 and sensors["  of which ray casting (all sensors)"] > 0
     # the robots' statuses are made where the sensors are read, and counted there, not as idle time
@@ -520,6 +528,7 @@ def test_bench_profile_says_where_the_time_goes():
     text = usarsim("bench", "--robots", "1", "--seconds", "1", "--profile", timeout=180).stdout
     assert "physics (MuJoCo steps)" in text and "ms per simulated s" in text and "interpreter lock" in text
     assert "measuring thread (sensor readings)" in text
+    assert "of which solving constraints" in text and "MuJoCo's own timers" in text
 
 
 def test_bench_refuses_nonsense():

@@ -6,9 +6,10 @@ The threads are profiled with ``cProfile`` (deterministic profiling: it slows Py
 down, native code such as MuJoCo's step and the ray-cast kernel not, so the shares of Python
 work come out somewhat high; compare runs with each other, not with the bench's plain real-time
 factor).  The simulation thread's time is split by entry point: the physics (the guarded
-``mj_step`` calls), each sensor type's measurement (its ray casting included, which is also
-given on its own line), report scheduling, the rest of building the outputs, world systems,
-handing the outputs to the server and the rest; with a measuring thread, the sensors' lines
+``mj_step`` calls, split by MuJoCo's own timers into collision, making and solving the
+constraints and the rest of its step), each sensor type's measurement (its ray casting
+included, which is also given on its own line), report scheduling, the rest of building the
+outputs, world systems, handing the outputs to the server and the rest; with a measuring thread, the sensors' lines
 are that thread's, and the simulation thread's own line is handing each instant over to it
 (copying the world's state, waiting for a free copy).  Its CPU time beside its wall time tells how
 long it waited for the interpreter lock (the GIL) or slept.  The event loop's time is split
@@ -23,6 +24,38 @@ import pstats
 import threading
 import time
 from dataclasses import dataclass, field
+
+# MuJoCo's own timers of its step (mjData.timer), summed into the parts of the physics that
+# the profile shows: (what, the timers)
+PHYSICS_PARTS = (
+    ("collision, broad phase", ("mjTIMER_COL_BROAD",)),
+    ("collision, narrow phase", ("mjTIMER_COL_NARROW",)),
+    ("making constraints", ("mjTIMER_POS_MAKE", "mjTIMER_POS_PROJECT")),
+    ("solving constraints", ("mjTIMER_CONSTRAINT",)),
+    ("kinematics, inertia", ("mjTIMER_POS_KINEMATICS", "mjTIMER_POS_INERTIA")),
+    ("the rest of its step", ("mjTIMER_VELOCITY", "mjTIMER_ACTUATION", "mjTIMER_ADVANCE")),
+)
+
+
+def physics_timers(d) -> dict[str, tuple[float, int]]:
+    """MuJoCo's step timers of ``d`` so far: {timer: (seconds, count)}."""
+    import mujoco
+
+    out = {}
+    for name, t in mujoco.mjtTimer.__members__.items():
+        i = int(t)
+        if name.startswith("mjTIMER_") and i < len(d.timer):
+            out[name] = (float(d.timer[i].duration), int(d.timer[i].number))
+    return out
+
+
+def physics_parts(before: dict, after: dict) -> list[tuple[str, float]]:
+    """The physics' parts between two readings of :func:`physics_timers`, in seconds (MuJoCo
+    times them in seconds of wall clock)."""
+    def spent(names) -> float:
+        return sum(after.get(n, (0.0, 0))[0] - before.get(n, (0.0, 0))[0] for n in names)
+
+    return [(what, max(0.0, spent(names))) for what, names in PHYSICS_PARTS]
 
 
 @dataclass
@@ -47,6 +80,9 @@ class Profiler:
         self._sensors_prof = cProfile.Profile()
         self._marks: dict[str, float] = {}
         self._measurer = None
+        self._timers: list[dict] = []  # MuJoCo's step timers as the window starts and ends
+        self.physics: list[tuple[str, float]] = []  # the physics' parts (seconds)
+        self.contacts: tuple[int, int, int] | None = None  # contacts, constraint rows, islands at the end
 
     def _on_sim(self, fn) -> None:
         done = threading.Event()
@@ -67,6 +103,7 @@ class Profiler:
         self._facade = app.facade
 
         def sim_start():
+            self._timers = [physics_timers(app.facade.sim.data)]
             self._marks["sim_wall"], self._marks["sim_cpu"] = time.perf_counter(), time.thread_time()
             self._sim_prof.enable()
 
@@ -89,6 +126,10 @@ class Profiler:
             self._sim_prof.disable()
             self.sim.wall_s = time.perf_counter() - self._marks["sim_wall"]
             self.sim.cpu_s = time.thread_time() - self._marks["sim_cpu"]
+            d = app.facade.sim.data
+            self._timers.append(physics_timers(d))
+            self.physics = physics_parts(*self._timers)
+            self.contacts = (int(d.ncon), int(d.nefc), int(d.nisland))
 
         def loop_stop():
             self._loop_prof.disable()
@@ -166,6 +207,7 @@ def breakdown(p: Profiler) -> dict:
     rows: list[tuple[str, float]] = []
     physics = _cum(s, [_where(health.BlowUpGuard.step)])
     rows.append(("physics (MuJoCo steps)", physics))
+    parts = [(f"  of which {what}", t) for what, t in p.physics]
     sensor_rows, sensor_total = _sensor_rows(s)
     rows += [r for r in sensor_rows if r[1] > 0]
     handing = _cum(s, [_where(measuring.Measurer.submit)])
@@ -183,6 +225,7 @@ def breakdown(p: Profiler) -> dict:
     rows.append(("handing outputs to the server", flush))
     accounted = physics + sensor_total + handing + sched + building + systems + flush
     rows.append(("the rest (requests, clock)", max(0.0, p.sim.wall_s - accounted)))
+    rows[1:1] = parts  # under the physics line, not counted twice
 
     sensors: list[tuple[str, float]] = []
     if p.sensors.stats is not None:
@@ -202,7 +245,8 @@ def breakdown(p: Profiler) -> dict:
     waiting = _cum(lp, _matching(lp, lambda k: k[2] == "select" and k[0].endswith("selectors.py")))
     loop_rows.append(("waiting for sockets (idle)", waiting))
     loop_rows.append(("the rest", max(0.0, p.loop.wall_s - fmt - writes - reads - waiting)))
-    return {"sim": rows, "sensors": sensors, "loop": loop_rows, "sim_wall_s": p.sim.wall_s, "sim_cpu_s": p.sim.cpu_s,
+    return {"sim": rows, "sensors": sensors, "loop": loop_rows, "contacts": p.contacts,
+            "sim_wall_s": p.sim.wall_s, "sim_cpu_s": p.sim.cpu_s,
             "sensors_wall_s": p.sensors.wall_s, "sensors_cpu_s": p.sensors.cpu_s,
             "loop_wall_s": p.loop.wall_s, "loop_cpu_s": p.loop.cpu_s}
 
@@ -213,8 +257,13 @@ def format_breakdown(b: dict, sim_seconds: float) -> str:
     sw = b["sim_wall_s"] or 1e-9
     out.append(f"simulation thread: {sw:.2f} s wall, {b['sim_cpu_s']:.2f} s CPU "
                f"(waiting for the interpreter lock or sleeping: {100 * (1 - b['sim_cpu_s'] / sw):.0f} %)")
-    for what, t in b["sim"]:
+    physics_parts_end = 1 + sum(1 for what, _ in b["sim"][1:] if what.startswith("  of which"))
+    for i, (what, t) in enumerate(b["sim"]):
         out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / sw:5.1f} %")
+        if i + 1 == physics_parts_end and b.get("contacts"):
+            ncon, nefc, nisland = b["contacts"]
+            out.append(f"    (the parts by MuJoCo's own timers; at the end {ncon:,} contacts, {nefc:,} constraint "
+                       f"rows, {nisland:,} islands)")
     if b.get("sensors"):
         mw = b["sensors_wall_s"] or 1e-9
         out.append(f"measuring thread (sensor readings): {mw:.2f} s wall, {b['sensors_cpu_s']:.2f} s CPU")

@@ -173,6 +173,7 @@ def run_profile_bench(args, world, n: int, seconds: float, progress: bool) -> in
                           "sim": {k: round(v, 4) for k, v in b["sim"]},
                           "sensors": {k: round(v, 4) for k, v in b["sensors"]},
                           "loop": {k: round(v, 4) for k, v in b["loop"]},
+                          "contacts": dict(zip(("contacts", "constraint_rows", "islands"), b["contacts"] or ())),
                           "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}))
     else:
         print(f"robots {n}: {run['sim_seconds']:.1f} simulated s in {run['wall_seconds']:.2f} s wall under the "
