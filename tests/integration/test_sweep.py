@@ -24,7 +24,7 @@ TWO_BY_TWO = """\
 name: two-by-two
 seeds: [1, 2]
 team: P2AT
-duration: 30
+duration: 12
 clock: lockstep
 controller: {brain: usarsim.brains.frontier:FrontierExplorer, params: {bounds: auto}}
 grid:
@@ -156,8 +156,8 @@ def test_a_two_by_two_sweep_scores_every_run_repeats_identically_and_skips_what_
     for r in rows:
         assert r["error"] is None and r["log"] == ""
         assert (r["experiment"], r["team"], r["robots_n"], r["clock"]) == ("two-by-two", "P2AT", 1, "lockstep")
-        assert (r["duration_s"], r["wireless"], r["controller"]) == (30.0, "world", 'FrontierExplorer(bounds="auto")')
-        assert 30.0 <= r["time_s"] <= 30.5  # the simulated time the score covers
+        assert (r["duration_s"], r["wireless"], r["controller"]) == (12.0, "world", 'FrontierExplorer(bounds="auto")')
+        assert 12.0 <= r["time_s"] <= 12.5  # the simulated time the score covers
         assert r["area_m2"] > 20.0 and r["distance_m"] > 1.0  # the explorer moved and its laser swept the floor
         assert math.isfinite(r["score"]) and r["score"] != 0.0
         assert r["victims_found"] >= 0 and r["collisions"] >= 0 and r["robots_lost"] == 0
@@ -283,7 +283,7 @@ def test_a_two_by_two_sweep_of_a_simulated_minute_with_the_explorer(local_ray, t
     """The issue's CI sweep: 2 worlds x 2 seeds of 60 simulated seconds, the shipped frontier
     explorer, lock-step; every run scored, the explorer sweeping more floor in a minute than in
     half of one."""
-    exp = load_experiment(write(tmp_path, TWO_BY_TWO.replace("duration: 30", "duration: 60")))
+    exp = load_experiment(write(tmp_path, TWO_BY_TWO.replace("duration: 12", "duration: 60")))
     result = run_sweep(exp, tmp_path / "minute", workers=2, progress=False)
     assert len(result.rows) == 4 and result.failed == 0
     for r in result.rows:
