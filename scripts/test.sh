@@ -36,7 +36,7 @@ fi
 # With arguments, pytest runs what they select, as given.  The whole suite (no arguments) is
 # shared among one process per core, up to 4 (pytest-xdist); then the tests marked 'alone' (they
 # time the wall clock: rates, pacing, deadlines) run by themselves, with no other test competing
-# for the processors.  On 2 cores that takes the suite from about 12.5 minutes to 8 or 9.
+# for the processors.  On 2 cores that takes the suite from about 12.5 minutes to 7 or 8.
 if [ $# -gt 0 ]; then
   exec "$USARSIM_PYTHON" -m pytest -q "$@"
 fi
