@@ -201,7 +201,8 @@ def snapshot_state(sim, runner=None) -> np.ndarray:
     if runner is None or not runner.alive:
         take(sim)
     else:
-        runner.submit(Request(take, immediate=True, on_done=lambda result, error: done.set()))
+        # concurrent: it reads the live state only, so it need not wait for the readings in flight
+        runner.submit(Request(take, immediate=True, concurrent=True, on_done=lambda result, error: done.set()))
         done.wait(10)
     return box.get("state")
 
