@@ -41,6 +41,8 @@ def _errors_only(on_error: Callable[[BaseException], None] | None) -> Done | Non
             on_error(error)
 
     return done
+
+
 Position = tuple[str, tuple[float, float, float], bool]
 
 # Outside lock-step the radio links are evaluated at most this often (simulated seconds).
