@@ -11,9 +11,10 @@ constraints and the rest of its step), each sensor type's measurement (its ray c
 included, which is also given on its own line), report scheduling, the rest of building the
 outputs, world systems, handing the outputs to the server and the rest; with a measuring
 thread, the sensors' lines are that thread's, and the simulation thread's own line is handing
-each instant over to it (copying the world's state, waiting for a free copy).  Its CPU time beside its wall time tells how
-long it waited for the interpreter lock (the GIL) or slept.  The event loop's time is split
-into formatting lines, socket writes, reading clients' lines and the rest (mostly waiting).
+each instant over to it (copying the world's state, waiting for a free copy).  Its CPU time
+beside its wall time tells how long it waited for the interpreter lock (the GIL) or slept.  The
+event loop's time is split into formatting lines, socket writes, reading clients' lines and the
+rest (mostly waiting).
 """
 
 from __future__ import annotations
