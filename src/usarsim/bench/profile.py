@@ -258,7 +258,9 @@ def format_breakdown(b: dict, sim_seconds: float) -> str:
     sw = b["sim_wall_s"] or 1e-9
     out.append(f"simulation thread: {sw:.2f} s wall, {b['sim_cpu_s']:.2f} s CPU "
                f"(waiting for the interpreter lock or sleeping: {100 * (1 - b['sim_cpu_s'] / sw):.0f} %)")
-    physics_parts_end = 1 + sum(1 for what, _ in b["sim"][1:] if what.startswith("  of which"))
+    physics_parts_end = 1  # the physics line, then its parts (the lines right after it)
+    while physics_parts_end < len(b["sim"]) and b["sim"][physics_parts_end][0].startswith("  of which"):
+        physics_parts_end += 1
     for i, (what, t) in enumerate(b["sim"]):
         out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / sw:5.1f} %")
         if i + 1 == physics_parts_end and b.get("contacts"):

@@ -565,9 +565,9 @@ class Session:
         self.send(M.Stepped(time=time_s))
 
     def _not_done(self, command: str, error: BaseException) -> None:
-        """A SET or REPORT the simulation did not carry out (it has stopped, or the request
-        failed on an unexpected error, logged with its traceback): an ERROR instead of the RES
-        that will not come."""
+        """A request the simulation did not carry out (it has stopped, or the request failed
+        on an unexpected error, logged with its traceback): an ERROR instead of the reply that
+        will not come."""
         reason = str(error) if isinstance(error, UsarsimError) else (
             f"the request failed on an unexpected error ({type(error).__name__}; the server's log has the traceback)")
         self.refuse(command, f"{command.lower()}-not-done", reason, level=logging.ERROR)
@@ -576,4 +576,4 @@ class Session:
         """The simulation has stopped (it stopped on an error, or the server is going down):
         the STEP is answered with an ERROR instead of a STEPPED that would never come."""
         self.steps_waiting -= 1
-        self.refuse("STEP", "step-stopped", str(error), level=logging.ERROR)
+        self._not_done("STEP", error)
