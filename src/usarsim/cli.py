@@ -28,14 +28,29 @@ def _speed(text: str) -> float | None:
     return v
 
 
-def _port(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}") from None
-    if not 0 <= v <= 65535:
-        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}")
-    return v
+def _int_within(low: int, high: int, what: str):
+    """An argument type: an integer ``low..high`` (``what`` names it in the error)."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            v = None
+        if v is None or not low <= v <= high:
+            raise argparse.ArgumentTypeError(f"expected {what} {low}..{high}, got {text!r}")
+        return v
+
+    return parse
+
+
+_port = _int_within(0, 65535, "a port number")
+_micros = _int_within(0, 1_000_000, "microseconds")
+
+
+def _step_grace_s(args: argparse.Namespace) -> float:
+    """``--step-grace-us`` in seconds (usarsim.server.ordering.STEP_GRACE_S by default)."""
+    from usarsim.server.ordering import STEP_GRACE_S
+
+    return STEP_GRACE_S if args.step_grace_us is None else args.step_grace_us / 1e6
 
 
 def _threads(text: str) -> str:
@@ -140,6 +155,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "microseconds before it sleeps, which answers a fast controller's next STEP sooner at the "
                         "cost of that much processor time a request; 0 never polls (default: 500 with "
                         "--lockstep, else 0)")
+    s.add_argument("--step-grace-us", type=_micros, default=None, metavar="US",
+                   help="lock-step: a STEP is carried out once every line that reached the server before it, on "
+                        "any connection, is handled, and no other control connection has received anything for "
+                        "this many microseconds (a line a client's TCP stack held back arrives within it; "
+                        "default: 200)")
     s.add_argument("--max-connections", type=int, default=256, help="control connections at most; one more is "
                    "refused and logged (default: %(default)s)")
     s.add_argument("--max-robots", type=int, default=None,
@@ -424,7 +444,7 @@ def cmd_serve(args) -> int:
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections),
                       record=args.record, foxglove_port=args.foxglove, run_options=run_options(args),
                       record_cameras_fps=max(0.0, args.record_cameras), record_camera_size=args.record_camera_size,
-                      score=args.score, score_file=args.score_file,
+                      score=args.score, score_file=args.score_file, step_grace_s=_step_grace_s(args),
                       on_score_line=lambda line: print(f"usarsim: {line}", flush=True))
 
     _raise_file_limit()

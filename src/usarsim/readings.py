@@ -59,9 +59,11 @@ class RangeScanReading:
 class RangeScan3DReading:
     """A 3D sweep, row-major: one horizontal line per vertical step.
 
-    ``frames``: the sweep's rows, the SEN lines it is sent in when one line would be too long
-    (None: not known, always one line).  ``frame``: this value holds one row only, the
-    ``frame``-th of ``frames`` (0 = the top row), as read from such a line.
+    ``frames``: the sweep's rows (None: not known; a sweep read from the one-line form does
+    not say).  ``split``: the sweep goes out as one SEN line per row, each naming its row with
+    ``{Frames rows} {Frame k}`` (the opt-in split form), instead of the one line of
+    protocol.md 6.3.  ``frame``: this value holds one row only, the ``frame``-th of ``frames``
+    (0 = the top row), as read from a line of the split form.
     """
 
     name: str
@@ -71,6 +73,7 @@ class RangeScan3DReading:
     sensor_type: str = "RangeScanner3D"
     frames: int | None = None
     frame: int | None = None
+    split: bool = False
 
 
 @dataclass(frozen=True, slots=True)

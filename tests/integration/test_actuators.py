@@ -17,9 +17,9 @@ P2AT_CONF = ("CONF {Type Actuator} {Name CameraPanTilt} {Link 1} {JointType Revo
              "{MinValue -3.1416} {MaxValue 3.1416} {Link 2} {JointType Revolute} {MaxTorque 20.0000} "
              "{MinValue -0.1600} {MaxValue 0.4000}")
 P2AT_GEO = ("GEO {Type Actuator} {Name CameraPanTilt} {Location 0.0000,0.0000,0.0000} "
-            "{Orientation 0.0000,0.0000,0.0000} {Mount P2AT} {Link 1} {Parent -1} {Location 0.1239,0.0000,-0.2036} "
-            "{Orientation 0.0000,0.0000,0.0000} {Link 2} {Parent 0} {Location 0.0000,0.0000,-0.0599} "
-            "{Orientation 0.0000,0.0000,0.0000}")
+            "{Orientation 0.0000,0.0000,0.0000} {Mount P2AT} {Link 1} {Parent 0} {Location 0.1239,0.0000,-0.2036} "
+            "{Orientation 3.1416,0.0000,0.0000} {Link 2} {Parent 1} {Location 0.0000,0.0000,0.0599} "
+            "{Orientation 1.5708,0.0000,0.0000}")
 ASTA = re.compile(r"ASTA \{Time (\d+\.\d{4})\} \{Name (\w+)\}((?: \{Link \d+\} \{Value -?\d+\.\d{4}\} "
                   r"\{Torque -?\d+\.\d{4}\})+)")
 
@@ -58,7 +58,7 @@ def test_conf_and_geo_of_the_pan_tilt_with_and_without_a_name(p2at):
     assert conf.actuators[0].links[1].max_value == pytest.approx(0.4)
     geo = M.parse_message(P2AT_GEO)
     assert isinstance(geo, M.ActuatorGeometry) and geo.actuators[0].mount == "P2AT"
-    assert [k.parent for k in geo.actuators[0].links] == [-1, 0]
+    assert [k.parent for k in geo.actuators[0].links] == [0, 1]  # the parent's index plus one (UDK)
     assert M.format_message(conf) == P2AT_CONF + "\r\n" and M.format_message(geo) == P2AT_GEO + "\r\n"
 
 
@@ -83,7 +83,8 @@ def test_no_asta_until_the_client_uses_the_actuator_api(p2at):
 
 
 def test_act_moves_several_links_in_one_line(p2at):
-    p2at.send("ACT {Name CameraPanTilt} {Link 1} {Value 0.3} {Link 2} {Value -0.1}")
+    # ACT counts links from 0 (UDK): {Link 0} is CONF's and ASTA's Link 1, the pan
+    p2at.send("ACT {Name CameraPanTilt} {Link 0} {Value 0.3} {Link 1} {Value -0.1}")
     states = asta(p2at.step(3.0), "CameraPanTilt")
     assert states, "ACT turns ASTA on"
     last = states[-1]
@@ -91,7 +92,7 @@ def test_act_moves_several_links_in_one_line(p2at):
     assert last.links[0].value == pytest.approx(0.3, abs=0.02)  # 0.17 rad/s: there within 2 s
     assert last.links[1].value == pytest.approx(-0.1, abs=0.02)
     # MOAST's UDK form carries an Order per link: 0 is an absolute angle
-    p2at.send("ACT {Name CameraPanTilt} {Link 1} {Value 0.0} {Order 0}")
+    p2at.send("ACT {Name CameraPanTilt} {Link 0} {Value 0.0} {Order 0}")
     states = asta(p2at.step(3.0), "CameraPanTilt")
     assert states[-1].links[0].value == pytest.approx(0.0, abs=0.02)
     assert states[-1].links[1].value == pytest.approx(-0.1, abs=0.02)  # untouched
@@ -100,6 +101,8 @@ def test_act_moves_several_links_in_one_line(p2at):
 def test_act_to_an_unknown_actuator_or_link_changes_nothing(p2at):
     p2at.send("ACT {Name NoArm} {Link 1} {Value 0.3}")
     p2at.send("ACT {Name CameraPanTilt} {Link 7} {Value 0.3}")
+    p2at.send("ACT {Name CameraPanTilt} {Link 2} {Value 0.3}")  # links 0 and 1 only
+    p2at.send("ACT {Name CameraPanTilt} {Link -1} {Value 0.3}")
     states = asta(p2at.step(2.0), "CameraPanTilt")
     assert all(abs(k.value) < 0.01 for s in states for k in s.links)
     p2at.sync()  # the connection is alive and everything was handled

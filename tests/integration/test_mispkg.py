@@ -13,9 +13,10 @@ import pytest
 from helpers import segments
 from usarsim.sim import frames
 
+# the real P2AT's line (protocol.md 6.8): link 1's frame turned over, link 2 above it along its Z
 GEO = ("GEO {Type MisPkg} {Name CameraPanTilt} {Link 1} {ParentLink -1} {Location 0.1239,0.0000,-0.2036} "
-       "{Orientation 0.0000,0.0000,0.0000} {Link 2} {ParentLink 1} {Location 0.0000,0.0000,-0.0599} "
-       "{Orientation 0.0000,0.0000,0.0000}")
+       "{Orientation 3.1415,0.0000,0.0000} {Link 2} {ParentLink 1} {Location 0.0000,0.0000,0.0599} "
+       "{Orientation 1.5707,0.0000,0.0000}")
 CONF = ("CONF {Type MisPkg} {Name CameraPanTilt} {Link 1} {JointType Revolute} {MaxSpeed 0.1700} "
         "{MaxTorque 20.0000} {MinRange 1.0000} {MaxRange 0.0000} {Link 2} {JointType Revolute} "
         "{MaxSpeed 0.1700} {MaxTorque 20.0000} {MinRange -0.1600} {MaxRange 0.4000}")
@@ -44,6 +45,10 @@ def pantilt(lines) -> list[tuple[float, float]]:
 
 def test_geo_and_conf_of_the_pan_tilt(robot):
     assert robot.ask("GETGEO {Type MisPkg}", "GEO").text == GEO
+    # the actuator API reports the same frames (the UDK's numbers: rounded, Parent counted from 1)
+    actuator = robot.ask("GETGEO {Type Actuator}", "GEO").text
+    assert actuator.endswith("{Link 1} {Parent 0} {Location 0.1239,0.0000,-0.2036} {Orientation 3.1416,0.0000,0.0000} "
+                             "{Link 2} {Parent 1} {Location 0.0000,0.0000,0.0599} {Orientation 1.5708,0.0000,0.0000}")
     assert robot.ask("GETCONF {Type MisPkg} {Name CameraPanTilt}", "CONF").text == CONF
     assert robot.ask("GETGEO {Type MisPkg} {Name NoSuchPackage}", "GEO").text == "GEO {Type MisPkg} {Name NoSuchPackage}"
 

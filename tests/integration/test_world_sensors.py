@@ -390,8 +390,8 @@ def test_range_scanner_3d_is_row_major_top_row_first(world, tmp_path):
     robot = probe_robot(tmp_path, "  - {type: RangeScanner3D, name: Scanner3D, location: [0.27, 0.0, -0.1]}\n")
     sim = settled(world, robot, "Glass")
     scan = values(sim, RangeScan3DReading, 0.4)[-1]
-    rows, cols = 31, 51
-    assert len(scan.ranges_m) == rows * cols
+    rows, cols = 11, 25  # the defaults: 2.5 degree steps over 25 x 60 degrees
+    assert len(scan.ranges_m) == rows * cols and scan.frames == rows
     grid = np.array(scan.ranges_m).reshape(rows, cols)
     x = sim.pose_of(1)[0][0] + 0.27
     d = 1.0 - x  # the glass pane (lasers do not pass it)
@@ -445,8 +445,8 @@ SEN_FORMS = {  # the exact shape of each SEN line (protocol.md 6.3)
                     rf"\{{Range {F}(,{F}){{180}}\}}",
     "IRScanner": rf"SEN {T}\{{Type IRScanner\}} \{{Name IRScanner1\}} \{{Resolution 0\.0870\}} \{{FOV 3\.1400\}} "
                  rf"\{{Range {F}(,{F}){{36}}\}}",
-    "RangeScanner3D": rf"SEN {T}\{{Type RangeScanner3D\}} \{{Name Scanner3D\}} \{{Frames 31\}} \{{Frame \d+\}} "
-                      rf"\{{Resolution 0\.0145,0\.0209\}} \{{FOV 0\.4363,1\.0472\}} \{{Range {F}(,{F}){{50}}\}}",
+    "RangeScanner3D": rf"SEN {T}\{{Type RangeScanner3D\}} \{{Name Scanner3D\}} "
+                      rf"\{{Resolution 0\.0436,0\.0436\}} \{{FOV 0\.4363,1\.0472\}} \{{Range {F}(,{F}){{274}}\}}",
     "Odometry": rf"SEN {T}\{{Type Odometry\}} \{{Name Odometry\}} \{{Pose {V3}\}}",
     "Encoder": rf"SEN {T}\{{Type Encoder\}} \{{Name ECLeft Tick -?\d+\}} \{{Name ECRight Tick -?\d+\}}",
     "Tachometer": rf"SEN {T}\{{Type Tachometer\}} \{{Name Tach\}} \{{Vel {F}(,{F}){{3}}\}} \{{Pos {F}(,{F}){{3}}\}}",
@@ -492,7 +492,8 @@ def test_a_robot_with_every_sensor_drives_through_the_world(server_factory, worl
     for stype, texts in by_type.items():
         for text in texts:
             assert re.fullmatch(SEN_FORMS[stype], text), (stype, text[:300])
-        times = sorted({float(segments(t)["Time"]) for t in texts})  # a 3D sweep: 31 lines, one Time
+        times = sorted({float(segments(t)["Time"]) for t in texts})
+        assert len(times) == len(texts), stype  # one line a reading (a 3D sweep too)
         gaps = {round(b - a, 4) for a, b in zip(times, times[1:])}
         assert gaps == {RATES[stype]}, (stype, gaps)
     assert all(ln.raw.endswith(b"\r\n") for ln in lines)
@@ -529,7 +530,7 @@ CONF_LINES = (  # protocol.md 6.7: all items of a type in one line, repeated-key
     'CONF {Type RangeSensor} {Name Range1} {MaxRange 3.0000} {MinRange 0.0000}',
     'CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} {Fov 3.1415} {Paning True} {Tilting False}',
     'CONF {Type IRScanner} {Name IRScanner1} {MaxRange 10.0000} {MinRange 0.1000} {Resolution 0.0870} {Fov 3.1400} {Paning True} {Tilting False}',
-    'CONF {Type RangeScanner3D} {Name Scanner3D} {MaxRange 1000.0000} {MinRange 0.1000} {Resolution 0.0145,0.0209} {Fov 0.4363,1.0472} {Paning False} {Tilting True}',
+    'CONF {Type RangeScanner3D} {Name Scanner3D} {MaxRange 1000.0000} {MinRange 0.1000} {Resolution 0.0436,0.0436} {Fov 0.4363,1.0472} {Paning False} {Tilting True}',
     'CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099}',
     'CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}',
     'CONF {Type Tachometer} {Name Tach} {ScanInterval 0.2000}',
@@ -586,7 +587,7 @@ def test_ir_noise_statistics_and_min_range_clamp(world, tmp_path):
     assert set(close) == {0.2}  # the pane is 7 cm away: clamped to MinRange
     # the 3D scanner's noise is the same relative model
     sim2 = settled(world, robot, "Glass", seed=22)
-    centre = np.array([s.ranges_m[15 * 51 + 25] for s in values(sim2, RangeScan3DReading, 20.0)])
+    centre = np.array([s.ranges_m[5 * 25 + 12] for s in values(sim2, RangeScan3DReading, 20.0)])
     d = 1.0 - (sim2.pose_of(1)[0][0] + 0.27)
     assert len(centre) == 50
     assert np.all(np.abs(centre - d) <= 0.001 * d + 1e-4) and centre.std() > 0.2 * 0.001 * d / math.sqrt(3)

@@ -268,3 +268,17 @@ def test_any_split_of_a_flood_gives_the_lines_of_the_rule(runs, terminator: byte
     buf = drive_buffer()
     got = feed_all(buf, [data[a:b] for a, b in zip(points, points[1:])])
     assert (got, buf.repeated_drives) == _reference(lines)
+
+
+def test_empty_lines_are_delivered_when_asked():
+    """The ground-truth port answers an empty line: it is kept, one terminator (CR LF, LF CR,
+    CR or LF) a line, and a CR LF split between two reads is still one terminator."""
+    buf = LineBuffer(empty_lines=True)
+    assert buf.feed(b"\r\n") == [""]
+    assert buf.feed(b"{Class Robot}\r\n\r\n") == ["{Class Robot}", ""]
+    assert buf.feed(b"{Name a}\r") == ["{Name a}"]
+    assert buf.feed(b"\n") == []  # the rest of the CR LF
+    assert buf.feed(b"\n\r  \n\r") == ["", ""]  # LF CR, then a line of spaces
+    assert buf.feed(b"a\nb\n\n") == ["a", "b", ""]
+    # by default a run of terminators ends one line and empty lines are skipped
+    assert LineBuffer().feed(b"\r\n{Class Robot}\r\n\r\n") == ["{Class Robot}"]

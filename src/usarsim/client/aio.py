@@ -184,8 +184,6 @@ class Robot:
     async def set(self, type: str, name: str | None = None, opcode: str | None = None,  # noqa: A002
                   params: Any = None) -> M.Result | None:
         await self._conn.send(set_line(type, name, opcode, params))
-        if self.world.lockstep:
-            return None
         return await self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)),
                                          f"RES of SET {type}", "SET")
 

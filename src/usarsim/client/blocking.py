@@ -212,11 +212,9 @@ class Robot:
 
     def set(self, type: str, name: str | None = None, opcode: str | None = None,  # noqa: A002
             params: Any = None) -> M.Result | None:
-        """``SET``.  In real time, waits for and returns its RES; in lock-step the server
-        carries it out at the next STEP and the RES arrives then (in :attr:`messages`)."""
+        """``SET`` on a mounted item: waits for and returns its RES (in lock-step too: the
+        server carries it out at once, at the current simulated time)."""
         self._conn.send(set_line(type, name, opcode, params))
-        if self.world.lockstep:
-            return None
         return self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}",
                                    "SET")
 

@@ -216,7 +216,7 @@ def check_vec(v: Any, n: int, path: str, key: str, *, positive: bool = False) ->
 # its kind (a box, a RangeScanner) and the word used when that key is absent.
 ENTRY_KINDS = {"objects": ("shape", "object"), "sensors": ("type", "item"), "chassis": ("shape", "box"),
                "shapes": ("shape", "box"), "wheels": (None, "wheel"), "links": (None, "link"),
-               "start_poses": (None, "start pose"), "victims": (None, "victim"),
+               "start_poses": (None, "start pose"), "path_nodes": (None, "path node"), "victims": (None, "victim"),
                "false_alarms": (None, "false alarm"), "rfid_tags": (None, "RFID tag"), "water": (None, "water volume"),
                "lights": (None, "light"), "mission_packages": (None, "mission package"), "legs": (None, "leg")}
 _KEY_TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")

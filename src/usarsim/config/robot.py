@@ -64,6 +64,9 @@ class Link:
     shapes: tuple[ChassisBox, ...] = ()
     armature: float = 0.05  # reflected inertia of the geared drive, kg m^2 (or kg)
     collide: bool = True  # False: its shapes touch nothing (a small pan-tilt on top of a robot)
+    # the joint frame USARSim's robot class gave the link, relative to its parent's, as GEO
+    # {Type MisPkg}/{Type Actuator} report it (None: its orientation); reporting only
+    geo_orientation: Vec3 | None = None
 
     @property
     def limited(self) -> bool:
@@ -411,7 +414,8 @@ def _links(top: Section, wnames: set[str]) -> list[Link]:
                           min_range=s.float("min_range", d.min_range), max_range=s.float("max_range", d.max_range),
                           max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
                           max_torque=s.float("max_torque", min=0.0, min_exclusive=True), shapes=shapes,
-                          armature=s.float("armature", d.armature, min=0.0), collide=s.bool("collide", d.collide)))
+                          armature=s.float("armature", d.armature, min=0.0), collide=s.bool("collide", d.collide),
+                          geo_orientation=s.vec("geo_orientation", 3, d.geo_orientation)))
         lnames.add(lname)
     return links
 

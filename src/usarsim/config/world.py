@@ -219,6 +219,8 @@ class WorldConfig:
     materials: dict[str, Material]
     objects: tuple[StaticObject, ...]
     start_poses: tuple[StartPose, ...]
+    # named places of the world (the UDK's path nodes: GETPATHNODES, GETCLOSESTPATHNODE)
+    path_nodes: tuple[StartPose, ...] = ()
     time_limit_min: int = 0
     timestep_s: float = 0.004
     gravity_m_s2: float = 9.81
@@ -625,17 +627,8 @@ def _world(data: dict, path: str) -> WorldConfig:
                                scale=s.vec("scale", 3, od.scale, positive=True))
         objects.append(obj)
 
-    poses: list[StartPose] = []
-    pnames: set[str] = set()
-    pd = FieldDefaults(StartPose)
-    for s in top.entries("start_poses"):
-        pname = s.str("name")
-        if any(c in pname for c in "{} \t,"):
-            raise s.error("name", f"a start pose name may not contain spaces, commas or braces, got {pname!r}")
-        if pname.lower() in pnames:
-            raise s.error("name", f"duplicate start pose name '{pname}'")
-        pnames.add(pname.lower())
-        poses.append(StartPose(name=pname, location=s.vec("location"), rotation=s.vec("rotation", 3, pd.rotation)))
+    poses = _named_poses(top, "start_poses", "start pose")
+    path_nodes = _named_poses(top, "path_nodes", "path node")
 
     g = top.section("geo_reference", {})
     gd = FieldDefaults(GeoReference)
@@ -715,10 +708,27 @@ def _world(data: dict, path: str) -> WorldConfig:
 
     top.finish()
     return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
-                       objects=tuple(objects), start_poses=tuple(poses), time_limit_min=time_limit,
+                       objects=tuple(objects), start_poses=poses, path_nodes=path_nodes, time_limit_min=time_limit,
                        timestep_s=timestep, gravity_m_s2=gravity, geo=geo, victims=tuple(victims),
                        false_alarms=tuple(alarms), rfid_tags=tuple(tags), water=tuple(water), lights=tuple(lights),
                        ambient_light=ambient, wireless=wireless)
+
+
+def _named_poses(top: Section, key: str, what: str) -> tuple[StartPose, ...]:
+    """The ``start_poses`` or ``path_nodes`` of a world: named poses, names unique (any case)
+    and without the characters that separate them on the wire."""
+    poses: list[StartPose] = []
+    names: set[str] = set()
+    pd = FieldDefaults(StartPose)
+    for s in top.entries(key):
+        pname = s.str("name")
+        if any(c in pname for c in "{} \t,"):
+            raise s.error("name", f"a {what} name may not contain spaces, commas or braces, got {pname!r}")
+        if pname.lower() in names:
+            raise s.error("name", f"duplicate {what} name '{pname}'")
+        names.add(pname.lower())
+        poses.append(StartPose(name=pname, location=s.vec("location"), rotation=s.vec("rotation", 3, pd.rotation)))
+    return tuple(poses)
 
 
 def _wireless(s: Section) -> WirelessConfig:

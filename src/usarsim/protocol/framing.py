@@ -22,6 +22,9 @@ DEFAULT_MAX_LINE_BYTES = 8192
 """Longest accepted command line; clients keep lines well under 4096 bytes."""
 
 _TERMINATORS = re.compile(rb"[\r\n]+")
+# ``empty_lines``: one terminator, CR LF, LF CR, CR or LF
+_ONE_TERMINATOR = re.compile(rb"\r\n|\n\r|\r|\n")
+_OTHER_HALF = {b"\r": b"\n", b"\n": b"\r"}
 
 REPEATED_DRIVE = re.compile(rb"(?:^|(?<=[\r\n]))(DRIVE(?:(?!(?i:order|flip))[^\r\n])*[\r\n]+)(?:\1)+")
 """A run of the same repeatable DRIVE line (with the same terminator), from the start of a
@@ -48,7 +51,10 @@ class LineBuffer:
       that arrives in later reads up to its terminator, and counted in ``dropped_lines``.
       The next line is delivered normally.  The caller decides whether a dropped line is a
       reason to close the connection.
-    * Lines made only of whitespace are skipped like empty ones.
+    * Lines made only of whitespace are skipped like empty ones; with ``empty_lines`` they
+      are delivered as ``""`` instead (a terminator is then one CR LF, LF CR, CR or LF, and a
+      CR LF or LF CR split between two reads is still one), for a port where an empty line is
+      a request (the ground-truth port answers it).
     * With ``drop_repeated_drives``, a repeatable DRIVE line (:func:`repeatable_drive`) the
       same as the line before it, also across reads, is dropped and counted in
       ``repeated_drives``.
@@ -57,9 +63,10 @@ class LineBuffer:
     """
 
     __slots__ = ("max_line_bytes", "dropped_lines", "drop_repeated_drives", "repeated_drives", "_buf",
-                 "_discarding", "_last")
+                 "_discarding", "_last", "empty_lines", "_half")
 
-    def __init__(self, max_line_bytes: int = DEFAULT_MAX_LINE_BYTES, *, drop_repeated_drives: bool = False):
+    def __init__(self, max_line_bytes: int = DEFAULT_MAX_LINE_BYTES, *, drop_repeated_drives: bool = False,
+                 empty_lines: bool = False):
         if max_line_bytes < 1:
             raise ValueError(f"max_line_bytes must be at least 1, got {max_line_bytes}")
         self.max_line_bytes = max_line_bytes
@@ -70,6 +77,8 @@ class LineBuffer:
         # True while skipping the tail of an over-long line (already counted).
         self._discarding = False
         self._last = ""  # the last line delivered (drop_repeated_drives)
+        self.empty_lines = empty_lines
+        self._half: bytes | None = None  # empty_lines: the other half of a CR LF the last read ended in
 
     @property
     def pending_bytes(self) -> int:
@@ -115,6 +124,10 @@ class LineBuffer:
         return head + REPEATED_DRIVE.sub(one, data)
 
     def _split(self, data: bytes) -> list[str]:
+        if self.empty_lines:
+            if self._half is not None and data[:1] == self._half:
+                data = data[1:]  # the rest of the terminator the last read ended in
+            self._half = None
         buf = self._buf
         # The bytes already held contain no terminator: only new bytes need scanning.
         scan_from = len(buf)
@@ -122,7 +135,9 @@ class LineBuffer:
         lines: list[str] = []
         limit = self.max_line_bytes
         start = 0
-        for match in _TERMINATORS.finditer(buf, scan_from):
+        empty = self.empty_lines
+        match = None
+        for match in (_ONE_TERMINATOR if empty else _TERMINATORS).finditer(buf, scan_from):
             end = match.start()
             if self._discarding:
                 # This terminator ends the over-long line counted earlier.
@@ -133,7 +148,13 @@ class LineBuffer:
                 line = buf[start:end].decode("ascii", "replace")
                 if not line.isspace():
                     lines.append(line)
+                elif empty:
+                    lines.append("")
+            elif empty:
+                lines.append("")
             start = match.end()
+        if empty and match is not None and match.end() == len(buf) and match.end() - match.start() == 1:
+            self._half = _OTHER_HALF[bytes(buf[match.start():match.end()])]
         if start:
             del buf[:start]
         if len(buf) > limit:

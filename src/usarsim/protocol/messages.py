@@ -375,8 +375,8 @@ class ActuatorConfiguration:
 @dataclass(frozen=True, slots=True)
 class ActuatorLinkGeometry:
     """One link of an actuator GEO: its joint's pose relative to its parent; ``parent`` is
-    the parent link's index counted from 0, -1 when the link sits on the actuator's base
-    (as the UDK server numbered them)."""
+    the parent link's index plus one, 0 when the link sits on the actuator's base (as the UDK
+    server printed it: ``{Link 2} {Parent 1}``)."""
 
     link: int
     parent: int
@@ -593,8 +593,9 @@ Message = (
 _CRLF = "\r\n"
 
 # Lines are kept shorter than this many bytes, CR LF included (protocol.md 1: the Player
-# driver reads a line into a 4096-byte buffer); a 3D sweep that would not fit in one line is
-# sent one row per line (:func:`format_reading`).
+# driver reads a line into a 4096-byte buffer).  A 3D scanner's configuration is refused when
+# its sweep (or, in the opt-in split form, its row) would make a longer line
+# (usarsim.sensors.scanner.LINE_LIMIT, the same bound).
 LINE_LIMIT = 4096
 
 
@@ -674,7 +675,8 @@ def _sen_scan(r: RangeScanReading) -> str:
 
 
 def _sen_scan3d(r: RangeScan3DReading) -> str:
-    # a line holding one row names it like the RangeImager's frames (protocol.md 6.3)
+    # a line of the split form holds one row and names it like the RangeImager's frames
+    # (protocol.md 6.3); a whole sweep is the one line of the RangeScanner3D row there
     frame = "" if r.frame is None else "{Frames %d} {Frame %d} " % (r.frames or 0, r.frame)
     return "{Type %s} {Name %s} %s{Resolution %s} {FOV %s} %s" % (
         r.sensor_type,
@@ -687,13 +689,14 @@ def _sen_scan3d(r: RangeScan3DReading) -> str:
 
 
 def _scan3d_rows(r: RangeScan3DReading) -> list[RangeScan3DReading] | None:
-    """The rows of a whole 3D sweep, each a reading of its own (None: it has no known rows)."""
+    """The rows of a whole 3D sweep to be sent split, each a reading of its own (None: it is
+    not to be split, or has no known rows)."""
     rows = r.frames
-    if r.frame is not None or not rows or rows < 2 or len(r.ranges_m) % rows:
+    if not r.split or r.frame is not None or not rows or len(r.ranges_m) % rows:
         return None
     n = len(r.ranges_m) // rows
     return [RangeScan3DReading(r.name, r.resolution_rad, r.fov_rad, r.ranges_m[k * n:(k + 1) * n],
-                               sensor_type=r.sensor_type, frames=rows, frame=k) for k in range(rows)]
+                               sensor_type=r.sensor_type, frames=rows, frame=k, split=True) for k in range(rows)]
 
 
 def _sen_odometry(r: OdometryReading) -> str:
@@ -828,19 +831,19 @@ _SEN_BODIES: dict[type, Callable[[Any], str]] = {
 def format_reading(reading: Reading, time: float | None = None) -> str:
     """The SEN line for a reading (same as ``format_message(SensorMessage(...))``).
 
-    A whole 3D sweep whose line would reach :data:`LINE_LIMIT` is written as one line per
-    row instead, top row first, each with ``{Frames rows} {Frame k}`` and the same Time."""
+    A whole 3D sweep is one line (protocol.md 6.3) unless it asks for the split form
+    (``split``): then it is written as one line per row, top row first, each with
+    ``{Frames rows} {Frame k}`` after the Name and the same Time."""
+    head = "SEN " if time is None else "SEN {Time %s} " % f4(time)
+    if isinstance(reading, RangeScan3DReading) and reading.split:
+        rows = _scan3d_rows(reading)
+        if rows is not None:
+            return "".join([head + _sen_scan3d(row) + _CRLF for row in rows])
     try:
         body = _SEN_BODIES[type(reading)](reading)
     except KeyError:
         raise TypeError(f"not a sensor reading: {reading!r}") from None
-    head = "SEN " if time is None else "SEN {Time %s} " % f4(time)
-    line = head + body + _CRLF
-    if len(line) >= LINE_LIMIT and isinstance(reading, RangeScan3DReading):
-        rows = _scan3d_rows(reading)
-        if rows is not None:
-            return "".join([head + _sen_scan3d(row) + _CRLF for row in rows])
-    return line
+    return head + body + _CRLF
 
 
 def _fmt_sensor(m: SensorMessage) -> str:
@@ -1281,6 +1284,7 @@ def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
         ranges_m=r.vector("Range", r.text("Range"), None),
         frames=None if frame is None else r.req_int("Frames"),
         frame=None if frame is None else r.int(Segment("Frame", frame)),
+        split=frame is not None,
     )
 
 

@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from usarsim.readings import FieldValue, RangeScan3DReading, RangeScanReading
+from usarsim.errors import ConfigError
+from usarsim.readings import FieldValue, ItemParams, OperationResult, RangeScan3DReading, RangeScanReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
@@ -118,28 +119,47 @@ class IRScanner(RangeScanner):
     PRESETS = {}
 
 
-# Bytes of range values one SEN line of a 3D scanner may carry: old clients read a line into
-# a 4096-byte buffer (protocol.md 1, "keep single lines below 4096 bytes"); the rest of the
-# line (Time, Type, Name, Frames, Frame, Resolution, FOV, braces, CR LF) stays well under
-# the 512 bytes left.
-ROW_BYTES = 4096 - 512
+# Lines are kept shorter than this many bytes, CR LF included, so that the clients written
+# for USARSim read each whole (protocol.md 1: "keep single lines below 4096 bytes"): Player's
+# usarsim driver reads a line into a USBOT_MAX_MSG_LEN + 1 = 4097-byte buffer up to its LF
+# (us_bot.h: USBOT_MAX_MSG_LEN 4096; us_bot.cc, UsBot::Main) and takes a segment's value only
+# when it ends before byte 4096 (us_parser.cc, us_get_value2), the Range of a 3D sweep into a
+# US_MAX_MSG_LEN = 4096-byte buffer (us_parser.h; us_get_laser3d); the SPQR RDK's USARSim
+# client reads its lines the same way (usarsimclientmodule.h: USBOT_MAX_MSG_LEN 4096;
+# us_getData).  The protocol layer keeps the same bound (usarsim.protocol.messages.LINE_LIMIT).
+LINE_LIMIT = 4096
+
+# The widest Time a SEN line's length is reckoned with: 4 decimals (protocol.md 2.4) and
+# 9 digits before the point, 31 years of simulated time.
+_LONGEST_TIME = "999999999.9999"
 
 
 @dataclass(frozen=True, kw_only=True)
 class RangeScanner3DConfig(SensorConfig):
-    # RangeScanner3D (protocol.md 7.3, UT Tarantula/Ardabot configs): MaxRange 1000
-    # (effectively unlimited), ScanInterval 0.4, HorizontalFOV 1.0472, HorizontalResolution
-    # 0.0209, VerticalFOV 0.4363, VerticalResolution 0.0145 -> 51 x 31 points.
+    # RangeScanner3D (protocol.md 7.3, UT Tarantula/Ardabot configs: USARBot.ini
+    # [USARBot.RangeScanner3D], as the Ardabot4j project page gives it): MaxRange 1000
+    # (effectively unlimited), ScanInterval 0.4, HorizontalFOV 1.0472 (60 degrees),
+    # VerticalFOV 0.4363 (25 degrees).  USARSim's resolutions there, 0.0209 and 0.0145 rad,
+    # make 51 x 31 = 1581 beams, up to 16 kB a sweep at this MaxRange: nearly four times the
+    # line Player's driver and the SPQR RDK read (LINE_LIMIT), so neither could take such a
+    # sweep whole.  Here the same field of view at 0.0436 rad (2.5 degrees) both ways:
+    # 25 x 11 = 275 beams, a beam straight ahead in the middle of the middle row, and a sweep
+    # of at most 2.9 kB with these ranges, within LINE_LIMIT.  USARSim's own grid is had with
+    # its two resolutions and ``split_rows: true``.
     max_range_m: float = 1000.0
     min_range_m: float = 0.1
     scan_interval_s: float = 0.4
     horizontal_fov_rad: float = 1.0472
-    horizontal_resolution_rad: float = 0.0209
+    horizontal_resolution_rad: float = 0.0436
     vertical_fov_rad: float = 0.4363
-    vertical_resolution_rad: float = 0.0145
+    vertical_resolution_rad: float = 0.0436
     panning: bool = False
     tilting: bool = True
     noise: float = 0.001
+    # False: each sweep is one SEN line, the form of protocol.md 6.3 that Player's laser3d
+    # driver and UvA parse; True: one line per row with {Frames rows} {Frame k}, the form
+    # of the UDK RangeImager (protocol.md 6.3), for a sweep too long for one line.
+    split_rows: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -151,19 +171,50 @@ class RangeScanner3DConfig(SensorConfig):
         rows, cols = self.counts
         if rows * cols > 100_000:
             raise ValueError(f"{rows} x {cols} beams is more than 100000 per scan")
-        # one row must fit in one SEN line (see RangeScanner3D): its values, each at most
-        # len("%.4f" % max_range_m) characters and a comma, within ROW_BYTES
-        width = len("%.4f" % self.max_range_m) + 1
-        if cols * width > ROW_BYTES:
-            raise ValueError(f"a row of {cols} beams up to {self.max_range_m:g} m is {cols * width} bytes, too long "
-                             f"for one SEN line (at most {ROW_BYTES // width} beams a row at this MaxRange): "
-                             f"choose a coarser horizontal_resolution_rad or a narrower horizontal_fov_rad")
 
     @property
     def counts(self) -> tuple[int, int]:
         """(rows, columns): vertical steps, horizontal steps."""
         return (int(math.floor(self.vertical_fov_rad / self.vertical_resolution_rad + 1e-6)) + 1,
                 int(math.floor(self.horizontal_fov_rad / self.horizontal_resolution_rad + 1e-6)) + 1)
+
+    def _line_parts(self, name: str, split: bool) -> tuple[int, int, int]:
+        """(bytes of the line but its ranges, CR LF included; ranges in it; bytes of a range
+        with its comma) of the longest SEN line of the scanner ``name`` in the one-line form
+        (``split`` False) or the split form: Time at its widest, every range at MaxRange, the
+        widest it prints."""
+        rows, cols = self.counts
+        head = "SEN {Time %s} {Type RangeScanner3D} {Name %s} %s{Resolution %.4f,%.4f} {FOV %.4f,%.4f} {Range }\r\n" % (
+            _LONGEST_TIME, name, "{Frames %d} {Frame %d} " % (rows, rows - 1) if split else "",
+            trunc4(self.vertical_resolution_rad), trunc4(self.horizontal_resolution_rad),
+            trunc4(self.vertical_fov_rad), trunc4(self.horizontal_fov_rad))
+        return len(head.encode()), cols if split else rows * cols, len("%.4f" % self.max_range_m) + 1
+
+    def longest_line(self, name: str, split: bool) -> int:
+        """The bytes, CR LF included, of the longest SEN line the scanner ``name`` can send in
+        the one-line form (``split`` False) or the split form (one fewer comma than ranges)."""
+        head, beams, value = self._line_parts(name, split)
+        return head + beams * value - 1
+
+    def line_problem(self, name: str, split: bool) -> str | None:
+        """Why the scanner ``name`` cannot send its sweeps within LINE_LIMIT in the one-line
+        form (``split`` False) or the split form (None: it can): what to change, and how
+        many beams would fit."""
+        longest = self.longest_line(name, split)
+        if longest < LINE_LIMIT:
+            return None
+        rows, cols = self.counts
+        head, _, value = self._line_parts(name, split)
+        fit = (LINE_LIMIT - head) // value  # head + fit * value - 1 < LINE_LIMIT
+        if split:
+            return (f"a row of {cols} beams up to {self.max_range_m:g} m makes SEN lines of up to {longest} bytes, "
+                    f"more than the {LINE_LIMIT - 1} old clients read in one line, even in the split form (at most "
+                    f"{fit} beams a row at this MaxRange): choose a coarser horizontal_resolution_rad, a narrower "
+                    f"horizontal_fov_rad or a shorter max_range_m")
+        return (f"a sweep of {rows} x {cols} beams up to {self.max_range_m:g} m makes SEN lines of up to {longest} "
+                f"bytes, more than the {LINE_LIMIT - 1} old clients read in one line (at most {fit} beams a sweep at "
+                f"this MaxRange): choose a coarser vertical_resolution_rad or horizontal_resolution_rad, a narrower "
+                f"field of view or a shorter max_range_m, or set split_rows: true to send one line per row")
 
 
 @SENSORS.register("RangeScanner3D", "3DRangeScanner")
@@ -173,14 +224,17 @@ class RangeScanner3D(Sensor):
     per vertical step, the top row first, each row from its rightmost beam to its leftmost,
     as the 2D scanner.
 
-    On the wire (protocol.md 6.3) a sweep is one SEN line when that line stays under the
-    4096 bytes old clients can read (protocol.md 1)::
+    On the wire (protocol.md 6.3) a sweep is one SEN line::
 
         SEN {Time t} {Type RangeScanner3D} {Name n} {Resolution vres,hres} {FOV vfov,hfov} {Range r1,r2,...}
 
-    A longer sweep (the 51 x 31 beams of USARSim's configuration make about 11 kB) is sent
-    as one line per row instead, all with the sweep's Time, the top row first, each naming
-    its row the way the RangeImager names its frames (protocol.md 6.3)::
+    with rows x columns values; the configuration is refused when that line would reach the
+    4096 bytes old clients read (:data:`LINE_LIMIT`, protocol.md 1).
+
+    Opt-in, by ``split_rows: true`` in the robot file or ``SET {Type RangeScanner3D} {Name n}
+    {Opcode Split} {Params 1}`` (``{Params 0}`` goes back), a sweep is sent as one line per
+    row instead, all with the sweep's Time, the top row first, each naming its row the way the
+    UDK RangeImager names its frames (protocol.md 6.3)::
 
         SEN {Time t} {Type RangeScanner3D} {Name n} {Frames rows} {Frame k}
             {Resolution vres,hres} {FOV vfov,hfov} {Range r1,...,r_cols}
@@ -189,8 +243,8 @@ class RangeScanner3D(Sensor):
 
     ``Frames`` is the number of rows (= lines) of the sweep and ``Frame`` the row this line
     holds, 0 for the top row up to rows - 1; Resolution and FOV are the whole sweep's, so
-    row k looks ``vfov / 2 - k * vres`` up.  A row never needs more than one line: the
-    configuration refuses rows too long for one.
+    row k looks ``vfov / 2 - k * vres`` up.  A SET to the one-line form fails (RES Failed)
+    when the sweep would not fit in one line.
     """
 
     SCANNABLE = True
@@ -205,6 +259,11 @@ class RangeScanner3D(Sensor):
     def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         c = self.config
+        problem = c.line_problem(self.name, c.split_rows)
+        if problem is not None:
+            raise ConfigError(f"invalid {self.TYPE} settings: {problem}", path=robot.path,
+                              key=item.key_path or item.name)
+        self.split = c.split_rows  # the form sweeps go out in; SET {Opcode Split} changes it
         rows, cols = c.counts
         pitches = c.vertical_fov_rad / 2.0 - c.vertical_resolution_rad * np.arange(rows)  # top row first
         yaws = c.horizontal_fov_rad / 2.0 - c.horizontal_resolution_rad * np.arange(cols)  # rightmost first
@@ -222,7 +281,25 @@ class RangeScanner3D(Sensor):
         np.clip(values, c.min_range_m, c.max_range_m, out=values)
         return RangeScan3DReading(self.name, (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
                                   (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)), tuple(values.tolist()),
-                                  sensor_type=self.TYPE, frames=c.counts[0])
+                                  sensor_type=self.TYPE, frames=c.counts[0], split=self.split)
+
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
+        """``{Opcode SCAN}`` (a sweep at once, in the form chosen) and ``{Opcode Split}
+        {Params 1|0}`` (also ``True``/``False``): one line per row from now on, or one line per
+        sweep again; Failed when Params is neither or the sweep would not fit in one line."""
+        if opcode.upper() != "SPLIT":
+            return super().operate(view, opcode, params)
+        text = (params.text or "").strip().lower()
+        if params.values is not None and len(params.values) == 1 and params.values[0] in (0.0, 1.0):
+            split = params.values[0] == 1.0
+        elif text in ("true", "false"):
+            split = text == "true"
+        else:
+            return OperationResult(ok=False)
+        if self.config.line_problem(self.name, split) is not None:
+            return OperationResult(ok=False)
+        self.split = split
+        return OperationResult(ok=True)
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config

@@ -8,6 +8,7 @@ import logging
 from usarsim.config.world import WorldConfig
 from usarsim.server.control import ControlServer
 from usarsim.server.image import CameraBindings, ImageServer, ImageSettings
+from usarsim.server.ordering import STEP_GRACE_S
 from usarsim.server.truth import TruthServer
 from usarsim.server.wireless import WirelessOptions, WirelessServers
 from usarsim.sim.facade import SimFacade
@@ -25,7 +26,8 @@ class Application:
                  max_web_connections: int = 64, record: str | None = None, foxglove_port: int | None = None,
                  run_options: dict | None = None, record_cameras_fps: float = 0.0,
                  record_camera_size: tuple[int, int] = (320, 240), score: bool = False,
-                 score_file: str | None = None, score_every_s: float = 10.0, on_score_line=None):
+                 score_file: str | None = None, score_every_s: float = 10.0, on_score_line=None,
+                 step_grace_s: float = STEP_GRACE_S):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
@@ -33,7 +35,8 @@ class Application:
         self.control = ControlServer(self.facade, host=host, port=port, max_connections=max_connections,
                                      robot_dirs=tuple(robot_dirs), max_line_bytes=max_line_bytes,
                                      max_pending_bytes=max_pending_bytes,
-                                     max_robots=max_connections if max_robots is None else max_robots)
+                                     max_robots=max_connections if max_robots is None else max_robots,
+                                     step_grace_s=step_grace_s)
         self.control.camera_bindings = self.camera_bindings
         # the ground-truth service (protocol.md 12.4); None: not served
         self.truth = (TruthServer(self.facade, host=host, port=truth_port, max_connections=max_viewers)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import socket
 import time
 from collections import deque
 from typing import Any
@@ -24,6 +25,7 @@ from usarsim.protocol.outputs import message_for
 from usarsim.readings import PackageState
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
+from usarsim.server.ordering import STEP_GRACE_S, StepOrder
 from usarsim.server.session import ALIVE, CLOSED, NEW, SPAWNING, Session, SessionContext
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.types import Output
@@ -38,6 +40,8 @@ REPLY_CAP_FACTOR = 4
 # its socket is not read, so that one client flooding the port slows only itself (TCP pushes
 # back on it) and never the event loop, the other clients or the physics.
 LINE_BUDGET_S = 0.002
+# Linux's option to acknowledge received segments at once (usarsim.server.ordering); None elsewhere
+TCP_QUICKACK = getattr(socket, "TCP_QUICKACK", None)
 
 
 def output_to_message(o: Output) -> Any:
@@ -65,6 +69,8 @@ class Connection(ServerConnection):
         self.dropped_periodic = 0
         self._backlog: deque[str] = deque()  # lines received, not handled yet
         self._step_out: list[bytes] = []  # outputs while a STEP runs: sent with the next reply
+        self.last_read = 0.0  # time.perf_counter() of the last read (usarsim.server.ordering)
+        self._sock = None  # the socket, to acknowledge what arrives at once (TCP_QUICKACK)
 
     @property
     def repeats_skipped(self) -> int:
@@ -74,14 +80,35 @@ class Connection(ServerConnection):
     # ServerConnection -------------------------------------------------------------------
     def connection_made(self, transport) -> None:
         transport.set_write_buffer_limits(high=self.server.max_pending_bytes)
+        if TCP_QUICKACK is not None:
+            self._sock = transport.get_extra_info("socket")
+            self._quickack()
         super().connection_made(transport)
+
+    def _quickack(self) -> None:
+        """Acknowledge the next segments at once, and what arrived and is not acknowledged yet
+        now: a client's Nagle algorithm then never holds a line back behind an unacknowledged
+        one for the 40 ms of a delayed acknowledgement (usarsim.server.ordering).  Linux
+        leaves quick-acknowledgement mode again when the server answers soon after it read
+        ("ping-pong" traffic), so this is asked again after every read and every write."""
+        try:
+            self._sock.setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
+        except OSError:  # closed meanwhile
+            self._sock = None
+
+    def write(self, data: bytes) -> bool:
+        sent = super().write(data)
+        if self._sock is not None and sent:
+            self._quickack()
+        return sent
 
     def register(self) -> None:
         srv = self.server
         uid = srv.next_uid()
         self.session = Session(SessionContext(facade=srv.facade, peer=self.peer, emit=self.send_reply,
                                               threadsafe=srv.threadsafe, admit=srv.admit, robot_dirs=srv.robot_dirs,
-                                              camera_bindings=srv.camera_bindings, log_once=self.log_once), uid)
+                                              camera_bindings=srv.camera_bindings, log_once=self.log_once,
+                                              resume=self._drain, step_order=srv.step_order, reader=self), uid)
         srv.connections[uid] = self
 
     def release(self) -> None:
@@ -106,7 +133,18 @@ class Connection(ServerConnection):
             self._drain()
 
     # Input -----------------------------------------------------------------------------
+    # usarsim.server.ordering.Reader ------------------------------------------------------
+    def unhandled(self) -> bool:
+        session = self.session
+        return bool(self._backlog) and not (session is not None and session.step_held)
+
+    def holds_step(self) -> bool:
+        return self.session is not None and self.session.step_held
+
     def data_received(self, data: bytes) -> None:
+        self.last_read = time.perf_counter()
+        if self._sock is not None:
+            self._quickack()
         if self.session is None:
             return
         before = self.buffer.dropped_lines
@@ -126,6 +164,12 @@ class Connection(ServerConnection):
         backlog = self._backlog
         n = 0
         while backlog:
+            if session.holding:
+                # its INIT is being carried out, or its STEP waits for the other connections:
+                # the next lines wait for it (answers in order; lines after a STEP are for the
+                # next one), the socket unread (Session.resume drains them)
+                self.gate.close(self.transport)
+                return
             if not self.writable and self.transport is not None and \
                     self.transport.get_write_buffer_size() > REPLY_CAP_FACTOR * self.server.max_pending_bytes:
                 # the client asks and asks but does not read the replies: its further lines
@@ -176,7 +220,8 @@ class Connection(ServerConnection):
 class ControlServer(TcpListener):
     def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3000,
                  max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = (),
-                 max_pending_bytes: int = HIGH_WATER, max_robots: int | None = None):
+                 max_pending_bytes: int = HIGH_WATER, max_robots: int | None = None,
+                 step_grace_s: float = STEP_GRACE_S):
         super().__init__(host, port)
         self.facade = facade
         self.robot_dirs = robot_dirs  # extra folders of robot files (serve --robot-dir)
@@ -190,6 +235,8 @@ class ControlServer(TcpListener):
         self.max_robots = max_connections if max_robots is None else max(0, int(max_robots))
         self.connections: dict[int, Connection] = {}
         self._uid = 0
+        # lock-step: each STEP carried out after every line read before it (usarsim.server.ordering)
+        self.step_order = StepOrder(self.connections.values, step_grace_s) if facade.lockstep else None
 
     def make_protocol(self) -> Connection:
         return Connection(self)
@@ -210,6 +257,11 @@ class ControlServer(TcpListener):
         self.loop = asyncio.get_running_loop()
         self.facade.set_deliver(self.threadsafe(self.dispatch))
         return await super().start()
+
+    async def stop(self) -> None:
+        if self.step_order is not None:
+            self.step_order.cancel()  # the connections close: their STEPs are not carried out
+        await super().stop()
 
     def dispatch(self, outs: list[Output]) -> None:
         """Format a batch of outputs and write them, one write per connection."""

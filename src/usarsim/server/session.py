@@ -29,7 +29,8 @@ NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
 
 NO_ROBOT = "no robot on this connection: send INIT first"
 # Commands a client waits for an answer to: a malformed one is answered with an ERROR.
-ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES", "REPORT")
+ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES", "GETPATHNODES", "GETCLOSESTPATHNODE",
+            "REPORT")
 
 
 def _copied(sent, exact) -> bool:
@@ -62,6 +63,12 @@ class SessionContext:
     robot_dirs: tuple[str, ...] = ()  # extra folders of robot files (serve --robot-dir)
     camera_bindings: Any = None  # the image server's CameraBindings
     log_once: LogOnce | None = None
+    # the connection handles the lines it holds back (Session.holding) once the hold ends
+    resume: Callable[[], None] | None = None
+    # lock-step: where STEPs fall among every connection's lines (usarsim.server.ordering),
+    # and this connection as the ordering sees it; None: a STEP is carried out at once
+    step_order: Any = None
+    reader: Any = None
 
     def __post_init__(self) -> None:
         if self.log_once is None:
@@ -89,6 +96,9 @@ class Session:
             C.Act: self.on_act,
             C.Ping: self.on_ping,
             C.Report: self.on_report,
+            C.GetPathNodes: self.on_get_path_nodes,
+            C.GetClosestPathNode: self.on_get_closest_path_node,
+            C.Control: self.on_control,
         }
         # the client speaks the UDK actuator API (ACT, or a query of {Type Actuator}): its
         # robot's mission packages are reported as ASTA too, each status period
@@ -97,11 +107,44 @@ class Session:
         self._spawn_done = ctx.threadsafe(self.spawn_done)
         self._stepped = ctx.threadsafe(self._step_done)
         self._step_refused = ctx.threadsafe(self._step_not_done)
-        self._set_failed = ctx.threadsafe(lambda error: self._not_done("SET", error))
-        self._report_failed = ctx.threadsafe(lambda error: self._not_done("REPORT", error))
         # STEPs asked for and not answered yet: the outputs of the robot meanwhile go out with
         # the next reply (its STEPPED), in one write (usarsim.server.control)
         self.steps_waiting = 0
+        # a STEP read here waits for the lines of the other connections (usarsim.server.ordering)
+        self.step_held = False
+        # requests sent to the simulation whose answer (RES, PONG...) is not written yet
+        self.awaiting = 0
+
+    @property
+    def holding(self) -> bool:
+        """The next lines wait: a request answered by the simulation (INIT, STEP, SET, REPORT,
+        PING) has not been answered yet, so that the requests of a connection are answered in
+        the order they were sent, whatever the segmentation; and what follows a STEP is for the
+        next STEP."""
+        return self.awaiting > 0 or self.steps_waiting > 0 or self.step_held or self.state == SPAWNING
+
+    def _answered(self, command: str, then: Callable[[Any], None] | None = None) -> Callable:
+        """A request's ``on_done(result, error)`` (called from the simulation thread) that
+        holds this connection's next lines until it is answered: ``then(result)`` sends the
+        answer (a RES the simulation outputs itself needs none: its outputs are written
+        before ``on_done`` runs), an error is answered with an ERROR, and the lines waiting
+        are handled."""
+        self.awaiting += 1
+
+        def done(result, error) -> None:
+            self.awaiting -= 1
+            if self.state != CLOSED:
+                if error is not None:
+                    self._not_done(command, error)
+                elif then is not None:
+                    then(result)
+            self._resume()
+
+        return self.ctx.threadsafe(done)
+
+    def _resume(self) -> None:
+        if self.ctx.resume is not None:
+            self.ctx.resume()
 
     @property
     def facade(self) -> SimFacade:
@@ -147,6 +190,38 @@ class Session:
         poses = tuple(M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
                       for p in self.facade.start_poses)
         self.send(M.StartPoses(poses=poses))
+
+    def on_get_path_nodes(self, cmd: C.GetPathNodes) -> None:
+        """``GETPATHNODES`` (UDK, protocol.md 5.8): the world's path nodes, laid out as start
+        poses are (``NFO {PathNodes 0}`` for a world that has none)."""
+        self.send(M.PathNodes(nodes=tuple(M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
+                                          for p in self.facade.world.path_nodes)))
+
+    def on_get_closest_path_node(self, cmd: C.GetClosestPathNode) -> None:
+        """``GETCLOSESTPATHNODE {Location x,y,z}`` (UDK): ``NFO {Pathnode name} {Location x,y,z}``
+        of the path node nearest to it."""
+        nodes = self.facade.world.path_nodes
+        if cmd.location is None:
+            self.refuse("GETCLOSESTPATHNODE", "malformed", "GETCLOSESTPATHNODE needs a {Location x,y,z}")
+            return
+        if not nodes:
+            self.refuse("GETCLOSESTPATHNODE", "no-path-nodes", f"world {self.facade.world_name} has no path nodes "
+                        f"(a world file lists them under path_nodes)", level=logging.INFO)
+            return
+        nearest = min(nodes, key=lambda p: math.dist(p.location, cmd.location))
+        self.send(M.ClosestPathNode(name=nearest.name, location=nearest.location))
+
+    def on_control(self, cmd: C.Control) -> None:
+        """``CONTROL`` (UDK world controller, protocol.md 5.8): not simulated.  ``{Type GetSTA}``,
+        the one request of it with a reply, is answered with an ERROR saying so; the others
+        have no reply and are logged once."""
+        if (cmd.type or "").lower() == "getsta":
+            self.refuse("CONTROL", "control", "this simulator has no world controller (the UDK's CONTROL Create, "
+                        "Kill, Move and GetSTA are not simulated): the ground-truth port lists every robot, victim "
+                        "and movable object", level=logging.INFO)
+            return
+        self.log_once("control", "CONTROL {Type %s}: this simulator has no world controller; ignored", cmd.type,
+                      level=logging.INFO)
 
     def on_init(self, cmd: C.Init) -> None:
         if self.state != NEW:
@@ -228,15 +303,20 @@ class Session:
             self.robot = None
             log.warning("%s: INIT failed: %s", self.ctx.peer, error)
             self.send(M.error_reply("INIT", str(error)))
-            return
-        self.state = ALIVE
+        else:
+            self.state = ALIVE
+        self._resume()  # the lines after the INIT
 
     def on_ping(self, cmd: C.Ping) -> None:
         """``PING [{Id x}]`` -> ``PONG [{Id x}] {Time t}`` (an extension) once the simulation has
         carried out every request sent before it (an INIT's spawn, or its ERROR) and every
         message it produced so far is written to this connection."""
+        self.awaiting += 1
+
         def done(t, error):
+            self.awaiting -= 1
             self.send(M.Pong(id=cmd.id, time=t if error is None else None))
+            self._resume()
 
         self.facade.barrier(self.ctx.threadsafe(done))
 
@@ -249,7 +329,7 @@ class Session:
             return
         self.reports += 1
         self.facade.report_victim(self.uid, cmd.name or f"Victim{self.reports}", cmd.location,
-                                  on_error=self._report_failed)
+                                  on_done=self._answered("REPORT"))
 
     def on_drive(self, cmd: C.Drive) -> None:
         # SPAWNING too: the spawn request is ahead of this one in the simulation's queue
@@ -312,13 +392,14 @@ class Session:
             _, tilt, pan = cmd.rotation
             self.facade.drive_joints(self.uid, [JointOrder(pkg.links[0], pan, 0), JointOrder(pkg.links[1], tilt, 0)])
         if cmd.zoom is not None:
-            self.facade.operate(self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)))
+            self.facade.operate(self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)),
+                                on_done=self._answered("CAMERA"))
 
     def on_act(self, cmd: C.Act) -> None:
         """``ACT {Name arm} {Link k} {Value v} [{Order o}] ...`` and ``ACT {Name arm} {Gripper 1|0}``
-        (UDK actuator API, protocol.md 5.8): the links of the mission package named, the
-        gripper whose fingers are on it (or the robot's only gripper).  No reply; a gripper
-        answers as ``SET {Type Gripper}`` does (RES, then EFF)."""
+        (UDK actuator API, protocol.md 5.8): the links of the mission package named, counted
+        from 0; the gripper whose fingers are on it (or the robot's only gripper).  No reply;
+        a gripper answers as ``SET {Type Gripper}`` does (RES, then EFF)."""
         if not self._alive():
             return
         self.actuator_api = True
@@ -332,20 +413,23 @@ class Session:
             return
         orders = []
         for lc in cmd.links:
-            if not 1 <= lc.link <= len(pkg.links):
-                self.log_once(f"act-link:{lc.link}", "ACT %s has no link %d (links 1..%d); ignored", pkg.name,
-                              lc.link, len(pkg.links))
+            # ACT counts links from 0, as the UDK server did (it passed k straight to the
+            # actuator's link array): {Link 0} is the link CONF, GEO and ASTA call Link 1
+            if not 0 <= lc.link < len(pkg.links):
+                self.log_once(f"act-link:{lc.link}", "ACT %s has no link %d (ACT counts links from 0: 0..%d); "
+                              "ignored", pkg.name, lc.link, len(pkg.links) - 1)
                 continue
-            orders.append(JointOrder(pkg.links[lc.link - 1], lc.value, lc.order))
+            orders.append(JointOrder(pkg.links[lc.link], lc.value, lc.order))
         if orders:
             self.facade.drive_joints(self.uid, orders)
         if cmd.gripper is not None:
             gripper = self._gripper_of(pkg)
             if gripper is None:
-                self.log_once("act-gripper", "ACT {Gripper}: actuator %s has no gripper; ignored", pkg.name)
-            else:
-                self.facade.operate(self.uid, "Gripper", gripper, "Close" if cmd.gripper else "Open",
-                                    ItemParams())
+                # answered as SET {Type Gripper} on a gripper the robot does not have: RES Failed
+                self.log_once("act-gripper", "ACT {Gripper}: actuator %s has no gripper; answered Failed",
+                              pkg.name, level=logging.INFO)
+            self.facade.operate(self.uid, "Gripper", gripper or pkg.name, "Close" if cmd.gripper else "Open",
+                                ItemParams(), on_done=self._answered("ACT"))
         if cmd.sequence is not None:
             self.log_once("act-sequence", "ACT {Sequence %d}: no stored sequences; ignored", cmd.sequence,
                           level=logging.INFO)
@@ -376,14 +460,13 @@ class Session:
 
     def _actuator_geometry(self, pkgs) -> M.ActuatorGeometry:
         """GEO {Type Actuator}: the actuator's base at the robot's origin (mounted on the
-        robot, named by its class), each link's joint pose relative to its parent link."""
+        robot, named by its class), each link's joint pose relative to its parent link;
+        ``Parent`` as the UDK printed it, the parent's index plus one (0: the base)."""
         out = []
         for p in pkgs:
-            links = []
-            for i, ln in enumerate(self.robot.link(n) for n in p.links):
-                parent = p.links.index(ln.parent) if ln.parent in p.links else -1
-                links.append(M.ActuatorLinkGeometry(link=i + 1, parent=parent, location=ln.location,
-                                                    orientation=ln.orientation))
+            links = [M.ActuatorLinkGeometry(link=f.link, parent=max(f.parent, 0), location=f.location,
+                                            orientation=f.orientation)
+                     for f in self.facade.package_frames(self.robot, p)]
             out.append(M.ActuatorPose(name=p.name, location=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0),
                                       mount=self.robot.class_name, links=tuple(links)))
         return M.ActuatorGeometry(actuators=tuple(out))
@@ -398,11 +481,6 @@ class Session:
 
     def _packages(self, name: str | None):
         return [p for p in self.robot.mission_packages if not name or p.name.lower() == name.lower()]
-
-    @staticmethod
-    def _parent_number(pkg, ln) -> int:
-        """ParentLink of a link: its parent's number in the package, -1 for the chassis."""
-        return pkg.links.index(ln.parent) + 1 if ln.parent in pkg.links else -1
 
     def on_get_geo(self, cmd: C.GetGeo) -> None:
         if self.robot is None:
@@ -428,9 +506,8 @@ class Session:
                 self.send(M.EmptyGeometry(item_type=cmd.type, name=cmd.name))
                 return
             self.send(M.MisPkgGeometry(packages=tuple(M.PackageGeometry(name=p.name, links=tuple(
-                M.LinkGeometry(link=i + 1, parent_link=self._parent_number(p, ln), location=ln.location,
-                               orientation=ln.orientation)
-                for i, ln in enumerate(self.robot.link(n) for n in p.links))) for p in pkgs)))
+                M.LinkGeometry(link=f.link, parent_link=f.parent, location=f.location, orientation=f.orientation)
+                for f in self.facade.package_frames(self.robot, p))) for p in pkgs)))
             return
         items = self._items(cmd.type, cmd.name)
         if not items:
@@ -504,7 +581,7 @@ class Session:
             self.on_viewports(cmd)
             return
         self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, ItemParams(values=cmd.values, text=cmd.params),
-                            on_error=self._set_failed)
+                            on_done=self._answered("SET"))
 
     def on_bind_camera(self, cmd: C.Set) -> None:
         """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that
@@ -538,16 +615,13 @@ class Session:
         for index, cam in cmd.viewports:
             if 1 <= index <= len(names):
                 names[index - 1] = cam
-        def done(result, error):
-            if error is not None:  # the simulation has stopped
-                self.refuse("SET", "viewports-stopped", f"SET Viewports: {error}", level=logging.ERROR)
-                return
+        def answer(result) -> None:
             time_s, states = result
             self.send(M.ViewportsResult(
                 time=time_s, config=cfg or config, config_status="OK" if cfg else "Failed",
                 viewports=tuple(M.ViewportState(index=i + 1, camera=c, status=st) for i, (c, st) in enumerate(states))))
 
-        self.facade.set_viewports(self.uid, names, on_done=self.ctx.threadsafe(done))
+        self.facade.set_viewports(self.uid, names, on_done=self._answered("SET", answer))
 
     MAX_STEP_S = 3600.0
 
@@ -558,11 +632,22 @@ class Session:
                           self.MAX_STEP_S)
             seconds = 0.0
         self.steps_waiting += 1
-        self.facade.step(seconds, self._stepped, self._step_refused)
+        order = self.ctx.step_order
+        if order is None or order.at_once(self.ctx.reader):
+            self.facade.step(seconds, self._stepped, self._step_refused)
+            return
+        self.step_held = True
+
+        def carry_out() -> None:
+            self.step_held = False
+            self.facade.step(seconds, self._stepped, self._step_refused)
+
+        order.submit(self.ctx.reader, carry_out)
 
     def _step_done(self, time_s: float) -> None:
         self.steps_waiting -= 1
         self.send(M.Stepped(time=time_s))
+        self._resume()  # the lines after the STEP
 
     def _not_done(self, command: str, error: BaseException) -> None:
         """A request the simulation did not carry out (it has stopped, or the request failed
@@ -577,3 +662,4 @@ class Session:
         the STEP is answered with an ERROR instead of a STEPPED that would never come."""
         self.steps_waiting -= 1
         self._not_done("STEP", error)
+        self._resume()

@@ -4,7 +4,7 @@ UDK's USARTruth): scoring and test tools ask where things are.
 asyncio glue only: lines (protocol.framing) -> request (protocol.truth) -> a snapshot
 taken on the simulation thread -> one line per object, then ``{End}``.  The connection
 stays open for further requests.  An unparseable line is logged once per connection and
-answered with a bare ``{End}``.
+answered with a bare ``{End}``, as an empty line is.
 
 A connection's requests are answered one after another, one at a time on the simulation
 thread, so that a flood of requests cannot stall the world: beyond MAX_WAITING waiting
@@ -37,7 +37,7 @@ class TruthConnection(ServerConnection):
 
     def __init__(self, server: TruthServer):
         super().__init__(server)
-        self.buffer = LineBuffer(max_line_bytes=4096)
+        self.buffer = LineBuffer(max_line_bytes=4096, empty_lines=True)  # an empty line is answered too
         self.waiting: collections.deque = collections.deque()  # parsed requests (None: unparseable)
         self._busy = False  # a request is being answered on the simulation thread
         self._answer_threadsafe = server.threadsafe(self._answer)
@@ -51,6 +51,7 @@ class TruthConnection(ServerConnection):
     def data_received(self, data: bytes) -> None:
         for line in self.buffer.feed(data):
             if not line.strip():
+                self.waiting.append(None)  # an empty request: answered with a bare {End}, in its turn
                 continue
             try:
                 self.waiting.append(parse_truth_request(line))

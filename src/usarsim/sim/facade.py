@@ -19,7 +19,7 @@ from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult
 from usarsim.robots import drive_class
-from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
+from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, package_frames
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner
 from usarsim.sim.simulation import Simulation, describe_items
@@ -28,19 +28,6 @@ from usarsim.sim.snapshot import FrameWatch, WorldFrame
 log = logging.getLogger("usarsim.sim")
 
 Done = Callable[[Any, BaseException | None], None]
-
-
-def _errors_only(on_error: Callable[[BaseException], None] | None) -> Done | None:
-    """A request's ``on_done`` that tells ``on_error`` of an error and says nothing of a
-    success (whose answer is an output of the simulation)."""
-    if on_error is None:
-        return None
-
-    def done(result: Any, error: BaseException | None) -> None:
-        if error is not None:
-            on_error(error)
-
-    return done
 
 
 Position = tuple[str, tuple[float, float, float], bool]
@@ -127,6 +114,12 @@ class SimFacade:
         """The kinds of DRIVE part (:mod:`usarsim.controls`) the robot's drive applies."""
         return drive_class(robot).ACCEPTS
 
+    @staticmethod
+    def package_frames(robot: RobotConfig, package) -> tuple[LinkFrame, ...]:
+        """What GETGEO {Type MisPkg} and {Type Actuator} report of each link of a mission
+        package (:func:`usarsim.sim.outputs.package_frames`)."""
+        return package_frames(robot, package)
+
     def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
         """What GETGEO and GETCONF {Type Robot} report of the robot (its drive model's numbers)."""
         return drive_class(robot).numbers(robot)
@@ -167,27 +160,29 @@ class SimFacade:
         """Joint orders (MULTIDRIVE, MISPKG, SET Joint, CAMERA), applied together."""
         self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders), concurrent=True))
 
-    def operate(self, uid: int, item_type, name, opcode, params,
-                on_error: Callable[[BaseException], None] | None = None) -> None:
-        """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF);
-        ``on_error(error)`` when it was not carried out (the simulation has stopped, or the
-        operation failed on an unexpected error)."""
+    def operate(self, uid: int, item_type, name, opcode, params, on_done: Done | None = None) -> None:
+        """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF),
+        handed to the server before ``on_done(result, error)``; ``error`` when it was not
+        carried out (the simulation has stopped, or the operation failed on an unexpected
+        error).  In lock-step it is carried out at once, at
+        the current simulated time, as INIT and REPORT are: a request with a reply is answered
+        without a STEP (a PING after it is answered after its RES), and what it changes acts
+        from the next STEP on, as a DRIVE's speeds do."""
         self.runner.submit(Request(lambda sim: sim.operate(uid, item_type, name, opcode, params),
-                                   on_done=_errors_only(on_error)))
+                                   immediate=True, on_done=on_done))
 
     def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
         """SET {Type Viewports}: ``on_done((time, [(camera, status), ...]), error)``."""
         self.runner.submit(Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)),
                                    immediate=True, on_done=on_done))
 
-    def report_victim(self, uid: int, name: str, location,
-                      on_error: Callable[[BaseException], None] | None = None) -> None:
+    def report_victim(self, uid: int, name: str, location, on_done: Done | None = None) -> None:
         """``REPORT {Type Victim}``: recorded at the simulated instant it is carried out, as a
-        RES output for the robot's client (observers such as the score see it too);
-        ``on_error(error)`` when it was not (the simulation has stopped)."""
+        RES output for the robot's client (observers such as the score see it too), handed to
+        the server before ``on_done(result, error)``; ``error`` when it was not (the
+        simulation has stopped)."""
         result = CommandResult("Victim", name, True, (("Location", tuple(float(v) for v in location)),))
-        self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True,
-                                   on_done=_errors_only(on_error)))
+        self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True, on_done=on_done))
 
     def step(self, seconds: float, on_done: Callable[[float], None],
              on_refused: Callable[[BaseException], None] | None = None) -> None:

@@ -8,8 +8,10 @@ Modes (``--speed``/``--lockstep``):
   runs as fast as it can;
 * lock-step: the world stands still until a STEP request; then exactly that much
   simulated time is run, every output due in it is delivered, and the STEP's
-  ``on_done`` callback is called.  Spawns and removals happen at once; every other
-  request waits for the start of the next STEP, in arrival order.
+  ``on_done`` callback is called.  Spawns, removals, queries and the requests a client
+  waits for a reply to (a SET on an item, a REPORT) happen at once, at the current simulated
+  time; the commands without a reply (DRIVE, joint orders) wait for the start of the next
+  STEP, in arrival order.
 
 In lock-step a short STEP asked for while the simulation thread has nothing to do runs at
 once on the thread that asked (the server's event loop), and the requests that wait for the
@@ -255,6 +257,10 @@ class SimulationRunner:
         if not req.concurrent:  # it may have changed the model (a spawn, a removal)
             self._interpreter.after_change(self.sim)
         if req.on_done is not None:
+            if req.immediate and not req.concurrent:
+                # what it output (a RES) reaches the server before its on_done: a connection
+                # that waits for its answer to go on reads its lines in order
+                self._flush()
             req.on_done(result, error)
 
     @staticmethod

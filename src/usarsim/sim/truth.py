@@ -13,7 +13,8 @@ if TYPE_CHECKING:
 
 def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None = None) -> list[tuple]:
     """Everything the ground-truth service knows, now: (name, class, time, location,
-    rotation) of every robot (its class and INIT name), victim (``Victim``), RFID tag
+    rotation) of every robot (its class and INIT name; the class ``Robot`` asks for every
+    robot), victim (``Victim``), RFID tag
     (``RFIDTag``, named by its id), false alarm (``FalseAlarm``) and movable object
     (``MovableObject``); world frame, rotations in [0, 2 pi).  Filtered by class and
     name (any case) when given."""
@@ -35,8 +36,10 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
             b = m.body(f"movable/{o.name}").id
             rows.append((o.name, "MovableObject", frames.from_mj_vec(d.xpos[b]),
                          frames.mj_mat_to_usar_euler(d.xmat[b])))
+    robots = len(sim.robots)  # the first rows: ``{Class Robot}`` asks for every one of them
     out = []
-    for n, c, loc, rot in rows:
-        if (class_name is None or c.lower() == class_name.lower()) and (name is None or n.lower() == name.lower()):
+    for i, (n, c, loc, rot) in enumerate(rows):
+        if (class_name is None or c.lower() == class_name.lower() or (i < robots and class_name.lower() == "robot")) \
+                and (name is None or n.lower() == name.lower()):
             out.append((n, c, now, tuple(float(x) for x in loc), tuple(frames.wrap_2pi(float(a)) for a in rot)))
     return out
