@@ -236,6 +236,59 @@ def test_lane_markings_are_found_down_the_road():
     assert np.ptp(xs) > WIDTH / 6 and np.ptp(wx) > WIDTH / 6  # lines running into the distance
 
 
+# The paint of the markings and the asphalt (textures.YELLOW, WHITE; the road world's asphalt
+# material), RGB 0..1: both lie flat under the same light, so the asphalt's brightness in a
+# picture tells how bright the paint must be.
+YELLOW_PAINT, WHITE_PAINT, ASPHALT = (0.95, 0.75, 0.10), (0.93, 0.93, 0.90), (0.22, 0.22, 0.24)
+
+
+def test_lane_markings_keep_their_paint_far_down_the_road():
+    """A P2AT's camera, 0.3 m above the road, looks down its lane at a grazing angle: out to the
+    far end of the block the double yellow centre line (left) and the white edge line (right)
+    keep the colour of their paint (painted into the road's texture, the renderer's mipmaps
+    would smear them across the asphalt into faint streaks)."""
+    from usarsim.config.catalog import resolve_world
+
+    world = resolve_world("DM-Road_UrbanChallenge")
+    pose = world.start_pose("PlayerStart1")
+    cam = Camera(world, [(pose.location, pose.rotation)])
+    try:
+        p = cam.picture(1).astype(float)
+    finally:
+        cam.close()
+    asphalt = np.median(p[HEIGHT // 2 + 8:, WIDTH // 3:2 * WIDTH // 3].mean(axis=2))
+    light = asphalt / (255.0 * np.mean(ASPHALT))
+    yellow = 255.0 * light * (YELLOW_PAINT[0] - YELLOW_PAINT[2])  # its red over its blue
+    white = 255.0 * light * np.mean(WHITE_PAINT)
+    # the far stretch: rows 3 to 31 below the horizon, the road from about 60 m to 4 m ahead
+    rows = range(HEIGHT // 2 + 3, HEIGHT // 2 + 32)
+    yellow_kept = np.median([(p[r, :WIDTH // 2, 0] - p[r, :WIDTH // 2, 2]).max() / yellow for r in rows])
+    white_kept = np.median([(p[r, WIDTH // 2 + 10:].mean(axis=1).max() - asphalt) / (white - asphalt) for r in rows])
+    assert yellow_kept > 0.75, (yellow_kept, yellow)
+    assert white_kept > 0.75, (white_kept, white)
+
+
+def test_road_paint_is_for_cameras_only():
+    """The markings lie on the road as thin boxes that nothing collides with and no range
+    sensor sees; on every street, one stop line before each crossing on each side."""
+    import mujoco
+
+    from usarsim.config.catalog import resolve_world
+    from usarsim.sim.constants import RAY_GROUPS
+    from usarsim.sim.simulation import Simulation
+
+    sim = Simulation(resolve_world("DM-Road_UrbanChallenge"), seed=1)
+    m = sim.model
+    paint = [g for g in range(m.ngeom) if m.geom(g).name.startswith("paint/")]
+    assert paint
+    for g in paint:
+        assert m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0
+        assert RAY_GROUPS[m.geom_group[g]] == 0
+        assert m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX and m.geom_size[g][2] < 0.001
+    stops = [g for g in paint if 0.2 < 2 * min(m.geom_size[g][:2]) < 0.5]  # 0.45 m across the lane
+    assert len(stops) == 8 * 3 * 2  # eight streets of three blocks, both ways
+
+
 def test_the_texture_names_of_world_files_are_the_textures_drawn():
     from usarsim.config.world import TEXTURE_NAMES
     from usarsim.sim.textures import TEXTURES, texture_image

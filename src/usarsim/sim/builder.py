@@ -14,7 +14,7 @@ from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.sensors.camera import CAMERAS
 from usarsim.sensors.touch import PROBE_MARGIN_M, PROBE_RADIUS_M, probe_name
-from usarsim.sim import frames, textures
+from usarsim.sim import frames, markings, textures
 from usarsim.sim.constants import (
     GROUP_MOVABLE,
     GROUP_ROBOT,
@@ -120,6 +120,8 @@ def _dress(spec: mujoco.MjSpec, g, mat, box_size=None) -> None:
         m.shininess = 0.2
     g.material = mat_name
     g.rgba = [1.0, 1.0, 1.0, float(mat.rgba[3])]
+    if texture == "road":  # its markings, laid on it (textures.road_markings)
+        markings.add_road_markings(spec, g, along_x, kind.specular)
 
 
 def world_spec(world: WorldConfig) -> mujoco.MjSpec:

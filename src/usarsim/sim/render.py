@@ -35,6 +35,7 @@ import numpy as np
 from usarsim.sim.builder import MAX_PICTURE_HEIGHT as MAX_HEIGHT
 from usarsim.sim.builder import MAX_PICTURE_WIDTH as MAX_WIDTH
 from usarsim.sim.builder import camera_fovy_deg
+from usarsim.sim.underwater import Water, through_water, water_of
 
 log = logging.getLogger("usarsim.render")
 
@@ -178,6 +179,7 @@ class RenderService:
         self._lock = threading.Lock()
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._model: mujoco.MjModel | None = None
+        self._water: Water | None = None  # the model's water volumes, found once per model
         self._snapshot: Snapshot | None = None
         self._next_frame = 0.0
         self.frames = 0
@@ -283,6 +285,7 @@ class RenderService:
                 r.close()
             self._renderers.clear()
             self._model = model
+            self._water = None
         r = self._renderers.pop((width, height), None)
         if r is None:
             while len(self._renderers) >= MAX_RENDERERS:  # the least recently used goes
@@ -320,7 +323,7 @@ class RenderService:
             model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, width, height)
             r = self._renderer(model, width, height)
             r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
-            return r.render()
+            return self._shoot(r, snap)
         # a panorama: four quarter views, each turned about the camera's own up axis
         edges = [round(k * width / 4) for k in range(5)]
         base = data.cam_xmat[cam.cam_id].reshape(3, 3).copy()
@@ -335,11 +338,23 @@ class RenderService:
                 model.cam_fovy[cam.cam_id] = camera_fovy_deg(math.pi / 2, w, height)
                 r = self._renderer(model, w, height)
                 r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
-                out[:, edges[k]:edges[k + 1]] = r.render()
+                out[:, edges[k]:edges[k + 1]] = self._shoot(r, snap)
         finally:
             data.cam_xmat[cam.cam_id] = base.ravel()
         return out
 
+    def _shoot(self, r: mujoco.Renderer, snap: Snapshot) -> np.ndarray:
+        """The picture of ``r``'s scene (its camera placed by ``update_scene``): as MuJoCo
+        renders it, or, from a camera under water, rendered with its depth and seen through the
+        water (:mod:`usarsim.sim.underwater`)."""
+        if self._water is None:
+            self._water = water_of(snap.model, snap.data)
+        glcam = r.scene.camera[0]
+        box = self._water.around(glcam.pos) if self._water.boxes else None
+        if box is None:
+            return r.render()
+        rgb, depth = render_with_depth(r)
+        return through_water(rgb, depth, glcam, box, self._water.colour)
 
     def _free(self, snap: Snapshot, v: FreeView) -> tuple[np.ndarray, dict]:
         if not (1 <= v.width <= MAX_WIDTH and 1 <= v.height <= MAX_HEIGHT):
@@ -361,10 +376,26 @@ class RenderService:
         cam.distance = v.distance
         r = self._renderer(model, v.width, v.height)
         r.update_scene(data, camera=cam, scene_option=SEEN)
-        picture = r.render()
+        picture = self._shoot(r, snap)
         return picture, {"lookat": [round(float(c), 4) for c in lookat], "azimuth": v.azimuth,
                          "elevation": v.elevation, "distance": v.distance,
                          "fovy": float(model.vis.global_.fovy), "time": round(snap.time, 4), "follow": followed}
+
+
+def render_with_depth(r: mujoco.Renderer) -> tuple[np.ndarray, np.ndarray]:
+    """One rendering of ``r``'s scene read back twice: the RGB picture (as ``r.render()``
+    makes it) and the raw depth buffer (reverse Z), rows top to bottom."""
+    h, w = r.height, r.width
+    rgb = np.empty((h, w, 3), dtype=np.uint8)
+    depth = np.empty((h, w), dtype=np.float32)
+    gl = r._gl_context
+    if gl is not None:
+        gl.make_current()
+    mujoco.mjr_render(r._rect, r.scene, r._mjr_context)
+    mujoco.mjr_readPixels(rgb, depth, r._rect, r._mjr_context)
+    if gl is None:  # a renderer without an OpenGL context of its own reads rows top down
+        return rgb, depth
+    return np.flipud(rgb), np.flipud(depth)
 
 
 def grid_tiles(cameras, count: int, wide_mode: int, tile_w: int, tile_h: int) -> tuple[list[Tile], int, int]:

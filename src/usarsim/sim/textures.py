@@ -3,7 +3,7 @@
 Every texture is an RGB image made with NumPy from a seeded generator, so that the same name
 and colour always give the same pixels.  A texture is made around its material's colour (the
 ``rgba`` of the world file): the image's average colour is close to it, the texture adds the
-pattern (the strands of a board, the joints of a brick wall, the markings of a road), so
+pattern (the strands of a board, the joints of a brick wall, the grain of asphalt), so
 that the top-down map and the recording, which show the material's colour, still agree with
 the cameras.  Images are made at first use and kept on disk under the user's cache folder
 (``$XDG_CACHE_HOME/usarsim/textures``, by default ``~/.cache/usarsim/textures``); a folder
@@ -12,7 +12,8 @@ that cannot be written only means that they are made again next time.
 Each texture has a natural tile size (metres along the image's width and height): one image
 covers that much of a surface unless the material gives its own ``texture_scale`` (tiles per
 metre).  A *fitted* texture (``road``) is laid along the longer side of a box, once across
-its width and at its natural length along it.
+its width and at its natural length along it.  A road's markings are not in its texture: they
+are laid on the road as thin shapes (:func:`road_markings`, ``usarsim.sim.markings``).
 
 Sizes of building materials are nominal trade sizes: 4 ft x 8 ft (1.22 x 2.44 m) sheets of
 plywood and OSB (APA, "Engineered Wood Construction Guide", 2019); a concrete masonry unit's
@@ -25,6 +26,7 @@ centre line of two yellow lines, stop lines 12-24 in (0.30-0.61 m) wide (section
 from __future__ import annotations
 
 import logging
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,7 +37,7 @@ import numpy as np
 log = logging.getLogger("usarsim.textures")
 
 # Bumped whenever a generator changes, so that cached images of an older look are not reused.
-VERSION = 1
+VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -264,34 +266,61 @@ WHITE = np.array([0.93, 0.93, 0.90])
 
 
 def _road(rng, base):
-    """One block of a two-way street, along the image's width: the crossing (the first
-    12.192 m), then the block; across the image's height from the left kerb of the way the
-    image runs (row 0) to the right kerb.  A double yellow centre line, white lines between
-    the travel lanes and the parking strips, and a stop line across each approach lane."""
-    w, h = 2048, 304
-    px_u, px_v = w / ROAD_BLOCK_M, h / ROAD_WIDTH_M
-    img = _asphalt_strip(rng, base, h, w)
-    u = np.arange(w) / px_u  # metres along the block
-    v = np.arange(h) / px_v  # metres from the left kerb
-    block = u >= ROAD_WIDTH_M  # outside the crossing
-    centre = ROAD_WIDTH_M / 2
-    edge = centre - ROAD_LANE_M, centre + ROAD_LANE_M
-    for off in (-0.15, 0.15):  # the double centre line: two 0.12 m lines 0.18 m apart
-        rows = np.abs(v - (centre + off)) < 0.06
-        img[np.ix_(rows, block)] = YELLOW
-    for e in edge:
-        rows = np.abs(v - e) < 0.06
-        img[np.ix_(rows, block)] = WHITE
-    crossing = ROAD_WIDTH_M / 2  # the crossing's centre line, along the block
-    # the way the image runs (increasing u) keeps to the right: rows beyond the centre; it
-    # stops before the next crossing (at ROAD_BLOCK_M + crossing); the other way stops after
-    # this one's crossing, on the rows before the centre
-    for along, lanes in ((ROAD_BLOCK_M + crossing - ROAD_STOP_M, (centre + 0.25, edge[1])),
-                         (crossing + ROAD_STOP_M, (edge[0], centre - 0.25))):
-        cols = np.abs(u - along) < 0.225  # 0.45 m wide (18 in)
-        rows = (v >= lanes[0]) & (v <= lanes[1])
-        img[np.ix_(rows, cols)] = WHITE
-    return img
+    """One block of a street's asphalt (its markings are not painted into the texture: see
+    :func:`road_markings`)."""
+    return _asphalt_strip(rng, base, 304, 2048)
+
+
+@dataclass(frozen=True)
+class Marking:
+    """A painted rectangle on a road: from ``start`` to ``end`` metres along the way the road
+    runs, from ``left`` to ``right`` metres across it (from its centre line, positive on the
+    right of the way it runs), of colour ``rgb``."""
+
+    start: float
+    end: float
+    left: float
+    right: float
+    rgb: tuple[float, float, float]
+
+
+def road_markings(length_m: float) -> list[Marking]:
+    """The markings of a street ``length_m`` long that begins and ends at a crossing, block by
+    block of ROAD_BLOCK_M (the last one cut at the street's end): each block is a crossing
+    (its first 12.192 m), then a double yellow centre line, white lines between the travel
+    lanes and the parking strips, and a stop line across each approach lane, 7.5 m before
+    the crossing street's centre line (right-hand traffic: each way stops on its own lane, on
+    the right).
+
+    The markings are laid on the road as thin shapes rather than painted into its texture: far
+    ahead of a camera near the ground the road is seen at a grazing angle, where a texel along
+    the road shrinks on the picture many times more than one across it; the renderer picks the
+    texture's mipmap from the larger shrinking (OpenGL 4.6 core profile, sec. 8.14.1; the
+    anisotropic filtering that would not is thirty to forty times slower on a software
+    renderer), so lines painted into the texture would be averaged across as much as along and
+    smeared into streaks a few tens of metres ahead.  Shapes are drawn at their true size at any distance and
+    smoothed at their edges by the renderer's multisampling."""
+    out: list[Marking] = []
+    lane = ROAD_LANE_M
+    half = 0.06  # the lines are 0.12 m wide
+    blocks = max(0, math.ceil((length_m - ROAD_WIDTH_M) / ROAD_BLOCK_M))
+    for b in range(blocks):
+        start = b * ROAD_BLOCK_M
+        here, ahead = start + ROAD_WIDTH_M / 2, start + ROAD_BLOCK_M + ROAD_WIDTH_M / 2  # crossing centres
+        lines = (start + ROAD_WIDTH_M, start + ROAD_BLOCK_M)
+        for off in (-0.15, 0.15):  # the double centre line: two 0.12 m lines 0.18 m apart
+            out.append(Marking(*lines, off - half, off + half, tuple(YELLOW)))
+        for e in (-lane, lane):
+            out.append(Marking(*lines, e - half, e + half, tuple(WHITE)))
+        # a stop line 0.45 m wide (18 in) across each approach lane: the way the road runs
+        # stops before the crossing ahead, the other way after this one's crossing
+        out.append(Marking(ahead - ROAD_STOP_M - 0.225, ahead - ROAD_STOP_M + 0.225, 0.25, lane, tuple(WHITE)))
+        out.append(Marking(here + ROAD_STOP_M - 0.225, here + ROAD_STOP_M + 0.225, -lane, -0.25, tuple(WHITE)))
+    cut = []
+    for mk in out:
+        if mk.start < length_m:
+            cut.append(Marking(mk.start, min(mk.end, length_m), mk.left, mk.right, mk.rgb))
+    return cut
 
 
 def _asphalt_strip(rng, base, h, w):
