@@ -405,6 +405,49 @@ def test_reversedns_names_the_caller_at_once_after_accept(radio, sockets):
         cb.close()
 
 
+def read_to_eof(sock: socket.socket) -> bytes:
+    """Everything received until the peer closes the connection."""
+    data = b""
+    while True:
+        try:
+            chunk = sock.recv(65536)
+        except (ConnectionResetError, BrokenPipeError):
+            return data
+        if not chunk:
+            return data
+        data += chunk
+
+
+@pytest.mark.parametrize("leaving", [("A0",), ("A0", "B0")], ids=["sender-leaves", "both-leave"])
+def test_a_relay_delivers_what_it_accepted_when_the_robots_leave_at_once(radio, sockets, leaving):
+    """A robot sends on its relay connection, closes it and closes its WSS control connection
+    at once (it leaves): the destination still gets every byte, then the end of the
+    connection.  The reference WSS took only the registration away when a robot left, and
+    its relay read the sender to the end before closing the other side (protocol.md 12.2)."""
+    wss = radio.app.wireless.wss
+    la, lb = sockets(listener(), listener())
+    for attempt in range(10):
+        ca, cb, relay = wss_dns(radio, "A0", "B0", la, lb)
+        control = {"A0": ca, "B0": cb}
+        message = f"attempt {attempt}: ".encode() + os.urandom(100_000)
+        a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
+        a.sendall(message)
+        a.close()
+        for name in leaving:
+            control[name].close()
+        b, _ = lb.accept()
+        try:
+            b.settimeout(DEFAULT_TIMEOUT)
+            got = read_to_eof(b)
+        finally:
+            b.close()
+            ca.close()
+            cb.close()
+        assert got == message, (attempt, len(got), len(message))
+    # the relays have ended: nothing is left of the robots that left
+    wait_for(lambda: radio.on_loop(lambda: not wss.retired and not wss.outgoing), what="the relays to end")
+
+
 def test_wss_init_accepts_port_0_as_no_listening_port(radio, sockets):
     """``INIT {Robot r} {Port 0,...}`` is accepted, as by the reference WSS, which reads the
     list as unsigned integers (protocol.md 12.2).  0 is no port a robot listens on: DNS

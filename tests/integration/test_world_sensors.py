@@ -16,6 +16,7 @@ import pytest
 from helpers import drive_skid, segments
 from usarsim.config.robot import load_robot
 from usarsim.config.world import load_world
+from usarsim.errors import ConfigError
 from usarsim.readings import RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading
 from usarsim.sim.simulation import Simulation
 
@@ -297,6 +298,39 @@ def test_rfid_occlusion_and_signal_modes(world, tmp_path):
     assert {t.tag_id for t in weak.tags} == {11137, 11139}
 
 
+def test_rfid_conf_names_each_readers_sensing_mode(server_factory, world, tmp_path):
+    """GETCONF {Type RFID} lists each reader's SensingMode by the names of the UT2004 RFID
+    sensor's setting (manual 10.9.3: Radius, Obstacle, Attenuation); the robot file gives the
+    mode as its number or its name, and the reader senses as its CONF says."""
+    robots = tmp_path / "robots"
+    robots.mkdir()
+    probe_robot(robots, RFID.format(extra=", SensingMode: obstacle")
+                + "  - {type: RFID, name: Far, location: [0.0, 0.0, 0.0], MaxRange: 5.0, SensingMode: 2}\n",
+                name="Readers")
+    srv = server_factory(world=world, seed=4, robot_dirs=(str(robots),))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.Readers} {Start Tags}")
+    c.step(1.0)
+    assert c.ask("GETCONF {Type RFID}", "CONF").text == (
+        "CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000} {SensingMode Obstacle}"
+        " {Name Far} {ScanInterval 0.2000} {MaxRange 5.0000} {SensingMode Attenuation}")
+    assert c.ask("GETCONF {Type RFID} {Name Far}", "CONF").text == (
+        "CONF {Type RFID} {Name Far} {ScanInterval 0.2000} {MaxRange 5.0000} {SensingMode Attenuation}")
+    # "obstacle" is mode 1: 11139, behind the wall, is not sensed (test_rfid_occlusion_and_signal_modes)
+    sen = next(ln for ln in c.step(0.4) if ln.text.startswith("SEN") and "{Name RFID}" in ln.text)
+    assert "{ID 11137} " in sen.text and "{ID 11139}" not in sen.text, sen.text
+
+
+def test_an_unknown_rfid_sensing_mode_is_refused_with_the_names(tmp_path):
+    from usarsim.sensors import make_item
+
+    for bad in ("Sonar", "3", "true", "1.0"):
+        robot = probe_robot(tmp_path, RFID.format(extra=f", SensingMode: {bad}"))
+        with pytest.raises(ConfigError, match=r"0 \(Radius\), 1 \(Obstacle\) or 2 \(Attenuation\)"):
+            make_item(robot.items[0], robot, 0, "R1")
+
+
 def test_a_tag_written_by_one_robot_is_read_back_by_another(server_factory, world):
     srv = server_factory(world=world, seed=2)
     a, b = srv.connect(), srv.connect()
@@ -540,7 +574,7 @@ CONF_LINES = (  # protocol.md 6.7: all items of a type in one line, repeated-key
     'CONF {Type INU} {Name INU} {ScanInterval 0.1000}',
     'CONF {Type Touch} {Name Bumper} {ScanInterval 0.1000}',
     'CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}',
-    'CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000}',
+    'CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000} {SensingMode Radius}',
     'CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}',
     'CONF {Type Sound} {Name Mic} {ScanInterval 0.1000}',
     'CONF {Type HumanMotion} {Name HM} {ScanInterval 0.1000}',

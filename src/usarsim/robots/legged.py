@@ -62,12 +62,16 @@ class Legged(DriveModel):
         super().__init__(robot)
         self.walk = {"linear": 0.0, "lateral": 0.0, "rotational": 0.0}
         self.sides = [0.0, 0.0]  # the last {Left} {Right}, rad/s (or percent)
-        # the gait's clock; how far it has set off (0 standing, 1 walking; it fades in and
-        # out over half a period); the velocities it walks at (they follow the command
-        # within half a period); each foot's place (forward, right, yaw) from under its hip
-        # and where its swing began; the time the gait was last set
+        # the gait's clock; how far it has set off (0 standing, 1 walking; it fades in over
+        # ``gait_rise`` seconds and out over half a period); whether its speed follows the
+        # command before that (a gait that starts on all its feet); the velocities it walks
+        # at (they follow the command within half a period); each foot's place (forward,
+        # right, yaw) from under its hip and where its swing began; the time the gait was
+        # last set
         self.gait_clock = 0.0
         self.gait_amp = 0.0
+        self.gait_rise = 0.0
+        self.gait_walks_at_once = False
         self.gait_vel: tuple = (0.0, 0.0, 0.0)
         self.gait_last = 0.0
         self.feet: list = []
@@ -105,8 +109,12 @@ class Legged(DriveModel):
         a trot for four legs at duty 0.5 (diagonal legs together), a walk for two legs
         above it, with both feet down at the start and end of every step while the body
         sways over the foot that will stand alone.  Hip yaw joints turn the feet with the
-        ground, ankles keep the soles flat.  The gait sets off (swaying first) and comes to
-        rest over half a period each; the walking speed follows the command within half a
+        ground, ankles keep the soles flat.  The walking speed follows the command within
+        half a period.  Setting off from rest, a gait whose feet all stand at its start (duty
+        above 0.5: a biped's double support) sways over its first standing foot while the
+        other is still down, (duty - 0.5) / 2 of a period, lifts that one with a full step
+        and speeds up from the first instant; a gait that lifts feet at once (a trot) fades
+        its steps in over half a period before it speeds up.  It comes to rest over half a
         period.  At rest its feet are back under its hips and its joints are left to joint
         commands."""
         g = self.robot.gait
@@ -119,24 +127,30 @@ class Legged(DriveModel):
         n = len(g.legs)
         dt = max(0.0, sim.time - self.gait_last)
         self.gait_last = sim.time
+        half = 0.5 * g.period_s
         if self.gait_amp <= 0.0:  # setting off: both feet down, the body between them
             self.gait_clock = (g.duty - 0.5) / 2.0 * g.period_s
             self.gait_amp, dt = 1e-9, 0.0
             self.gait_vel = (0.0, 0.0, 0.0)
             self.feet = [[0.0, 0.0, 0.0] for _ in range(n)]
             self.swing_from = [None] * n
+            # every foot stands until the first lifts, (duty - 0.5) / 2 of a period from
+            # now: the sway is built by then, and the first step is a whole one; a trot
+            # lifts feet at once and fades its steps in over half a period
+            self.gait_walks_at_once = g.duty > 0.5
+            self.gait_rise = self.gait_clock if self.gait_walks_at_once else half
         else:
             self.gait_clock += dt
-        half = 0.5 * g.period_s
         tops = (g.max_linear_m_s, g.max_lateral_m_s, g.max_yaw_rate_rad_s)
-        if self.gait_amp >= 1.0:  # under way: the walking speed follows the command
+        if self.gait_amp >= 1.0 or self.gait_walks_at_once:  # the speed follows the command
             self.gait_vel = tuple(cur + max(-top * dt / half, min(top * dt / half, c - cur))
                                   for cur, c, top in zip(self.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops))
         at_rest = not any(self.gait_vel) and all(abs(x) < 1e-4 for f in self.feet for x in f)
-        if moving:
-            self.gait_amp = min(1.0, self.gait_amp + dt / half)
-        elif at_rest:
+        if moving or not at_rest:  # (stopped while setting off, it still steps its feet back under it)
+            self.gait_amp = min(1.0, self.gait_amp + dt / self.gait_rise)
+        else:  # coming to rest over half a period; a command meanwhile fades it in over as long
             self.gait_amp = max(0.0, self.gait_amp - dt / half)
+            self.gait_rise, self.gait_walks_at_once = half, False
         # the feet: standing ones stay on the ground as the body moves, swinging ones go
         # to where they will stand
         stance_t = g.duty * g.period_s

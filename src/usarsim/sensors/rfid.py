@@ -5,11 +5,14 @@ Tags are world entities (the world file's ``rfid_tags``, plus the ones robots dr
 each with an integer id and a memory that any robot's reader can read and write: the
 tag keeps what was written, for everyone.
 
-The reader's three sensing modes, after the UT2004 RFID sensor (manual 10.9.3):
+The reader's three sensing modes, after the UT2004 RFID sensor's ``SensingMode`` setting
+(manual 10.9.3, "Choosing the right SensingMode"), whose values are named ``Radius``,
+``Obstacle`` and ``Attenuation``; the robot file gives the number or the name, and GETCONF
+reports the name:
 
-* 0, radius: every tag within MaxRange is detected, walls or not;
-* 1, radius with occlusion: ... and no wall stands on the straight line to it;
-* 2, signal strength: the tag's signal at the reader, P(d) = P(1 m) - 10 n log10(d) -
+* 0, ``Radius``: every tag within MaxRange is detected, walls or not;
+* 1, ``Obstacle``: ... and no wall stands on the straight line to it;
+* 2, ``Attenuation``: the tag's signal at the reader, P(d) = P(1 m) - 10 n log10(d) -
   ObstacleLoss x (walls crossed), must reach the Threshold (and d <= MaxRange).
 
 Walls are the static solids of the world, counted as the wireless simulation counts them
@@ -31,13 +34,17 @@ from usarsim.sim import frames
 if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
 
+SENSING_MODES = ("Radius", "Obstacle", "Attenuation")
+"""The names of sensing modes 0, 1 and 2: the values of the UT2004 RFID sensor's SensingMode
+(manual 10.9.3)."""
+
 
 @dataclass(frozen=True, kw_only=True)
 class RfidConfig(SensorConfig):
     # The reader's range was not recovered from any USARSim source (protocol.md 7.10:
     # "a few metres"); 3 m is an estimate for a passive UHF tag reader.
     max_range_m: float = 3.0
-    sensing_mode: int = 0
+    sensing_mode: int | str = 0  # 0, 1, 2 or its name (SENSING_MODES); a number once made
     # Signal-strength mode (estimates, no USARSim figures survive): -40 dBm at 1 m,
     # free-space exponent 2, 10 dB per wall, detection down to -75 dBm.
     signal_at_1m_dbm: float = -40.0
@@ -50,9 +57,14 @@ class RfidConfig(SensorConfig):
         super().__post_init__()
         if self.max_range_m <= 0:
             raise ValueError(f"max_range_m must be > 0, got {self.max_range_m}")
-        if self.sensing_mode not in (0, 1, 2):
-            raise ValueError(f"sensing_mode must be 0 (radius), 1 (radius with occlusion) or 2 (signal strength), "
-                             f"got {self.sensing_mode}")
+        mode = self.sensing_mode
+        if isinstance(mode, str):
+            names = {n.lower(): i for i, n in enumerate(SENSING_MODES)}
+            mode = names.get(mode.strip().lower(), mode)
+        if isinstance(mode, bool) or not isinstance(mode, int) or mode not in (0, 1, 2):
+            raise ValueError(f"sensing_mode must be 0 (Radius), 1 (Obstacle) or 2 (Attenuation), "
+                             f"got {self.sensing_mode!r}")
+        object.__setattr__(self, "sensing_mode", mode)
 
 
 def _tag_and_data(text: str | None) -> tuple[int | None, str]:
@@ -135,4 +147,6 @@ class RFID(Sensor):
         return OperationResult(ok=True)
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
-        return (("ScanInterval", self.config.scan_interval_s), ("MaxRange", self.config.max_range_m))
+        c = self.config
+        return (("ScanInterval", c.scan_interval_s), ("MaxRange", c.max_range_m),
+                ("SensingMode", SENSING_MODES[c.sensing_mode]))

@@ -1,7 +1,12 @@
 """The Wireless Simulation Server (WSS, TCP 50000, ``--wss-port``; protocol.md 12.2), the
 RoboCup one: robots INIT with the ports they listen on, ask GETSS, DNS and REVERSEDNS, and
 connect to a relay port per ordered robot pair that copies bytes both ways while the radio
-link holds and refuses connections while it is down (under the same number).
+link holds and refuses connections while it is down (under the same number).  A relay
+delivers what it accepted: the bytes read from one socket before it closed are written to the
+other before that one is closed, and a robot that leaves (its control connection closes) stops
+its relay ports from listening but leaves the relays already connected running, as the
+reference WSS of protocol.md 12.2 did: a robot leaving took only its registration away, and a
+relay read its sockets until one closed, writing each read to the other before closing both.
 
 asyncio glue only: lines (:class:`~usarsim.protocol.framing.LineBuffer`) -> requests
 (:func:`~usarsim.protocol.wireless.parse_wss_request`) -> the registered robots, relay
@@ -180,16 +185,18 @@ class Pipe:
             self.out_sock = None
         for end in self.ends:
             if end.transport is not None:
-                end.transport.close()
-        self.port.pipes.discard(self)
+                end.transport.close()  # after writing what it still holds (asyncio's close)
         if self.port.server.outgoing.get(self.out_port) is self:
             del self.port.server.outgoing[self.out_port]
+        self.port.pipe_closed(self)
 
 
 class RelayPort:
     """The WSS's port for one ordered robot pair (and one listening port of the
     destination): it listens while the link holds and refuses connections otherwise,
-    always under the same number."""
+    always under the same number.  Once one of its robots has left it is retired: it no
+    longer listens, and its relays already connected run on until either end closes them or
+    the link goes down."""
 
     def __init__(self, server: WssServer, src: str, dst: str, dst_port: int):
         self.server = server
@@ -199,6 +206,7 @@ class RelayPort:
         self.up = False
         self.checked_at = 0.0
         self.pipes: set[Pipe] = set()
+        self.retired = False
         self._sock: socket.socket | None = None
         self._listening = False
 
@@ -225,6 +233,11 @@ class RelayPort:
         self.checked_at = at
         self.up = up
         loop = asyncio.get_running_loop()
+        if self.retired:  # listens no more; a link going down still ends its relays
+            if not up:
+                for pipe in list(self.pipes):
+                    pipe.close()
+            return
         if up and not self._listening:
             if self._sock is None:
                 try:
@@ -246,8 +259,11 @@ class RelayPort:
                 except OSError as exc:
                     log.warning("wss: relay port %d lost while the link is down: %s", self.number, exc)
 
-    def _accept(self) -> None:
-        for _ in range(16):
+    def _accept(self, most: int | None = 16) -> None:
+        """Take up to ``most`` connections waiting on the port (None: all of them)."""
+        taken = 0
+        while most is None or taken < most:
+            taken += 1
             try:
                 conn, addr = self._sock.accept()
             except (BlockingIOError, InterruptedError):
@@ -273,6 +289,23 @@ class RelayPort:
             self._sock.close()
         self._sock = None
         self._listening = False
+
+    def retire(self) -> None:
+        """One of the robots left: the connections that reached the port already are taken
+        (their bytes were accepted), then it stops listening; its relays run on."""
+        if self._listening:
+            self._accept(None)
+        self.retired = True
+        self._release()
+        if not self.pipes:
+            self.server.retired_port_done(self)
+        else:
+            self.server.retired.add(self)
+
+    def pipe_closed(self, pipe: Pipe) -> None:
+        self.pipes.discard(pipe)
+        if self.retired and not self.pipes:
+            self.server.retired_port_done(self)
 
     def close(self) -> None:
         for pipe in list(self.pipes):
@@ -353,22 +386,24 @@ class WssServer(WirelessServer):
         self.ports: dict[tuple[str, str, int], RelayPort] = {}
         self.by_number: dict[int, RelayPort] = {}
         self.outgoing: dict[int, Pipe] = {}  # the local port of the server's own end of each pipe -> the pipe
+        self.retired: set[RelayPort] = set()  # relay ports of robots that left, while relays run through them
         self.tasks: set[asyncio.Task] = set()  # pipes being connected
         service.subscribers.append(self._on_pair)
 
     async def stop(self) -> None:
         await super().stop()
-        for rp in list(self.ports.values()):
+        for rp in [*self.ports.values(), *self.retired]:
             rp.close()
         self.ports.clear()
         self.by_number.clear()
+        self.retired.clear()
         for task in list(self.tasks):
             task.cancel()
         if self.tasks:
             await asyncio.gather(*self.tasks, return_exceptions=True)
 
     def _on_pair(self, pair: Pair, up: bool, time: float) -> None:
-        for rp in list(self.ports.values()):
+        for rp in [*self.ports.values(), *self.retired]:
             if rp.pair == pair and time >= rp.checked_at and rp.up != up:
                 rp.set_up(up, time)
                 self.service.event("wss relay port %d (%s -> %s) %s", rp.number, rp.src, rp.dst,
@@ -455,13 +490,23 @@ class WssServer(WirelessServer):
         return None
 
     def unregister(self, robot: WssRobot) -> None:
+        """``robot``'s control connection closed: its name is free again and its relay ports
+        retire (their relays run on, as in the reference WSS, whose robot leaving took only
+        its registration away: protocol.md 12.2)."""
         if self.robots.get(robot.name) is not robot:
             return
+        gone = [(key, rp) for key, rp in self.ports.items() if robot.name in (rp.src, rp.dst)]
+        for _, rp in gone:  # while both robots are still registered
+            rp.retire()
         del self.robots[robot.name]
-        for key, rp in list(self.ports.items()):
-            if robot.name in (rp.src, rp.dst):
-                rp.close()
-                del self.ports[key]
-                self.by_number.pop(rp.number, None)
-                self.service.unwatch(rp.pair)
+        for key, rp in gone:
+            del self.ports[key]
+            self.by_number.pop(rp.number, None)
         self.service.event("wss: %s left", robot.name)
+
+    def retired_port_done(self, rp: RelayPort) -> None:
+        """A retired port has no relay left (none at all, or its last one closed): its pair
+        is no longer watched."""
+        if rp in self.retired or not rp.pipes:
+            self.retired.discard(rp)
+            self.service.unwatch(rp.pair)
