@@ -73,7 +73,7 @@ def path_length(points: list[tuple[float, float]]) -> float:
 def test_wander_drives_far_without_touching_a_wall(walls):
     with launch(world="DM-USAR_yellow", seed=1) as server, server.connect() as world:
         robot = world.spawn("P2AT", "W1", location=(0.8, -1.5, -0.25))  # the centre-south room
-        brain = Wander(robot, seed=3, origin=(0.8, -1.5, 0.0))
+        brain = Wander(robot, seed=1, origin=(0.8, -1.5, 0.0))
         world.step(0.2)
         trail, touches, clearance = [], 0, math.inf
 

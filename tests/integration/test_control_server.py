@@ -252,7 +252,8 @@ def test_range_scanner_conf_and_geo(robot):
 
 
 @pytest.mark.parametrize("query, reply", [
-    ("GETCONF {Type Odometry}", "CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099}"),
+    ("GETCONF {Type Odometry}",
+     "CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099} {TrackWidth 0.5520}"),
     ("GETCONF {Type GroundTruth}", "CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}"),
     ("GETCONF {Type INS}", "CONF {Type INS} {Name INS} {ScanInterval 0.2000}"),
     ("GETGEO {Type Odometry}",

@@ -565,7 +565,7 @@ CONF_LINES = (  # protocol.md 6.7: all items of a type in one line, repeated-key
     'CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} {Fov 3.1415} {Paning True} {Tilting False}',
     'CONF {Type IRScanner} {Name IRScanner1} {MaxRange 10.0000} {MinRange 0.1000} {Resolution 0.0870} {Fov 3.1400} {Paning True} {Tilting False}',
     'CONF {Type RangeScanner3D} {Name Scanner3D} {MaxRange 1000.0000} {MinRange 0.1000} {Resolution 0.0436,0.0436} {Fov 0.4363,1.0472} {Paning False} {Tilting True}',
-    'CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099}',
+    'CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099} {TrackWidth 0.4712}',
     'CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}',
     'CONF {Type Tachometer} {Name Tach} {ScanInterval 0.2000}',
     'CONF {Type GPS} {Name GPS} {ScanInterval 0.2000}',

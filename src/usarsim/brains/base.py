@@ -41,10 +41,10 @@ def inverse(a: tuple[float, float, float]) -> tuple[float, float, float]:
 @dataclass(frozen=True)
 class Body:
     """What a brain needs to know of its robot's build.  The defaults are a P2AT's (its
-    robot file, and docs/robot-files.md for the calibrated track width)."""
+    robot file, whose Odometry TrackWidth is the calibrated track width)."""
 
     wheel_radius: float = 0.13  # m
-    track_width: float = 0.554  # m: the effective track of a skid-steered robot (turns slip)
+    track_width: float = 0.552  # m: the effective track of a skid-steered robot (turns slip)
     max_wheel_speed: float = 5.385  # rad/s
     half_length: float = 0.262  # m: chassis origin to the front (and back) of the robot
     half_width: float = 0.249  # m: chassis origin to its side
@@ -126,14 +126,19 @@ class Brain:
         if pose is None:
             return
         driving = max(abs(self.command[0]), abs(self.command[1])) > 0.5 and not self._escape
+        # where it is by its INS when it has one: inertial, so it does not move on with wheels
+        # that spin (a robot hung up on a box the laser passes over, its odometry running on)
+        ins = self._ins()
+        if ins is not None:
+            pose = (ins.location[0], ins.location[1], ins.orientation[2])
         self._history.append((self.time, pose, driving))
         while self._history and self.time - self._history[0][0] > STALL_S + 0.5:
             self._history.pop(0)
 
     def stalled(self) -> bool:
         """True when the wheels have been driven for STALL_S seconds and the robot has
-        neither moved nor turned: it is pushing against something (a P2AT's motors stall
-        at a wall)."""
+        neither moved nor turned (by its INS, else its pose): it is pushing against something
+        (a P2AT's motors stall at a wall), or hung up on something with its wheels spinning."""
         recent = [h for h in self._history if self.time - h[0] <= STALL_S]
         if not recent or self.time - recent[0][0] < STALL_S - 0.15 or not all(h[2] for h in recent):
             return False
@@ -236,8 +241,12 @@ class Brain:
             return 0.0
         return max(abs(wrap(n - b)) for n, b in zip(now, self._level))
 
+    def _ins(self) -> Any:
+        """The INS's latest reading, or None."""
+        return next((r for r in self.robot.readings.values() if getattr(r, "sensor_type", None) == "INS"), None)
+
     def _ins_level(self) -> tuple[float, float] | None:
-        ins = next((r for r in self.robot.readings.values() if getattr(r, "sensor_type", None) == "INS"), None)
+        ins = self._ins()
         return None if ins is None else (wrap(ins.orientation[0]), wrap(ins.orientation[1]))
 
     def _follow_level(self, dt: float) -> None:

@@ -62,6 +62,10 @@ GIVE_UP_S = 12.0  # s without getting 0.3 m nearer the goal: put it aside
 ASIDE_S = 60.0  # ... for this long
 REACHED = 0.35  # m: a goal this near is reached
 NO_GOAL_S = 8.0  # s without a frontier it can reach (turning to look around): done
+# The front sonars (a P2AT's F3-F6, robot file) and how near they must see something the laser
+# does not for it to be a low obstacle in the way (m, from the sonars at the front edge)
+FRONT_SONARS = ("F3", "F4", "F5", "F6")
+LOW_OBSTACLE_M = 0.25
 MAX_TILT = math.radians(3.0)  # a sweep taken leaning more than this (on a ramp, a box) is not mapped
 PEER_RADIUS = 0.5  # m: beams ending this near a team-mate hit the team-mate
 
@@ -236,12 +240,14 @@ class FrontierExplorer(Brain):
         grid = self.fused()
         x, y, a = pose
         labels, _ = frontier_clusters(grid, self.min_frontier)
+        dist, parent = self.planner.search(grid, (x, y))
         candidates = (labels > 0) & self.region
         self._aside = [g for g in self._aside if g[2] > self.time]
         outside = 0.0
-        if not candidates.any() and np.count_nonzero(~grid.unknown & self.region) < 0.2 * np.count_nonzero(self.region):
-            # it has hardly seen the area yet (it starts far from it): make for the frontiers
-            # nearest to the area
+        if not (candidates & np.isfinite(dist)).any() and \
+                np.count_nonzero(~grid.unknown & self.region) < 0.2 * np.count_nonzero(self.region):
+            # it has hardly seen the area yet (it starts far from it) and can reach none of its
+            # frontiers: make for the frontiers nearest to the area
             candidates = labels > 0
             outside = 3.0
         ii, jj = np.nonzero(candidates)
@@ -249,7 +255,6 @@ class FrontierExplorer(Brain):
         if ii.size == 0:
             self.path, self.goal = [], None
             return
-        dist, parent = self.planner.search(grid, (x, y))
         d = dist[ii, jj]
         ok = np.isfinite(d)
         if not ok.any():
@@ -323,7 +328,18 @@ class FrontierExplorer(Brain):
         if scan is not None and v > 0:
             clr = self.clearance(scan)
             front = float(np.min(clr[np.abs(self.bearings(scan)) < math.radians(30.0)]))
-            if front < 0.15:
+            sonar = self.sonar()
+            low = min((sonar[n] for n in FRONT_SONARS if n in sonar), default=math.inf)
+            if low < LOW_OBSTACLE_M and front > low + 0.3:
+                # the front sonars see something the laser passes over (a low box): it goes
+                # into the map, and the path goes round it
+                _, _, a = pose
+                ahead = self.body.half_length + low + 0.05
+                self.own.mark_occupied(x + ahead * math.cos(a), y + ahead * math.sin(a), 0.15)
+                self._fused = False
+                self._last_plan = -math.inf
+                v = 0.0
+            elif front < 0.15:
                 v = 0.0
             elif front < 0.4:
                 v = min(v, 0.15)

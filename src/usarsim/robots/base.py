@@ -37,11 +37,14 @@ DRIVES = Registry("drive")
 class Treads:
     """How a robot's wheels meet the floor when it turns by skidding them sideways (tracks
     and the tyres of skid-steered robots): the tread's friction across its rolling direction
-    as a fraction of the friction along it, and the drivetrain's inertia reflected to the
-    wheel's rim, as a mass (kg: a wheel's rotor inertia is this times its radius squared)."""
+    as a fraction of the friction along it, the drivetrain's inertia reflected to the
+    wheel's rim, as a mass (kg: a wheel's rotor inertia is this times its radius squared),
+    and how the tread's contact with the floor gives (MuJoCo's solref: time constant in
+    seconds and damping ratio; MuJoCo's default is 0.02 s, critically damped)."""
 
     lateral_ratio: float
     drive_inertia_kg: float
+    solref: tuple[float, float] = (0.02, 1.0)
 
 
 class DriveModel:

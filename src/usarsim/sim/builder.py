@@ -613,6 +613,7 @@ def _add_tread(spec, wheel_body, w, robot, prefix: str, treads) -> None:
     p.geomname1 = "floor"
     p.geomname2 = g.name
     p.condim = 3
+    p.solref = list(treads.solref)
     # the capsule's contact frame: first tangent along its axis (across the tread)
     p.friction = [mu * treads.lateral_ratio, mu, SPIN_FRICTION, ROLL_FRICTION, ROLL_FRICTION]
 
