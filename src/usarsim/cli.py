@@ -587,7 +587,7 @@ def cmd_validate(args) -> int:
                   f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms")
         else:
             from usarsim.config.robot import class_name_problem, load_robot
-            from usarsim.sim.builder import robot_model_summary
+            from usarsim.sim.robotspec import robot_model_summary
             from usarsim.sim.simulation import describe_items
 
             r = load_robot(path)

@@ -19,7 +19,7 @@ from usarsim.config.robot import load_robot
 from usarsim.config.world import check_world_file, load_world
 from usarsim.protocol.messages import SensorMessage, format_message, parse_message
 from usarsim.sensors import ITEMS
-from usarsim.sim.builder import robot_model_summary
+from usarsim.sim.robotspec import robot_model_summary
 from usarsim.sim.simulation import Simulation, describe_items
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))

@@ -136,7 +136,7 @@ def test_a_new_drive_kind_from_one_file_in_the_test_tree_and_a_robot_file(server
 def test_a_robot_file_is_checked_by_its_drive_model(tmp_path):
     from usarsim.config.robot import load_robot
     from usarsim.errors import ConfigError
-    from usarsim.sim.builder import robot_model_summary
+    from usarsim.sim.robotspec import robot_model_summary
 
     one_sided = UNICYCLE_ROBOT.replace("drive: unicycle", "drive: skid").replace("side: right", "side: left")
     p = tmp_path / "OneSided.yaml"

@@ -94,7 +94,7 @@ class Camera:
         picture of the same view)."""
         import mujoco
 
-        from usarsim.sim.builder import camera_fovy_deg, camera_name
+        from usarsim.sim.robotspec import camera_fovy_deg, camera_name
 
         snap = self.sim.cameras.render_snapshot()
         m = snap.model

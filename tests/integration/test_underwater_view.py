@@ -46,8 +46,8 @@ def test_the_submarine_sees_murky_water_and_the_quay_camera_is_unchanged(server_
     import mujoco
 
     from usarsim.server.image import ImageSettings
-    from usarsim.sim.builder import camera_name
     from usarsim.sim.render import SEEN, camera_renderer
+    from usarsim.sim.robotspec import camera_name
 
     srv = server_factory(world=harbour, image=ImageSettings(image_type=0, width=WIDTH, height=HEIGHT))
     sub = srv.connect()

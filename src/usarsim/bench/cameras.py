@@ -107,8 +107,8 @@ class _BareRenderer:
 
     def _run(self) -> None:
         from usarsim.server.image import encode_picture
-        from usarsim.sim.builder import camera_fovy_deg
         from usarsim.sim.render import camera_renderer
+        from usarsim.sim.robotspec import camera_fovy_deg
 
         w, h = self.size
         snap = self.snap

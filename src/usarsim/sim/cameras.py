@@ -11,7 +11,7 @@ import mujoco
 
 from usarsim.sensors import CameraItem
 from usarsim.sensors.camera import OmniCam
-from usarsim.sim import builder
+from usarsim.sim import robotspec
 
 if TYPE_CHECKING:
     from usarsim.sim.robot import SimRobot
@@ -100,14 +100,14 @@ class Cameras:
         snap.multiview = list(self.multiview())
         for r in self.sim.robots.values():
             for cam in self.cameras_of(r):
-                cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, builder.camera_name(r.prefix, cam.name))
+                cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.camera_name(r.prefix, cam.name))
                 if cid >= 0:
                     snap.cameras[(r.uid, cam.name.lower())] = CameraState(
                         cam_id=cid, fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
                         omni=isinstance(cam, OmniCam))
-            # the chase view behind and above the robot (builder.CHASE_CAMERA)
-            cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, builder.chase_camera_name(r.prefix))
+            # the chase view behind and above the robot (robotspec.CHASE_CAMERA)
+            cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.chase_camera_name(r.prefix))
             if cid >= 0:
-                snap.cameras.setdefault((r.uid, builder.CHASE_CAMERA.lower()),
-                                        CameraState(cam_id=cid, fov_rad=builder.CHASE_FOV_RAD, omni=False))
+                snap.cameras.setdefault((r.uid, robotspec.CHASE_CAMERA.lower()),
+                                        CameraState(cam_id=cid, fov_rad=robotspec.CHASE_FOV_RAD, omni=False))
         return snap

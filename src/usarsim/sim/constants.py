@@ -22,6 +22,20 @@ GROUND_GROUPS = np.array([1, 1, 1, 1, 0, 1], dtype=np.uint8)
 SOLID_CONTYPE, SOLID_CONAFFINITY = 1, 3
 WHEEL_CONTYPE, WHEEL_CONAFFINITY = 2, 0
 
+# Wheel rolling friction and torsional friction: MuJoCo's defaults for the
+# second and third friction coefficients.
+SPIN_FRICTION = 0.005
+ROLL_FRICTION = 0.0001
+
+# Treads (usarsim.robots.skid): a skid-steered robot's wheels meet the floor through a
+# tread contact of their own, whose friction is direction-dependent (MuJoCo gives that
+# to explicit contact pairs only, in the contact frame of the collider: a capsule lying
+# along the axle has its first tangent along the axle).  The floor carries a collision bit
+# of its own so that the wheel's cylinder, which still meets everything else (ramps,
+# steps, walls, other robots), skips it.
+FLOOR_CONTYPE = 8
+TREAD_WHEEL_CONTYPE, TREAD_WHEEL_CONAFFINITY = 0, SOLID_CONTYPE
+
 # Waving victims: the right arm rises about the shoulder's own left-right axis from where it
 # lies (along the body) to 2 x 0.6 rad, and back, once every 2 s (the manual's victims wave an
 # arm to draw attention, section 3.2.1).  A roll about the body's long axis, along which the

@@ -17,7 +17,7 @@ import mujoco
 
 from usarsim.config.robot import Link
 from usarsim.readings import PackageState
-from usarsim.sim import builder
+from usarsim.sim import robotspec
 
 if TYPE_CHECKING:
     from usarsim.sim.robot import SimRobot
@@ -81,8 +81,8 @@ def apply(m: mujoco.MjModel, d: mujoco.MjData, r: SimRobot, ln: Link) -> None:
     kind, value = r.joints.get(ln.name, (0, None))
     if r.battery_empty:
         kind, value = 2, 0.0
-    kp, kv = builder.joint_servo_gains(ln)
-    lo, hi = builder.joint_travel(ln)
+    kp, kv = robotspec.joint_servo_gains(ln)
+    lo, hi = robotspec.joint_travel(ln)
     if kind == 2:
         m.actuator_gainprm[a, 0] = 1.0
         m.actuator_biasprm[a, :3] = (0.0, 0.0, 0.0)

@@ -34,7 +34,7 @@ import numpy as np
 
 from usarsim.sim.builder import MAX_PICTURE_HEIGHT as MAX_HEIGHT
 from usarsim.sim.builder import MAX_PICTURE_WIDTH as MAX_WIDTH
-from usarsim.sim.builder import camera_fovy_deg
+from usarsim.sim.robotspec import camera_fovy_deg
 from usarsim.sim.underwater import Water, through_water, water_of
 
 log = logging.getLogger("usarsim.render")

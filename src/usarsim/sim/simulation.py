@@ -31,7 +31,7 @@ from usarsim.errors import ConfigError, SimulationError
 from usarsim.readings import CommandResult, ItemParams, Refusal, ZoomResult
 from usarsim.robots import make_drive
 from usarsim.sensors import Sensor, make_item
-from usarsim.sim import builder, frames, joints, systems, truth
+from usarsim.sim import builder, frames, joints, robotspec, systems, truth
 from usarsim.sim.battery import Batteries
 from usarsim.sim.cameras import Cameras
 from usarsim.sim.constants import GROUND_GROUPS
@@ -225,7 +225,7 @@ class Simulation:
             if ground is not None:
                 loc = (loc[0], loc[1], ground - robot.lowest_point_m - robot.spawn_clearance_m)
         prefix = f"robot{uid}"
-        builder.add_robot(self.spec, robot, prefix, loc, rot, drive)
+        robotspec.add_robot(self.spec, robot, prefix, loc, rot, drive)
         r = SimRobot(uid=uid, name=name, config=robot, prefix=prefix, spawn_time=self.time,
                      handle=RobotHandle(prefix), sensors=sensors, drive=drive)
         for s in sensors:
@@ -235,7 +235,7 @@ class Simulation:
             self._rebuild()
         except Exception:
             del self.robots[uid]
-            builder.remove_robot(self.spec, prefix)
+            robotspec.remove_robot(self.spec, prefix)
             self._rebuild()
             raise
         drive.on_spawn(self, r)
@@ -264,7 +264,7 @@ class Simulation:
         self.reports.remove_robot(r)
         for key in [k for k in self.live_conf if k[0] == uid]:
             del self.live_conf[key]
-        builder.remove_robot(self.spec, r.prefix)
+        robotspec.remove_robot(self.spec, r.prefix)
         self._rebuild()
         log.info("removed robot '%s' (id %d) at t=%.3f", r.name, uid, self.time)
 
