@@ -129,8 +129,29 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
             _add_camera(spec, body, item, prefix)
         elif item.item_type.lower() == "touch":
             _add_touch_probe(spec, body, item, prefix)
+        elif item.item_type.lower() == "gripper":
+            _add_grasp(spec, item, prefix)
     _add_chase_camera(body, robot, prefix)
     return body
+
+
+def grasp_name(prefix: str, gripper: str) -> str:
+    return f"{prefix}/grasp/{gripper}"
+
+
+def _add_grasp(spec, item, prefix: str) -> None:
+    """The weld that holds what a gripper grasps (usarsim.sim.systems.grasps): from its first
+    finger to the world until it closes on something, off until then."""
+    fingers = item.params.get("fingers") or item.params.get("Fingers") or ()
+    if not fingers:
+        return  # the Gripper's configuration says what is missing
+    eq = spec.add_equality()
+    eq.name = grasp_name(prefix, item.name)
+    eq.type = mujoco.mjtEq.mjEQ_WELD
+    eq.objtype = mujoco.mjtObj.mjOBJ_BODY
+    eq.name1 = f"{prefix}/{fingers[0]}"
+    eq.name2 = "world"
+    eq.active = False
 
 
 # Items the image server renders (the CAMERAS registry), and the MuJoCo camera each becomes: it

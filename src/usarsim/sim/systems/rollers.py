@@ -6,7 +6,18 @@ import mujoco
 import numpy as np
 
 from usarsim.effecters import RollerTable
+from usarsim.effecters.roller_table import ROLLER_FRICTION
 from usarsim.sim.systems.base import SYSTEMS, System
+
+# How quickly the rollers bring a load to their speed: a first-order time constant (s), the
+# force capped at the rollers' grip x the load's weight.  An estimate (no roller table's
+# data): a load placed on running rollers is at their speed within a few centimetres of
+# travel, as on a powered roller conveyor.  The force is renewed every physics step while a
+# table carries something: renewed every 10 (40 ms), a push that stiff overshoots.
+GRIP_TAU_S = 0.05
+# Below this speed (m/s) over the table top, its friction on a sliding load is taken as
+# growing from zero (the sign of a slide that has not started is not known)
+SLIDE_M_S = 0.005
 
 
 @SYSTEMS.register("rollers")
@@ -21,6 +32,10 @@ class RollerTables(System):
         super().__init__(sim)
         self._pushed: set[int] = set()
         self._model = sim.model  # body ids are the model's: they change with a rebuild
+
+    def max_steps(self) -> int | None:
+        # every step while a table carries a load (see GRIP_TAU_S), else every EVERY_STEPS
+        return 1 if self._pushed else self.EVERY_STEPS
 
     @staticmethod
     def _tables(sim) -> list[RollerTable]:
@@ -55,10 +70,15 @@ class RollerTables(System):
                 mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
                 robot_vel = np.empty(6)
                 mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, t.handle.body_id, robot_vel, 0)
-                slip = t.speed - float(axis @ (vel[3:] - robot_vel[3:]))
+                along = float(axis @ (vel[3:] - robot_vel[3:]))  # the load's speed on the table
                 mass = float(m.body_subtreemass[b])
-                push = max(-1.0, min(1.0, slip / 0.05)) * t.config.grip * mass * g
-                d.xfrc_applied[b, :3] = axis * push
+                # towards the rollers' speed with time constant GRIP_TAU_S, and, while they
+                # turn, against the table top's own friction as the load slides on it
+                push = mass * (t.speed - along) / GRIP_TAU_S
+                if t.speed != 0.0:
+                    push += ROLLER_FRICTION * mass * g * max(-1.0, min(1.0, along / SLIDE_M_S))
+                limit = t.config.grip * mass * g
+                d.xfrc_applied[b, :3] = axis * max(-limit, min(limit, push))
         for b in self._pushed - pushed:
             d.xfrc_applied[b, :3] = 0.0
         self._pushed = pushed
