@@ -135,8 +135,7 @@ class Connection(ServerConnection):
     # Input -----------------------------------------------------------------------------
     # usarsim.server.ordering.Reader ------------------------------------------------------
     def unhandled(self) -> bool:
-        session = self.session
-        return bool(self._backlog) and not (session is not None and session.step_held)
+        return bool(self._backlog) and not self.holds_step()
 
     def holds_step(self) -> bool:
         return self.session is not None and self.session.step_held
@@ -165,9 +164,10 @@ class Connection(ServerConnection):
         n = 0
         while backlog:
             if session.holding:
-                # its INIT is being carried out, or its STEP waits for the other connections:
-                # the next lines wait for it (answers in order; lines after a STEP are for the
-                # next one), the socket unread (Session.resume drains them)
+                # a request of its own is not answered yet (an INIT, a SET, a PING...), or its
+                # STEP waits for the other connections: the next lines wait (answers in order;
+                # lines after a STEP are for the next one), the socket unread (the session's
+                # resume drains them)
                 self.gate.close(self.transport)
                 return
             if not self.writable and self.transport is not None and \

@@ -8,7 +8,8 @@ it wrote them: in one write or several, on the robot's connection or another one
 Three things make it hold, whatever the segmentation and the timing:
 
 * The server acknowledges every segment of a control connection at once (``TCP_QUICKACK``,
-  which Linux clears again, so it is set after every read: :mod:`usarsim.server.control`).
+  which Linux clears again, so it is set after every read and write:
+  :mod:`usarsim.server.control`).
   A client's Nagle algorithm holds a small write back until its previous one is acknowledged;
   with the kernel's delayed acknowledgement (up to 40 ms on Linux) a ``MISPKG`` written just
   after a ``DRIVE`` reached the server after a ``STEP`` written after both on another

@@ -124,19 +124,20 @@ class Session(Articulation):
         next STEP."""
         return self.awaiting > 0 or self.steps_waiting > 0 or self.step_held or self.state == SPAWNING
 
-    def _answered(self, command: str, then: Callable[[Any], None] | None = None) -> Callable:
+    def _answered(self, command: str, then: Callable[[Any], None] | None = None,
+                  refused: Callable[[BaseException], None] | None = None) -> Callable:
         """A request's ``on_done(result, error)`` (called from the simulation thread) that
         holds this connection's next lines until it is answered: ``then(result)`` sends the
         answer (a RES the simulation outputs itself needs none: its outputs are written
-        before ``on_done`` runs), an error is answered with an ERROR, and the lines waiting
-        are handled."""
+        before ``on_done`` runs), an error is answered by ``refused(error)`` (by default an
+        ERROR), and the lines waiting are handled."""
         self.awaiting += 1
 
         def done(result, error) -> None:
             self.awaiting -= 1
             if self.state != CLOSED:
                 if error is not None:
-                    self._not_done(command, error)
+                    (refused or (lambda e: self._not_done(command, e)))(error)
                 elif then is not None:
                     then(result)
             self._resume()
@@ -312,14 +313,8 @@ class Session(Articulation):
         """``PING [{Id x}]`` -> ``PONG [{Id x}] {Time t}`` (an extension) once the simulation has
         carried out every request sent before it (an INIT's spawn, or its ERROR) and every
         message it produced so far is written to this connection."""
-        self.awaiting += 1
-
-        def done(t, error):
-            self.awaiting -= 1
-            self.send(M.Pong(id=cmd.id, time=t if error is None else None))
-            self._resume()
-
-        self.facade.barrier(self.ctx.threadsafe(done))
+        self.facade.barrier(self._answered("PING", then=lambda t: self.send(M.Pong(id=cmd.id, time=t)),
+                                           refused=lambda error: self.send(M.Pong(id=cmd.id, time=None))))
 
     def on_report(self, cmd: C.Report) -> None:
         """``REPORT {Type Victim} {Location x,y,z} [{Name label}]`` (an extension): a victim the

@@ -164,10 +164,10 @@ class SimFacade:
         """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF),
         handed to the server before ``on_done(result, error)``; ``error`` when it was not
         carried out (the simulation has stopped, or the operation failed on an unexpected
-        error).  In lock-step it is carried out at once, at
-        the current simulated time, as INIT and REPORT are: a request with a reply is answered
-        without a STEP (a PING after it is answered after its RES), and what it changes acts
-        from the next STEP on, as a DRIVE's speeds do."""
+        error).  In lock-step it is carried out at once, at the current simulated time, as
+        INIT and REPORT are: a request with a reply is answered without a STEP (a PING after it
+        is answered after its RES), and what it changes acts from the next STEP on, as a
+        DRIVE's speeds do."""
         self.runner.submit(Request(lambda sim: sim.operate(uid, item_type, name, opcode, params),
                                    immediate=True, on_done=on_done))
 

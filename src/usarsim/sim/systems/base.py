@@ -53,6 +53,11 @@ class System:
         """Set this system's forces (or motions) for the next stretch of physics steps."""
 
 
+def mounted(sim: Simulation, kind: type) -> list:
+    """Every item of class ``kind`` (a Gripper, a RollerTable) mounted on the world's robots."""
+    return [s for r in sim.robots.values() for s in r.sensors if isinstance(s, kind)]
+
+
 def collect(sim: Simulation, previous: list[System] = ()) -> list[System]:
     """The systems the world needs now, in order; one still wanted keeps its instance (and
     its state) from ``previous``."""

@@ -20,7 +20,7 @@ import numpy as np
 
 from usarsim.effecters import Gripper
 from usarsim.sim.robotspec import grasp_name
-from usarsim.sim.systems.base import SYSTEMS, System
+from usarsim.sim.systems.base import SYSTEMS, System, mounted
 
 
 class _Hold:
@@ -48,13 +48,9 @@ class Grasps(System):
         self._model = None
         self._holds: list[_Hold] = []
 
-    @staticmethod
-    def _grippers(sim) -> list[Gripper]:
-        return [s for r in sim.robots.values() for s in r.sensors if isinstance(s, Gripper)]
-
     @classmethod
     def wanted(cls, sim) -> bool:
-        return bool(cls._grippers(sim))
+        return bool(mounted(sim, Gripper))
 
     def active(self) -> bool:
         return any(h.gripper.closed for h in self._holds)
@@ -64,7 +60,7 @@ class Grasps(System):
         m, d = sim.model, sim.data
         if m is not self._model:  # rebuilt: ids anew, nothing welded (the next look grasps again)
             self._model = m
-            self._holds = [_Hold(m, g) for g in self._grippers(sim)]
+            self._holds = [_Hold(m, g) for g in mounted(sim, Gripper)]
         if not any(h.gripper.closed or h.held >= 0 for h in self._holds):
             return
         touching = self._touching(m, d)

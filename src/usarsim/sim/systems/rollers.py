@@ -7,7 +7,7 @@ import numpy as np
 
 from usarsim.effecters import RollerTable
 from usarsim.effecters.roller_table import ROLLER_FRICTION
-from usarsim.sim.systems.base import SYSTEMS, System
+from usarsim.sim.systems.base import SYSTEMS, System, mounted
 
 # How quickly the rollers bring a load to their speed: a first-order time constant (s), the
 # force capped at the rollers' grip x the load's weight.  An estimate (no roller table's
@@ -37,13 +37,9 @@ class RollerTables(System):
         # every step while a table carries a load (see GRIP_TAU_S), else every EVERY_STEPS
         return 1 if self._pushed else self.EVERY_STEPS
 
-    @staticmethod
-    def _tables(sim) -> list[RollerTable]:
-        return [s for r in sim.robots.values() for s in r.sensors if isinstance(s, RollerTable)]
-
     @classmethod
     def wanted(cls, sim) -> bool:
-        return bool(cls._tables(sim))
+        return bool(mounted(sim, RollerTable))
 
     def pre_step(self) -> None:
         sim = self.sim
@@ -51,7 +47,7 @@ class RollerTables(System):
         if m is not self._model:  # rebuilt: the ids pushed before name other bodies now
             self._pushed, self._model = set(), m
         pushed: set[int] = set()
-        tables = {t.geom: t for t in self._tables(sim)}
+        tables = {t.geom: t for t in mounted(sim, RollerTable)}
         if tables:
             g = sim.world.gravity_m_s2
             for i in range(d.ncon):
