@@ -3,6 +3,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/_env.sh
+# Everything: the core, the extras (recordings, sweeps) and the test tools, since the suite tests
+# every part.
+echo "scripts/test.sh: installing usarsim with every extra and the test tools (pip install -e '.[test]')" >&2
 "$USARSIM_PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
 # The operator console's tests drive a headless Chromium: Debian's package (Playwright's own
 # browser download is not used).  Without it those tests are skipped, with the reason.
@@ -15,7 +18,8 @@ if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/
   if [ "$sudo" = none ]; then
     echo "scripts/test.sh: no chromium and no root to install it (apt-get install chromium): the browser tests will be skipped" >&2
   else
-    echo "scripts/test.sh: installing chromium for the console's browser tests" >&2
+    echo "scripts/test.sh: the operator console's tests drive a real browser: installing Debian's chromium" \
+         "(apt-get install chromium, a few minutes the first time)" >&2
     { $sudo env DEBIAN_FRONTEND=noninteractive apt-get update -q \
         && $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium; } \
         </dev/null >/dev/null \

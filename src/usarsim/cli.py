@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import difflib
 import faulthandler
 import logging
 import os
+import re
 import signal
 import sys
 from pathlib import Path
@@ -111,6 +113,38 @@ def _port_offset(text: str) -> int:
     return v
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with a usage error said in one line (no usage block before it), naming the
+    command's --help, and "did you mean" for a misspelt command, choice or option."""
+
+    def parse_args(self, args=None, namespace=None):  # noqa: ANN001, ANN201 (argparse's signature)
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            msg = "unrecognized arguments: " + " ".join(extras)
+            known = self._subparser(getattr(parsed, "command", None))._option_string_actions
+            guess = next((g for e in extras if e.startswith("--")
+                          for g in difflib.get_close_matches(e.split("=")[0], known, n=1)), None)
+            if guess:
+                msg += f" (did you mean {guess}?)"
+            self._subparser(getattr(parsed, "command", None)).error(msg)
+        return parsed
+
+    def _subparser(self, command: str | None) -> argparse.ArgumentParser:
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+                return action.choices[command]
+        return self
+
+    def error(self, message: str):  # noqa: ANN201 (argparse's signature: never returns)
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            options = re.findall(r"'([^']*)'", choice.group(2))
+            guess = difflib.get_close_matches(choice.group(1), options, n=1)
+            if guess:
+                message += f" (did you mean {guess[0]!r}?)"
+        self.exit(2, f"{self.prog}: error: {message}; see '{self.prog} --help'\n")
+
+
 _VERBOSE_HELP = "more log output: -v logs connections, spawns and removals, -vv everything (debug)"
 
 
@@ -121,7 +155,7 @@ def _add_verbose(parser: argparse.ArgumentParser, dest: str) -> None:
 def build_parser() -> argparse.ArgumentParser:
     from usarsim.config.world import WIRELESS_MODELS
 
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="usarsim",
         description="A USARSim-compatible robot simulator on MuJoCo. Controllers written for USARSim 3.x "
                     "connect on TCP port 3000 and drive simulated robots unmodified.",
@@ -627,7 +661,8 @@ def cmd_robots(args) -> int:
     for path in robot_files().values():
         r = load_robot(path)
         kit = ", ".join(sorted({i.item_type for i in r.items}))
-        print(f"{r.class_name}  {r.drive} ({r.steering_type})  {kit}")
+        drive = r.drive if r.steering_type in ("", "None") else f"{r.drive} ({r.steering_type})"
+        print(f"{r.class_name:<11} {drive:<27} {r.description}\n{'':<11} {'':<27} kit: {kit}")
     return 0
 
 
@@ -694,11 +729,27 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
+    from usarsim.extras import MissingExtraError, require
+
+    try:
+        if args.command in ("sweep", "report"):
+            require("sweep", f"usarsim {args.command}")
+        elif args.command == "replay":
+            require("record", "usarsim replay")
+        elif getattr(args, "record", None) or getattr(args, "foxglove", None) is not None:
+            require("record", f"usarsim {args.command} --{'record' if args.record else 'foxglove'}")
+    except MissingExtraError as exc:
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
     if hasattr(args, "handler"):  # sweep, report
         return args.handler(args)
     handler = {"serve": cmd_serve, "validate": cmd_validate, "worlds": cmd_worlds, "robots": cmd_robots,
                "bench": cmd_bench, "replay": cmd_replay}[args.command]
-    return handler(args)
+    try:
+        return handler(args)
+    except BrokenPipeError:  # 'usarsim robots | head': the reader has all it wanted
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":

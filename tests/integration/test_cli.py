@@ -132,7 +132,29 @@ def test_worlds_and_robots_list_the_shipped_files():
     names = [ln.split()[0] for ln in worlds.stdout.splitlines()]
     assert "DM-USAR_yellow" in names and names == sorted(names)
     assert re.search(r"^DM-USAR_yellow\s+NIST yellow arena", worlds.stdout, re.M)
-    assert re.search(r"^P2AT\s+skid \(SkidSteered\)\s+.*RangeScanner", robots.stdout, re.M)
+    assert re.search(r"^P2AT\s+skid \(SkidSteered\)\s+\S.*\n\s+kit: .*RangeScanner", robots.stdout, re.M)
+
+
+def test_robots_list_says_each_robot_and_its_drive_without_none():
+    out = usarsim("robots").stdout
+    assert "(None)" not in out
+    assert re.search(r"^AirRobot\s+aerial\s+AirRobot AR100-B quadrotor", out, re.M)
+    assert re.search(r"^\s+kit: Camera, GPS, GroundTruth, IMU, Sonar$", out, re.M)
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (("serve", "--speed", "fast"), "usarsim serve: error: argument --speed: expected a number > 0 or 'max', "
+                                   "got 'fast'; see 'usarsim serve --help'"),
+    (("serve", "--wrold", "x"), "usarsim serve: error: unrecognized arguments: --wrold x (did you mean --world?); "
+                                "see 'usarsim serve --help'"),
+    (("serv",), "did you mean 'serve'?"),
+])
+def test_a_usage_error_is_one_line_with_a_suggestion(args, said):
+    out = usarsim(*args)
+    assert out.returncode == 2
+    assert out.stdout == ""
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1 and said in lines[0], out.stderr
 
 
 def test_no_command_prints_help_and_exits_2():
