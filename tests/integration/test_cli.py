@@ -575,3 +575,26 @@ def test_bench_env_prints_steps_per_second():
 
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert result["env_steps_per_s"] > 0 and result["team"] == 2 and result["team_steps_per_s"] > 0
+
+
+def test_talk_sends_typed_lines_and_prints_the_answers(serve):
+    port = serve("--port", "0", "--lockstep").port()
+    lines = "GETSTARTPOSES\nINIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}\nSTEP {Time 0.2}\n"
+    out = subprocess.run([sys.executable, "-m", "usarsim.client.talk", "--port", str(port), "--hide", "SEN,MISSTA"],
+                         input=lines, capture_output=True, text=True, timeout=60, check=False)
+    assert out.returncode == 0, out.stderr
+    said = out.stdout.splitlines()
+    assert said[0] == NFO_ON_CONNECT.decode().strip()
+    assert said[1].startswith("NFO {StartPoses 8} {PlayerStart1 -9.50,0.00,-0.25 ")
+    assert said[-1] == "STEPPED {Time 0.2000}" and any(s.startswith("STA {Type GroundVehicle}") for s in said)
+    assert not any(s.startswith(("SEN", "MISSTA")) for s in said)
+
+
+def test_talk_without_a_simulator_says_so_in_one_line():
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    out = subprocess.run([sys.executable, "-m", "usarsim.client.talk", "--port", str(port)], input="",
+                         capture_output=True, text=True, timeout=60, check=False)
+    assert out.returncode == 1 and len(out.stderr.splitlines()) == 1
+    assert f"no simulator on 127.0.0.1:{port}" in out.stderr and "usarsim serve" in out.stderr
