@@ -61,6 +61,30 @@ def test_a_world_as_json(yellow_world):
     assert w["start_poses"][0] == {"name": "PlayerStart1", "location": [-9.5, 0.0, -0.25], "rotation": [0.0, 0.0, 0.0]}
 
 
+def test_the_arena_is_what_the_world_is_made_of_without_the_floor_around_it(yellow_world):
+    w = world_json(yellow_world)
+    x0, y0, x1, y1, top = w["arena"]
+    # DM-USAR_yellow: the outer walls, 12.1 m by 14.5 m and 1.2 m high, on a floor of 28 m by 22 m
+    assert (x0, y0, x1, y1) == pytest.approx((-6.05, -7.25, 6.05, 7.25), abs=1e-3)
+    assert top == pytest.approx(1.2)
+    bx0, by0, bx1, by1 = w["bounds"]
+    assert (bx1 - bx0) * (by1 - by0) > 3 * (x1 - x0) * (y1 - y0)  # the floor reaches far beyond it
+    for o in w["objects"]:
+        for x, y in o["poly"]:
+            assert x0 - 1e-3 <= x <= x1 + 1e-3 and y0 - 1e-3 <= y <= y1 + 1e-3, o["name"]
+    for v in w["victims"]:
+        assert x0 <= v["location"][0] <= x1 and y0 <= v["location"][1] <= y1, v
+
+
+def test_a_world_with_nothing_on_its_floor_frames_the_floor(tmp_path):
+    from usarsim.config.catalog import resolve_world
+
+    path = tmp_path / "Bare.yaml"
+    path.write_text("name: Bare\nfloor:\n  center: [10.0, -2.0]\n  size: [8.0, 4.0]\n")
+    w = world_json(resolve_world(str(path)))
+    assert w["arena"] == [6.0, -4.0, 14.0, 0.0, 0.0]
+
+
 def test_a_robot_class_as_json():
     from usarsim.config.catalog import resolve_robot
 

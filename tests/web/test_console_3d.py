@@ -46,6 +46,25 @@ def azimuth_change(a: float, b: float) -> float:
     return math.remainder(b - a, 360.0)
 
 
+def eye(cam: dict) -> np.ndarray:
+    """Where MuJoCo's free camera is (its frame): ``distance`` back from the point it looks at."""
+    az, el = math.radians(cam["azimuth"]), math.radians(cam["elevation"])
+    fwd = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    return np.asarray(cam["lookat"], dtype=float) - cam["distance"] * fwd
+
+
+def yellow(img: np.ndarray) -> np.ndarray:
+    """The pixels of DM-USAR_yellow's yellow walls."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 100) & (g > 90) & (b < 0.75 * np.minimum(r, g))
+
+
+def red(img: np.ndarray) -> np.ndarray:
+    """The pixels of a P2AT's red body."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 90) & (r > 2 * g) & (r > 2 * b)
+
+
 def wait_for_frame_after(page, frames: int) -> dict:
     """The camera of the first 3-D view picture after ``frames`` pictures, once no other is asked for."""
     page.wait_for_function("""(n) => { const v = window.usarsimConsole.view3d;
@@ -61,13 +80,28 @@ def test_the_3d_view_shows_the_arena_and_a_drag_orbits_the_camera(console_page, 
     view = page.locator("#view3d")
     page.wait_for_function("(document.getElementById('view3d').dataset.frames | 0) >= 1", timeout=30000)
     first = wait_for_frame_after(page, 0)
-    # the default: the whole world from above at an angle, seen along +X as the map shows it
+    # the default: the arena from above at an angle, seen along +X as the map shows it
     assert first["azimuth"] == 0 and -80 < first["elevation"] < -30 and first["distance"] > 10, first
     assert first["follow"] is None and first["width"] >= 200 and first["height"] >= 200, first
+    # framed: the arena (the outer walls, 12.1 m by 14.5 m, on a floor of 28 m by 22 m) is
+    # in the middle, the camera about as far from it as it is wide
+    static = page.evaluate("window.usarsimConsole.world.objects.filter((o) => !o.movable).flatMap((o) => o.poly)")
+    xs, ys = [p[0] for p in static], [p[1] for p in static]
+    centre = np.array([(min(xs) + max(xs)) / 2, -(min(ys) + max(ys)) / 2, 0.0])  # MuJoCo's frame
+    size = math.hypot(max(xs) - min(xs), max(ys) - min(ys))
+    assert size == pytest.approx(math.hypot(12.1, 14.5), abs=0.1)
+    assert math.dist(first["lookat"][:2], centre[:2]) < 0.15 * size, (first, centre)
+    assert 0.5 * size < np.linalg.norm(eye(first) - centre) < 1.4 * size, (first, size)
     ARTIFACTS.mkdir(exist_ok=True)
     before_png = view.screenshot(path=str(ARTIFACTS / "console-3d-before-orbit.png"))
     before = picture(before_png)
     assert before.std() > 15, "the 3-D view is a uniform field, not a picture of the world"
+    # the walls span most of the picture's width, and a good share of it is wall
+    walls = yellow(before)
+    cols, rows = walls.any(axis=0).nonzero()[0], walls.any(axis=1).nonzero()[0]
+    assert (cols.max() - cols.min()) > 0.75 * before.shape[1], (cols.min(), cols.max(), before.shape)
+    assert (rows.max() - rows.min()) > 0.4 * before.shape[0], (rows.min(), rows.max(), before.shape)
+    assert walls.mean() > 0.08, walls.mean()
     assert page.text_content("#view3d-info").startswith("az 0° · el ")
     # left-drag 200 pixels to the right: the camera orbits, 60 degrees of azimuth
     box = view.bounding_box()
@@ -111,13 +145,27 @@ def test_the_3d_view_shows_the_arena_and_a_drag_orbits_the_camera(console_page, 
     moved = math.dist(panned["lookat"][:2], zoomed["lookat"][:2])
     assert moved > 1.0 and panned["lookat"][2] == pytest.approx(zoomed["lookat"][2], abs=1e-6), (zoomed, panned)
     assert panned["azimuth"] == pytest.approx(zoomed["azimuth"], abs=0.01)
-    # Arena: back to the whole world
+    # Arena: back to the arena
     page.click("#view3d-arena")
     again = wait_for_frame_after(page, panned["frames"])
     while again["azimuth"] != 0:
         again = wait_for_frame_after(page, again["frames"])
     assert again["distance"] == pytest.approx(first["distance"], rel=1e-3)
     assert again["lookat"] == pytest.approx(first["lookat"], abs=1e-3)
+    # the view made wide: the arena is framed again, for the wider picture
+    page.click("#view3d-wide")
+    page.wait_for_selector("#world-view", state="hidden")
+    page.wait_for_function("""() => { const v = window.usarsimConsole.view3d;
+        return v.shown.width > 1.5 * v.shown.height && !v.busy && !v.wanted; }""")
+    wide = wait_for_frame_after(page, page.evaluate("window.usarsimConsole.view3d.frames") - 1)
+    assert wide["azimuth"] == 0 and wide["distance"] < 0.9 * first["distance"], (first, wide)
+    assert math.dist(wide["lookat"][:2], centre[:2]) < 0.15 * size, (wide, centre)
+    walls = yellow(picture(page.locator("#view3d").screenshot(path=str(ARTIFACTS / "console-3d-wide.png"))))
+    cols, rows = walls.any(axis=0).nonzero()[0], walls.any(axis=1).nonzero()[0]
+    # the taller of its sides now fills the picture's height
+    assert (rows.max() - rows.min()) > 0.75 * walls.shape[0], (rows.min(), rows.max(), walls.shape)
+    assert (cols.max() - cols.min()) > 0.4 * walls.shape[1], (cols.min(), cols.max(), walls.shape)
+    page.click("#view3d-wide")
     assert console_page.errors == []
 
 
@@ -130,12 +178,27 @@ def test_the_3d_view_follows_the_attached_robot(console_page, console_server):
     page.wait_for_function("window.usarsimConsole.view3d.shown && window.usarsimConsole.view3d.shown.follow === 'Web3D'",
                            timeout=30000)
     shown = wait_for_frame_after(page, 0)
+    while shown["elevation"] != page.evaluate("window.usarsimConsole.view3d.camera.elevation"):
+        shown = wait_for_frame_after(page, shown["frames"])  # the chase view asked for is the one shown
     [row] = truth(console_server.app.truth.port, "Web3D")
     x, y, z = row["location"]
     # the camera looks at the robot's chassis (MuJoCo's frame: Y left, Z up)
     assert shown["lookat"] == pytest.approx([x, -y, -z], abs=0.15), (shown, row)
-    assert shown["distance"] <= 5.0
+    # from a few metres behind it (looking where it heads) and above it
+    assert 2.0 <= shown["distance"] <= 5.0, shown
+    assert -40 <= shown["elevation"] <= -15, shown
+    assert abs(azimuth_change(-math.degrees(row["rotation"][2]), shown["azimuth"])) < 5, (shown, row)
+    cam = eye(shown)
+    assert 0.8 < cam[2] - (-z) < 3.0 and cam[0] < x - 1.5, (cam, row)  # above, and behind (it faces +X)
     assert page.text_content("#view3d-info").endswith("following Web3D")
+    # the robot is big in the middle of the picture
+    ARTIFACTS.mkdir(exist_ok=True)
+    img = picture(page.locator("#view3d").screenshot(path=str(ARTIFACTS / "console-3d-follow.png")))
+    body = red(img)
+    h, w = body.shape
+    assert body.sum() > 0.02 * h * w, (body.sum(), h * w)
+    rows, cols = body.nonzero()
+    assert abs(cols.mean() - w / 2) < 0.15 * w and abs(rows.mean() - h / 2) < 0.2 * h, (cols.mean(), rows.mean(), w, h)
     # it drives forward: the pictures follow it, a few a second
     page.fill("#command", "DRIVE {Left 4} {Right 4}")
     page.press("#command", "Enter")

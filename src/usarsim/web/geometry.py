@@ -4,7 +4,9 @@ above and the robot classes a client may spawn.
 Footprints are polygons in the world's horizontal plane (USARSim frame: X forward/north,
 Y right/east, metres): the outline of a shape after its roll, pitch and yaw, projected
 straight down.  ``top`` is how high the shape reaches above the floor (Z is down), so a
-viewer can draw higher things over lower ones.
+viewer can draw higher things over lower ones.  ``bounds`` holds the floor and everything
+on it (what the map shows when fitted); ``arena`` only what the world is made of, the floor
+left out (what the 3-D view frames).
 """
 
 from __future__ import annotations
@@ -93,6 +95,29 @@ def _r(values) -> list[float]:
     return [round(float(v), 4) for v in values]
 
 
+def arena_box(world: WorldConfig, objects: list[dict]) -> list[float]:
+    """The box that holds what a world is made of: [x0, y0, x1, y1, top] (metres; ``top`` is
+    the height above the floor of the highest thing).  Its objects' outlines and its victims
+    without the floor, which reaches far beyond them in most worlds; the floor alone when
+    the world has nothing on it."""
+    xs: list[float] = []
+    ys: list[float] = []
+    top = 0.0
+    for e in objects:
+        for x, y in e["poly"]:
+            xs.append(x)
+            ys.append(y)
+        top = max(top, e["top"])
+    for v in world.victims:
+        xs.append(v.location[0])
+        ys.append(v.location[1])
+    if not xs:
+        fl = world.floor
+        xs = [fl.center[0] - fl.size[0] / 2, fl.center[0] + fl.size[0] / 2]
+        ys = [fl.center[1] - fl.size[1] / 2, fl.center[1] + fl.size[1] / 2]
+    return _r((min(xs), min(ys), max(xs), max(ys), top))
+
+
 def world_json(world: WorldConfig) -> dict:
     """The world's static geometry, start poses, victims, tags and water, for the world view."""
     objects = []
@@ -126,6 +151,7 @@ def world_json(world: WorldConfig) -> dict:
         "description": world.description,
         "floor": {"center": _r(fl.center), "size": _r(fl.size), "rgba": _rgba(world, fl.material)},
         "bounds": _r((min(xs), min(ys), max(xs), max(ys))),
+        "arena": arena_box(world, objects),
         "objects": objects,
         "false_alarms": alarms,
         "water": water,

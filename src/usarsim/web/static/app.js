@@ -45,7 +45,7 @@ class Console {
     });
     this.video.pageId = this.pageId;
     this.view3d = new View3D($("view3d"), { overlay: $("view3d-overlay"), info: $("view3d-info"),
-      followButton: $("view3d-follow") });
+      followButton: $("view3d-follow"), sizeOf: (name) => this.dimensionsOf(name) });
     this.plots = {
       speed: new TimePlot($("plot-speed"), { title: "Speed", unit: "m/s", digits: 2, colour: "#3ddc6a", floor: 0.5 }),
       battery: new TimePlot($("plot-battery"), { title: "Battery", unit: "s", digits: 0, colour: "#ffcc4d", floor: 10 }),
@@ -390,6 +390,14 @@ class Console {
     for (const b of document.querySelectorAll("#wheels .ack")) b.disabled = !(s && s.drive === "ackermann");
     $("speed").textContent = s ? s.speedText() : "–";
     $("lights-button").textContent = s && s.lightOn ? "Lights Off" : "Lights On";
+  }
+
+  // a robot's length, width and height (metres), from its class; null when not known
+  dimensionsOf(robot) {
+    const row = this.map.robots.get(robot);
+    const s = this.sessions.find((x) => x.name === robot);
+    const cls = (s && s.cls) || (row && this.classOf(row.class));
+    return cls ? cls.dimensions : null;
   }
 
   // video --------------------------------------------------------------------------
