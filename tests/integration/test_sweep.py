@@ -128,7 +128,8 @@ def test_dry_run_lists_every_run_and_runs_none(tmp_path, capsys):
     text = capsys.readouterr().out
     for r in exp.runs:
         assert r.run_id in text
-    assert text.count(" new ") == 5 and "DM-USAR_orange" in text and "2xP3AT" in text
+    assert sum(line.endswith(" new") for line in text.splitlines()) == 5 and "DM-USAR_orange" in text
+    assert all(line == line.rstrip() for line in text.splitlines())  # no padding at the ends of lines and "2xP3AT" in text
     assert "5 runs: 0 done already" in text and "5 to run" in text
     assert not out.exists()  # nothing ran, nothing written
 
@@ -240,7 +241,7 @@ def constructed_rows() -> list[dict]:
     return rows
 
 
-def test_the_summary_gives_mean_deviation_and_a_t_interval_per_configuration(tmp_path, capsys):
+def test_the_summary_gives_mean_deviation_and_an_interval_suited_to_each_score(tmp_path, capsys):
     assert t975(1) == 12.706 and t975(2) == 4.303 and t975(30) == 2.042
     assert 1.96 < t975(1000) < 1.99 and t975(40) == pytest.approx(2.021)
     s = Stat.of([96.0, 100.0, 104.0])
@@ -254,12 +255,22 @@ def test_the_summary_gives_mean_deviation_and_a_t_interval_per_configuration(tmp
         ("DM-USAR_yellow", "Wander", 3, 1), ("DM-USAR_yellow", "FrontierExplorer", 3, 0),
         ("DM-USAR_red", "Wander", 3, 0), ("DM-USAR_red", "FrontierExplorer", 3, 0)]
     assert groups[1].stat("area_m2").mean == pytest.approx(140.0)  # the failed run is not averaged
+    # victims found 1, 0, 1: a t interval would be [-0.77, 2.10]; the exact Poisson one of 2
+    # victims in 3 runs is [0.2422, 7.2247] / 3
+    victims = groups[1].stat("victims_found")
+    assert victims.method == "poisson"
+    assert (victims.ci_low, victims.ci_high) == pytest.approx((0.2422 / 3, 7.2247 / 3), abs=1e-4)
+    assert groups[1].stat("robots_lost").ci_high == pytest.approx(1.0)  # 0 of 1 robot lost: at most the team
 
     write_rows(rows, tmp_path)
     assert main(["report", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert f"report written to {tmp_path / 'report.html'}" in out
-    assert "FrontierExplorer" in out and "140.0 ± 9.9" in out  # area: 4.303 * 4 / sqrt(3) = 9.94
+    assert "±" not in out  # one notation: mean [low, high]
+    assert out.count("mean [95 % CI]") == 3  # in the header of each score's column
+    assert "FrontierExplorer" in out and "140.0 [130.1, 149.9]" in out  # area: 4.303 * 4 / sqrt(3) = 9.94
+    assert "0.67 [0.08, 2.41]" in out and "-0.77" not in out
+    assert "victims found: exact Poisson (Garwood)" in out and "area m²: Student's t, clipped at 0" in out
     report = build_report(tmp_path)
     assert report.axes == ("world", "controller")
     assert sorted(p.name for p in report.plots) == sorted(
@@ -270,8 +281,18 @@ def test_the_summary_gives_mean_deviation_and_a_t_interval_per_configuration(tmp
         summary = list(csv.DictReader(f))
     assert float(summary[1]["area_m2_mean"]) == pytest.approx(140.0)
     assert float(summary[1]["area_m2_ci95_high"]) == pytest.approx(140.0 + 4.303 * 4.0 / math.sqrt(3), abs=1e-4)
+    assert float(summary[1]["victims_found_ci95_low"]) == pytest.approx(0.2422 / 3, abs=1e-4)
     page = report.html_path.read_text()
     assert page.count('<img src="data:image/png;base64,') == 6 and "boom" in page
+    assert "±" not in page and page.count("mean [95 % CI, Poisson]") == 5  # the five counts
+
+
+def test_report_help_shows_plain_percent_signs(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["report", "--help"])
+    assert info.value.code == 0
+    text = capsys.readouterr().out
+    assert "95 % confidence interval" in text and "%%" not in text
 
 
 def test_report_without_results_says_so(tmp_path, capsys):

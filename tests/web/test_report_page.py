@@ -1,7 +1,8 @@
 """The sweep report's HTML page (usarsim report) in a real headless browser (Chromium
 through Playwright): it opens from the file alone with no console error, every plot is a
-decoded picture, and the summary table has a row per configuration.  A screenshot of the
-page is saved in tests/artifacts/."""
+decoded picture, the summary table has a row per configuration, says in each score's header
+what its cells are (mean [95 % CI, method]), and the page fits a 1280 px wide window, its
+summary table included.  A screenshot of the page is saved in tests/artifacts/."""
 
 from __future__ import annotations
 
@@ -56,7 +57,12 @@ def test_the_report_page_opens_without_errors_and_shows_its_plots(browser, tmp_p
             assert img["src"] == "data:image/png;base64,"  # embedded: the page needs no other file
         assert page.eval_on_selector_all("#summary tbody tr", "rows => rows.length") == 4
         headers = page.eval_on_selector_all("#summary thead th", "els => els.map(e => e.textContent)")
-        assert headers[:4] == ["world", "team", "runs", "failed"] and "area explored (m²)" in headers
+        assert headers[:4] == ["world", "team", "runs", "failed"] and "area explored (m²)mean [95 % CI, t, ≥ 0]" in headers
+        assert "victims foundmean [95 % CI, Poisson]" in headers and "scoremean [95 % CI, t]" in headers
+        assert "±" not in page.text_content("body")  # one notation: mean, then [low, high]
+        # a count's interval never goes below 0 (victims 0, 1, 2 of team P2AT at DM-USAR_yellow)
+        assert page.text_content("#summary tbody tr:first-child td:nth-child(6)") == "1.00[0.21, 2.92]"
+        assert fits_1280(page)
         assert "the controller exited with code 1: <no map>" in page.text_content("#failed")
         assert page.title() == "usarsim sweep report: page"
         ARTIFACTS.mkdir(exist_ok=True)
@@ -64,3 +70,32 @@ def test_the_report_page_opens_without_errors_and_shows_its_plots(browser, tmp_p
     finally:
         context.close()
     assert errors == [] and failed_requests == []
+
+
+def fits_1280(page) -> bool:
+    """The page, and its summary table, no wider than the 1280 px window (no sideways scroll)."""
+    width = page.evaluate("document.documentElement.scrollWidth")
+    table = page.evaluate("(() => { const t = document.getElementById('summary');"
+                          " return [t.getBoundingClientRect().right, t.parentElement.scrollWidth,"
+                          " t.parentElement.clientWidth]; })()")
+    assert width <= 1280, f"the page is {width} px wide"
+    assert table[0] <= 1280 and table[1] <= table[2], f"the summary table overflows: {table}"
+    return True
+
+
+def test_a_report_of_three_axes_with_long_labels_fits_1280_px(browser, tmp_path):
+    rows = sweep_rows()
+    rows += [dict(r, run_id=f"{r['run_id']}-tuned", controller='FrontierExplorer(bounds="auto", speed=0.4, '
+                                                               'turn_rate=0.8)') for r in rows]
+    write_rows(rows, tmp_path)
+    report = build_report(tmp_path)
+    assert report.axes == ("world", "team", "controller")
+    context = browser.new_context(viewport={"width": 1280, "height": 900})
+    page = context.new_page()
+    try:
+        page.goto(report.html_path.as_uri())
+        page.wait_for_load_state("load")
+        assert page.eval_on_selector_all("#summary tbody tr", "rows => rows.length") == 8
+        assert fits_1280(page)
+    finally:
+        context.close()

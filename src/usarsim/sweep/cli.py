@@ -4,6 +4,7 @@ the ``usarsim`` command line; each parser's ``handler`` runs its command."""
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,9 @@ def add_parsers(subparsers: Any) -> None:
                     "task with a simulator of its own on free ports, and store one row per run (its "
                     "configuration, its score, its wall time, its error) in DIR/results.parquet and "
                     "DIR/results.csv. Runs done already in DIR are skipped; a failed run is recorded and run "
-                    "again next time. Exit status 1 when a run failed.")
+                    "again next time. Exit status 0 when every run went well, 1 when a run failed; stopped by "
+                    "Ctrl-C (SIGINT) or SIGTERM, it stores the runs that finished, says how many, and exits "
+                    "with 130 or 143: the same command goes on from there.")
     s.add_argument("experiment", metavar="EXPERIMENT.yaml", help="the experiment file")
     s.add_argument("--dry-run", action="store_true", help="list the runs (and which are done already); run none")
     s.add_argument("--workers", type=_positive, default=None, metavar="N",
@@ -33,7 +36,9 @@ def add_parsers(subparsers: Any) -> None:
     r = subparsers.add_parser(
         "report", help="summarize a sweep's results: table, plots, one HTML page",
         description="Read DIR/results.parquet (usarsim sweep) and write DIR/summary.csv (per configuration: "
-                    "mean, standard deviation and 95 %% confidence interval of each score over its seeds), "
+                    "mean, standard deviation and 95 % confidence interval of each score over its seeds: "
+                    "Student's t, clipped to the range a score can take, or the exact Poisson interval of a "
+                    "count; docs/experiments.md), "
                     "DIR/plot-*.png (score, victims found and area explored against the sweep's axes) and "
                     "DIR/report.html, one self-contained page with the table and the plots.")
     r.add_argument("folder", metavar="DIR", help="a sweep's results folder")
@@ -61,6 +66,19 @@ def _console(stderr: bool = False) -> Any:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
+    from usarsim.sweep.runner import stop_on_signals
+
+    with stop_on_signals() as caught:
+        try:
+            return _sweep(args)
+        except KeyboardInterrupt:  # outside the runs (reading the file, starting): nothing to store
+            signum = caught.first or signal.SIGINT
+            print(f"usarsim: sweep stopped by {signal.Signals(signum).name}; run the same command again to go on",
+                  file=sys.stderr)
+            return 128 + signum
+
+
+def _sweep(args: argparse.Namespace) -> int:
     from usarsim.errors import ConfigError, UsarsimError
     from usarsim.sweep.experiment import load_experiment
     from usarsim.sweep.results import ResultsStore
@@ -79,7 +97,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         todo = sum(1 for r in exp.runs if r.run_id not in done)
         print(f"{len(exp.runs)} runs: {len(exp.runs) - todo} done already in {out}, {todo} to run")
         return 0
-    from usarsim.sweep.runner import run_sweep
+    from usarsim.sweep.runner import SweepInterrupted, run_sweep
 
     todo = sum(1 for r in exp.runs if r.run_id not in done)
     print(f"usarsim: sweep {exp.name}: {len(exp.runs)} runs, {len(exp.runs) - todo} done already, {todo} to run; "
@@ -90,10 +108,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     except UsarsimError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"usarsim: interrupted; the runs finished so far are stored in {out}: the same command goes on "
-              "from there", file=sys.stderr)
-        return 130
+    except SweepInterrupted as exc:
+        ids = {r.run_id for r in exp.runs}
+        stored = len(ResultsStore(out).done_ids() & ids)
+        ran = len(exc.outcome.rows)
+        print(f"usarsim: sweep stopped by {signal.Signals(exc.signum).name}: {stored} of {len(exp.runs)} runs done "
+              f"and stored in {out} ({ran} finished now, {exc.outcome.failed} failed); run the same command "
+              f"again to run the other {len(exp.runs) - stored}", file=sys.stderr)
+        return 128 + exc.signum
     for row in outcome.rows:
         if row.get("error"):
             print(f"usarsim: run {row['run_id']} ({row['world']}, seed {row['seed']}, {row['controller']}) "
@@ -121,11 +143,22 @@ def print_plan(exp: Any, done: set[str], failed_before: set[str], console: Any) 
         status = "done" if r.run_id in done else "failed, again" if r.run_id in failed_before else "new"
         t.add_row(str(i), r.run_id, short(r.world), str(r.seed), r.team_label, r.wireless, f"{r.duration_s:g} s",
                   r.clock, short(r.controller.label, 48), status)
-    console.print(t)
+    _print_table(t, console)
+
+
+def _print_table(table: Any, console: Any) -> None:
+    """``table`` on stdout, without the blanks rich pads its lines with."""
+    with console.capture() as captured:
+        console.print(table)
+    print("\n".join(line.rstrip() for line in captured.get().splitlines()))
+
+
+# The scores of the terminal's table (report.html and summary.csv have every one).
+TABLE_SCORES = (("score", "score"), ("victims_found", "victims found"), ("area_m2", "area m²"))
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from usarsim.sweep.report import AXIS_NAMES, build_report, fmt, short
+    from usarsim.sweep.report import AXIS_NAMES, build_report, digits_of, fmt_stat, method_of, short
     from usarsim.sweep.results import PARQUET
 
     folder = Path(args.folder)
@@ -142,16 +175,18 @@ def cmd_report(args: argparse.Namespace) -> int:
               title_justify="left")
     for c in shown:
         t.add_column(AXIS_NAMES[c])
-    for c in ("runs", "failed", "score", "victims found", "area m²"):
+    for c in ("runs", "failed"):
         t.add_column(c, justify="right")
+    for _, name in TABLE_SCORES:
+        t.add_column(f"{name}\nmean [95 % CI]", justify="right")
     for g in report.groups:
         cells = [short(g.config[c], 40) for c in shown] + [str(len(g.seeds)), str(g.failed)]
-        for m, d in (("score", 1), ("victims_found", 2), ("area_m2", 1)):
-            s = g.stat(m)
-            cells.append(fmt(s.mean, d) + (f" ± {fmt(s.ci_high - s.mean, d)}" if s.ci_high is not None else ""))
+        cells += [fmt_stat(g.stat(m), digits_of(m)) for m, _ in TABLE_SCORES]
         t.add_row(*cells)
-    _console().print(t)
-    print("(mean ± half-width of the 95 % confidence interval over the seeds)")
+    _print_table(t, _console())
+    print("mean [95 % confidence interval of the mean] over the seeds; the intervals: "
+          + "; ".join(f"{name}: {method_of(m)}" for m, name in TABLE_SCORES[:2]) + ";\n"
+          + "; ".join(f"{name}: {method_of(m)}" for m, name in TABLE_SCORES[2:]) + " (docs/experiments.md)")
     print(f"usarsim: summary {report.summary_csv}; {len(report.plots)} plots in {folder}")
     print(f"usarsim: report written to {report.html_path}")
     return 0

@@ -1,7 +1,11 @@
 """The report of a sweep: per configuration (the runs that differ only in their seed), the
-mean, standard deviation and 95 % confidence interval of every score; plots of the score,
-the victims found and the area explored against the sweep's axes; and one self-contained
-HTML page with both (the plots embedded as data URIs), ``report.html`` beside the results.
+mean, standard deviation and 95 % confidence interval of every score (each score's interval
+by a method suited to it: :mod:`usarsim.sweep.stats`); plots of the score, the victims found
+and the area explored against the sweep's axes; and one self-contained HTML page with both
+(the plots embedded as data URIs), ``report.html`` beside the results.
+
+Everywhere (terminal, page, plots) a score reads ``mean [low, high]``: its mean over the
+seeds and the 95 % confidence interval of that mean.
 """
 
 from __future__ import annotations
@@ -17,6 +21,9 @@ from typing import Any
 
 from usarsim.sweep.experiment import CONFIG_COLUMNS, varying_axes
 from usarsim.sweep.results import SCORE_COLUMNS, read_rows
+from usarsim.sweep.stats import METHOD_NAMES, POISSON, T_CLIPPED, T, poisson_interval, t975, t_interval
+
+__all__ = ["INTERVALS", "METRICS", "Group", "Stat", "build_report", "summarize", "t975"]
 
 # The scores the summary gives, with their names for people.
 METRICS = {"score": "score", "victims_found": "victims found", "victims_reported": "victims reported",
@@ -26,49 +33,53 @@ PLOTTED = ("score", "victims_found", "area_m2")
 AXIS_NAMES = {"world": "world", "team": "team", "wireless": "wireless model", "duration_s": "duration (s)",
               "clock": "clock", "controller": "controller"}
 
-# Student's t, two-sided 95 % (the 0.975 quantile), by degrees of freedom; beyond 30 it is
-# interpolated in 1/df towards the normal's 1.960.
-_T975 = (12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145,
-         2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045,
-         2.042)
-_T975_FAR = ((30, 2.042), (40, 2.021), (60, 2.000), (120, 1.980), (math.inf, 1.960))
+# Each score's 95 % interval: its method and the range its mean can take (docs/experiments.md).
+# Robots lost are also at most the team's size.
+INTERVALS: dict[str, tuple[str, float | None, float | None]] = {
+    "score": (T, None, None),  # penalties make it negative: any number
+    "victims_found": (POISSON, 0.0, None), "victims_reported": (POISSON, 0.0, None),
+    "false_reports": (POISSON, 0.0, None), "collisions": (POISSON, 0.0, None), "robots_lost": (POISSON, 0.0, None),
+    "area_m2": (T_CLIPPED, 0.0, None), "distance_m": (T_CLIPPED, 0.0, None),
+    "radio_contact_share": (T_CLIPPED, 0.0, 1.0),
+}
 
 
-def t975(df: int) -> float:
-    """The 0.975 quantile of Student's t with ``df`` degrees of freedom (df >= 1)."""
-    if df < 1:
-        raise ValueError(f"degrees of freedom must be >= 1, got {df}")
-    if df <= len(_T975):
-        return _T975[df - 1]
-    for (d0, t0), (d1, t1) in zip(_T975_FAR, _T975_FAR[1:]):
-        if df <= d1:
-            a, b = 1.0 / d0, (0.0 if math.isinf(d1) else 1.0 / d1)
-            return t0 + (t1 - t0) * (a - 1.0 / df) / (a - b)
-    return 1.960
+def method_of(metric: str) -> str:
+    """How ``metric``'s interval is made, for people: "exact Poisson (Garwood)"..."""
+    method, low, high = INTERVALS.get(metric, (T, None, None))
+    if method != T_CLIPPED:
+        return METHOD_NAMES[method]
+    return "Student's t, clipped at 0" if high is None else f"Student's t, clipped to [{low:g}, {high:g}]"
 
 
 @dataclass
 class Stat:
-    """Mean, sample standard deviation and the 95 % confidence interval of the mean (None
-    where there are too few values: the deviation and interval need two)."""
+    """Mean, sample standard deviation (None for fewer than two values) and the 95 %
+    confidence interval of the mean by ``method`` (None where it has too few values: a t
+    interval needs two, a Poisson one a single count)."""
 
     n: int
     mean: float | None
     sd: float | None
     ci_low: float | None
     ci_high: float | None
+    method: str = T
 
     @classmethod
-    def of(cls, values: list[float]) -> Stat:
+    def of(cls, values: list[float], metric: str | None = None, team_size: int | None = None) -> Stat:
+        """The statistics of ``values``; the interval ``metric``'s (INTERVALS; Student's t
+        when None), robots lost clipped at ``team_size``."""
+        method, low, high = INTERVALS.get(metric, (T, None, None)) if metric else (T, None, None)
         n = len(values)
         if n == 0:
-            return cls(0, None, None, None, None)
+            return cls(0, None, None, None, None, method)
         mean = sum(values) / n
-        if n == 1:
-            return cls(1, mean, None, None, None)
-        sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1))
-        half = t975(n - 1) * sd / math.sqrt(n)
-        return cls(n, mean, sd, mean - half, mean + half)
+        sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1)) if n > 1 else None
+        if method == POISSON:
+            ci = poisson_interval(values, high=team_size if metric == "robots_lost" else None)
+        else:
+            ci = t_interval(values, low, high)
+        return cls(n, mean, sd, *(ci or (None, None)), method)
 
 
 @dataclass
@@ -79,9 +90,10 @@ class Group:
     seeds: list[int] = field(default_factory=list)
     failed: int = 0
     values: dict[str, list[float]] = field(default_factory=dict)
+    team_size: int | None = None
 
     def stat(self, metric: str) -> Stat:
-        return Stat.of(self.values.get(metric, []))
+        return Stat.of(self.values.get(metric, []), metric, self.team_size)
 
 
 def summarize(rows: list[dict[str, Any]]) -> list[Group]:
@@ -91,6 +103,8 @@ def summarize(rows: list[dict[str, Any]]) -> list[Group]:
     for r in rows:
         key = tuple(r.get(c) for c in CONFIG_COLUMNS)
         g = groups.setdefault(key, Group({c: r.get(c) for c in CONFIG_COLUMNS}))
+        if r.get("robots_n") is not None:
+            g.team_size = max(g.team_size or 0, int(r["robots_n"]))
         if r.get("error"):
             g.failed += 1
             continue
@@ -116,7 +130,19 @@ def fmt(v: float | None, digits: int = 1) -> str:
     return f"{v:.{digits}f}" if abs(v) < 1e6 else f"{v:.3g}"
 
 
-def _digits(metric: str) -> int:
+def fmt_ci(s: Stat, digits: int = 1) -> str:
+    """``[low, high]``, the interval of ``s`` (empty where it has none)."""
+    return f"[{fmt(s.ci_low, digits)}, {fmt(s.ci_high, digits)}]" if s.ci_low is not None else ""
+
+
+def fmt_stat(s: Stat, digits: int = 1) -> str:
+    """``mean [low, high]``: the mean and its 95 % confidence interval."""
+    ci = fmt_ci(s, digits)
+    return fmt(s.mean, digits) + (f" {ci}" if ci else "")
+
+
+def digits_of(metric: str) -> int:
+    """The decimals ``metric`` is shown with."""
     return 3 if metric == "radio_contact_share" else 2 if metric in ("collisions", "robots_lost", "victims_found",
                                                                        "victims_reported", "false_reports") else 1
 
@@ -144,11 +170,12 @@ def plot(rows: list[dict[str, Any]], metric: str, axis: str | None, axes: tuple[
         label = ", ".join(short(v, 24) for v in combo) if combo else None
         mx, my, lo, hi = [], [], [], []
         for xi, x in enumerate(xs):
-            vals = [float(r[metric]) for r in ok if (axis is None or r.get(axis) == x)
-                    and tuple(r.get(a) for a in others) == combo]
-            if not vals:
+            sel = [r for r in ok if (axis is None or r.get(axis) == x) and tuple(r.get(a) for a in others) == combo]
+            if not sel:
                 continue
-            s = Stat.of(vals)
+            vals = [float(r[metric]) for r in sel]
+            sizes = [int(r["robots_n"]) for r in sel if r.get("robots_n") is not None]
+            s = Stat.of(vals, metric, max(sizes) if sizes else None)
             mx.append(xi + offset)
             my.append(s.mean)
             lo.append(s.mean - (s.ci_low if s.ci_low is not None else s.mean))
@@ -162,7 +189,7 @@ def plot(rows: list[dict[str, Any]], metric: str, axis: str | None, axes: tuple[
     ax.set_xlabel(AXIS_NAMES.get(axis, axis) if axis else "")
     ax.set_ylabel(METRICS[metric])
     ax.set_title(f"{METRICS[metric]}" + (f" by {AXIS_NAMES.get(axis, axis)}" if axis else "")
-                 + " (mean, 95 % CI; dots: runs)", fontsize=10)
+                 + f"\nmean, 95 % CI ({method_of(metric)}); dots: runs", fontsize=10)
     ax.grid(axis="y", alpha=0.3)
     if len(series) > 1:
         ax.legend(title=", ".join(AXIS_NAMES.get(a, a) for a in others), fontsize=8, title_fontsize=8)
@@ -235,20 +262,39 @@ def _write_summary_csv(groups: list[Group], path: Path) -> None:
 
 
 _CSS = """
-body { font: 14px/1.45 system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2em auto; max-width: 1320px;
-       padding: 0 1em; color: #1d2330; }
+body { font: 14px/1.45 system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 1.5em auto; max-width: 1280px;
+       padding: 0 1em; color: #1d2330; box-sizing: border-box; }
 h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { font-size: 1.2em; margin-top: 1.6em; }
 .meta { color: #5a6375; }
-table { border-collapse: collapse; margin: 0.5em 0; font-variant-numeric: tabular-nums; }
-th, td { border: 1px solid #d5dae3; padding: 0.3em 0.6em; text-align: left; vertical-align: top; }
-th { background: #eef1f6; } td.num { text-align: right; white-space: nowrap; }
-td.cfg { white-space: nowrap; } td .ci { color: #6b7385; font-size: 0.85em; }
+.fit { max-width: 100%; overflow-x: auto; }
+table { border-collapse: collapse; margin: 0.5em 0; font-variant-numeric: tabular-nums; font-size: 13px; }
+th, td { border: 1px solid #d5dae3; padding: 0.25em 0.4em; text-align: left; vertical-align: top; }
+th { background: #eef1f6; font-weight: 600; } th .how { display: block; font-weight: normal; font-size: 0.85em;
+     color: #5a6375; }
+td.num { text-align: right; white-space: nowrap; }
+td.cfg { max-width: 16em; overflow-wrap: break-word; } td.word { white-space: nowrap; }
+td .ci { display: block; color: #6b7385; font-size: 0.85em; }
 .plots { display: flex; flex-wrap: wrap; gap: 1em; }
-figure { margin: 0; border: 1px solid #d5dae3; padding: 0.5em; background: #fff; }
+figure { margin: 0; border: 1px solid #d5dae3; padding: 0.5em; background: #fff; max-width: 100%;
+         box-sizing: border-box; }
 figure img { display: block; max-width: 100%; height: auto; }
 figcaption { color: #5a6375; font-size: 0.9em; margin-top: 0.3em; }
-td.err { font-family: ui-monospace, monospace; font-size: 0.85em; white-space: pre-wrap; max-width: 60em; }
+td.err { font-family: ui-monospace, monospace; font-size: 0.85em; white-space: pre-wrap; overflow-wrap: anywhere;
+         max-width: 60em; }
 """
+
+# Each interval method as a column's header says it.
+_HOW = {"score": "t", "area_m2": "t, ≥ 0", "distance_m": "t, ≥ 0", "radio_contact_share": "t, 0 to 1"}
+
+
+def _how(metric: str) -> str:
+    return _HOW.get(metric, "Poisson" if INTERVALS[metric][0] == POISSON else "t")
+
+
+def _cfg_cell(text: str) -> str:
+    """A configuration's value; a short one in a word (a world's name) kept on one line."""
+    whole = " " not in text and len(text) <= 24
+    return f'<td class="cfg{" word" if whole else ""}">{html.escape(text)}</td>'
 
 
 def _html(folder: Path, rows: list[dict[str, Any]], groups: list[Group], axes: tuple[str, ...],
@@ -272,23 +318,27 @@ def _html(folder: Path, rows: list[dict[str, Any]], groups: list[Group], axes: t
         out.append('<p class="meta">Every run: ' + "; ".join(
             f"{e(AXIS_NAMES[c])}: {e(short(first.get(c), 80))}" for c in fixed) + "</p>")
     out.append("<h2>Summary</h2>")
-    out.append('<p class="meta">Per configuration, over its seeds: mean ± standard deviation, and under it the '
-               "95 % confidence interval of the mean (Student's t). Failed runs are counted, not averaged.</p>")
-    out.append("<table id=\"summary\"><thead><tr>")
+    out.append('<p class="meta" id="how">Per configuration, over its seeds: the mean, and under it '
+               "[low, high], the 95 % confidence interval of the mean (the standard deviation shows when the "
+               "pointer rests on a cell). Intervals: <b>t</b>: Student's t; <b>t, ≥ 0</b> and <b>t, 0 to 1</b>: "
+               "Student's t clipped to the range the score can take; <b>Poisson</b>: the exact Poisson interval "
+               "(Garwood) of a count per run (robots lost also at most the team's size). Failed runs are counted, "
+               "not averaged.</p>")
+    out.append('<div class="fit"><table id="summary"><thead><tr>')
     out += [f"<th>{e(AXIS_NAMES[c])}</th>" for c in shown]
-    out += ["<th>runs</th>", "<th>failed</th>"] + [f"<th>{e(METRICS[m])}</th>" for m in SCORE_COLUMNS]
+    out += ["<th>runs</th>", "<th>failed</th>"] + [
+        f'<th>{e(METRICS[m])}<span class="how">mean [95 % CI, {e(_how(m))}]</span></th>' for m in SCORE_COLUMNS]
     out.append("</tr></thead><tbody>")
     for g in groups:
-        out.append("<tr>" + "".join(f'<td class="cfg">{e(short(g.config[c], 60))}</td>' for c in shown))
+        out.append("<tr>" + "".join(_cfg_cell(short(g.config[c], 60)) for c in shown))
         out.append(f'<td class="num">{len(g.seeds)}</td><td class="num">{g.failed}</td>')
         for m in SCORE_COLUMNS:
-            s, d = g.stat(m), _digits(m)
-            sd = f" ± {fmt(s.sd, d)}" if s.sd is not None else ""
-            ci = f'<br><span class="ci">[{fmt(s.ci_low, d)}, {fmt(s.ci_high, d)}]</span>' if s.ci_low is not None \
-                else ""
-            out.append(f'<td class="num">{fmt(s.mean, d)}{sd}{ci}</td>')
+            s, d = g.stat(m), digits_of(m)
+            tip = f' title="standard deviation {fmt(s.sd, d)} over {s.n} runs"' if s.sd is not None else ""
+            ci = f'<span class="ci">{fmt_ci(s, d)}</span>' if s.ci_low is not None else ""
+            out.append(f'<td class="num"{tip}>{fmt(s.mean, d)}{ci}</td>')
         out.append("</tr>")
-    out.append("</tbody></table>")
+    out.append("</tbody></table></div>")
     out.append("<h2>Plots</h2><div class=\"plots\">")
     for path, caption, png in plots:
         data = base64.b64encode(png).decode("ascii")

@@ -15,11 +15,13 @@ import os
 import platform
 import shlex
 import shutil
+import signal
 import subprocess
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -46,6 +48,60 @@ class RunFailed(Exception):
 
 class SweepError(UsarsimError):
     """The sweep itself cannot go on (Ray cannot be started or joined)."""
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """The sweep was stopped (Ctrl-C, SIGINT or SIGTERM) before its last run: the rows that
+    arrived are stored, Ray is shut down.  ``outcome`` is what it did until then, ``signum``
+    the signal that stopped it (SIGINT for a plain KeyboardInterrupt)."""
+
+    def __init__(self, outcome: SweepOutcome, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.outcome = outcome
+        self.signum = signum
+
+
+class _Signals:
+    """The signals :func:`stop_on_signals` caught, the first first."""
+
+    def __init__(self) -> None:
+        self.caught: list[int] = []
+
+    @property
+    def first(self) -> int | None:
+        return self.caught[0] if self.caught else None
+
+    def handle(self, signum: int, frame: Any) -> None:
+        self.caught.append(signum)
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+_signals: _Signals | None = None  # while stop_on_signals is in force
+
+
+@contextmanager
+def stop_on_signals() -> Iterator[_Signals]:
+    """While in the block, SIGINT and SIGTERM raise KeyboardInterrupt in the main thread, as
+    Ctrl-C does: a sweep stops, stores what finished and shuts Ray down.  Both stop it even
+    when this process was started with them ignored (as a script's background job is, for
+    SIGINT): a sweep can always be stopped, and goes on later where it stopped.  The handlers
+    in force before come back at the end.  Does nothing outside the main thread."""
+    global _signals
+
+    caught = _Signals()
+    if threading.current_thread() is not threading.main_thread():
+        yield caught
+        return
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s in previous:
+        signal.signal(s, caught.handle)
+    _signals, before = caught, _signals
+    try:
+        yield caught
+    finally:
+        _signals = before
+        for s, old in previous.items():
+            signal.signal(s, old if old is not None else signal.SIG_DFL)
 
 
 # ---------------------------------------------------------------- one run
@@ -285,6 +341,11 @@ def start_ray(workers: int | None, address: str | None) -> bool:
     quiet = {"include_dashboard": False, "logging_level": logging.ERROR, "log_to_driver": False}
     if address:
         _check_reachable(address)
+    # ray.init makes SIGTERM exit the driver (sys.exit) after its native crash handler printed
+    # a stack dump; a handler the caller put in place (stop_on_signals: store what finished,
+    # then stop, in one line) is put back after it
+    own_sigterm = signal.getsignal(signal.SIGTERM) if threading.current_thread() is threading.main_thread() \
+        else None
     try:
         if address:
             ray.init(address=address, **quiet)
@@ -295,6 +356,9 @@ def start_ray(workers: int | None, address: str | None) -> bool:
         why = str(cause).strip().splitlines()[0] if str(cause).strip() else type(cause).__name__
         where = f"join the Ray cluster at {address}" if address else "start Ray on this machine"
         raise SweepError(f"cannot {where}: {why}") from exc
+    finally:
+        if callable(own_sigterm):
+            signal.signal(signal.SIGTERM, own_sigterm)
     return True
 
 
@@ -315,7 +379,11 @@ def _check_reachable(address: str) -> None:
 def run_sweep(experiment: Experiment, out_dir: str | Path, *, workers: int | None = None,
               address: str | None = None, progress: bool = True, console: Any = None) -> SweepOutcome:
     """Run every run of ``experiment`` that ``out_dir`` has no successful row of, as Ray
-    tasks (at most ``workers`` at a time when given), storing each row as it arrives."""
+    tasks (at most ``workers`` at a time when given), storing each row as it arrives.
+
+    Interrupted (KeyboardInterrupt: Ctrl-C, or a signal under :func:`stop_on_signals`), it
+    stores the rows that arrived, shuts down the Ray it started and raises
+    :class:`SweepInterrupted`; the same call later runs only what is missing."""
     import ray
 
     store = ResultsStore(out_dir)
@@ -325,15 +393,16 @@ def run_sweep(experiment: Experiment, out_dir: str | Path, *, workers: int | Non
     if not todo:
         return outcome
     t0 = time.monotonic()
-    started = start_ray(workers, address)
-    outcome.ray_start_s = time.monotonic() - t0
-    task = ray.remote(num_cpus=1, max_retries=0)(execute)
-    limit = workers or len(todo)
-    pending: dict[Any, Run] = {}
-    queue = list(todo)
+    was_running = ray.is_initialized()
     bar = _Progress(len(todo), experiment.name, enabled=progress, console=console)
-    last_save = 0.0
     try:
+        start_ray(workers, address)
+        outcome.ray_start_s = time.monotonic() - t0
+        task = ray.remote(num_cpus=1, max_retries=0)(execute)
+        limit = workers or len(todo)
+        pending: dict[Any, Run] = {}
+        queue = list(todo)
+        last_save = 0.0
         with bar:
             while queue or pending:
                 while queue and len(pending) < limit:
@@ -357,12 +426,46 @@ def run_sweep(experiment: Experiment, out_dir: str | Path, *, workers: int | Non
                     if finished is not None:
                         outcome.collect_s.append(max(0.0, time.time() - finished))
                     bar.advance(failed=outcome.failed)
-    finally:
-        store.save()
-        if started:
-            ray.shutdown()
+    except KeyboardInterrupt as exc:
+        outcome.elapsed_s = time.monotonic() - t0
+        signum = (_signals.first if _signals is not None else None) or signal.SIGINT
+        _stop(store, shutdown=not was_running)
+        raise SweepInterrupted(outcome, signum) from exc
+    except BaseException:
+        _stop(store, shutdown=not was_running)
+        raise
+    _stop(store, shutdown=not was_running)
     outcome.elapsed_s = time.monotonic() - t0
     return outcome
+
+
+def _stop(store: ResultsStore, *, shutdown: bool) -> None:
+    """Store the rows, and shut down the Ray this sweep started (a signal that comes while
+    it does is noted, not obeyed: stopping is what it asks for)."""
+    import ray
+
+    with _deferred_signals():
+        store.save()
+        if shutdown and ray.is_initialized():
+            ray.shutdown()
+
+
+@contextmanager
+def _deferred_signals() -> Iterator[None]:
+    """While in the block, the signals stop_on_signals handles are noted only."""
+    caught = _signals
+    if caught is None or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s, old in previous.items():
+        if old == caught.handle:
+            signal.signal(s, lambda signum, frame: caught.caught.append(signum))
+    try:
+        yield
+    finally:
+        for s, old in previous.items():
+            signal.signal(s, old)
 
 
 def _lost_row(run: Run, exc: BaseException) -> dict[str, Any]:
