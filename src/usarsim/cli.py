@@ -76,6 +76,7 @@ def _size(text: str) -> tuple[int, int]:
 # The ports ``usarsim serve`` listens on when none is given, by option; ``--port-offset N``
 # adds N to each (a second server beside the first needs nothing else).
 FOXGLOVE_PORT = 8765  # Foxglove's own default for a live WebSocket connection
+FOXGLOVE_DEFAULT = -1  # --foxglove without a port: FOXGLOVE_PORT plus --port-offset (resolve_foxglove_port)
 DEFAULT_PORTS = {"port": 3000, "truth_port": 3989, "image_port": 5003, "web_port": 8080,
                  "wcs_port": 5874, "wss_port": 50000, "cominterface_port": 7435}
 
@@ -100,6 +101,14 @@ def resolve_ports(given: dict[str, int | None], offset: int = 0,
                                  "outside 1..65535")
         ports[name] = value
     return ports
+
+
+def resolve_foxglove_port(given: int | None, offset: int = 0) -> int | None:
+    """--foxglove's port: None when not asked for, FOXGLOVE_PORT plus ``offset`` when asked
+    for without a port, else the port given (0 included, a free one)."""
+    if given is None:
+        return None
+    return FOXGLOVE_PORT + offset if given == FOXGLOVE_DEFAULT else given
 
 
 def _port_offset(text: str) -> int:
@@ -174,7 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--port", type=_port, default=None, help="control port (default: 3000; 0 picks a free port)")
     s.add_argument("--port-offset", type=_port_offset, default=0, metavar="N",
                    help="add N to the default of every port (control 3000, ground truth 3989, image 5003, web "
-                        "8080, ComServer 5874, WSS 50000, ComServerInterface 7435), to run a second server beside "
+                        "8080, ComServer 5874, WSS 50000, ComServerInterface 7435, Foxglove 8765 with --foxglove), "
+                        "to run a second server beside "
                         "the first: --port-offset 100 listens on 3100, 4089...; a port given explicitly keeps its "
                         "value (default: %(default)s)")
     s.add_argument("--seed", type=int, default=0, help="seed of every random generator (default: %(default)s)")
@@ -289,9 +299,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "radio contact: docs/scoring.md) and print it every 10 simulated seconds and at the end")
     s.add_argument("--score-file", default=None, metavar="FILE.json",
                    help="write the run's final score as JSON when the server stops (docs/scoring.md)")
-    s.add_argument("--foxglove", type=_port, nargs="?", const=FOXGLOVE_PORT, default=None, metavar="PORT",
-                   help=f"serve the run live to Foxglove over its WebSocket protocol (default port "
-                        f"{FOXGLOVE_PORT}; 0 picks a free port): open Foxglove and connect to ws://HOST:PORT")
+    s.add_argument("--foxglove", type=_port, nargs="?", const=FOXGLOVE_DEFAULT, default=None, metavar="PORT",
+                   help=f"serve the run live to Foxglove over its WebSocket protocol, subprotocol foxglove.sdk.v1 "
+                        f"(default port {FOXGLOVE_PORT} plus --port-offset; 0 picks a free port): open Foxglove and "
+                        "connect to ws://HOST:PORT (docs/recording.md)")
 
     v = sub.add_parser("validate", help="check a world, robot, RNDF or MDF file",
                        description="Load a world or robot file (or a shipped world or robot class by name, "
@@ -360,7 +371,10 @@ def build_parser() -> argparse.ArgumentParser:
                                     "compare every server line with the recorded one. A lock-step recording "
                                     "replays identically; a real-time one is replayed at its recorded "
                                     "simulated times and the report says how far the outputs differ. Image "
-                                    "and wireless connections are not replayed.")
+                                    "and wireless connections are not replayed. A recording the server did not "
+                                    "close (killed, crashed) is replayed up to where it ends, with a warning "
+                                    "saying where; a damaged file, or one that is not a recording, is refused "
+                                    "in one line (exit 1; the traceback with -v).")
     rp.add_argument("path", metavar="FILE.mcap", help="a recording made with usarsim serve --record")
     rp.add_argument("--check", action="store_true",
                     help="stop at the first server line that differs, name its connection, simulated time and "
@@ -476,7 +490,8 @@ def cmd_serve(args) -> int:
                       web_port=None if args.no_web else ports["web_port"], max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections),
-                      record=args.record, foxglove_port=args.foxglove, run_options=run_options(args),
+                      record=args.record, foxglove_port=resolve_foxglove_port(args.foxglove, args.port_offset),
+                      run_options=run_options(args),
                       record_cameras_fps=max(0.0, args.record_cameras), record_camera_size=args.record_camera_size,
                       score=args.score, score_file=args.score_file, step_grace_s=_step_grace_s(args),
                       on_score_line=lambda line: print(f"usarsim: {line}", flush=True))
@@ -504,7 +519,8 @@ def cmd_serve(args) -> int:
             where = f"[{where}]" if ":" in where else where
             print(f"usarsim: operator console at http://{where}:{app.web.port}/", flush=True)
         if app.recorder is not None and args.record:
-            print(f"usarsim: recording to {args.record} (complete when the server stops)", flush=True)
+            print(f"usarsim: recording to {args.record} (written as it goes: a server that is killed loses "
+                  "about its last second)", flush=True)
         mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
         log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
         await stop.wait()

@@ -21,6 +21,11 @@ are identical and how far their numbers are apart.
 
 Image-server connections are not replayed (their pictures are not kept), nor the wireless
 ports (the ComServer dials out to the robots' own listening ports).
+
+A recording is read from its first byte on (:mod:`usarsim.server.recording.reading`): one the
+server did not close (killed, crashed) replays up to where it ends, with a warning that says
+where, and what the server answers after that end is not compared.  A damaged file, or one
+that is not a recording, is refused in one line (exit 1; the traceback in the log at -v).
 """
 
 from __future__ import annotations
@@ -30,12 +35,13 @@ import logging
 import math
 import os
 import re
+import shlex
 import sys
 import time
 from collections import defaultdict
 from dataclasses import dataclass, field
-from pathlib import Path
 
+from usarsim.errors import UsarsimError
 from usarsim.server.recording.transcript import (
     METADATA_NAME,
     TOPIC,
@@ -57,8 +63,9 @@ _NAME = re.compile(r"\{Name ([^} ]*)")
 LINE_LIMIT = 1 << 22  # the longest line read back (a 3-D sweep's row is a few kB)
 
 
-class ReplayError(Exception):
-    """A recording that cannot be replayed (no transcript, an unknown world)."""
+class ReplayError(UsarsimError):
+    """A recording that cannot be replayed (missing, not MCAP, damaged, no transcript, an
+    unknown world)."""
 
 
 @dataclass
@@ -66,34 +73,54 @@ class Recording:
     path: str
     info: RunInfo
     chunks: list[Chunk]
+    complete: bool = True  # False: the server stopped without closing the file (killed, crashed)
+    end_time: float = 0.0  # simulated time of the last message it holds, s
+    end_byte: int = 0  # where its readable part ends
+    size: int = 0  # bytes in the file
+
+    def ending(self) -> str | None:
+        """A recording the server did not close: where it ends, in words (None when closed)."""
+        if self.complete:
+            return None
+        return (f"the recording ends at t={self.end_time:.3f} s, byte {self.end_byte} of {self.size} (it was not "
+                "closed: the server stopped without closing it, killed or crashed, or the file was cut short); "
+                "what it holds is replayed")
 
 
 def read_recording(path: str | os.PathLike) -> Recording:
-    """The transcript and run information of an MCAP recording (read with the ``mcap`` reader)."""
-    from mcap.exceptions import McapError
-    from mcap.reader import make_reader
+    """The transcript and run information of a recording, read from its first byte on
+    (:func:`usarsim.server.recording.reading.read_mcap`): a recording the server did not close
+    is read up to where it ends.  ReplayError says in one line what is wrong with the file."""
+    from usarsim.server.recording.reading import DamagedRecording, RecordingError, read_mcap
 
-    p = Path(path)
-    if not p.is_file():
-        raise ReplayError(f"{p}: no such file")
-    meta: dict[str, str] | None = None
+    name = str(path)
+    try:
+        contents = read_mcap(path, topics=[TOPIC])
+    except DamagedRecording as exc:
+        raise ReplayError(f"{exc}: the file was changed after it was written (a disk or copy error); what comes "
+                          f"before that byte replays: head -c {exc.offset} {shlex.quote(name)} > part.mcap && "
+                          "usarsim replay part.mcap") from exc
+    except RecordingError as exc:
+        raise ReplayError(f"{exc}; give a recording made with usarsim serve --record") from exc
+    except OSError as exc:
+        raise ReplayError(f"{name} cannot be read ({exc.strerror or exc})") from exc
+    meta = contents.metadata.get(METADATA_NAME)
+    if meta is None:
+        if not contents.complete:
+            raise ReplayError(f"{name} ends at byte {contents.end} before its run information (the server stopped "
+                              "as it started): nothing to replay")
+        raise ReplayError(f"{name}: no '{METADATA_NAME}' metadata: not recorded by usarsim serve --record")
     chunks: list[Chunk] = []
     try:
-        with p.open("rb") as f:
-            reader = make_reader(f)
-            for m in reader.iter_metadata():
-                if m.name == METADATA_NAME:
-                    meta = dict(m.metadata)
-            f.seek(0)
-            reader = make_reader(f)
-            for _, _, msg in reader.iter_messages(topics=[TOPIC], log_time_order=False):
-                chunks.append(decode_chunk(msg.data))
-    except (McapError, ValueError, KeyError, OSError) as exc:
-        raise ReplayError(f"{p}: not a readable usarsim recording ({exc})") from exc
-    if meta is None:
-        raise ReplayError(f"{p}: no '{METADATA_NAME}' metadata: not recorded by usarsim serve --record")
+        info = parse_run_info(meta)
+        for _, _, data in contents.messages:
+            chunks.append(decode_chunk(data))
+    except (ValueError, KeyError, TypeError) as exc:
+        raise ReplayError(f"{name}: its transcript does not decode ({type(exc).__name__}: {exc}): not a usarsim "
+                          "recording, or one changed after it was written") from exc
     chunks.sort(key=lambda c: c.seq)
-    return Recording(str(p), parse_run_info(meta), chunks)
+    return Recording(name, info, chunks, complete=contents.complete, end_time=contents.end_ns / 1e9,
+                     end_byte=contents.end, size=contents.size)
 
 
 @dataclass
@@ -241,6 +268,8 @@ class Replayer:
         expected: dict[int, list[tuple[Chunk, str]]] = {}
         for cid, outs in by_conn.items():
             lines = list(split_lines(outs))
+            if not self.rec.complete and lines and not outs[-1].text.endswith("\n"):
+                lines.pop()  # a line the end of an unclosed recording cut short
             expected[cid] = lines
             counts: dict[int, int] = {}
             for k, (ch, _) in enumerate(lines):
@@ -374,7 +403,9 @@ class Replayer:
                                            recorded, replayed)
                 k += 1
             conn.compared = k
-            if final and len(conn.got) > len(conn.expected) and rep.first is None:
+            # a recording the server did not close ends where it ends: what the server sent
+            # after that is not a difference
+            if final and self.rec.complete and len(conn.got) > len(conn.expected) and rep.first is None:
                 k = len(conn.expected)
                 t = conn.expected[-1][0].sim_time if conn.expected else 0.0
                 rep.first = Difference(conn.cid, conn.port, conn.peer, k + 1, t, None, conn.got[k])
@@ -448,7 +479,18 @@ def format_report(path: str, rep: Report) -> str:
 
 
 def main(args) -> int:
-    """``usarsim replay FILE [--check] [--timeout S]``."""
+    """``usarsim replay FILE [--check] [--timeout S]``: 0 when replayed (and, with --check,
+    identical), 1 when it differs or the file cannot be replayed (one line on stderr: what is
+    wrong and what to do; the traceback in the log at -v)."""
+    try:
+        rec = read_recording(args.path)
+    except ReplayError as exc:
+        return _refuse(exc)
+    except Exception as exc:  # noqa: BLE001 (a file no case above foresaw: still one line)
+        return _refuse(ReplayError(f"{args.path} cannot be read: {type(exc).__name__}: {exc}"), exc)
+    ending = rec.ending()
+    if ending is not None:
+        print(f"usarsim replay: warning: {ending}", file=sys.stderr, flush=True)
     bar = None
     progress = None
     if sys.stderr.isatty():
@@ -462,14 +504,22 @@ def main(args) -> int:
 
         bar.start()
     try:
-        rep = replay(args.path, check=args.check, timeout=args.timeout, progress=progress)
+        rep = asyncio.run(Replayer(rec, check=args.check, timeout=args.timeout, progress=progress).run())
     except ReplayError as exc:
-        print(f"usarsim: error: {exc}", file=sys.stderr)
-        return 2
+        return _refuse(exc)
     finally:
         if bar is not None:
             bar.stop()
     print(format_report(args.path, rep))
+    if ending is not None:
+        print(f"note: {ending}")
     if args.check and not rep.info.lockstep:
         print("note: a real-time recording never replays identically; --check compares lock-step recordings")
     return 0 if rep.ok or not args.check else 1
+
+
+def _refuse(exc: Exception, cause: BaseException | None = None) -> int:
+    """One line on stderr; the traceback in the log at -v."""
+    log.info("usarsim replay: %s", exc, exc_info=cause or exc)
+    print(f"usarsim replay: {exc}", file=sys.stderr, flush=True)
+    return 1

@@ -19,6 +19,7 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 from mcap_protobuf.decoder import DecoderFactory
 
+from usarsim.cli import FOXGLOVE_PORT
 from usarsim.client import launch
 from usarsim.protocol import messages as M
 from usarsim.server.recording.transcript import TOPIC, decode_chunk, encode_chunk, split_lines
@@ -257,12 +258,25 @@ def test_a_real_time_recording_replays_and_says_how_far_it_differs(tmp_path):
 
 
 def test_replay_refuses_what_is_not_a_recording(tmp_path):
+    """One line on stderr, exit 1 (tests/integration/test_recording_crash.py: damaged files)."""
     junk = tmp_path / "junk.mcap"
     junk.write_bytes(b"not an mcap file at all")
     out = usarsim("replay", str(junk))
-    assert out.returncode == 2 and "not a readable usarsim recording" in out.stderr
+    assert out.returncode == 1 and out.stderr.strip() == (
+        f"usarsim replay: {junk} is not an MCAP file (it does not start with MCAP's magic bytes); give a recording "
+        "made with usarsim serve --record")
     out = usarsim("replay", str(tmp_path / "missing.mcap"))
-    assert out.returncode == 2 and "no such file" in out.stderr
+    assert out.returncode == 1 and out.stderr.strip().endswith("missing.mcap: no such file; give a recording made "
+                                                               "with usarsim serve --record")
+    # an MCAP file that usarsim did not write: no run information
+    other = tmp_path / "other.mcap"
+    with other.open("wb") as f:
+        w = Writer(f)
+        w.start(profile="", library="test")
+        w.add_message(w.register_channel("/x", "json", 0), 0, b"{}", 0)
+        w.finish()
+    out = usarsim("replay", str(other))
+    assert out.returncode == 1 and "no 'usarsim' metadata" in out.stderr and "Traceback" not in out.stderr
 
 
 def test_record_to_a_folder_that_does_not_exist_is_a_clear_error(tmp_path):
@@ -394,3 +408,111 @@ def test_a_viewer_that_does_not_read_never_holds_the_simulation_back():
         robot.drive(left=2.0, right=2.0)
         sim_s, wall_s = asyncio.run(stalled_viewer(srv.ports["foxglove"], lambda: world.truth("P2AT")[0].time, 3.0))
     assert sim_s == pytest.approx(wall_s, rel=0.15), (sim_s, wall_s)
+
+
+def _abort(ws) -> None:
+    """Drop a WebSocket connection the way a killed viewer does: no close frame, a TCP reset."""
+    import socket
+    import struct
+
+    sock = ws.transport.get_extra_info("socket")
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    ws.transport.abort()
+
+
+def test_a_viewer_that_vanishes_is_news_not_an_error_and_an_old_viewer_is_told_why():
+    """A subscribed viewer whose connection is reset (a killed app) is logged at INFO, never
+    ERROR; a viewer that offers only foxglove.websocket.v1 is refused (foxglove-sdk 0.30 speaks
+    foxglove.sdk.v1) with a WARNING that says so."""
+    websockets = pytest.importorskip("websockets")
+
+    async def viewers(port: int) -> int:
+        try:
+            async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.websocket.v1"]):
+                raise AssertionError("foxglove.websocket.v1 was accepted: docs/recording.md is out of date")
+        except websockets.InvalidStatus as exc:
+            refused = exc.response.status_code
+        ws = await websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"])
+        deadline = time.monotonic() + 20
+        subscribed = 0
+        while time.monotonic() < deadline and subscribed < 3:
+            m = await asyncio.wait_for(ws.recv(), 20)
+            if isinstance(m, str) and json.loads(m).get("op") == "advertise":
+                chans = json.loads(m)["channels"]
+                await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                    {"id": c["id"], "channelId": c["id"]} for c in chans]}))
+                subscribed += len(chans)
+        await asyncio.sleep(0.5)  # messages flow to it
+        _abort(ws)
+        await asyncio.sleep(1.0)  # the server notices
+        return refused
+
+    with launch(world="DM-USAR_yellow", lockstep=False, speed=1.0, foxglove=True, extra_args=("-v",)) as srv:
+        with srv.connect() as world:
+            world.spawn("P2AT", name="R1")
+            status = asyncio.run(viewers(srv.ports["foxglove"]))
+            world.truth()  # the server still serves
+        srv.close(keep_stderr=True)
+        log = srv.stderr_tail(200_000)
+    assert status == 400
+    assert "Foxglove viewer gone without closing its connection" in log, log[-3000:]
+    assert " INFO foxglove.websocket.connected_client.poller: Foxglove viewer gone" in log
+    errors = [line for line in log.splitlines() if " ERROR " in line]
+    assert errors == [], errors
+    refused = [line for line in log.splitlines() if "refused the connection" in line]
+    assert len(refused) == 1 and " WARNING foxglove.websocket.server: Foxglove: refused" in refused[0], log[-3000:]
+    assert "foxglove.sdk.v1" in refused[0] and "foxglove.websocket.v1" in refused[0]
+
+
+def test_without_v_a_vanished_viewer_is_not_logged_at_all():
+    websockets = pytest.importorskip("websockets")
+
+    async def vanish(port: int) -> None:
+        ws = await websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"])
+        m = await asyncio.wait_for(ws.recv(), 20)  # serverInfo
+        assert json.loads(m)["op"] == "serverInfo"
+        _abort(ws)
+        await asyncio.sleep(1.0)
+
+    with launch(world="DM-USAR_yellow", lockstep=False, speed=1.0, foxglove=True) as srv:
+        asyncio.run(vanish(srv.ports["foxglove"]))
+        srv.close(keep_stderr=True)
+        log = srv.stderr_tail(200_000)
+    assert "ERROR" not in log and "Foxglove viewer gone" not in log, log
+
+
+def test_foxglove_port_without_a_number_moves_with_the_port_offset():
+    from usarsim.cli import build_parser, resolve_foxglove_port
+
+    def port(*argv: str) -> int | None:
+        args = build_parser().parse_args(["serve", *argv])
+        return resolve_foxglove_port(args.foxglove, args.port_offset)
+
+    assert port() is None and port("--port-offset", "100") is None  # not asked for
+    assert port("--foxglove") == FOXGLOVE_PORT == 8765
+    assert port("--foxglove", "--port-offset", "100") == 8865 == port("--port-offset", "100", "--foxglove")
+    assert port("--port-offset", "100", "--foxglove", "9000") == 9000  # given explicitly: kept
+    assert port("--port-offset", "100", "--foxglove", "0") == 0  # a free port
+    helped = " ".join(usarsim("serve", "--help").stdout.split())
+    assert "ComServerInterface 7435, Foxglove 8765 with --foxglove)" in helped  # --port-offset's help
+    assert "(default port 8765 plus --port-offset; 0 picks a free port)" in helped  # --foxglove's
+
+
+def test_a_server_with_a_port_offset_serves_foxglove_there():
+    import socket
+
+    for offset in range(1101, 15000, 997):  # one whose Foxglove port is free here
+        with socket.socket() as sock:
+            try:
+                sock.bind(("127.0.0.1", FOXGLOVE_PORT + offset))
+            except OSError:
+                continue
+        break
+    else:
+        pytest.skip("no free port for the test")
+    with launch(world="DM-USAR_yellow", extra_args=("--port-offset", str(offset), "--foxglove")) as srv:
+        deadline = time.monotonic() + 10
+        while "foxglove" not in srv.ports and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert srv.ports.get("foxglove") == FOXGLOVE_PORT + offset, srv.ports
+        assert srv.ports["control"] != 3000 + offset  # given explicitly (0): no offset

@@ -15,9 +15,12 @@ What it writes (docs/recording.md lists every channel):
 The taps and watchers only queue what they see; one thread of its own encodes and writes
 (``foxglove-sdk``, whose writer and WebSocket server run in native code).  Log times are
 simulated times, so that a recording plays back on the simulated clock; each transcript
-chunk carries its wall time too.  Nothing queued is dropped: a recording is whole.  A live
-viewer that reads too slowly loses its oldest messages (the server's backlog), never the
-simulation's time.
+chunk carries its wall time too.  Nothing queued is dropped: a recording is whole.  The file's
+current chunk is finished and handed to the operating system every simulated and every
+wall-clock second (:data:`FLUSH_SIM_S`, :data:`FLUSH_WALL_S`), so that a server killed leaves
+a file readable up to about a second before its end (:mod:`.reading`).  A live viewer that
+reads too slowly loses its oldest messages (the server's backlog), never the simulation's
+time.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import json
 import logging
 import math
 import queue
+import re
 import threading
 import time
 from collections.abc import Callable
@@ -44,6 +48,7 @@ from foxglove.messages import (
     SceneUpdate,
 )
 from foxglove.messages import LaserScan as FLaserScan
+from foxglove.websocket import ServerListener
 from PIL import Image
 
 from usarsim.config.world import WorldConfig
@@ -70,6 +75,14 @@ MAX_WAITING_OUTPUTS = 256
 CAMERA_SIZE = (320, 240)
 CAMERA_JPEG_QUALITY = 75  # the image server's "normal" (usarsim.server.image.JPEG_QUALITY)
 LIVE_BACKLOG = 1024  # messages per live viewer before its oldest are dropped (foxglove-sdk's default)
+# The file's current chunk is finished and handed to the operating system at least this often,
+# in wall-clock and in simulated seconds, so that a server killed (kill -9, a crash) leaves a
+# recording readable up to about a second before its end (usarsim replay reads such a file,
+# docs/recording.md; a power cut also loses what the operating system had not yet written to
+# the disk).  A chunk is also finished when it holds CHUNK_SIZE bytes.
+FLUSH_WALL_S = 1.0
+FLUSH_SIM_S = 1.0
+CHUNK_SIZE = 1 << 20  # uncompressed bytes a chunk (foxglove-sdk's default)
 BACKLOG_WARNING = 200_000  # items queued for the recorder's thread before a warning
 
 
@@ -78,7 +91,47 @@ def _write_options():
     physics keeps the other core."""
     from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
-    return MCAPWriteOptions(compression=MCAPCompression.Zstd, compression_level=1, compression_threads=0)
+    return MCAPWriteOptions(compression=MCAPCompression.Zstd, compression_level=1, compression_threads=0,
+                            chunk_size=CHUNK_SIZE)
+
+
+# foxglove-sdk's own log: its native WebSocket server logs through Python's logging, under
+# these names (its Rust modules'; pyo3-log hands each record to the logger of that exact name,
+# so a filter goes on each).
+SDK_LOGGERS = ("foxglove.websocket.server", "foxglove.websocket_server", "foxglove.websocket.connected_client",
+               "foxglove.websocket.connected_client.poller", "foxglove.websocket.connected_client.send_lossy",
+               "foxglove.websocket.advertise")
+# A viewer gone without closing its WebSocket (an app killed, a laptop closed, a network
+# dropped): what the sdk logs then, as an ERROR.
+_VIEWER_GONE = re.compile(r"Connection reset|without closing handshake|Broken pipe|Connection aborted|timed out|"
+                          r"os error (?:32|103|104|110)\b")
+_HANDSHAKE_FAILED = re.compile(r"Dropping client (\S+): handshake failed")
+# The WebSocket subprotocols the sdk's server accepts (foxglove-sdk 0.30); a viewer that
+# offers none of them is answered HTTP 400 (docs/recording.md, "Live in Foxglove").
+SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.sdk.v1.1")
+
+
+class _SdkLogFilter(logging.Filter):
+    """foxglove-sdk's log as a user reads it: a viewer that goes away without closing is news
+    (INFO, with -v), not an error; a connection refused at the handshake says why."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        msg = record.getMessage()
+        if _VIEWER_GONE.search(msg):
+            record.levelno, record.levelname = logging.INFO, "INFO"
+            record.msg, record.args = f"Foxglove viewer gone without closing its connection ({msg})", None
+            return logging.getLogger(record.name).isEnabledFor(logging.INFO)
+        refused = _HANDSHAKE_FAILED.search(msg)
+        if refused:
+            record.levelno, record.levelname = logging.WARNING, "WARNING"
+            record.msg, record.args = (
+                f"Foxglove: refused the connection from {refused.group(1)} (HTTP 400): not a WebSocket viewer "
+                f"that offers the subprotocol {' or '.join(SUBPROTOCOLS)}; a viewer that offers only "
+                "foxglove.websocket.v1 (Lichtblick up to 1.21, older Foxglove Studio builds) cannot connect: use "
+                "the Foxglove app or a newer Lichtblick (docs/recording.md, 'Live in Foxglove')"), None
+        return True
 
 
 class _LogTap(logging.Handler):
@@ -140,8 +193,9 @@ class _CountingQueue:
             log.warning("recording: %d items wait to be written: the recorder falls behind the simulation "
                         "(nothing is dropped; memory grows until it catches up)", self.queued - self.done)
 
-    def get(self):
-        return self._q.get()
+    def get(self, timeout: float | None = None):
+        """The next item; queue.Empty when none came within ``timeout`` seconds."""
+        return self._q.get(timeout=timeout)
 
 
 class _Sink:
@@ -191,6 +245,7 @@ class Recorder:
         self._time: Callable[[], float] = lambda: 0.0
         self._describe = None
         self._log_tap = _LogTap(self)
+        self._sdk_filter = _SdkLogFilter()
         # worker state
         self._names: dict[int, str] = {}  # uid -> robot name
         self._seen: dict[str, _Seen] = {}  # robots by name
@@ -199,6 +254,10 @@ class Recorder:
         self._last_refresh = -math.inf
         self.messages = 0  # written (every sink counted once)
         self.chunks = 0
+        self.flushes = 0  # chunks finished and handed to the operating system on time (FLUSH_*)
+        self._unflushed = False  # something was written to the file since its last flush
+        self._flushed_wall = 0.0  # time.monotonic() of the last flush
+        self._flushed_sim = 0.0  # simulated time of the last flush
         self.error: BaseException | None = None
 
     # Wiring --------------------------------------------------------------------------
@@ -257,6 +316,8 @@ class Recorder:
             self._live_sink = _Sink(ctx)
             self._sinks.append(self._live_sink)
             self.foxglove_port = self.server.port
+            for name in SDK_LOGGERS:
+                logging.getLogger(name).addFilter(self._sdk_filter)
         logging.getLogger("usarsim").addHandler(self._log_tap)
         self._q.put(("world",))
         self._thread.start()
@@ -277,6 +338,8 @@ class Recorder:
         if self.server is not None:
             self.server.stop()
             self.server = None
+            for name in SDK_LOGGERS:
+                logging.getLogger(name).removeFilter(self._sdk_filter)
 
     # Taps (event loop) ---------------------------------------------------------------
     def opened(self, port: str, peer: str) -> int:
@@ -314,8 +377,16 @@ class Recorder:
         handlers = {"chunk": self._write_chunk, "outs": self._write_outputs, "frame": self._write_frame,
                     "log": self._write_log, "world": self._write_world, "resend": self._resend_static,
                     "picture": self._write_picture}
+        self._flushed_wall = time.monotonic()
         while True:
-            item = self._q.get()
+            wait = None
+            if self._unflushed:  # nothing more may come for a while: the file is flushed meanwhile
+                wait = max(0.0, self._flushed_wall + FLUSH_WALL_S - time.monotonic())
+            try:
+                item = self._q.get(wait)
+            except queue.Empty:
+                self._flush()
+                continue
             if item is None:
                 return
             try:
@@ -325,6 +396,28 @@ class Recorder:
                     self.error = exc
                     log.exception("recording: cannot write %s", item[0])
             self._q.done += 1
+            if self._writer is not None and item[0] != "resend":
+                self._unflushed = True
+                if time.monotonic() - self._flushed_wall >= FLUSH_WALL_S or \
+                        self._time() - self._flushed_sim >= FLUSH_SIM_S:
+                    self._flush()
+
+    def _flush(self) -> None:
+        """Finish the file's current chunk and hand what is written to the operating system:
+        a server killed from now on leaves all of it readable."""
+        self._flushed_wall = time.monotonic()
+        self._flushed_sim = self._time()
+        self._unflushed = False
+        writer = self._writer
+        if writer is None:
+            return
+        try:
+            writer.flush()
+            self.flushes += 1
+        except Exception as exc:  # a full disk: the server goes on, the recording stops growing
+            if self.error is None:
+                self.error = exc
+                log.exception("recording: cannot flush %s", self.path)
 
     def _log(self, topic: str, make, msg, t: float, sinks: list[_Sink] | None = None) -> None:
         ns = scene.to_ns(t)
@@ -504,8 +597,10 @@ class Recorder:
             timestamp=scene.timestamp(t), frame_id=f"{robot}/{cam}", data=jpeg, format="jpeg"), t)
 
 
-class _Listener:
-    """Live viewers: one that subscribes to the world is sent its static geometry."""
+class _Listener(ServerListener):
+    """Live viewers: one that subscribes to the world is sent its static geometry.  The sdk's
+    ServerListener answers every other callback (an unsubscription, a viewer leaving) with
+    nothing."""
 
     def __init__(self, rec: Recorder):
         self.rec = rec
