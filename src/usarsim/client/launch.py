@@ -110,7 +110,7 @@ def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = Tru
     """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file),
     ``seed``, lock-step (default) or real time at ``speed`` (None: as fast as it can).
     ``wireless``, ``image`` and ``web`` start those services too; ``record`` records the run
-    to that MCAP file (written when the server stops); ``foxglove`` serves it live to
+    to that MCAP file (written as it goes, closed when the server stops); ``foxglove`` serves it live to
     Foxglove (its port in ``ports["foxglove"]``).  Use it in a ``with`` block, or call
     :meth:`Server.close`."""
     args = ["--world", str(world), "--seed", str(int(seed)), "--port", "0", "--truth-port", "0"]

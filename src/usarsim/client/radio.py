@@ -1,4 +1,4 @@
-"""A robot's radio through the simulator's ComServer (README "Team communication",
+"""A robot's radio through the simulator's ComServer (docs/wireless.md,
 protocol.md 12.1, manual 3.2.4): the messages get through only while the simulated link
 between the two robots holds.
 

@@ -1,6 +1,6 @@
 """Lock-step: where a STEP falls among the lines of every control connection.
 
-The rule (README, "Time: real time, accelerated, lock-step"): **a STEP is carried out once
+The rule (docs/protocol.md, "Time: real time, accelerated, lock-step"): **a STEP is carried out once
 every line that reached the server before it, on any control connection, has been read and
 handled**, so that a controller's commands are applied by the STEP that follows them however
 it wrote them: in one write or several, on the robot's connection or another one.
