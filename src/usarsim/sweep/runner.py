@@ -427,15 +427,15 @@ def run_sweep(experiment: Experiment, out_dir: str | Path, *, workers: int | Non
                         outcome.collect_s.append(max(0.0, time.time() - finished))
                     bar.advance(failed=outcome.failed)
     except KeyboardInterrupt as exc:
+        interrupted: KeyboardInterrupt | None = exc
+    else:
+        interrupted = None
+    finally:
+        _stop(store, shutdown=not was_running)
         outcome.elapsed_s = time.monotonic() - t0
+    if interrupted is not None:
         signum = (_signals.first if _signals is not None else None) or signal.SIGINT
-        _stop(store, shutdown=not was_running)
-        raise SweepInterrupted(outcome, signum) from exc
-    except BaseException:
-        _stop(store, shutdown=not was_running)
-        raise
-    _stop(store, shutdown=not was_running)
-    outcome.elapsed_s = time.monotonic() - t0
+        raise SweepInterrupted(outcome, signum) from interrupted
     return outcome
 
 
