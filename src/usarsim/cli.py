@@ -130,12 +130,13 @@ class _Parser(argparse.ArgumentParser):
         parsed, extras = self.parse_known_args(args, namespace)
         if extras:
             msg = "unrecognized arguments: " + " ".join(extras)
-            known = self._subparser(getattr(parsed, "command", None))._option_string_actions
+            command = self._subparser(getattr(parsed, "command", None))
             guess = next((g for e in extras if e.startswith("--")
-                          for g in difflib.get_close_matches(e.split("=")[0], known, n=1)), None)
+                          for g in difflib.get_close_matches(e.split("=")[0], command._option_string_actions, n=1)),
+                         None)
             if guess:
                 msg += f" (did you mean {guess}?)"
-            self._subparser(getattr(parsed, "command", None)).error(msg)
+            command.error(msg)
         return parsed
 
     def _subparser(self, command: str | None) -> argparse.ArgumentParser:
