@@ -3,29 +3,38 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/_env.sh
-# Everything: the core, the extras (recordings, sweeps) and the test tools, since the suite tests
+# Everything: the core, the extras (recordings, sweeps, ROS 2) and the test tools, since the suite tests
 # every part.
 echo "scripts/test.sh: installing usarsim with every extra and the test tools (pip install -e '.[test]')" >&2
 "$USARSIM_PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"
-# The operator console's tests drive a headless Chromium: Debian's package (Playwright's own
-# browser download is not used).  Without it those tests are skipped, with the reason.
-if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1 \
-    && command -v apt-get >/dev/null 2>&1; then
+# Debian packages the tests need, installed once with apt-get when missing:
+# * chromium: the operator console's tests drive a headless browser, Debian's (Playwright's own
+#   browser download is not used); without it those tests are skipped, with the reason;
+# * cmake and g++: the ROS 2 bridge's /tf needs tf2_msgs, which has no wheel and is built once into
+#   the environment (python -m usarsim.ros2.tf2_build, below).
+debs=()
+if ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then debs+=(chromium); fi
+if ! command -v cmake >/dev/null 2>&1; then debs+=(cmake); fi
+if ! command -v g++ >/dev/null 2>&1; then debs+=(g++); fi
+if [ "${#debs[@]}" -gt 0 ] && command -v apt-get >/dev/null 2>&1; then
   sudo=""
   if [ "$(id -u)" != 0 ]; then
     if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then sudo="sudo -n"; else sudo="none"; fi
   fi
   if [ "$sudo" = none ]; then
-    echo "scripts/test.sh: no chromium and no root to install it (apt-get install chromium): the browser tests will be skipped" >&2
+    echo "scripts/test.sh: ${debs[*]} missing and no root to install them (apt-get install ${debs[*]}):" \
+         "the browser tests are skipped, the ROS 2 tests need cmake and g++" >&2
   else
-    echo "scripts/test.sh: the operator console's tests drive a real browser: installing Debian's chromium" \
-         "(apt-get install chromium, a few minutes the first time)" >&2
+    echo "scripts/test.sh: installing Debian's ${debs[*]} for the browser and ROS 2 tests" \
+         "(apt-get install, a few minutes the first time)" >&2
     { $sudo env DEBIAN_FRONTEND=noninteractive apt-get update -q \
-        && $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium; } \
+        && $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q "${debs[@]}"; } \
         </dev/null >/dev/null \
-      || echo "scripts/test.sh: could not install chromium: the browser tests will be skipped" >&2
+      || echo "scripts/test.sh: could not install ${debs[*]}" >&2
   fi
 fi
+"$USARSIM_PYTHON" -m usarsim.ros2.tf2_build \
+  || echo "scripts/test.sh: tf2_msgs could not be built: the ROS 2 tests of /tf will fail" >&2
 # The house style (pyproject.toml [tool.ruff]): a finding fails the run before any test.
 "$USARSIM_PYTHON" -m ruff check src tests tools examples
 export MUJOCO_GL="${MUJOCO_GL:-egl}"

@@ -386,6 +386,9 @@ def build_parser() -> argparse.ArgumentParser:
     from usarsim.sweep.cli import add_parsers as add_sweep_parsers
 
     add_sweep_parsers(sub)  # 'usarsim sweep' and 'usarsim report' (docs/experiments.md)
+    from usarsim.ros2.cli import add_parser as add_ros2_parser
+
+    add_ros2_parser(sub)  # 'usarsim ros2' (docs/ros2.md)
     for command in (s, v, w, r, b, rp):  # -v and -vv after the command too: 'usarsim serve -v'
         _add_verbose(command, "verbose_after")
     return p
@@ -753,6 +756,8 @@ def main(argv: list[str] | None = None) -> int:
             require("sweep", f"usarsim {args.command}")
         elif args.command == "replay":
             require("record", "usarsim replay")
+        elif args.command == "ros2":
+            require("ros2", "usarsim ros2")
         elif getattr(args, "record", None) or getattr(args, "foxglove", None) is not None:
             require("record", f"usarsim {args.command} --{'record' if args.record else 'foxglove'}")
     except MissingExtraError as exc:

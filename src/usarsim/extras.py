@@ -2,8 +2,9 @@
 
 The simulator itself (``usarsim serve``, the clients, the environments) needs only the core
 install.  Sweeps and their reports (Ray, Arrow, matplotlib) and recordings (Foxglove's SDK, the
-MCAP reader) are extras: ``pip install 'usarsim[sweep]'``, ``'usarsim[record]'`` or
-``'usarsim[all]'``.  A command that needs a missing one says so in one line.
+MCAP reader) and the ROS 2 bridge (rclpy) are extras: ``pip install 'usarsim[sweep]'``,
+``'usarsim[record]'``, ``'usarsim[ros2]'`` or ``'usarsim[all]'``.  A command that needs a
+missing one says so in one line.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from usarsim.errors import UsarsimError
 EXTRAS: dict[str, tuple[str, ...]] = {
     "sweep": ("ray", "pyarrow", "matplotlib"),
     "record": ("foxglove", "mcap", "zstandard"),
+    "ros2": ("rclpy", "sensor_msgs", "nav_msgs", "rosgraph_msgs", "std_srvs", "visualization_msgs", "rosbags"),
 }
 
 

@@ -156,6 +156,11 @@ class Robot:
     def take_messages(self) -> list[Any]:
         return self._conn.state.take_messages()
 
+    @property
+    def closed(self) -> bool:
+        """True once the server closed this robot's connection (or :meth:`close` did)."""
+        return self._conn.state.closed
+
     def reading(self, name: str) -> Any:
         return self.readings.get(name)
 

@@ -1,0 +1,589 @@
+"""The ROS 2 bridge: robots of a running simulator on the ROS 2 graph.
+
+The bridge is an ordinary protocol client in a process of its own (DDS and rclpy never share the
+simulation's interpreter): it connects to a simulator (this one or any USARSim server), spawns
+its robots, asks each for its GETGEO and GETCONF, and then turns what the robots send into ROS 2
+messages and ROS 2 commands into protocol lines.  docs/ros2.md has the topic and frame tables.
+
+Threads: the main thread owns the sockets (reads the robots' messages, publishes, and in
+lock-step mode drives the clock); rclpy's executor runs in a second thread and only queues what
+subscribers and services ask for, which the main thread carries out between reads.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import queue
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from usarsim.client.blocking import Robot, World
+from usarsim.client.core import ClientError, ServerError, drive_line
+from usarsim.protocol import messages as M
+from usarsim.readings import (
+    GpsReading,
+    ImuReading,
+    OdometryReading,
+    PoseReading,
+    RangeReading,
+    RangeScanReading,
+    VictimReading,
+)
+
+from .convert import BadTwist, Kinematics, angles, drive_of, quaternion, ros_pose, scan_angles, vector
+
+log = logging.getLogger("usarsim.ros2")
+
+# GETGEO types asked of every robot for /tf_static (an EmptyGeometry answer: the robot has none)
+SENSOR_TYPES = ("RangeScanner", "RangeScanner3D", "Sonar", "IR", "Odometry", "INS", "IMU", "GroundTruth", "GPS",
+                "Camera", "VictSensor", "Touch", "RFID", "Acoustic", "HumanMotion")
+WORLD_FRAME = "map"  # the simulator's world, in REP 103 axes (ground truth, victims, map -> odom)
+NODE_NAME = "usarsim_bridge"
+
+
+@dataclass
+class RobotSpec:
+    """A robot to spawn: ``CLASS@START[:NAME]`` on the command line."""
+
+    class_name: str
+    start: str | None = None
+    name: str | None = None
+
+    @classmethod
+    def parse(cls, text: str) -> RobotSpec:
+        name = None
+        if ":" in text:
+            text, name = text.rsplit(":", 1)
+        cls_name, _, start = text.partition("@")
+        if not cls_name:
+            raise ValueError(f"a robot is CLASS[@START][:NAME], e.g. P2AT@PlayerStart1:robot1; got {text!r}")
+        return cls(cls_name, start or None, name or None)
+
+
+@dataclass
+class _Conf:
+    """One item's CONF fields, by key (the text the server sent)."""
+
+    fields: dict[str, str] = field(default_factory=dict)
+
+    def number(self, key: str, default: float) -> float:
+        try:
+            return float(self.fields[key])
+        except (KeyError, ValueError):
+            return default
+
+
+class RobotBridge:
+    """One robot: its publishers, its subscriptions and what it last reported."""
+
+    def __init__(self, bridge: Bridge, robot: Robot, frame_prefix: str):
+        self.bridge = bridge
+        self.robot = robot
+        self.name = robot.name
+        self.ns = f"/{robot.name}"
+        self.prefix = frame_prefix
+        self.geo = robot.geo("Robot")
+        self.conf = robot.conf("Robot")
+        self.kinematics = Kinematics.of(self.geo, self.conf)
+        self.mounts: dict[str, M.ItemPose] = {}  # sensor name -> its GETGEO mount
+        self.confs: dict[str, _Conf] = {}  # sensor name -> its CONF fields
+        for item_type in SENSOR_TYPES:
+            try:
+                geo = robot.geo(item_type)
+                conf = robot.conf(item_type)
+            except ServerError:
+                continue
+            for item in getattr(geo, "items", ()):
+                self.mounts[item.name] = item
+            for item in getattr(conf, "items", ()):
+                self.confs[item.name] = _Conf({k: str(v) for k, v in item.fields})
+        self.pubs: dict[str, Any] = {}
+        self.scan_topics: dict[str, str] = {}
+        self.last_odom: tuple[float, float, float, float] | None = None  # t, x, y, yaw (ROS)
+        self.battery_full: int | None = None
+        self.warned: set[str] = set()
+
+    def frame(self, name: str) -> str:
+        return f"{self.prefix}{name}"
+
+    # publishers made on first use: a robot without a sensor has no topic for it ----------------
+    def publisher(self, topic: str, msg_type: Any) -> Any:
+        pub = self.pubs.get(topic)
+        if pub is None:
+            pub = self.pubs[topic] = self.bridge.node.create_publisher(msg_type, f"{self.ns}/{topic}",
+                                                                       self.bridge.qos)
+        return pub
+
+    def emit(self, topic: str, msg_type: Any, msg: Any, stamp: float) -> None:
+        self.publisher(topic, msg_type).publish(msg)
+        self.bridge._record(f"{self.ns}/{topic}", msg, stamp)
+
+    def warn_once(self, key: str, text: str) -> None:
+        if key not in self.warned:
+            self.warned.add(key)
+            log.warning("robot %s: %s", self.name, text)
+
+    def static_transforms(self) -> list[Any]:
+        """base_link to every sensor's frame, from the GETGEO mounts (items on a mission
+        package's link at the package's rest pose)."""
+        out = []
+        for name, item in self.mounts.items():
+            out.append(self.bridge.transform(0.0, self.frame("base_link"), self.frame(name), item.location,
+                                             item.orientation))
+        return out
+
+    # commands from ROS ------------------------------------------------------------------------
+    def on_twist(self, vx: float, vy: float, vz: float, wz: float) -> None:
+        try:
+            keys = drive_of(self.kinematics, vx, vy, vz, wz)
+        except BadTwist as exc:
+            log.warning("robot %s: ignored a %s", self.name, exc)
+            return
+        except ValueError as exc:
+            self.warn_once("cmd_vel", f"ignored cmd_vel: {exc}")
+            return
+        limited = drive_of(self.kinematics, vx, vy, vz, wz, clip=False) != keys
+        if limited:
+            self.warn_once("limit", f"cmd_vel ({vx:g}, {vy:g}, {vz:g} m/s, {wz:g} rad/s) is beyond what the robot "
+                                    f"can do: limited to its MaxSpeed and MaxFrontSteer (said once)")
+        self.bridge.commands.put((self, drive_line(**keys)))
+
+    # messages from the simulator --------------------------------------------------------------
+    def handle(self, msg: Any) -> None:
+        b = self.bridge
+        t = getattr(msg, "time", None)
+        stamp = t if isinstance(t, float) and math.isfinite(t) else (self.robot.time or b.sim_time)
+        if isinstance(msg, M.SensorMessage):
+            r = msg.reading
+            if isinstance(r, RangeScanReading):
+                self.publish_scan(stamp, r)
+            elif isinstance(r, OdometryReading):
+                self.publish_odometry(stamp, r)
+            elif isinstance(r, PoseReading) and r.sensor_type == "GroundTruth":
+                self.publish_ground_truth(stamp, r)
+            elif isinstance(r, PoseReading) and r.sensor_type == "INS":
+                self.publish_imu(stamp, r.name, r.orientation, None, None)
+            elif isinstance(r, ImuReading):
+                self.publish_imu(stamp, r.name, r.orientation, r.angular_velocity, r.acceleration)
+            elif isinstance(r, RangeReading):
+                self.publish_ranges(stamp, r)
+            elif isinstance(r, GpsReading):
+                self.publish_gps(stamp, r)
+            elif isinstance(r, VictimReading):
+                self.publish_victims(stamp, r)
+        elif isinstance(msg, (M.GroundVehicleStatus, M.AerialVehicleStatus)):
+            self.publish_battery(stamp, msg.battery_s)
+
+    def publish_scan(self, stamp: float, r: RangeScanReading) -> None:
+        from sensor_msgs.msg import LaserScan
+
+        topic = self.scan_topics.get(r.name)
+        if topic is None:
+            topic = self.scan_topics[r.name] = "scan" if not self.scan_topics else f"scan/{r.name}"
+        conf = self.confs.get(r.name, _Conf())
+        m = LaserScan()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = self.frame(r.name)
+        n = len(r.ranges_m)
+        m.angle_min, m.angle_max = scan_angles(n, r.resolution_rad)
+        m.angle_increment = float(r.resolution_rad)
+        m.time_increment = 0.0  # every beam of a sweep is measured at once
+        m.scan_time = conf.number("ScanInterval", 0.0)
+        m.range_min = conf.number("MinRange", 0.0)
+        m.range_max = conf.number("MaxRange", max(r.ranges_m, default=0.0))
+        m.ranges = [float(v) for v in r.ranges_m]
+        self.emit(topic, LaserScan, m, stamp)
+
+    def publish_odometry(self, stamp: float, r: OdometryReading) -> None:
+        from nav_msgs.msg import Odometry
+
+        x, y, yaw = float(r.x_m), -float(r.y_m), -float(r.theta_rad)
+        m = Odometry()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = self.frame("odom")
+        m.child_frame_id = self.frame("base_link")
+        m.pose.pose.position.x, m.pose.pose.position.y = x, y
+        q = quaternion(0.0, 0.0, yaw)
+        o = m.pose.pose.orientation
+        o.x, o.y, o.z, o.w = q
+        if self.last_odom is not None and stamp > self.last_odom[0]:
+            t0, x0, y0, yaw0 = self.last_odom
+            dt = stamp - t0
+            dx, dy = (x - x0) / dt, (y - y0) / dt
+            m.twist.twist.linear.x = math.cos(yaw) * dx + math.sin(yaw) * dy  # in base_link
+            m.twist.twist.linear.y = -math.sin(yaw) * dx + math.cos(yaw) * dy
+            m.twist.twist.angular.z = math.remainder(yaw - yaw0, math.tau) / dt
+        self.last_odom = (stamp, x, y, yaw)
+        self.emit("odom", Odometry, m, stamp)
+        self.bridge.send_tf([self.bridge.transform(stamp, self.frame("odom"), self.frame("base_link"),
+                                                   (r.x_m, r.y_m, 0.0), (0.0, 0.0, r.theta_rad))], stamp)
+
+    def publish_ground_truth(self, stamp: float, r: PoseReading) -> None:
+        from nav_msgs.msg import Odometry
+
+        m = Odometry()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = WORLD_FRAME
+        m.child_frame_id = self.frame("base_link")
+        (px, py, pz), q = ros_pose(r.location, r.orientation)
+        p = m.pose.pose.position
+        p.x, p.y, p.z = px, py, pz
+        o = m.pose.pose.orientation
+        o.x, o.y, o.z, o.w = q
+        self.emit("ground_truth", Odometry, m, stamp)
+
+    def publish_imu(self, stamp: float, name: str, orientation: Any, gyro: Any, accel: Any) -> None:
+        from sensor_msgs.msg import Imu
+
+        m = Imu()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = self.frame(name)
+        o = m.orientation
+        o.x, o.y, o.z, o.w = quaternion(*angles(orientation))
+        if gyro is None:
+            m.angular_velocity_covariance[0] = -1.0  # REP 145: -1 marks a quantity the sensor does not give
+        else:
+            v = m.angular_velocity
+            v.x, v.y, v.z = vector(gyro)
+        if accel is None:
+            m.linear_acceleration_covariance[0] = -1.0
+        else:
+            a = m.linear_acceleration
+            a.x, a.y, a.z = vector(accel)
+        self.emit("imu", Imu, m, stamp)
+
+    def publish_ranges(self, stamp: float, r: RangeReading) -> None:
+        from sensor_msgs.msg import Range
+
+        kind = "sonar" if r.sensor_type.lower().startswith("sonar") else "ir"
+        for item in r.items:
+            conf = self.confs.get(item.name, _Conf())
+            m = Range()
+            m.header.stamp = b_time(stamp)
+            m.header.frame_id = self.frame(item.name)
+            m.radiation_type = Range.ULTRASOUND if kind == "sonar" else Range.INFRARED
+            m.field_of_view = conf.number("BeamAngle", 0.0)
+            m.min_range = conf.number("MinRange", 0.0)
+            m.max_range = conf.number("MaxRange", float(item.range_m))
+            m.range = float(item.range_m)
+            self.emit(f"{kind}/{item.name}", Range, m, stamp)
+
+    def publish_gps(self, stamp: float, r: GpsReading) -> None:
+        from sensor_msgs.msg import NavSatFix, NavSatStatus
+
+        m = NavSatFix()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = self.frame(r.name)
+        m.status.status = NavSatStatus.STATUS_FIX if r.fix else NavSatStatus.STATUS_NO_FIX
+        m.status.service = NavSatStatus.SERVICE_GPS
+        m.latitude = _degrees(r.latitude, "S")
+        m.longitude = _degrees(r.longitude, "W")
+        m.altitude = math.nan  # the sensor reports none
+        m.position_covariance_type = NavSatFix.COVARIANCE_TYPE_UNKNOWN
+        self.emit("gps/fix", NavSatFix, m, stamp)
+
+    def publish_victims(self, stamp: float, r: VictimReading) -> None:
+        from visualization_msgs.msg import Marker, MarkerArray
+
+        out = MarkerArray()
+        clear = Marker()
+        clear.action = Marker.DELETEALL
+        out.markers.append(clear)
+        for i, part in enumerate(r.parts):
+            m = Marker()
+            m.header.stamp = b_time(stamp)
+            m.header.frame_id = self.frame(r.name)
+            m.ns = "victims"
+            m.id = i
+            m.type = Marker.SPHERE
+            m.action = Marker.ADD
+            m.text = part.part_name  # the part's name (Head, Chest, ...), for a program reading the array
+            p = m.pose.position
+            p.x, p.y, p.z = vector(part.location)
+            m.pose.orientation.w = 1.0
+            m.scale.x = m.scale.y = m.scale.z = 0.1
+            m.color.r, m.color.g, m.color.b, m.color.a = 1.0, 0.2, 0.2, 1.0
+            out.markers.append(m)
+        self.emit("victims", MarkerArray, out, stamp)
+
+    def publish_battery(self, stamp: float, seconds: int) -> None:
+        from sensor_msgs.msg import BatteryState
+
+        if self.battery_full is None or seconds > self.battery_full:
+            self.battery_full = max(1, int(seconds))
+        m = BatteryState()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = self.frame("base_link")
+        m.voltage = m.temperature = m.current = m.charge = m.capacity = m.design_capacity = math.nan
+        m.percentage = float(seconds) / self.battery_full  # of the life the robot had when the bridge met it
+        m.power_supply_status = BatteryState.POWER_SUPPLY_STATUS_DISCHARGING
+        m.present = True
+        self.emit("battery", BatteryState, m, stamp)
+
+
+def _degrees(value: Any, negative: str) -> float:
+    """USARSim's (degrees, minutes, hemisphere) as signed decimal degrees."""
+    if not value:
+        return math.nan
+    deg, minutes, hemi = value
+    d = float(deg) + float(minutes) / 60.0
+    return -d if str(hemi).upper() == negative else d
+
+
+def b_time(t: float) -> Any:
+    """A ``builtin_interfaces/Time`` of simulated seconds."""
+    from builtin_interfaces.msg import Time
+
+    t = max(0.0, float(t))
+    sec = int(math.floor(t))
+    nsec = int(round((t - sec) * 1e9))
+    if nsec >= 1_000_000_000:
+        sec, nsec = sec + 1, nsec - 1_000_000_000
+    return Time(sec=sec, nanosec=nsec)
+
+
+class Bridge:
+    """Robots of one simulator on one ROS 2 domain (see the module's docstring)."""
+
+    def __init__(self, world: World, *, period: float = 0.1, rtf: float = 1.0, frame_prefix: bool = True,
+                 stamped: bool = False, bag: str | None = None):
+        import rclpy
+        from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+        from rclpy.signals import SignalHandlerOptions
+
+        self.world = world
+        self.period = period
+        self.rtf = rtf
+        self.frame_prefix = frame_prefix
+        self.stamped = stamped
+        self.robots: dict[str, RobotBridge] = {}
+        self.commands: queue.SimpleQueue[tuple[RobotBridge | None, Any]] = queue.SimpleQueue()
+        self.sim_time = 0.0
+        self.paused = False
+        self._steps_asked = 0
+        self._step_done = threading.Condition()
+        # a plain flag, not an Event: stop() runs in a signal handler, which must take no lock
+        self._halt = False
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+
+        self.node = Node(NODE_NAME, context=self.context)
+        # reliable: both reliable subscribers (RViz, Nav2) and best-effort ones (sensor data QoS) match it
+        self.qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
+        tf_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
+        # as tf2_ros's static broadcaster: the latest message kept for subscribers that come later
+        static_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                                durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST)
+        from rosgraph_msgs.msg import Clock
+        from std_srvs.srv import Trigger
+        from tf2_msgs.msg import TFMessage
+
+        self._clock_pub = self.node.create_publisher(Clock, "/clock", self.qos)
+        self._tf_pub = self.node.create_publisher(TFMessage, "/tf", tf_qos)
+        self._tf_static_pub = self.node.create_publisher(TFMessage, "/tf_static", static_qos)
+        self._static: list[Any] = []
+        for name, handler in (("pause", self._srv_pause), ("resume", self._srv_resume), ("step", self._srv_step)):
+            self.node.create_service(Trigger, f"/usarsim/{name}", handler)
+        self.recorder = None
+        if bag:
+            from .bag import BagWriter
+
+            self.recorder = BagWriter(bag)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._spin_thread = threading.Thread(target=self._spin, name="ros2-executor", daemon=True)
+        self._spin_thread.start()
+
+    # rclpy's thread ---------------------------------------------------------------------------
+    def _spin(self) -> None:
+        while not self._halt:
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception as exc:  # an exception in a callback: logged, the bridge goes on
+                if self._halt:
+                    break
+                log.warning("ROS 2 callback failed: %s", exc)
+
+    def _srv_pause(self, request: Any, response: Any) -> Any:
+        if not self.world.lockstep:
+            response.success, response.message = False, "the simulator runs in real time: start it with --lockstep"
+        else:
+            self.commands.put((None, "pause"))
+            response.success, response.message = True, "paused"
+        return response
+
+    def _srv_resume(self, request: Any, response: Any) -> Any:
+        if not self.world.lockstep:
+            response.success, response.message = False, "the simulator runs in real time: start it with --lockstep"
+        else:
+            self.commands.put((None, "resume"))
+            response.success, response.message = True, "resumed"
+        return response
+
+    def _srv_step(self, request: Any, response: Any) -> Any:
+        if not self.world.lockstep:
+            response.success, response.message = False, "the simulator runs in real time: start it with --lockstep"
+            return response
+        with self._step_done:
+            before = self.sim_time
+            self.commands.put((None, "step"))
+            self._step_done.wait_for(lambda: self.sim_time > before or self._halt, timeout=10.0)
+            ok = self.sim_time > before
+        response.success = ok
+        response.message = f"simulated time {self.sim_time:.3f} s" if ok else "the step did not complete"
+        return response
+
+    # building -----------------------------------------------------------------------------------
+    def add_robot(self, spec: RobotSpec) -> RobotBridge:
+        name = spec.name or f"robot{len(self.robots) + 1}"
+        robot = self.world.spawn(spec.class_name, name, start=spec.start)
+        rb = RobotBridge(self, robot, f"{name}/" if self.frame_prefix else "")
+        self.robots[name] = rb
+        self._subscribe(rb)
+        self._static.extend(rb.static_transforms())
+        log.info("robot %s (%s) on the ROS 2 graph as /%s/..., cmd_vel: %s", name, spec.class_name, name,
+                 rb.kinematics.kind if rb.kinematics.kind != "none" else "not taken")
+        return rb
+
+    def _subscribe(self, rb: RobotBridge) -> None:
+        from geometry_msgs.msg import Twist, TwistStamped
+
+        def twist(m: Any) -> None:
+            rb.on_twist(m.linear.x, m.linear.y, m.linear.z, m.angular.z)
+
+        def twist_stamped(m: Any) -> None:
+            twist(m.twist)
+
+        plain, stamped = ("cmd_vel_unstamped", "cmd_vel") if self.stamped else ("cmd_vel", "cmd_vel_stamped")
+        self.node.create_subscription(Twist, f"{rb.ns}/{plain}", twist, self.qos)
+        self.node.create_subscription(TwistStamped, f"{rb.ns}/{stamped}", twist_stamped, self.qos)
+
+    def publish_static(self) -> None:
+        from tf2_msgs.msg import TFMessage
+
+        msg = TFMessage(transforms=list(self._static))
+        self._tf_static_pub.publish(msg)
+        self._record("/tf_static", msg, 0.0)
+
+    def transform(self, stamp: float, parent: str, child: str, location: Any, rotation: Any) -> Any:
+        """A TransformStamped of a USARSim pose (location, roll/pitch/yaw) of ``child`` in ``parent``."""
+        from geometry_msgs.msg import TransformStamped
+
+        ts = TransformStamped()
+        ts.header.stamp = b_time(stamp)
+        ts.header.frame_id = parent
+        ts.child_frame_id = child
+        (x, y, z), q = ros_pose(location, rotation)
+        tr = ts.transform.translation
+        tr.x, tr.y, tr.z = x, y, z
+        r = ts.transform.rotation
+        r.x, r.y, r.z, r.w = q
+        return ts
+
+    def send_tf(self, transforms: list[Any], stamp: float) -> None:
+        from tf2_msgs.msg import TFMessage
+
+        msg = TFMessage(transforms=transforms)
+        self._tf_pub.publish(msg)
+        self._record("/tf", msg, stamp)
+
+    def _record(self, topic: str, msg: Any, stamp: float) -> None:
+        if self.recorder is not None:
+            self.recorder.write(topic, msg, stamp)
+
+    # running ------------------------------------------------------------------------------------
+    def publish_clock(self, t: float) -> None:
+        from rosgraph_msgs.msg import Clock
+
+        if t < self.sim_time:
+            return
+        with self._step_done:
+            self.sim_time = t
+            self._step_done.notify_all()
+        msg = Clock(clock=b_time(t))
+        self._clock_pub.publish(msg)
+        self._record("/clock", msg, t)
+
+    def _dispatch(self) -> None:
+        for rb in list(self.robots.values()):
+            for msg in rb.robot.take_messages():
+                rb.handle(msg)
+
+    def _carry_out(self) -> int:
+        """Send the queued commands; returns the steps asked for (lock-step)."""
+        steps = 0
+        while True:
+            try:
+                rb, what = self.commands.get_nowait()
+            except queue.Empty:
+                return steps
+            if rb is not None:
+                try:
+                    rb.robot.send(what)
+                except ClientError as exc:
+                    rb.warn_once("send", f"could not send a command: {exc}")
+            elif what == "pause":
+                self.paused = True
+                log.info("paused at %.3f s", self.sim_time)
+            elif what == "resume":
+                self.paused = False
+                log.info("resumed at %.3f s", self.sim_time)
+            elif what == "step":
+                steps += 1
+
+    def run(self, duration: float | None = None, ready: Callable[[], None] | None = None) -> None:
+        """Bridge until :meth:`stop`, or for ``duration`` simulated seconds."""
+        self.publish_static()
+        if ready is not None:
+            ready()
+        start_wall = time.monotonic()
+        start_sim = self.sim_time
+        while not self._halt:
+            if duration is not None and self.sim_time - start_sim >= duration - 1e-9:
+                return
+            gone = [rb.name for rb in self.robots.values() if rb.robot.closed]
+            if gone:
+                raise ClientError(f"the simulator closed the connection of {', '.join(gone)}")
+            steps = self._carry_out()
+            if self.world.lockstep:
+                if self.paused and steps == 0:
+                    time.sleep(0.01)
+                    start_wall, start_sim = time.monotonic(), self.sim_time
+                    continue
+                t = self.world.step(self.period)
+                self._dispatch()
+                self.publish_clock(t)
+                if self.rtf > 0 and not self.paused:
+                    ahead = (self.sim_time - start_sim) / self.rtf - (time.monotonic() - start_wall)
+                    while ahead > 0 and not self._halt:
+                        time.sleep(min(ahead, 0.05))
+                        ahead = (self.sim_time - start_sim) / self.rtf - (time.monotonic() - start_wall)
+            else:
+                self.world.wait(0.01)
+                self._dispatch()
+                self.publish_clock(max((rb.robot.time or 0.0) for rb in self.robots.values())
+                                   if self.robots else self.sim_time)
+
+    def stop(self) -> None:
+        """Stop :meth:`run` (safe in a signal handler)."""
+        self._halt = True
+
+    def close(self) -> None:
+        self._halt = True
+        with self._step_done:
+            self._step_done.notify_all()
+        self._spin_thread.join(timeout=5.0)
+        try:
+            self.executor.shutdown(timeout_sec=1.0)
+            self.node.destroy_node()
+        finally:
+            if self.context.ok():
+                self.context.try_shutdown()
+        if self.recorder is not None:
+            self.recorder.close()
