@@ -290,6 +290,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="record the run to an MCAP file: every line each client sent and received on every port "
                         "(for 'usarsim replay'), and the world, robots, lasers, poses, battery, radio links and "
                         "log in Foxglove's schemas (docs/recording.md)")
+    s.add_argument("--record-format", choices=("foxglove", "ros2"), default="foxglove",
+                   help="foxglove (default): the MCAP file above; ros2: a rosbag2 folder (the name less .mcap) of "
+                        "what the --ros2 bridge publishes, for 'ros2 bag play' (docs/ros2.md)")
+    s.add_argument("--ros2", action="append", default=[], metavar="CLASS[@START][:NAME]",
+                   help="start the ROS 2 bridge beside the server with this robot (repeat for more): 'usarsim "
+                        "ros2 --robot ...' in a process of its own, stopped with the server (docs/ros2.md)")
     s.add_argument("--record-cameras", type=float, default=0.0, metavar="FPS",
                    help="with --record or --foxglove: also every robot camera's picture (JPEG), FPS a simulated "
                         "second (default: 0, none; rendering costs the CPU: 5 is a good rate)")
@@ -357,7 +363,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="one sitting of every benchmark the scaling targets of a 2-core machine are judged by "
                         "(16, 64 and 256 robots, round trips, cameras), --runs times in turn, and a table of each "
                         "target against every run, with the machine and the time (5 to 6 minutes on a 2-core machine)")
-    b.add_argument("--runs", type=int, default=3, help="with --targets: runs of each benchmark (default: %(default)s)")
+    b.add_argument("--runs", type=int, default=3,
+                   help="with --targets: runs of each benchmark; with --ros2: runs each way (default: %(default)s)")
+    b.add_argument("--ros2", action="store_true",
+                   help="the ROS 2 bridge: N P2ATs in real time, alternately without and with 'usarsim ros2' and a "
+                        "subscriber of every topic in another process; the real-time factor reached, each topic's "
+                        "rate and missed readings, and the delay from the simulated time of a reading to its "
+                        "delivery (docs/ros2.md)")
     b.add_argument("--counts", type=int, nargs="+", default=[16, 64, 256], metavar="N",
                    help="with --targets: robot counts (default: 16 64 256; the targets are set at those)")
     b.add_argument("--env", action="store_true",
@@ -494,7 +506,8 @@ def cmd_serve(args) -> int:
                       web_port=None if args.no_web else ports["web_port"], max_robots=args.max_robots,
                       max_line_bytes=max(64, args.max_line_bytes), max_pending_bytes=max(4, args.max_pending_kb) * 1024,
                       max_viewers=max(1, args.max_viewers), max_web_connections=max(2, args.max_web_connections),
-                      record=args.record, foxglove_port=resolve_foxglove_port(args.foxglove, args.port_offset),
+                      record=args.record if args.record_format == "foxglove" else None,
+                      foxglove_port=resolve_foxglove_port(args.foxglove, args.port_offset),
                       run_options=run_options(args),
                       record_cameras_fps=max(0.0, args.record_cameras), record_camera_size=args.record_camera_size,
                       score=args.score, score_file=args.score_file, step_grace_s=_step_grace_s(args),
@@ -525,6 +538,7 @@ def cmd_serve(args) -> int:
         if app.recorder is not None and args.record:
             print(f"usarsim: recording to {args.record} (written as it goes: a server that is killed loses "
                   "about its last second)", flush=True)
+        bridge = await _start_ros2_bridge(args, app) if args.ros2 else None
         mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
         log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
         await stop.wait()
@@ -533,6 +547,8 @@ def cmd_serve(args) -> int:
             print(f"usarsim: error: the simulation stopped on an unexpected error ({failure!r}; the log has the "
                   "traceback): the server stops", file=sys.stderr, flush=True)
         log.info("shutting down")
+        if bridge is not None:
+            await _stop_ros2_bridge(bridge)
         await app.stop()
         if app.recorder is not None and args.record and os.path.isfile(args.record):
             rec = app.recorder
@@ -550,6 +566,39 @@ def cmd_serve(args) -> int:
     except SystemExit as exc:
         return int(exc.code or 0)
     return 0
+
+
+async def _start_ros2_bridge(args, app) -> asyncio.subprocess.Process:
+    """``usarsim ros2`` for the robots of ``--ros2``, in a process of its own, on the control
+    port just opened; its lines go to this server's output."""
+    port = next(p for service, _, p in app.listeners() if service == "control")
+    host = "127.0.0.1" if args.host in ("", "0.0.0.0", "::") else args.host
+    cmd = [sys.executable, "-m", "usarsim", "ros2", "--host", host, "--port", str(port)]
+    image = next((p for service, _, p in app.listeners() if service == "image"), None)
+    if image is not None:
+        cmd += ["--image-port", str(image)]
+    else:
+        cmd += ["--camera-hz", "0"]
+    if args.lockstep:
+        cmd.append("--lockstep")
+    for robot in args.ros2:
+        cmd += ["--robot", robot]
+    if args.record and args.record_format == "ros2":
+        cmd += ["--bag", args.record.removesuffix(".mcap")]
+    log.info("starting the ROS 2 bridge: %s", " ".join(cmd[1:]))
+    return await asyncio.create_subprocess_exec(*cmd, stdin=asyncio.subprocess.DEVNULL, start_new_session=True)
+
+
+async def _stop_ros2_bridge(proc: asyncio.subprocess.Process) -> None:
+    if proc.returncode is None:
+        proc.terminate()
+        try:
+            await asyncio.wait_for(proc.wait(), 15.0)
+        except TimeoutError:
+            proc.kill()
+            await proc.wait()
+    if proc.returncode not in (0, -signal.SIGTERM):
+        print(f"usarsim: the ROS 2 bridge exited {proc.returncode} (its error is above)", file=sys.stderr)
 
 
 def run_options(args) -> dict:
@@ -705,6 +754,10 @@ def _bench(args) -> int:
         from usarsim.bench.targets import run_targets_bench
 
         return run_targets_bench(args)
+    if args.ros2:
+        from usarsim.ros2.bench import run_ros2_bench
+
+        return run_ros2_bench(args)
     if args.round_trips:
         from usarsim.bench import run_round_trip_bench
 
@@ -758,6 +811,13 @@ def main(argv: list[str] | None = None) -> int:
             require("record", "usarsim replay")
         elif args.command == "ros2":
             require("ros2", "usarsim ros2")
+        elif args.command == "serve" and (args.ros2 or args.record_format == "ros2"):
+            require("ros2", "usarsim serve --ros2")
+            if args.record_format == "ros2" and not (args.record and args.ros2):
+                raise MissingExtraError("--record-format ros2 records what the ROS 2 bridge publishes: give "
+                                        "--record NAME and --ros2 ROBOT")
+            if args.foxglove is not None:
+                require("record", "usarsim serve --foxglove")
         elif getattr(args, "record", None) or getattr(args, "foxglove", None) is not None:
             require("record", f"usarsim {args.command} --{'record' if args.record else 'foxglove'}")
     except MissingExtraError as exc:

@@ -205,7 +205,7 @@ def test_every_command_of_the_page_runs_as_printed(page, clone_folder):
             server.kill()
 
 
-INLINE = re.compile(r"`(usarsim (?:serve|validate|worlds|robots|bench|replay|sweep|report)\b[^`]*)`")
+INLINE = re.compile(r"`(usarsim (?:serve|validate|worlds|robots|bench|replay|sweep|report|ros2)\b[^`]*)`")
 
 
 def test_every_usarsim_command_named_in_the_text_has_options_that_exist(capsys):

@@ -76,17 +76,19 @@ def probe(domain: int) -> Iterator[Probe]:
 
 @pytest.fixture
 def ros_sim(ros_world: Path, domain: int, tf2_ready: None) -> Iterator[Callable[..., tuple[Bridge, Tap]]]:
-    """``ros_sim(*bridge_args, lockstep=True)``: a simulator of the ROS test world, a Tap and
+    """``ros_sim(*bridge_args, lockstep=True, image=False)``: a simulator of the ROS test world
+    (with its image server when ``image``), a Tap and
     a bridge through it; all stopped at teardown, where the bridge must exit 0 without a
     traceback."""
     from usarsim.client.launch import launch
 
     made: list[tuple[Any, Tap, Bridge]] = []
 
-    def make(*args: str, lockstep: bool = True) -> tuple[Bridge, Tap]:
-        server = launch(str(ros_world), lockstep=lockstep, speed=1.0)
+    def make(*args: str, lockstep: bool = True, image: bool = False) -> tuple[Bridge, Tap]:
+        server = launch(str(ros_world), lockstep=lockstep, speed=1.0, image=image)
         tap = Tap(server.port)
-        bridge = Bridge(tap.port, domain, *(("--lockstep",) if lockstep else ()), *args)
+        more = ("--image-port", str(server.ports["image"])) if image else ("--camera-hz", "0")
+        bridge = Bridge(tap.port, domain, *(("--lockstep",) if lockstep else ()), *more, *args)
         made.append((server, tap, bridge))
         if not bridge.ready:
             bridge.stop()

@@ -31,6 +31,9 @@ from usarsim.readings import (
     PoseReading,
     RangeReading,
     RangeScanReading,
+    RfidReading,
+    TachometerReading,
+    TouchReading,
     VictimReading,
 )
 
@@ -47,20 +50,33 @@ NODE_NAME = "usarsim_bridge"
 
 @dataclass
 class RobotSpec:
-    """A robot to spawn: ``CLASS@START[:NAME]`` on the command line."""
+    """A robot to spawn: ``CLASS@START[:NAME]`` on the command line, START a start pose's name
+    or ``x,y,z[,yaw]`` (metres and radians, USARSim's axes)."""
 
     class_name: str
     start: str | None = None
     name: str | None = None
+    location: tuple[float, float, float] | None = None
+    yaw: float = 0.0
 
     @classmethod
     def parse(cls, text: str) -> RobotSpec:
+        whole = text
         name = None
         if ":" in text:
             text, name = text.rsplit(":", 1)
         cls_name, _, start = text.partition("@")
         if not cls_name:
-            raise ValueError(f"a robot is CLASS[@START][:NAME], e.g. P2AT@PlayerStart1:robot1; got {text!r}")
+            raise ValueError(f"a robot is CLASS[@START][:NAME], e.g. P2AT@PlayerStart1:robot1; got {whole!r}")
+        if start and start[0] in "-+.0123456789":
+            try:
+                values = [float(v) for v in start.split(",")]
+            except ValueError:
+                values = []
+            if len(values) not in (3, 4):
+                raise ValueError(f"{whole!r}: a place is x,y,z or x,y,z,yaw (metres, radians)")
+            return cls(cls_name, None, name or None, (values[0], values[1], values[2]),
+                       values[3] if len(values) == 4 else 0.0)
         return cls(cls_name, start or None, name or None)
 
 
@@ -101,6 +117,18 @@ class RobotBridge:
                 self.mounts[item.name] = item
             for item in getattr(conf, "items", ()):
                 self.confs[item.name] = _Conf({k: str(v) for k, v in item.fields})
+        self.packages: dict[str, list[int]] = {}  # mission package -> its links (MISPKG)
+        try:
+            mis = robot.geo("MisPkg")
+            for pkg in getattr(mis, "packages", ()):
+                self.packages[pkg.name] = [link.link for link in pkg.links]
+        except ServerError:
+            pass
+        self.joints: dict[str, float] = {}  # STA joints (flippers...) and package links, by ROS joint name
+        self.wheels: dict[str, tuple[float, float]] = {}  # tachometer: position, velocity
+        self.cameras = [name for name, item in self.mounts.items() if self.confs.get(name, _Conf()).fields.get(
+            "CameraFov") is not None]
+        self.next_picture = 0.0
         self.pubs: dict[str, Any] = {}
         self.scan_topics: dict[str, str] = {}
         self.last_odom: tuple[float, float, float, float] | None = None  # t, x, y, yaw (ROS)
@@ -134,7 +162,47 @@ class RobotBridge:
         for name, item in self.mounts.items():
             out.append(self.bridge.transform(0.0, self.frame("base_link"), self.frame(name), item.location,
                                              item.orientation))
+        for name in self.cameras:  # REP 103's optical frame: z forward, x right, y down
+            ts = self.bridge.transform(0.0, self.frame(name), self.frame(f"{name}_optical"), (0.0, 0.0, 0.0),
+                                       (0.0, 0.0, 0.0))
+            r = ts.transform.rotation
+            r.x, r.y, r.z, r.w = quaternion(-math.pi / 2, 0.0, -math.pi / 2)
+            out.append(ts)
         return out
+
+    def on_joints(self, names: list[str], positions: list[float]) -> None:
+        """A JointState command: each name a mission package's link (``CameraPanTilt_link2``,
+        to MISPKG) or a joint of the robot's STA (a flipper, to DRIVE {Name} {Value})."""
+        by_package: dict[str, dict[int, float]] = {}
+        for name, value in zip(names, positions):
+            if not math.isfinite(value):
+                log.warning("robot %s: ignored a joint command for %s with %g", self.name, name, value)
+                continue
+            pkg, _, link = name.rpartition("_link")
+            if pkg in self.packages and link.isdigit() and int(link) in self.packages[pkg]:
+                by_package.setdefault(pkg, {})[int(link)] = value
+            elif name in self.joints and "_link" not in name:
+                self.bridge.commands.put((self, drive_line_joint(name, value)))
+            else:
+                known = sorted(self.joints) + [f"{p}_link{k}" for p, ks in self.packages.items() for k in ks]
+                log.warning("robot %s: a joint command names no joint of it: %r (its joints: %s)", self.name, name,
+                            ", ".join(dict.fromkeys(known)) or "none")
+        for pkg, values in by_package.items():
+            from usarsim.client.core import mispkg_line
+
+            self.bridge.commands.put((self, mispkg_line(pkg, values)))
+
+    def on_report(self, x: float, y: float, z: float, frame: str) -> None:
+        """A victim report (a point in the ``map`` frame) to REPORT {Type Victim}."""
+        if frame not in ("", WORLD_FRAME):
+            self.warn_once("report-frame", f"a victim report in frame {frame!r} ignored: give it in {WORLD_FRAME!r}")
+            return
+        if not all(math.isfinite(v) for v in (x, y, z)):
+            log.warning("robot %s: ignored a victim report at a point that is not finite", self.name)
+            return
+        from usarsim.client.core import report_line
+
+        self.bridge.commands.put((self, report_line(vector((x, y, z)))))
 
     # commands from ROS ------------------------------------------------------------------------
     def on_twist(self, vx: float, vy: float, vz: float, wz: float) -> None:
@@ -175,8 +243,23 @@ class RobotBridge:
                 self.publish_gps(stamp, r)
             elif isinstance(r, VictimReading):
                 self.publish_victims(stamp, r)
+            elif isinstance(r, TouchReading):
+                self.publish_touch(stamp, r)
+            elif isinstance(r, RfidReading):
+                self.publish_rfid(stamp, r)
+            elif isinstance(r, TachometerReading):
+                for i, (v, p) in enumerate(zip(r.velocities_rad_s, r.positions_rad)):
+                    self.wheels[f"{r.name}_wheel{i}"] = (float(p), float(v))
         elif isinstance(msg, (M.GroundVehicleStatus, M.AerialVehicleStatus)):
             self.publish_battery(stamp, msg.battery_s)
+            for name, value in getattr(msg, "joints", ()):
+                self.joints[name] = float(value)
+            if self.joints or self.wheels:
+                self.publish_joint_states(stamp)
+        elif isinstance(msg, M.MisPkgStatus):
+            for link in msg.links:
+                self.joints[f"{msg.name}_link{link.link}"] = float(link.value)
+            self.publish_joint_states(stamp)
 
     def publish_scan(self, stamp: float, r: RangeScanReading) -> None:
         from sensor_msgs.msg import LaserScan
@@ -310,6 +393,102 @@ class RobotBridge:
             out.markers.append(m)
         self.emit("victims", MarkerArray, out, stamp)
 
+    def publish_touch(self, stamp: float, r: TouchReading) -> None:
+        from std_msgs.msg import Bool
+
+        for item in r.items:
+            self.emit(f"touch/{item.name}", Bool, Bool(data=bool(item.touching)), stamp)
+
+    def publish_rfid(self, stamp: float, r: RfidReading) -> None:
+        from visualization_msgs.msg import Marker, MarkerArray
+
+        out = MarkerArray()
+        clear = Marker()
+        clear.action = Marker.DELETEALL
+        out.markers.append(clear)
+        for tag in r.tags:
+            m = Marker()
+            m.header.stamp = b_time(stamp)
+            m.header.frame_id = self.frame(r.name)
+            m.ns = "rfid"
+            m.id = int(tag.tag_id)
+            m.type = Marker.CUBE
+            m.text = str(tag.tag_id) if tag.memory is None else f"{tag.tag_id} {tag.memory}"  # id, then memory
+            p = m.pose.position
+            p.x, p.y, p.z = vector(tag.location)
+            m.pose.orientation.w = 1.0
+            m.scale.x = m.scale.y = m.scale.z = 0.05
+            m.color.g, m.color.a = 1.0, 1.0
+            out.markers.append(m)
+        self.emit("rfid", MarkerArray, out, stamp)
+
+    def publish_joint_states(self, stamp: float) -> None:
+        from sensor_msgs.msg import JointState
+
+        m = JointState()
+        m.header.stamp = b_time(stamp)
+        m.name = list(self.joints) + list(self.wheels)
+        m.position = [*self.joints.values(), *(p for p, _ in self.wheels.values())]
+        if self.wheels:
+            m.velocity = [math.nan] * len(self.joints) + [v for _, v in self.wheels.values()]
+        self.emit("joint_states", JointState, m, stamp)
+
+    def publish_picture(self, stamp: float, camera: str, compressed: bool, raw: bool, info: bool) -> None:
+        """One picture of ``camera`` from the image server: image_raw (rgb8), its JPEG and the
+        camera's intrinsics (a pinhole of its horizontal field of view)."""
+        from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+
+        try:
+            rgb = self.robot.picture(camera)
+        except ClientError as exc:
+            self.warn_once(f"camera-{camera}", f"no picture of {camera}: {exc} (is the image server on?)")
+            return
+        h, w = int(rgb.shape[0]), int(rgb.shape[1])
+        frame = self.frame(f"{camera}_optical")
+        base = "camera" if camera == self.cameras[0] else f"camera/{camera}"
+        if raw:
+            m = Image()
+            m.header.stamp, m.header.frame_id = b_time(stamp), frame
+            m.height, m.width, m.encoding, m.step = h, w, "rgb8", 3 * w
+            m.data = rgb.tobytes()
+            self.emit(f"{base}/image_raw", Image, m, stamp)
+        if compressed:
+            import io
+
+            from PIL import Image as PILImage
+
+            buf = io.BytesIO()
+            PILImage.fromarray(rgb).save(buf, format="JPEG", quality=85)
+            c = CompressedImage()
+            c.header.stamp, c.header.frame_id = b_time(stamp), frame
+            c.format = "rgb8; jpeg compressed bgr8"  # image_transport's compressed format string
+            c.data = buf.getvalue()
+            self.emit(f"{base}/image_raw/compressed", CompressedImage, c, stamp)
+        if info:
+            fov = self.confs.get(camera, _Conf()).number("CameraFov", math.radians(90.0))
+            f = (w / 2.0) / math.tan(fov / 2.0)
+            ci = CameraInfo()
+            ci.header.stamp, ci.header.frame_id = b_time(stamp), frame
+            ci.height, ci.width = h, w
+            ci.distortion_model = "plumb_bob"
+            ci.d = [0.0] * 5
+            ci.k = [f, 0.0, w / 2.0, 0.0, f, h / 2.0, 0.0, 0.0, 1.0]
+            ci.r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+            ci.p = [f, 0.0, w / 2.0, 0.0, 0.0, f, h / 2.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+            self.emit(f"{base}/camera_info", CameraInfo, ci, stamp)
+
+    def camera_wanted(self) -> list[tuple[str, bool, bool, bool]]:
+        """The cameras with a subscriber (or a recording): (camera, compressed, raw, info)."""
+        out = []
+        recording = self.bridge.recorder is not None
+        for cam in self.cameras:
+            base = f"{self.ns}/{'camera' if cam == self.cameras[0] else f'camera/{cam}'}"
+            counts = [recording or self.bridge.node.count_subscribers(f"{base}/{t}") > 0
+                      for t in ("image_raw/compressed", "image_raw", "camera_info")]
+            if any(counts):
+                out.append((cam, *counts))
+        return out
+
     def publish_battery(self, stamp: float, seconds: int) -> None:
         from sensor_msgs.msg import BatteryState
 
@@ -323,6 +502,12 @@ class RobotBridge:
         m.power_supply_status = BatteryState.POWER_SUPPLY_STATUS_DISCHARGING
         m.present = True
         self.emit("battery", BatteryState, m, stamp)
+
+
+def drive_line_joint(name: str, value: float) -> str:
+    """``DRIVE {Name joint} {Value v} {Order 0}``: a joint of the robot to a position (protocol.md
+    5.3f)."""
+    return f"DRIVE {{Name {name}}} {{Value {value:.4f}}} {{Order 0}}\r\n"
 
 
 def _degrees(value: Any, negative: str) -> float:
@@ -350,7 +535,7 @@ class Bridge:
     """Robots of one simulator on one ROS 2 domain (see the module's docstring)."""
 
     def __init__(self, world: World, *, period: float = 0.1, rtf: float = 1.0, frame_prefix: bool = True,
-                 stamped: bool = False, bag: str | None = None):
+                 stamped: bool = False, bag: str | None = None, camera_hz: float = 5.0):
         import rclpy
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
@@ -360,6 +545,7 @@ class Bridge:
         self.rtf = rtf
         self.frame_prefix = frame_prefix
         self.stamped = stamped
+        self.camera_hz = camera_hz
         self.robots: dict[str, RobotBridge] = {}
         self.commands: queue.SimpleQueue[tuple[RobotBridge | None, Any]] = queue.SimpleQueue()
         self.sim_time = 0.0
@@ -442,7 +628,8 @@ class Bridge:
     # building -----------------------------------------------------------------------------------
     def add_robot(self, spec: RobotSpec) -> RobotBridge:
         name = spec.name or f"robot{len(self.robots) + 1}"
-        robot = self.world.spawn(spec.class_name, name, start=spec.start)
+        robot = self.world.spawn(spec.class_name, name, start=spec.start, location=spec.location,
+                                 rotation=None if spec.location is None else (0.0, 0.0, spec.yaw))
         rb = RobotBridge(self, robot, f"{name}/" if self.frame_prefix else "")
         self.robots[name] = rb
         self._subscribe(rb)
@@ -463,6 +650,14 @@ class Bridge:
         plain, stamped = ("cmd_vel_unstamped", "cmd_vel") if self.stamped else ("cmd_vel", "cmd_vel_stamped")
         self.node.create_subscription(Twist, f"{rb.ns}/{plain}", twist, self.qos)
         self.node.create_subscription(TwistStamped, f"{rb.ns}/{stamped}", twist_stamped, self.qos)
+        from geometry_msgs.msg import PointStamped
+        from sensor_msgs.msg import JointState
+
+        self.node.create_subscription(JointState, f"{rb.ns}/joint_commands",
+                                      lambda m: rb.on_joints(list(m.name), list(m.position)), self.qos)
+        self.node.create_subscription(PointStamped, f"{rb.ns}/report_victim",
+                                      lambda m: rb.on_report(m.point.x, m.point.y, m.point.z, m.header.frame_id),
+                                      self.qos)
 
     def publish_static(self) -> None:
         from tf2_msgs.msg import TFMessage
@@ -513,7 +708,15 @@ class Bridge:
     def _dispatch(self) -> None:
         for rb in list(self.robots.values()):
             for msg in rb.robot.take_messages():
+                if isinstance(msg, M.Result) and getattr(msg, "item_type", "") == "Victim":
+                    log.info("robot %s: victim report: %s", rb.name, msg)
                 rb.handle(msg)
+        if self.camera_hz > 0:
+            for rb in list(self.robots.values()):
+                if rb.cameras and self.sim_time >= rb.next_picture:
+                    rb.next_picture = self.sim_time + 1.0 / self.camera_hz
+                    for camera, compressed, raw, info in rb.camera_wanted():
+                        rb.publish_picture(rb.robot.time or self.sim_time, camera, compressed, raw, info)
 
     def _carry_out(self) -> int:
         """Send the queued commands; returns the steps asked for (lock-step)."""

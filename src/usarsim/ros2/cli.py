@@ -35,7 +35,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "is its ROS namespace, default robot1, robot2, ...; START a start pose of the world, "
                         "default the first)")
     p.add_argument("--robots", metavar="FILE.yaml", default=None,
-                   help="robots from a YAML list of {class, start, name} (besides any --robot)")
+                   help="robots from a YAML list of {class, start, name} or {class, location: [x, y, z], yaw, name} "
+                        "(besides any --robot)")
+    p.add_argument("--image-port", type=int, default=None, metavar="PORT",
+                   help="the simulator's image server, for the camera topics (default: the robot port + 2003, "
+                        "5003 beside 3000)")
+    p.add_argument("--camera-hz", type=float, default=5.0, metavar="HZ",
+                   help="pictures a simulated second of each camera that has a subscriber (default: %(default)s; "
+                        "0: no camera topics)")
     p.add_argument("--lockstep", action="store_true",
                    help="the simulator runs in lock-step (usarsim serve --lockstep): the bridge steps it")
     p.add_argument("--period", type=_positive, default=0.1, metavar="S",
@@ -90,7 +97,9 @@ def robot_specs(args: argparse.Namespace) -> list[Any]:
         for i, entry in enumerate(data):
             if not isinstance(entry, dict) or not isinstance(entry.get("class"), str):
                 raise ValueError(f"--robots {path}: robot {i + 1} needs a 'class' (e.g. class: P2AT)")
-            specs.append(RobotSpec(entry["class"], entry.get("start"), entry.get("name")))
+            loc = entry.get("location")
+            specs.append(RobotSpec(entry["class"], entry.get("start"), entry.get("name"),
+                                   None if loc is None else tuple(float(v) for v in loc), float(entry.get("yaw", 0.0))))
     names = [s.name for s in specs if s.name]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -120,14 +129,14 @@ def cmd_ros2(args: argparse.Namespace) -> int:
     from .bridge import Bridge
 
     try:
-        world = World(args.host, args.port, lockstep=args.lockstep, timeout=args.timeout)
+        world = World(args.host, args.port, lockstep=args.lockstep, image_port=args.image_port, timeout=args.timeout)
     except ClientError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
     bridge = None
     try:
         bridge = Bridge(world, period=args.period, rtf=args.rtf, frame_prefix=not args.no_frame_prefix,
-                        stamped=args.stamped, bag=args.bag)
+                        stamped=args.stamped, bag=args.bag, camera_hz=max(0.0, args.camera_hz))
         other = _other_clock_publisher(bridge)
         if other:
             print(f"usarsim: error: {other} publishes /clock on ROS_DOMAIN_ID {domain} already (another bridge?): "
