@@ -30,6 +30,7 @@ from usarsim.readings import (
     OdometryReading,
     PoseReading,
     RangeReading,
+    RangeScan3DReading,
     RangeScanReading,
     RfidReading,
     TachometerReading,
@@ -107,6 +108,7 @@ class RobotBridge:
         self.kinematics = Kinematics.of(self.geo, self.conf)
         self.mounts: dict[str, M.ItemPose] = {}  # sensor name -> its GETGEO mount
         self.confs: dict[str, _Conf] = {}  # sensor name -> its CONF fields
+        self.types: dict[str, str] = {}  # sensor name -> its type
         for item_type in SENSOR_TYPES:
             try:
                 geo = robot.geo(item_type)
@@ -115,6 +117,7 @@ class RobotBridge:
                 continue
             for item in getattr(geo, "items", ()):
                 self.mounts[item.name] = item
+                self.types[item.name] = item_type
             for item in getattr(conf, "items", ()):
                 self.confs[item.name] = _Conf({k: str(v) for k, v in item.fields})
         self.packages: dict[str, list[int]] = {}  # mission package -> its links (MISPKG)
@@ -131,6 +134,8 @@ class RobotBridge:
         self.next_picture = 0.0
         self.pubs: dict[str, Any] = {}
         self.scan_topics: dict[str, str] = {}
+        self.rows: dict[str, dict[int, tuple[float, Any]]] = {}  # a split 3D sweep's rows so far
+        self.points_named = sum(1 for t in self.types.values() if t == "RangeScanner3D") > 1
         self.last_odom: tuple[float, float, float, float] | None = None  # t, x, y, yaw (ROS)
         self.battery_full: int | None = None
         self.warned: set[str] = set()
@@ -229,6 +234,8 @@ class RobotBridge:
             r = msg.reading
             if isinstance(r, RangeScanReading):
                 self.publish_scan(stamp, r)
+            elif isinstance(r, RangeScan3DReading):
+                self.publish_points(stamp, r)
             elif isinstance(r, OdometryReading):
                 self.publish_odometry(stamp, r)
             elif isinstance(r, PoseReading) and r.sensor_type == "GroundTruth":
@@ -280,6 +287,50 @@ class RobotBridge:
         m.range_max = conf.number("MaxRange", max(r.ranges_m, default=0.0))
         m.ranges = [float(v) for v in r.ranges_m]
         self.emit(topic, LaserScan, m, stamp)
+
+    def publish_points(self, stamp: float, r: RangeScan3DReading) -> None:
+        """A 3D sweep (row-major, the top row first, each row from its rightmost beam) as a
+        PointCloud2 of its returns (beams short of MaxRange) in the scanner's frame; a sweep sent
+        one row a line is published once its last row is in."""
+        import numpy as np
+        from sensor_msgs.msg import PointCloud2, PointField
+
+        vres, hres = r.resolution_rad
+        vfov, hfov = r.fov_rad
+        rows_total = r.frames or (int(round(vfov / vres)) + 1 if vres > 0 else 1)
+        if r.frame is not None:  # one row of a split sweep
+            parts = self.rows.setdefault(r.name, {})
+            if parts and next(iter(parts.values()))[0] != stamp:
+                parts.clear()
+            parts[r.frame] = (stamp, r.ranges_m)
+            if len(parts) < rows_total:
+                return
+            ranges = np.concatenate([np.asarray(parts[k][1], dtype=np.float64) for k in sorted(parts)])
+            parts.clear()
+        else:
+            ranges = np.asarray(r.ranges_m, dtype=np.float64)
+        if rows_total <= 0 or len(ranges) % rows_total:
+            self.warn_once(f"points-{r.name}", f"a 3D sweep of {len(ranges)} beams does not split into "
+                                               f"{rows_total} rows: not published")
+            return
+        cols = len(ranges) // rows_total
+        elevation = vfov / 2.0 - np.arange(rows_total) * vres  # up positive
+        azimuth = -((cols - 1) * hres) / 2.0 + np.arange(cols) * hres  # counter-clockwise, from the right
+        el, az = np.meshgrid(elevation, azimuth, indexing="ij")
+        rng = ranges.reshape(rows_total, cols)
+        limit = self.confs.get(r.name, _Conf()).number("MaxRange", math.inf)
+        keep = (rng > 0) & (rng < limit - 1e-3)
+        xyz = np.stack([rng * np.cos(el) * np.cos(az), rng * np.cos(el) * np.sin(az), rng * np.sin(el)], axis=-1)
+        pts = xyz[keep].astype(np.float32)
+        m = PointCloud2()
+        m.header.stamp = b_time(stamp)
+        m.header.frame_id = self.frame(r.name)
+        m.height, m.width = 1, len(pts)
+        m.fields = [PointField(name=n, offset=4 * i, datatype=PointField.FLOAT32, count=1)
+                    for i, n in enumerate("xyz")]
+        m.is_bigendian, m.point_step, m.row_step, m.is_dense = False, 12, 12 * len(pts), True
+        m.data = pts.tobytes()
+        self.emit("points" if not self.points_named else f"points/{r.name}", PointCloud2, m, stamp)
 
     def publish_odometry(self, stamp: float, r: OdometryReading) -> None:
         from nav_msgs.msg import Odometry

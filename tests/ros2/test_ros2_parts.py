@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("rclpy", reason="the ROS 2 extra is not installed (pip install -e '.[ros2]')")
 
 from geometry_msgs.msg import PointStamped  # noqa: E402
-from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState  # noqa: E402
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState, PointCloud2  # noqa: E402
 from std_msgs.msg import Bool  # noqa: E402
 
 
@@ -68,3 +68,19 @@ def test_joints_touch_and_victim_reports(ros_sim, probe):
     assert bridge.stop() == 0
     assert "a joint command names no joint of it: 'NoSuchJoint'" in bridge.stderr
     assert "Traceback" not in bridge.stderr
+
+
+def test_a_3d_scanner_is_a_point_cloud(ros_sim, probe):
+    """Kurt3D's RangeScanner3D: its returns as points, the wall 11 m ahead where it is."""
+    import numpy as np
+
+    points = probe.subscribe("/robot1/points", PointCloud2)
+    ros_sim("--robot", "Kurt3D@Skid:robot1", "--rtf", "5")
+    probe.wait(lambda: points, what="a point cloud")
+    m = points[-1]
+    assert m.header.frame_id == "robot1/" + m.header.frame_id.split("/", 1)[1]
+    xyz = np.frombuffer(bytes(m.data), dtype=np.float32).reshape(-1, 3)
+    assert len(xyz) == m.width > 0
+    ahead = xyz[(np.abs(xyz[:, 1]) < 0.3) & (np.abs(xyz[:, 2]) < 0.3)]
+    assert len(ahead) > 0, "beams straight ahead hit the wall"
+    assert np.median(ahead[:, 0]) == pytest.approx(11.0, abs=0.4)  # the wall face, 11 m from the start pose
