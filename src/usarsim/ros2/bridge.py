@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import queue
+import selectors
 import threading
 import time
 from collections.abc import Callable
@@ -133,6 +134,7 @@ class RobotBridge:
             "CameraFov") is not None]
         self.next_picture = 0.0
         self.pubs: dict[str, Any] = {}
+        self.kept: dict[str, Any] = {}  # topic -> its message, reused (rclpy serialises on publish)
         self.scan_topics: dict[str, str] = {}
         self.rows: dict[str, dict[int, tuple[float, Any]]] = {}  # a split 3D sweep's rows so far
         self.points_named = sum(1 for t in self.types.values() if t == "RangeScanner3D") > 1
@@ -275,17 +277,19 @@ class RobotBridge:
         if topic is None:
             topic = self.scan_topics[r.name] = "scan" if not self.scan_topics else f"scan/{r.name}"
         conf = self.confs.get(r.name, _Conf())
-        m = LaserScan()
-        m.header.stamp = b_time(stamp)
-        m.header.frame_id = self.frame(r.name)
+        m = self.kept.get(topic)
+        if m is None:
+            m = self.kept[topic] = LaserScan()
+            m.header.frame_id = self.frame(r.name)
+            m.time_increment = 0.0  # every beam of a sweep is measured at once
+            m.scan_time = conf.number("ScanInterval", 0.0)
+            m.range_min = conf.number("MinRange", 0.0)
+            m.range_max = conf.number("MaxRange", max(r.ranges_m, default=0.0))
+        set_time(m.header.stamp, stamp)
         n = len(r.ranges_m)
         m.angle_min, m.angle_max = scan_angles(n, r.resolution_rad)
         m.angle_increment = float(r.resolution_rad)
-        m.time_increment = 0.0  # every beam of a sweep is measured at once
-        m.scan_time = conf.number("ScanInterval", 0.0)
-        m.range_min = conf.number("MinRange", 0.0)
-        m.range_max = conf.number("MaxRange", max(r.ranges_m, default=0.0))
-        m.ranges = [float(v) for v in r.ranges_m]
+        m.ranges = r.ranges_m
         self.emit(topic, LaserScan, m, stamp)
 
     def publish_points(self, stamp: float, r: RangeScan3DReading) -> None:
@@ -395,16 +399,19 @@ class RobotBridge:
 
         kind = "sonar" if r.sensor_type.lower().startswith("sonar") else "ir"
         for item in r.items:
-            conf = self.confs.get(item.name, _Conf())
-            m = Range()
-            m.header.stamp = b_time(stamp)
-            m.header.frame_id = self.frame(item.name)
-            m.radiation_type = Range.ULTRASOUND if kind == "sonar" else Range.INFRARED
-            m.field_of_view = conf.number("BeamAngle", 0.0)
-            m.min_range = conf.number("MinRange", 0.0)
-            m.max_range = conf.number("MaxRange", float(item.range_m))
+            topic = f"{kind}/{item.name}"
+            m = self.kept.get(topic)
+            if m is None:  # made once; each reading sets only its stamp and range
+                conf = self.confs.get(item.name, _Conf())
+                m = self.kept[topic] = Range()
+                m.header.frame_id = self.frame(item.name)
+                m.radiation_type = Range.ULTRASOUND if kind == "sonar" else Range.INFRARED
+                m.field_of_view = conf.number("BeamAngle", 0.0)
+                m.min_range = conf.number("MinRange", 0.0)
+                m.max_range = conf.number("MaxRange", float(item.range_m))
+            set_time(m.header.stamp, stamp)
             m.range = float(item.range_m)
-            self.emit(f"{kind}/{item.name}", Range, m, stamp)
+            self.emit(topic, Range, m, stamp)
 
     def publish_gps(self, stamp: float, r: GpsReading) -> None:
         from sensor_msgs.msg import NavSatFix, NavSatStatus
@@ -570,16 +577,26 @@ def _degrees(value: Any, negative: str) -> float:
     return -d if str(hemi).upper() == negative else d
 
 
-def b_time(t: float) -> Any:
-    """A ``builtin_interfaces/Time`` of simulated seconds."""
-    from builtin_interfaces.msg import Time
-
+def _sec_nsec(t: float) -> tuple[int, int]:
     t = max(0.0, float(t))
     sec = int(math.floor(t))
     nsec = int(round((t - sec) * 1e9))
     if nsec >= 1_000_000_000:
         sec, nsec = sec + 1, nsec - 1_000_000_000
+    return sec, nsec
+
+
+def b_time(t: float) -> Any:
+    """A ``builtin_interfaces/Time`` of simulated seconds."""
+    from builtin_interfaces.msg import Time
+
+    sec, nsec = _sec_nsec(t)
     return Time(sec=sec, nanosec=nsec)
+
+
+def set_time(stamp: Any, t: float) -> None:
+    """Set a ``builtin_interfaces/Time`` to simulated seconds."""
+    stamp.sec, stamp.nanosec = _sec_nsec(t)
 
 
 class Bridge:
@@ -756,8 +773,8 @@ class Bridge:
         self._clock_pub.publish(msg)
         self._record("/clock", msg, t)
 
-    def _dispatch(self) -> None:
-        for rb in list(self.robots.values()):
+    def _dispatch(self, only: list[RobotBridge] | None = None) -> None:
+        for rb in only if only is not None else list(self.robots.values()):
             for msg in rb.robot.take_messages():
                 if isinstance(msg, M.Result) and getattr(msg, "item_type", "") == "Victim":
                     log.info("robot %s: victim report: %s", rb.name, msg)
@@ -798,6 +815,7 @@ class Bridge:
             ready()
         start_wall = time.monotonic()
         start_sim = self.sim_time
+        selector: selectors.BaseSelector | None = None
         while not self._halt:
             if duration is not None and self.sim_time - start_sim >= duration - 1e-9:
                 return
@@ -819,10 +837,24 @@ class Bridge:
                         time.sleep(min(ahead, 0.05))
                         ahead = (self.sim_time - start_sim) / self.rtf - (time.monotonic() - start_wall)
             else:
-                self.world.wait(0.01)
-                self._dispatch()
-                self.publish_clock(max((rb.robot.time or 0.0) for rb in self.robots.values())
-                                   if self.robots else self.sim_time)
+                # each robot's lines published as soon as they are read, not after every robot's
+                if selector is None:
+                    selector = selectors.DefaultSelector()
+                    for rb in self.robots.values():
+                        selector.register(rb.robot.fileno(), selectors.EVENT_READ, rb)
+                ready = [key.data for key, _ in selector.select(0.01)]
+                for rb in ready:
+                    try:
+                        rb.robot.update(0.0)
+                    except ClientError:
+                        selector.unregister(rb.robot.fileno())
+                        raise
+                    self._dispatch([rb])
+                    t = rb.robot.time
+                    if t is not None and t > self.sim_time:
+                        self.publish_clock(t)
+                if not ready:
+                    self._dispatch([])
 
     def stop(self) -> None:
         """Stop :meth:`run` (safe in a signal handler)."""
