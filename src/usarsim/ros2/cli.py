@@ -80,7 +80,7 @@ def _positive(text: str) -> float:
 
 
 def robot_specs(args: argparse.Namespace) -> list[Any]:
-    from .bridge import RobotSpec
+    from .robot import RobotSpec
 
     specs = [RobotSpec.parse(text) for text in args.robot]
     if args.robots:
