@@ -133,14 +133,32 @@ def drive(probe, topic: str, gt: list, vx: float = 0.0, wz: float = 0.0, vz: flo
 
 
 def test_cmd_vel_moves_a_p2at(ros_sim, probe):
+    from tf2_msgs.msg import TFMessage
+
     gt = probe.subscribe("/robot1/ground_truth", Odometry)
-    ros_sim("--robot", "P2AT@Skid:robot1", "--rtf", "5")
+    probe.subscribe("/tf", TFMessage)
+    ros_sim("--robot", "P2AT@Skid:robot1", "--rtf", "5", "--map-tf")
     probe.wait(lambda: len(gt) >= 3, what="ground truth")
     speed, turn = drive(probe, "/robot1/cmd_vel", gt, vx=0.3)
     assert speed == pytest.approx(0.3, rel=0.05)
     assert abs(turn) < 0.05
     _, turn = drive(probe, "/robot1/cmd_vel", gt, wz=0.5)
     assert turn > 0.25, f"told to turn left at 0.5 rad/s, it turned at {turn:.3f} rad/s"
+
+    # --map-tf: map -> odom -> base_link, composed, is where ground truth puts the robot
+    by_pair: dict[tuple[str, str], dict[float, object]] = {}
+    for m in probe.messages("/tf"):
+        for t in m.transforms:
+            by_pair.setdefault((t.header.frame_id, t.child_frame_id), {})[round(stamp(t), 4)] = t.transform
+    map_odom, odom_base = by_pair[("map", "robot1/odom")], by_pair[("robot1/odom", "robot1/base_link")]
+    truth = {round(stamp(m), 4): m.pose.pose for m in gt}
+    t = max(set(map_odom) & set(odom_base) & set(truth))
+    a, b = map_odom[t], odom_base[t]
+    ya, yb = yaw(a.rotation), yaw(b.rotation)
+    x = a.translation.x + math.cos(ya) * b.translation.x - math.sin(ya) * b.translation.y
+    y = a.translation.y + math.sin(ya) * b.translation.x + math.cos(ya) * b.translation.y
+    assert (x, y) == pytest.approx((truth[t].position.x, truth[t].position.y), abs=1e-3)
+    assert math.remainder(ya + yb - yaw(truth[t].orientation), math.tau) == pytest.approx(0.0, abs=1e-3)
 
 
 def test_cmd_vel_moves_a_sedan_and_an_airrobot(ros_sim, probe):
@@ -176,3 +194,25 @@ def test_pause_stops_the_clock_and_step_advances_it(ros_sim, probe):
     assert stamp(probe.messages("/clock")[-1]) == pytest.approx(before + PERIOD, abs=1e-9)
     assert probe.call("/usarsim/resume", Trigger).success
     probe.wait(lambda: stamp(probe.messages("/clock")[-1]) > before + 5 * PERIOD, what="the clock to run again")
+
+
+def test_cmd_vel_moves_a_holonomic_lisa_sideways(ros_sim, probe):
+    """Lisa's two steered wheels: forward, then to the left (ROS +y) without turning."""
+    gt = probe.subscribe("/lisa/ground_truth", Odometry)
+    ros_sim("--robot", "Lisa@Spare:lisa", "--rtf", "5")
+    probe.wait(lambda: len(gt) >= 3, what="ground truth")
+    p0 = gt[-1].pose.pose.position
+    x0, y0 = p0.x, p0.y
+    speed, turn = drive(probe, "/lisa/cmd_vel", gt, vx=0.3, settle=1.5, measure=2.0)
+    assert speed == pytest.approx(0.3, rel=0.15) and abs(turn) < 0.1
+    p1 = gt[-1].pose.pose.position
+    assert p1.x - x0 > 0.5 and abs(p1.y - y0) < 0.15, "forward is ROS +x"
+    pub = probe.publisher("/lisa/cmd_vel", Twist)
+    side = Twist()
+    side.linear.y = 0.2
+    pub.publish(side)
+    t0 = stamp(gt[-1])
+    probe.wait(lambda: stamp(gt[-1]) >= t0 + 4.0, timeout=60, what="the sideways drive")
+    p2 = gt[-1].pose.pose.position
+    assert p2.y - p1.y > 0.3, f"told to move left (ROS +y) it moved {p2.y - p1.y:+.2f} m in y"
+    assert abs(yaw(gt[-1].pose.pose.orientation)) < 0.2

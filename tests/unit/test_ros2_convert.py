@@ -110,3 +110,21 @@ def test_robot_specifications(text, spec):
 def test_bad_robot_specifications(text):
     with pytest.raises(ValueError):
         RobotSpec.parse(text)
+
+
+def test_holonomic_wheels_turn_along_their_velocity():
+    geo = M.RobotGeometry(class_name="Lisa", dimensions=(0.5, 0.5, 0.6), wheel_radius=0.08, wheel_separation=0.38)
+    conf = M.RobotConfiguration(class_name="Lisa", steering_type="HolonomSteered", mass_kg=20.0, max_speed=20.0,
+                                max_torque=8.0)
+    k = Kinematics.of(geo, conf)
+    assert k.kind == "holonomic"
+    assert drive_of(k, 0.4, 0.0, 0.0, 0.0)["wheels"] == [(0, pytest.approx(5.0), 0.0), (1, pytest.approx(5.0), 0.0)]
+    # to the left (ROS +y): both wheels a quarter turn to the left, negative in USARSim's sense
+    for _, speed, steer in drive_of(k, 0.0, 0.16, 0.0, 0.0)["wheels"]:
+        assert (speed, steer) == (pytest.approx(2.0), pytest.approx(-math.pi / 2))
+    # backwards: straight wheels spun backwards, not turned round
+    for _, speed, steer in drive_of(k, -0.4, 0.0, 0.0, 0.0)["wheels"]:
+        assert (speed, steer) == (pytest.approx(-5.0), pytest.approx(0.0))
+    # in place, counter-clockwise: the left wheel back, the right forward
+    (n0, left, _), (n1, right, _) = drive_of(k, 0.0, 0.0, 0.0, 1.0)["wheels"]
+    assert (n0, n1) == (0, 1) and left == pytest.approx(-0.19 / 0.08) and right == pytest.approx(0.19 / 0.08)

@@ -34,7 +34,7 @@ class Bridge:
     """Robots of one simulator on one ROS 2 domain (see the module's docstring)."""
 
     def __init__(self, world: World, *, period: float = 0.1, rtf: float = 1.0, frame_prefix: bool = True,
-                 stamped: bool = False, bag: str | None = None, camera_hz: float = 5.0):
+                 stamped: bool = False, bag: str | None = None, camera_hz: float = 5.0, map_tf: bool = False):
         import rclpy
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
@@ -45,6 +45,7 @@ class Bridge:
         self.frame_prefix = frame_prefix
         self.stamped = stamped
         self.camera_hz = camera_hz
+        self.map_tf = map_tf
         self.robots: dict[str, RobotBridge] = {}
         self.commands: queue.SimpleQueue[tuple[RobotBridge | None, Any]] = queue.SimpleQueue()
         self.sim_time = 0.0

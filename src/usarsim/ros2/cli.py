@@ -55,6 +55,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--no-frame-prefix", action="store_true",
                    help="frames without the robot's name (odom, base_link): for a single robot and a stack "
                         "configured with ROS's default frame names")
+    p.add_argument("--map-tf", action="store_true",
+                   help="also publish map -> ROBOT/odom on /tf from ground truth (the robot's odometry origin in "
+                        "the world), for a stack that wants a map frame without a SLAM node")
     p.add_argument("--stamped", action="store_true",
                    help="cmd_vel is geometry_msgs/TwistStamped (Nav2 with enable_stamped_cmd_vel) and "
                         "cmd_vel_unstamped a Twist")
@@ -136,7 +139,8 @@ def cmd_ros2(args: argparse.Namespace) -> int:
     bridge = None
     try:
         bridge = Bridge(world, period=args.period, rtf=args.rtf, frame_prefix=not args.no_frame_prefix,
-                        stamped=args.stamped, bag=args.bag, camera_hz=max(0.0, args.camera_hz))
+                        stamped=args.stamped, bag=args.bag, camera_hz=max(0.0, args.camera_hz),
+                        map_tf=args.map_tf)
         other = _other_clock_publisher(bridge)
         if other:
             print(f"usarsim: error: {other} publishes /clock on ROS_DOMAIN_ID {domain} already (another bridge?): "

@@ -14,6 +14,8 @@ becomes the robot's own DRIVE, with the numbers its GETGEO and GETCONF give:
 * Ackermann: the driven wheels' spin speed ``v / radius`` and the front axle's angle
   ``atan(wheelbase * w / v)`` (the bicycle model, ibid. section 3.3), USARSim's angle positive to
   the right; a turn asked for standing still keeps the wheels straight;
+* holonomic (two steered drive wheels on one axle, as Lisa's): each wheel turned along its own
+  velocity and spun at its speed;
 * aerial and legged: the forward, lateral (right), altitude (up) velocities and the clockwise
   turn rate.
 """
@@ -88,6 +90,8 @@ class Kinematics:
             return cls("velocities")
         if steering == "SkidSteered" and r > 0:
             return cls("skid", r, float(geo.wheel_separation or 0.0), max_speed=float(conf.max_speed))
+        if steering == "HolonomSteered" and r > 0:
+            return cls("holonomic", r, float(geo.wheel_separation or 0.0), max_speed=float(conf.max_speed))
         if steering == "AckermanSteered" and r > 0:
             return cls("ackermann", r, float(geo.wheel_separation or 0.0), float(geo.wheel_base or 0.0),
                        float(conf.max_speed), float(conf.max_front_steer))
@@ -99,7 +103,7 @@ class BadTwist(ValueError):
     """A Twist that cannot be driven: NaN or infinite."""
 
 
-def drive_of(k: Kinematics, vx: float, vy: float, vz: float, wz: float, clip: bool = True) -> dict[str, float]:
+def drive_of(k: Kinematics, vx: float, vy: float, vz: float, wz: float, clip: bool = True) -> dict[str, Any]:
     """The DRIVE keys (for :func:`usarsim.client.core.drive_line`) of a Twist, limited to the
     robot's maxima unless ``clip`` is False (the simulator limits them too)."""
     values = (vx, vy, vz, wz)
@@ -119,6 +123,21 @@ def drive_of(k: Kinematics, vx: float, vy: float, vz: float, wz: float, clip: bo
         lim = k.max_steer if k.max_steer > 0 and clip else math.pi / 2
         return {"speed": _clip(speed, k.max_speed if k.max_speed > 0 and clip else math.inf),
                 "front_steer": _clip(steer, lim), "rear_steer": 0.0}
+    if k.kind == "holonomic":
+        # two steered drive wheels on the axle, numbered 0 (left) and 1 (right) (protocol.md 5.3c):
+        # each turned along its own velocity (vx - w y, vy) and spun at its speed, a turn past
+        # 90 degrees taken as the opposite angle driven backwards
+        lim = k.max_speed if k.max_speed > 0 and clip else math.inf
+        wheels = []
+        for number, y in ((0, k.wheel_separation / 2.0), (1, -k.wheel_separation / 2.0)):
+            wx, wy = vx - wz * y, vy
+            speed, angle = math.hypot(wx, wy) / k.wheel_radius, math.atan2(wy, wx)
+            if angle > math.pi / 2:
+                angle, speed = angle - math.pi, -speed
+            elif angle < -math.pi / 2:
+                angle, speed = angle + math.pi, -speed
+            wheels.append((number, _clip(speed, lim), -angle))  # USARSim: positive to the right
+        return {"wheels": wheels}
     if k.kind == "velocities":
         return {"linear_velocity": vx, "lateral_velocity": -vy, "altitude_velocity": vz, "rotational_velocity": -wz}
     raise ValueError(k.reason or "this robot takes no cmd_vel")

@@ -27,7 +27,7 @@ from usarsim.readings import (
     VictimReading,
 )
 
-from .convert import BadTwist, Kinematics, angles, drive_of, quaternion, ros_pose, scan_angles, vector
+from .convert import BadTwist, Kinematics, angles, drive_of, quaternion, ros_pose, scan_angles, vector, yaw_of
 
 if TYPE_CHECKING:
     from .bridge import Bridge
@@ -130,6 +130,8 @@ class RobotBridge:
         self.rows: dict[str, dict[int, tuple[float, Any]]] = {}  # a split 3D sweep's rows so far
         self.points_named = sum(1 for t in self.types.values() if t == "RangeScanner3D") > 1
         self.last_odom: tuple[float, float, float, float] | None = None  # t, x, y, yaw (ROS)
+        self.last_truth: tuple[float, float, float, float, float] | None = None  # t, x, y, z, yaw (ROS)
+        self.map_tf_sent = -1.0
         self.battery_full: int | None = None
         self.warned: set[str] = set()
 
@@ -216,7 +218,12 @@ class RobotBridge:
         if limited:
             self.warn_once("limit", f"cmd_vel ({vx:g}, {vy:g}, {vz:g} m/s, {wz:g} rad/s) is beyond what the robot "
                                     f"can do: limited to its MaxSpeed and MaxFrontSteer (said once)")
-        self.bridge.commands.put((self, drive_line(**keys)))
+        if "wheels" in keys:
+            line = "DRIVE " + " ".join(f"{{WheelNumber {n}}} {{WheelSpeed {v:.4f}}} {{WheelSteer {a:.4f}}}"
+                                       for n, v, a in keys["wheels"]) + "\r\n"
+        else:
+            line = drive_line(**keys)
+        self.bridge.commands.put((self, line))
 
     # messages from the simulator --------------------------------------------------------------
     def handle(self, msg: Any) -> None:
@@ -347,6 +354,7 @@ class RobotBridge:
             m.twist.twist.linear.y = -math.sin(yaw) * dx + math.cos(yaw) * dy
             m.twist.twist.angular.z = math.remainder(yaw - yaw0, math.tau) / dt
         self.last_odom = (stamp, x, y, yaw)
+        self.send_map_tf()
         self.emit("odom", Odometry, m, stamp)
         self.bridge.send_tf([self.bridge.transform(stamp, self.frame("odom"), self.frame("base_link"),
                                                    (r.x_m, r.y_m, 0.0), (0.0, 0.0, r.theta_rad))], stamp)
@@ -364,6 +372,25 @@ class RobotBridge:
         o = m.pose.pose.orientation
         o.x, o.y, o.z, o.w = q
         self.emit("ground_truth", Odometry, m, stamp)
+        self.last_truth = (stamp, px, py, pz, yaw_of(q))
+        self.send_map_tf()
+
+    def send_map_tf(self) -> None:
+        """``map`` to ``NAME/odom`` (``--map-tf``): where odometry's origin is by ground truth,
+        once both have a reading of the same time (in the plane: x, y, yaw; z of the truth)."""
+        if not self.bridge.map_tf or self.last_truth is None or self.last_odom is None:
+            return
+        t, gx, gy, gz, gyaw = self.last_truth
+        to, ox, oy, oyaw = self.last_odom
+        if abs(t - to) > 1e-6 or t <= self.map_tf_sent:
+            return
+        self.map_tf_sent = t
+        yaw = gyaw - oyaw
+        c, s_ = math.cos(yaw), math.sin(yaw)
+        x, y = gx - (c * ox - s_ * oy), gy - (s_ * ox + c * oy)
+        # the transform in ROS axes; Bridge.transform takes USARSim's, so turn them back
+        self.bridge.send_tf([self.bridge.transform(t, WORLD_FRAME, self.frame("odom"), (x, -y, -gz),
+                                                   (0.0, 0.0, -yaw))], t)
 
     def publish_imu(self, stamp: float, name: str, orientation: Any, gyro: Any, accel: Any) -> None:
         from sensor_msgs.msg import Imu
