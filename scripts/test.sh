@@ -47,9 +47,10 @@ if [[ "$USARSIM_PYTHON" == */* && -f "$venv_bin/../pyvenv.cfg" ]]; then
   export PATH
 fi
 # With arguments, pytest runs what they select, as given.  The whole suite (no arguments) is
-# shared among one process per core, up to 4 (pytest-xdist); then the tests marked 'alone' (they
-# time the wall clock: rates, pacing, deadlines) run by themselves, with no other test competing
-# for the processors.  On 2 cores that takes the suite from about 12.5 minutes to 7 or 8.
+# shared among one process per core, up to 4 (pytest-xdist); beside it, in a process of its own,
+# the tests marked 'ports' (the pages' commands, on the default ports: they mostly wait for robots
+# driving in real time) run one at a time; then the tests marked 'alone' (they time the wall clock:
+# rates, pacing, deadlines) run by themselves, with no other test competing for the processors.
 if [ $# -gt 0 ]; then
   exec "$USARSIM_PYTHON" -m pytest -q "$@"
 fi
@@ -58,9 +59,18 @@ if [ "$workers" -gt 4 ]; then workers=4; fi
 if [ "$workers" -lt 2 ]; then
   exec "$USARSIM_PYTHON" -m pytest -q
 fi
+beside="$(mktemp -d)"
+"$USARSIM_PYTHON" -m pytest -q -p no:cacheprovider --basetemp "$beside/tmp" -m ports >"$beside/log" 2>&1 &
+ports_pid=$!
 shared=0
-"$USARSIM_PYTHON" -m pytest -q -n "$workers" -m "not alone" || shared=$?
+"$USARSIM_PYTHON" -m pytest -q -n "$workers" -m "not alone and not ports" || shared=$?
+ports=0
+wait "$ports_pid" || ports=$?
+echo "scripts/test.sh: the pages' commands (tests marked 'ports', run beside the others):"
+cat "$beside/log"
+rm -rf "$beside"
 alone=0
 "$USARSIM_PYTHON" -m pytest -q -m alone || alone=$?
 if [ "$shared" != 0 ]; then exit "$shared"; fi
+if [ "$ports" != 0 ]; then exit "$ports"; fi
 exit "$alone"

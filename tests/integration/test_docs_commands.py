@@ -18,7 +18,8 @@ clone's script), with the shell ``scripts/test.sh`` leaves behind (the virtual e
   (this is that environment) and ``pip install`` (every extra is installed here).
 
 Blocks tagged otherwise (```python, ```yaml, untagged transcripts and outputs) are not commands.
-It uses the default ports, so it runs by itself (``alone``).
+It uses the default ports, so no other test of its own does: ``scripts/test.sh`` runs it (marked
+``ports``) in a process of its own beside the shared phase, whose tests use free ports (port 0).
 """
 
 from __future__ import annotations
@@ -173,7 +174,7 @@ def pages_with_commands() -> list[str]:
     return [page for page in pages() if any(kind not in ("file", "end") for kind, _, _ in commands(page))]
 
 
-@pytest.mark.alone
+@pytest.mark.ports
 @pytest.mark.parametrize("page", pages_with_commands())
 def test_every_command_of_the_page_runs_as_printed(page, clone_folder):
     steps = commands(page)
