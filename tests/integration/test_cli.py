@@ -227,16 +227,27 @@ def _run_test_script(tmp_path: Path, *args: str, cores: int, failing: str = "") 
     return out.returncode, log.read_text().splitlines() if log.exists() else []
 
 
+PORTS_RUN = "-q -p no:cacheprovider --basetemp BASETEMP -m ports"
+SHARED_RUN = "-q -n 2 -m not alone and not ports"
+
+
+def _runs(tmp_path: Path, *args: str, cores: int, failing: str = "") -> tuple[int, list[str]]:
+    rc, calls = _run_test_script(tmp_path, *args, cores=cores, failing=failing)
+    return rc, [re.sub(r"--basetemp \S+", "--basetemp BASETEMP", c) for c in calls]
+
+
 def test_test_script_shares_the_suite_among_the_cores_then_runs_the_wall_clock_tests_alone(tmp_path):
-    assert _run_test_script(tmp_path / "a", cores=2) == (0, ["-q -n 2 -m not alone", "-q -m alone"])
-    assert _run_test_script(tmp_path / "b", cores=16)[1][0] == "-q -n 4 -m not alone"  # at most 4 processes
-    assert _run_test_script(tmp_path / "c", cores=1) == (0, ["-q"])  # one core: one process, everything
-    # a failure among the shared tests fails the run, and the others still run
-    assert _run_test_script(tmp_path / "d", cores=2, failing="not alone") == (1, ["-q -n 2 -m not alone",
-                                                                                 "-q -m alone"])
-    assert _run_test_script(tmp_path / "e", cores=2, failing="-m alone")[0] == 1
+    # the shared phase and, beside it, the pages' commands (in either order), then the wall-clock tests
+    rc, calls = _runs(tmp_path / "a", cores=2)
+    assert rc == 0 and sorted(calls[:2]) == sorted([PORTS_RUN, SHARED_RUN]) and calls[2:] == ["-q -m alone"]
+    assert "-q -n 4 -m not alone and not ports" in _runs(tmp_path / "b", cores=16)[1]  # at most 4 processes
+    assert _runs(tmp_path / "c", cores=1) == (0, ["-q"])  # one core: one process, everything
+    # a failure in any phase fails the run, and the others still run
+    for case, failing in (("d", "not alone and not ports"), ("e", "-m alone"), ("g", "-m ports")):
+        rc, calls = _runs(tmp_path / case, cores=2, failing=failing)
+        assert rc == 1 and len(calls) == 3, (failing, calls)
     # arguments select what runs, in one process, as given
-    assert _run_test_script(tmp_path / "f", "tests/unit", "-k", "lidar", cores=2) == (0, ["-q tests/unit -k lidar"])
+    assert _runs(tmp_path / "f", "tests/unit", "-k", "lidar", cores=2) == (0, ["-q tests/unit -k lidar"])
 
 
 def test_readme_says_how_to_get_the_command_after_the_first_two():
