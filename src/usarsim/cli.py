@@ -400,8 +400,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_sweep_parsers(sub)  # 'usarsim sweep' and 'usarsim report' (docs/experiments.md)
     from usarsim.ros2.cli import add_parser as add_ros2_parser
 
-    add_ros2_parser(sub)  # 'usarsim ros2' (docs/ros2.md)
-    for command in (s, v, w, r, b, rp):  # -v and -vv after the command too: 'usarsim serve -v'
+    r2 = add_ros2_parser(sub)  # 'usarsim ros2' (docs/ros2.md)
+    for command in (s, v, w, r, b, rp, r2):  # -v and -vv after the command too: 'usarsim serve -v'
         _add_verbose(command, "verbose_after")
     return p
 

@@ -12,7 +12,7 @@ from typing import Any
 
 log = logging.getLogger("usarsim.ros2")
 
-OTHER_BRIDGE_WAIT_S = 2.0  # listen this long for another /clock publisher (discovery on a busy machine)
+OTHER_BRIDGE_WAIT_S = 3.0  # listen this long for another /clock publisher (discovery on a busy machine)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
