@@ -84,3 +84,24 @@ def test_a_3d_scanner_is_a_point_cloud(ros_sim, probe):
     ahead = xyz[(np.abs(xyz[:, 1]) < 0.3) & (np.abs(xyz[:, 2]) < 0.3)]
     assert len(ahead) > 0, "beams straight ahead hit the wall"
     assert np.median(ahead[:, 0]) == pytest.approx(11.0, abs=0.4)  # the wall face, 11 m from the start pose
+
+
+def test_flippers_and_an_arm_follow_joint_commands(ros_sim, probe):
+    """TeleMax: a flipper (a joint of its STA, to DRIVE {Name}) and an arm link (its mission
+    package, to MISPKG), commanded by name in one JointState, reach their positions."""
+    probe.subscribe("/telemax/joint_states", JointState)
+    ros_sim("--robot", "TeleMax@Spare:telemax", "--rtf", "5")
+
+    def position(name: str) -> float | None:
+        msgs = probe.messages("/telemax/joint_states")
+        return dict(zip(msgs[-1].name, msgs[-1].position)).get(name) if msgs else None
+
+    probe.wait(lambda: position("FRFlipper") is not None, what="the flippers in joint_states")
+    cmd = probe.publisher("/telemax/joint_commands", JointState)
+    m = JointState()
+    m.name, m.position = ["FRFlipper", "TeleMaxArm_link2"], [0.5, 0.3]
+    cmd.publish(m)
+    probe.wait(lambda: abs(position("FRFlipper") - 0.5) < 0.02, timeout=60, what="the flipper at 0.5 rad")
+    probe.wait(lambda: position("TeleMaxArm_link2") is not None and abs(position("TeleMaxArm_link2") - 0.3) < 0.03,
+               timeout=60, what="the arm's link 2 at 0.3 rad")
+    assert abs(position("FLFlipper")) < 0.05, "the other flippers stay"
