@@ -7,6 +7,7 @@ Nothing here sleeps for a fixed time: every wait is on a condition with a timeou
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import math
 import socket
 import threading
@@ -433,3 +434,56 @@ def drive_joint(sim, uid: int, name: str, value: float, order: int = 0) -> bool:
 
     r = sim.robots.get(uid)
     return r is not None and joints.order(sim, r, name, value, order)
+
+
+class Tap:
+    """A TCP relay between a client under test and the server at ``port`` (the client connects to
+    ``tap.port``): every byte passes both ways, and the lines the server sends are kept, in
+    order, as text."""
+
+    def __init__(self, port: int):
+        self.target = port
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self.listener.getsockname()[1]
+        self.lines: list[str] = []
+        self._lock = threading.Lock()
+        self.pumps: list[threading.Thread] = []
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self.listener.accept()
+            except OSError:
+                return
+            server = socket.create_connection(("127.0.0.1", self.target))
+            for sock in (client, server):
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            for args in ((client, server, False), (server, client, True)):
+                self.pumps.append(threading.Thread(target=self._pump, args=args, daemon=True))
+                self.pumps[-1].start()
+
+    def _pump(self, src: socket.socket, dst: socket.socket, keep: bool) -> None:
+        rest = b""
+        try:
+            while data := src.recv(1 << 16):
+                dst.sendall(data)
+                if keep:
+                    *lines, rest = (rest + data).split(b"\r\n")
+                    with self._lock:
+                        self.lines.extend(line.decode("ascii", "replace") for line in lines)
+        except OSError:
+            pass
+        finally:
+            with contextlib.suppress(OSError):
+                dst.shutdown(socket.SHUT_RDWR)
+            src.close()
+
+    def sen(self, sensor_type: str) -> list[str]:
+        with self._lock:
+            return [line for line in self.lines if line.startswith("SEN ") and f"{{Type {sensor_type}}}" in line]
+
+    def close(self) -> None:
+        self.listener.close()
+        for pump in self.pumps:
+            pump.join(5)

@@ -9,7 +9,6 @@ at once with one line saying why."""
 
 from __future__ import annotations
 
-import contextlib
 import math
 import re
 import socket
@@ -21,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from helpers import Tap
 from usarsim.client import launch
 from usarsim.config.catalog import resolve_world
 from usarsim.config.world import load_world
@@ -66,57 +66,7 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-GROUND_TRUTH = re.compile(rb"^SEN \{Time ([-\d.]+)\} \{Type GroundTruth\} .*\{Location ([-\d.]+),([-\d.]+),")
-
-
-class Tap:
-    """A TCP relay between an example and the server: it passes every byte on, both ways, and
-    keeps the (time, x, y) of every GroundTruth reading the server sends its robot (a
-    lock-step run's every tenth of a second, however fast the example steps)."""
-
-    def __init__(self, port: int):
-        self.target = port
-        self.listener = socket.create_server(("127.0.0.1", 0))
-        self.port = self.listener.getsockname()[1]
-        self.samples: list[tuple[float, float, float]] = []
-        self.pumps: list[threading.Thread] = []
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                client, _ = self.listener.accept()
-            except OSError:
-                return  # closed
-            server = socket.create_connection(("127.0.0.1", self.target))
-            for sock in (client, server):
-                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            for args in ((client, server, False), (server, client, True)):
-                self.pumps.append(threading.Thread(target=self._pump, args=args, daemon=True))
-                self.pumps[-1].start()
-
-    def _pump(self, src: socket.socket, dst: socket.socket, tap: bool) -> None:
-        rest = b""
-        try:
-            while data := src.recv(1 << 16):
-                dst.sendall(data)
-                if tap:
-                    *lines, rest = (rest + data).split(b"\r\n")
-                    for line in lines:
-                        if m := GROUND_TRUTH.match(line):
-                            self.samples.append((float(m.group(1)), float(m.group(2)), float(m.group(3))))
-        except OSError:
-            pass
-        finally:  # each socket is the source of one pump, which closes it
-            with contextlib.suppress(OSError):
-                dst.shutdown(socket.SHUT_RDWR)
-            src.close()
-
-    def close(self) -> None:
-        """No more connections; those there were are done (their readings all kept)."""
-        self.listener.close()
-        for pump in self.pumps:
-            pump.join(10)
+GROUND_TRUTH = re.compile(r"^SEN \{Time ([-\d.]+)\} \{Type GroundTruth\} .*\{Location ([-\d.]+),([-\d.]+),")
 
 
 def run_watched(port: int, *args: str, example: Path = EXAMPLE) -> tuple[subprocess.CompletedProcess, list]:
@@ -128,7 +78,8 @@ def run_watched(port: int, *args: str, example: Path = EXAMPLE) -> tuple[subproc
                              text=True, timeout=180)
     finally:
         tap.close()
-    return out, list(tap.samples)
+    return out, [(float(m.group(1)), float(m.group(2)), float(m.group(3)))
+                 for m in map(GROUND_TRUTH.match, tap.lines) if m]
 
 
 def longest_stay(samples: list[tuple[float, float, float]]) -> tuple[float, tuple[float, float, float]]:

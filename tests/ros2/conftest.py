@@ -17,8 +17,9 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="the ROS 2 extra is not installed (pip install -e '.[ros2]')")
 
-from ros2_parts import Bridge, Probe, Tap  # noqa: E402
+from ros2_parts import Bridge, Probe  # noqa: E402
 
+from helpers import Tap  # noqa: E402
 from usarsim.ros2.tf2_build import ensure_tf2_msgs  # noqa: E402
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")

@@ -1,12 +1,10 @@
-"""The ROS 2 tests' parts: a TCP relay between the bridge and the simulator that keeps every
-line the simulator sends the bridge, the bridge (``usarsim ros2``) in a process of its own, and a
-probe: a real rclpy node in the test's process that subscribes, publishes and calls services."""
+"""The ROS 2 tests' parts: the bridge (``usarsim ros2``) in a process of its own, and a probe: a
+real rclpy node in the test's process that subscribes, publishes and calls services (the relay
+between bridge and simulator is helpers.Tap)."""
 
 from __future__ import annotations
 
-import contextlib
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -15,58 +13,6 @@ from collections.abc import Callable
 from typing import Any
 
 import rclpy
-
-
-class Tap:
-    """A TCP relay between the bridge and the simulator: every byte passes both ways; the lines
-    the simulator sends are kept, per connection, as text."""
-
-    def __init__(self, port: int):
-        self.target = port
-        self.listener = socket.create_server(("127.0.0.1", 0))
-        self.port = self.listener.getsockname()[1]
-        self.lines: list[str] = []
-        self._lock = threading.Lock()
-        self.pumps: list[threading.Thread] = []
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                client, _ = self.listener.accept()
-            except OSError:
-                return
-            server = socket.create_connection(("127.0.0.1", self.target))
-            for sock in (client, server):
-                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            for args in ((client, server, False), (server, client, True)):
-                self.pumps.append(threading.Thread(target=self._pump, args=args, daemon=True))
-                self.pumps[-1].start()
-
-    def _pump(self, src: socket.socket, dst: socket.socket, keep: bool) -> None:
-        rest = b""
-        try:
-            while data := src.recv(1 << 16):
-                dst.sendall(data)
-                if keep:
-                    *lines, rest = (rest + data).split(b"\r\n")
-                    with self._lock:
-                        self.lines.extend(line.decode("ascii", "replace") for line in lines)
-        except OSError:
-            pass
-        finally:
-            with contextlib.suppress(OSError):
-                dst.shutdown(socket.SHUT_RDWR)
-            src.close()
-
-    def sen(self, sensor_type: str) -> list[str]:
-        with self._lock:
-            return [line for line in self.lines if line.startswith("SEN ") and f"{{Type {sensor_type}}}" in line]
-
-    def close(self) -> None:
-        self.listener.close()
-        for pump in self.pumps:
-            pump.join(5)
 
 
 class Bridge:

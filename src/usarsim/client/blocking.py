@@ -440,30 +440,6 @@ class World:
             if t is not None and t > self.time:
                 self.time = t
 
-    def poll(self, timeout: float) -> bool:
-        """Read what the robots' connections have, waiting up to ``timeout`` seconds for the
-        first bytes (real time; unlike :meth:`wait`, it returns as soon as something came).
-        True when something was read."""
-        sel = selectors.DefaultSelector()
-        got = False
-        try:
-            for robot in self._robots.values():
-                if not robot._conn.state.closed:
-                    sel.register(robot._conn.sock, selectors.EVENT_READ, robot._conn)
-            if not sel.get_map():
-                time.sleep(timeout)
-                return False
-            for key, _ in sel.select(timeout):
-                key.data.read(0.0)
-                got = True
-        finally:
-            sel.close()
-        for robot in self._robots.values():
-            t = robot._conn.state.time
-            if t is not None and t > self.time:
-                self.time = t
-        return got
-
     def truth(self, class_name: str | None = None, name: str | None = None) -> list[TruthObject]:
         """Where things are now, from the ground-truth service: robots, victims, RFID tags,
         false alarms and movable objects (``class_name``/``name`` filter)."""

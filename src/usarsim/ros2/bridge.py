@@ -29,6 +29,8 @@ from .robot import NODE_NAME, RobotBridge, RobotSpec, b_time
 
 log = logging.getLogger("usarsim.ros2")
 
+REAL_TIME_REFUSAL = "the simulator runs in real time: start it with --lockstep"
+
 
 class Bridge:
     """Robots of one simulator on one ROS 2 domain (see the module's docstring)."""
@@ -74,7 +76,8 @@ class Bridge:
         self._tf_pub = self.node.create_publisher(TFMessage, "/tf", tf_qos)
         self._tf_static_pub = self.node.create_publisher(TFMessage, "/tf_static", static_qos)
         self._static: list[Any] = []
-        for name, handler in (("pause", self._srv_pause), ("resume", self._srv_resume), ("step", self._srv_step)):
+        for name, handler in (("pause", self._switch("pause")), ("resume", self._switch("resume")),
+                              ("step", self._srv_step)):
             self.node.create_service(Trigger, f"/usarsim/{name}", handler)
         self.recorder = None
         if bag:
@@ -96,25 +99,22 @@ class Bridge:
                     break
                 log.warning("ROS 2 callback failed: %s", exc)
 
-    def _srv_pause(self, request: Any, response: Any) -> Any:
-        if not self.world.lockstep:
-            response.success, response.message = False, "the simulator runs in real time: start it with --lockstep"
-        else:
-            self.commands.put((None, "pause"))
-            response.success, response.message = True, "paused"
-        return response
+    def _switch(self, what: str) -> Callable[[Any, Any], Any]:
+        """The service that pauses or resumes the clock (``what``: "pause" or "resume")."""
 
-    def _srv_resume(self, request: Any, response: Any) -> Any:
-        if not self.world.lockstep:
-            response.success, response.message = False, "the simulator runs in real time: start it with --lockstep"
-        else:
-            self.commands.put((None, "resume"))
-            response.success, response.message = True, "resumed"
-        return response
+        def handle(request: Any, response: Any) -> Any:
+            if not self.world.lockstep:
+                response.success, response.message = False, REAL_TIME_REFUSAL
+            else:
+                self.commands.put((None, what))
+                response.success, response.message = True, f"{what}d"
+            return response
+
+        return handle
 
     def _srv_step(self, request: Any, response: Any) -> Any:
         if not self.world.lockstep:
-            response.success, response.message = False, "the simulator runs in real time: start it with --lockstep"
+            response.success, response.message = False, REAL_TIME_REFUSAL
             return response
         with self._step_done:
             before = self.sim_time

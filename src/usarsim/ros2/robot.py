@@ -446,28 +446,37 @@ class RobotBridge:
         self.emit("gps/fix", NavSatFix, m, stamp)
 
     def publish_victims(self, stamp: float, r: VictimReading) -> None:
+        # one red sphere per part seen, its text the part's name (Head, Chest, ...)
+        self.publish_markers(stamp, "victims", r.name, "SPHERE", 0.1, (1.0, 0.2, 0.2),
+                             [(i, part.part_name, part.location) for i, part in enumerate(r.parts)])
+
+    def publish_markers(self, stamp: float, topic: str, sensor: str, shape: str, size: float,
+                        rgb: tuple[float, float, float], items: list[tuple[int, str, Any]]) -> None:
+        """A MarkerArray: a DELETEALL, then a marker per (id, text, USARSim location) in the
+        sensor's frame (namespace ``topic``)."""
         from visualization_msgs.msg import Marker, MarkerArray
 
         out = MarkerArray()
         clear = Marker()
         clear.action = Marker.DELETEALL
         out.markers.append(clear)
-        for i, part in enumerate(r.parts):
+        for ident, text, location in items:
             m = Marker()
             m.header.stamp = b_time(stamp)
-            m.header.frame_id = self.frame(r.name)
-            m.ns = "victims"
-            m.id = i
-            m.type = Marker.SPHERE
+            m.header.frame_id = self.frame(sensor)
+            m.ns = topic
+            m.id = ident
+            m.type = getattr(Marker, shape)
             m.action = Marker.ADD
-            m.text = part.part_name  # the part's name (Head, Chest, ...), for a program reading the array
+            m.text = text
             p = m.pose.position
-            p.x, p.y, p.z = vector(part.location)
+            p.x, p.y, p.z = vector(location)
             m.pose.orientation.w = 1.0
-            m.scale.x = m.scale.y = m.scale.z = 0.1
-            m.color.r, m.color.g, m.color.b, m.color.a = 1.0, 0.2, 0.2, 1.0
+            m.scale.x = m.scale.y = m.scale.z = size
+            m.color.r, m.color.g, m.color.b = rgb
+            m.color.a = 1.0
             out.markers.append(m)
-        self.emit("victims", MarkerArray, out, stamp)
+        self.emit(topic, MarkerArray, out, stamp)
 
     def publish_touch(self, stamp: float, r: TouchReading) -> None:
         from std_msgs.msg import Bool
@@ -476,27 +485,10 @@ class RobotBridge:
             self.emit(f"touch/{item.name}", Bool, Bool(data=bool(item.touching)), stamp)
 
     def publish_rfid(self, stamp: float, r: RfidReading) -> None:
-        from visualization_msgs.msg import Marker, MarkerArray
-
-        out = MarkerArray()
-        clear = Marker()
-        clear.action = Marker.DELETEALL
-        out.markers.append(clear)
-        for tag in r.tags:
-            m = Marker()
-            m.header.stamp = b_time(stamp)
-            m.header.frame_id = self.frame(r.name)
-            m.ns = "rfid"
-            m.id = int(tag.tag_id)
-            m.type = Marker.CUBE
-            m.text = str(tag.tag_id) if tag.memory is None else f"{tag.tag_id} {tag.memory}"  # id, then memory
-            p = m.pose.position
-            p.x, p.y, p.z = vector(tag.location)
-            m.pose.orientation.w = 1.0
-            m.scale.x = m.scale.y = m.scale.z = 0.05
-            m.color.g, m.color.a = 1.0, 1.0
-            out.markers.append(m)
-        self.emit("rfid", MarkerArray, out, stamp)
+        # one green cube per tag in range, its id the tag's ID, its text the ID and the memory
+        self.publish_markers(stamp, "rfid", r.name, "CUBE", 0.05, (0.0, 1.0, 0.0),
+                             [(int(t.tag_id), str(t.tag_id) if t.memory is None else f"{t.tag_id} {t.memory}",
+                               t.location) for t in r.tags])
 
     def publish_joint_states(self, stamp: float) -> None:
         from sensor_msgs.msg import JointState
