@@ -54,16 +54,21 @@ fi
 if [ $# -gt 0 ]; then
   exec "$USARSIM_PYTHON" -m pytest -q "$@"
 fi
+# The fast tier first (tests/fast: the protocol, sessions, console and client logic with a fake
+# facade; no MuJoCo, which USARSIM_FAST_TIER=1 makes fail to import): a fault there fails the run
+# in seconds, before the physics tests start.
+echo "scripts/test.sh: the fast tier (pytest -m fast: no physics, no sockets)" >&2
+USARSIM_FAST_TIER=1 "$USARSIM_PYTHON" -m pytest -q -p no:cacheprovider tests/fast
 workers="$(nproc 2>/dev/null || echo 1)"
 if [ "$workers" -gt 4 ]; then workers=4; fi
 if [ "$workers" -lt 2 ]; then
-  exec "$USARSIM_PYTHON" -m pytest -q
+  exec "$USARSIM_PYTHON" -m pytest -q -m "not fast"
 fi
 beside="$(mktemp -d)"
 "$USARSIM_PYTHON" -m pytest -q -p no:cacheprovider --basetemp "$beside/tmp" -m ports >"$beside/log" 2>&1 &
 ports_pid=$!
 shared=0
-"$USARSIM_PYTHON" -m pytest -q -n "$workers" -m "not alone and not ports" || shared=$?
+"$USARSIM_PYTHON" -m pytest -q -n "$workers" -m "not alone and not ports and not fast" || shared=$?
 ports=0
 wait "$ports_pid" || ports=$?
 echo "scripts/test.sh: the pages' commands (tests marked 'ports', run beside the others):"

@@ -1,14 +1,40 @@
-"""Shared fixtures: worlds, in-process servers on port 0, the golden-update switch."""
+"""Shared fixtures: worlds, in-process servers on port 0, the golden-update switch; the fast
+tier's guard and marker."""
 
 from __future__ import annotations
 
+import importlib.abc
 import os
+import sys
 from pathlib import Path
 
 import pytest
 
 import usarsim  # noqa: F401  (first: it chooses MuJoCo's offscreen GL backend before MuJoCo loads)
 from helpers import ServerThread, write_test_world
+
+FAST_DIR = Path(__file__).parent / "fast"
+# USARSIM_FAST_TIER=1 (scripts/test.sh's first phase: pytest tests/fast): importing MuJoCo fails,
+# so that a test of the fast tier cannot build a physics model, even through an import deep down.
+FAST_TIER = os.environ.get("USARSIM_FAST_TIER") == "1"
+
+
+class _NoMuJoCo(importlib.abc.MetaPathFinder):
+    def find_spec(self, name: str, path: object = None, target: object = None) -> None:
+        if name == "mujoco" or name.startswith("mujoco."):
+            raise ImportError("the fast test tier (USARSIM_FAST_TIER=1) loads no MuJoCo: this test belongs in "
+                              "tests/unit or tests/integration, or its code imports the physics it does not need")
+
+
+if FAST_TIER:
+    sys.meta_path.insert(0, _NoMuJoCo())
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Every test under tests/fast is marked ``fast`` (``pytest -m fast`` selects the tier)."""
+    for item in items:
+        if FAST_DIR in Path(str(item.path)).parents:
+            item.add_marker(pytest.mark.fast)
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

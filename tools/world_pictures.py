@@ -44,8 +44,9 @@ def save_png(picture: np.ndarray, path: Path) -> int:
 
 def world_pictures(name: str, out: Path) -> list[tuple[Path, int]]:
     from usarsim.config.catalog import resolve_robot, resolve_world
-    from usarsim.sim.render import RenderService, Tile
+    from usarsim.sim.render import RenderService
     from usarsim.sim.simulation import Simulation
+    from usarsim.sim.tiles import Tile
 
     world = resolve_world(name)
     sim = Simulation(world)

@@ -228,7 +228,8 @@ def _run_test_script(tmp_path: Path, *args: str, cores: int, failing: str = "") 
 
 
 PORTS_RUN = "-q -p no:cacheprovider --basetemp BASETEMP -m ports"
-SHARED_RUN = "-q -n 2 -m not alone and not ports"
+SHARED_RUN = "-q -n 2 -m not alone and not ports and not fast"
+FAST_RUN = "-q -p no:cacheprovider tests/fast"
 
 
 def _runs(tmp_path: Path, *args: str, cores: int, failing: str = "") -> tuple[int, list[str]]:
@@ -237,15 +238,19 @@ def _runs(tmp_path: Path, *args: str, cores: int, failing: str = "") -> tuple[in
 
 
 def test_test_script_shares_the_suite_among_the_cores_then_runs_the_wall_clock_tests_alone(tmp_path):
-    # the shared phase and, beside it, the pages' commands (in either order), then the wall-clock tests
+    # the fast tier; the shared phase and, beside it, the pages' commands (in either order); then the
+    # wall-clock tests
     rc, calls = _runs(tmp_path / "a", cores=2)
-    assert rc == 0 and sorted(calls[:2]) == sorted([PORTS_RUN, SHARED_RUN]) and calls[2:] == ["-q -m alone"]
-    assert "-q -n 4 -m not alone and not ports" in _runs(tmp_path / "b", cores=16)[1]  # at most 4 processes
-    assert _runs(tmp_path / "c", cores=1) == (0, ["-q"])  # one core: one process, everything
-    # a failure in any phase fails the run, and the others still run
+    assert rc == 0 and calls[0] == FAST_RUN and sorted(calls[1:3]) == sorted([PORTS_RUN, SHARED_RUN])
+    assert calls[3:] == ["-q -m alone"]
+    assert "-q -n 4 -m not alone and not ports and not fast" in _runs(tmp_path / "b", cores=16)[1]  # at most 4
+    assert _runs(tmp_path / "c", cores=1) == (0, [FAST_RUN, "-q -m not fast"])  # one core: one process
+    # a failure in the fast tier stops the run at once; in any later phase it fails the run, and the
+    # others still run
+    assert _runs(tmp_path / "h", cores=2, failing="tests/fast") == (1, [FAST_RUN])
     for case, failing in (("d", "not alone and not ports"), ("e", "-m alone"), ("g", "-m ports")):
         rc, calls = _runs(tmp_path / case, cores=2, failing=failing)
-        assert rc == 1 and len(calls) == 3, (failing, calls)
+        assert rc == 1 and len(calls) == 4, (failing, calls)
     # arguments select what runs, in one process, as given
     assert _runs(tmp_path / "f", "tests/unit", "-k", "lidar", cores=2) == (0, ["-q tests/unit -k lidar"])
 

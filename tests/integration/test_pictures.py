@@ -85,7 +85,7 @@ class Camera:
                                      max_fps=0)
 
     def picture(self, uid: int) -> np.ndarray:
-        from usarsim.sim.render import Tile
+        from usarsim.sim.tiles import Tile
 
         return self.service.render(WIDTH, HEIGHT, [Tile(uid, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=60)
 

@@ -140,7 +140,7 @@ def test_the_chase_view_looks_at_the_robot_from_behind_and_above(live):
     import numpy as np
     from PIL import Image
 
-    from usarsim.sim.render import Tile
+    from usarsim.sim.tiles import Tile
 
     robot = live.connect()
     robot.nfo()

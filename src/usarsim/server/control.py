@@ -27,7 +27,7 @@ from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
 from usarsim.server.ordering import STEP_GRACE_S, StepOrder
 from usarsim.server.session import ALIVE, CLOSED, NEW, SPAWNING, Session, SessionContext
-from usarsim.sim.facade import SimFacade
+from usarsim.sim.api import Facade
 from usarsim.sim.types import Output
 
 log = logging.getLogger("usarsim.server")
@@ -218,7 +218,7 @@ class Connection(ServerConnection):
 
 
 class ControlServer(TcpListener):
-    def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3000,
+    def __init__(self, facade: Facade, *, host: str = "127.0.0.1", port: int = 3000,
                  max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = (),
                  max_pending_bytes: int = HIGH_WATER, max_robots: int | None = None,
                  step_grace_s: float = STEP_GRACE_S):

@@ -22,7 +22,7 @@ from usarsim.protocol import messages as M
 from usarsim.readings import ItemParams
 from usarsim.server.articulation import Articulation
 from usarsim.server.connection import LogOnce
-from usarsim.sim.facade import SimFacade
+from usarsim.sim.api import Facade
 
 log = logging.getLogger("usarsim.server")
 
@@ -56,7 +56,7 @@ class SessionContext:
     ``log_once`` logs each kind of problem once per connection (shared with the connection;
     by default one of the session's own)."""
 
-    facade: SimFacade
+    facade: Facade
     peer: str
     emit: Callable[[Any], None]
     threadsafe: Callable[[Callable], Callable]
@@ -149,7 +149,7 @@ class Session(Articulation):
             self.ctx.resume()
 
     @property
-    def facade(self) -> SimFacade:
+    def facade(self) -> Facade:
         return self.ctx.facade
 
     def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:

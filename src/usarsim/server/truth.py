@@ -22,7 +22,7 @@ from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.truth import END, TruthObject, format_truth_object, parse_truth_request
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
-from usarsim.sim.facade import SimFacade
+from usarsim.sim.api import Facade
 
 log = logging.getLogger("usarsim.server")
 
@@ -82,7 +82,7 @@ class TruthConnection(ServerConnection):
 
 
 class TruthServer(TcpListener):
-    def __init__(self, facade: SimFacade, *, host: str = "127.0.0.1", port: int = 3989, max_connections: int = 16):
+    def __init__(self, facade: Facade, *, host: str = "127.0.0.1", port: int = 3989, max_connections: int = 16):
         super().__init__(host, port)
         self.facade = facade
         self.max_connections = max_connections

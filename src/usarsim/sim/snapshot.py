@@ -13,15 +13,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
-from usarsim.config.robot import RobotConfig
 from usarsim.sim import frames
 from usarsim.sim.radio import RadioModel, RadioNet, pair_key
+from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
 
 if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
@@ -29,49 +28,6 @@ if TYPE_CHECKING:
 # Radio links are sampled for all pairs of at most this many robots (n (n - 1) / 2 pairs);
 # beyond it a frame carries no links (the wireless servers still compute theirs).
 MAX_LINK_ROBOTS = 32
-
-
-@dataclass(frozen=True, slots=True)
-class RobotFrame:
-    """A robot at one instant: USARSim frame, metres and radians (rotations in [0, 2 pi))."""
-
-    uid: int
-    name: str
-    config: RobotConfig
-    location: tuple[float, float, float]
-    rotation: tuple[float, float, float]
-    battery_s: float
-    spawn_time: float
-    wall_force_n: float = 0.0  # the strongest push against a static solid now (contact_forces)
-
-
-@dataclass(frozen=True, slots=True)
-class ObjectFrame:
-    """A movable object (a brick, a pipe) at one instant."""
-
-    name: str
-    location: tuple[float, float, float]
-    rotation: tuple[float, float, float]
-
-
-@dataclass(frozen=True, slots=True)
-class LinkFrame:
-    """The radio link between two robots (by name, lower case, sorted) at one instant."""
-
-    a: str
-    b: str
-    signal_dbm: float
-    distance_m: float
-    walls: int
-    holds: bool
-
-
-@dataclass(frozen=True, slots=True)
-class WorldFrame:
-    time: float
-    robots: tuple[RobotFrame, ...]
-    objects: tuple[ObjectFrame, ...]
-    links: tuple[LinkFrame, ...] | None  # None: not sampled in this frame
 
 
 def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:

@@ -10,8 +10,8 @@ from __future__ import annotations
 from usarsim.sim.frames import euler_to_mat
 from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
 from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_model
-from usarsim.sim.render import Tile, grid_tiles
-from usarsim.sim.snapshot import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
+from usarsim.sim.tiles import Tile, grid_tiles
+from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
 
 __all__ = ["ItemDescription", "Link", "LinkFrame", "ObjectFrame", "Output", "Pair", "RadioModel", "RobotFrame",
            "RobotNumbers", "Tile", "WorldFrame", "euler_to_mat", "grid_tiles", "pair_key", "resolve_model"]

@@ -23,7 +23,7 @@ import asyncio
 import logging
 
 from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT, SendParser
-from usarsim.sim.facade import SimFacade
+from usarsim.sim.api import Facade
 from usarsim.sim.types import resolve_model
 
 from .comserver import MAX_LINKS, MAX_LISTENING, MAX_REGISTERED, ComServer
@@ -56,7 +56,7 @@ class WirelessServers:
     """The three servers and what they share, as one ``usarsim serve`` runs them.  Made
     before the simulation starts: the radio model is handed to the facade here."""
 
-    def __init__(self, facade: SimFacade, options: WirelessOptions, *, host: str = "127.0.0.1"):
+    def __init__(self, facade: Facade, options: WirelessOptions, *, host: str = "127.0.0.1"):
         model = resolve_model(facade.world.wireless, options.config, model=options.model)
         self.service = WirelessService(facade, model, debug=options.debug)
         limit = options.max_connections

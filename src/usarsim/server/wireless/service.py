@@ -27,7 +27,7 @@ from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener, call_on_loop
-from usarsim.sim.facade import SimFacade
+from usarsim.sim.api import Facade
 from usarsim.sim.types import Link, Pair, RadioModel
 
 log = logging.getLogger("usarsim.wireless")
@@ -70,7 +70,7 @@ class WirelessService:
     simulation thread), the pairs the servers depend on, the latest state reported for
     each pair, and the servers that follow the changes (``subscribers``)."""
 
-    def __init__(self, facade: SimFacade, model: RadioModel, *, debug: bool = False):
+    def __init__(self, facade: Facade, model: RadioModel, *, debug: bool = False):
         self.facade = facade
         self.model = model
         self.debug = debug

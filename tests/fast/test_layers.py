@@ -55,6 +55,17 @@ def test_the_client_loads_no_mujoco_simulation_or_server():
     assert top(mods, "usarsim.sim", "usarsim.server", "usarsim.web", "usarsim.sensors", "usarsim.config") == set()
 
 
+def test_the_servers_and_the_console_load_no_mujoco():
+    """They are written against the facade's interface (usarsim.sim.api), so that the fast test
+    tier runs them with a fake facade and no physics; only the composition root (server.app)
+    brings the real simulation."""
+    mods = loaded_after(["usarsim.server.session", "usarsim.server.control", "usarsim.server.truth",
+                         "usarsim.server.wireless", "usarsim.server.image", "usarsim.web.console"])
+    assert "usarsim.web.console" in mods and "usarsim.sim.api" in mods
+    assert top(mods, "mujoco", "usarsim.sim.simulation", "usarsim.sim.facade", "usarsim.sensors",
+               "usarsim.robots") == set()
+
+
 @pytest.mark.parametrize("module", ["usarsim.sim.simulation", "usarsim.sim.runner", "usarsim.sim.facade",
                                     "usarsim.sensors", "usarsim.effecters"])
 def test_sim_loads_no_asyncio_protocol_or_server(module):
@@ -66,7 +77,7 @@ def test_sim_loads_no_asyncio_protocol_or_server(module):
 SRC = Path(__file__).resolve().parents[2] / "src" / "usarsim"
 # What the servers and the console may import of the simulation layer: its facade and the
 # types that cross it (design.md 2 and 5).
-SIM_DOOR = ("usarsim.sim.facade", "usarsim.sim.types")
+SIM_DOOR = ("usarsim.sim.api", "usarsim.sim.facade", "usarsim.sim.types")
 BELOW_THE_DOOR = ("usarsim.sim", "usarsim.sensors", "usarsim.effecters", "usarsim.robots", "mujoco")
 
 

@@ -1,0 +1,222 @@
+"""Test doubles of the fast tier: a facade with no physics behind it.
+
+:class:`FakeFacade` has the interface the servers are written against
+(:class:`usarsim.sim.api.Facade`); it builds no MuJoCo model.  A robot stands where it was
+spawned, simulated time moves only by STEP, and every call is kept in ``calls`` for the test to
+read.  What the real simulation would compute from a robot's model (its GETGEO numbers, its
+items' descriptions) is given by the test, or a plain default.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from usarsim.config.robot import MissionPackage, RobotConfig
+from usarsim.config.world import StartPose, WorldConfig
+from usarsim.controls import DriveCommand, JointOrder, WheelSpeeds
+from usarsim.errors import UsarsimError
+from usarsim.readings import CommandResult
+from usarsim.sim.api import Done, OutputsHandler
+from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers
+
+
+@dataclass
+class Spawned:
+    uid: int
+    robot: RobotConfig
+    name: str
+    location: tuple[float, float, float]
+    rotation: tuple[float, float, float]
+    set_down: bool
+
+
+@dataclass
+class FakeFacade:
+    """A facade in lock-step with no physics (see the module's docstring)."""
+
+    world: WorldConfig
+    lockstep: bool = True
+    speed: float | None = None
+    numbers: RobotNumbers | None = None
+    descriptions: list[ItemDescription] = field(default_factory=list)
+    spawn_error: str | None = None  # the next spawn fails with this
+    calls: list[tuple[str, tuple]] = field(default_factory=list)
+    robots: dict[int, Spawned] = field(default_factory=dict)
+    now: float = 0.0
+    started: bool = False
+    stopped: bool = False
+
+    def __post_init__(self) -> None:
+        self._deliver: OutputsHandler = lambda outs: None
+        self._watchers: list[OutputsHandler] = []
+        self._failure: BaseException | None = None
+
+    # what the simulation thread would do ---------------------------------------------
+    def output(self, outs: list[Output]) -> None:
+        """Hand outputs to the servers, as the simulation does after a step."""
+        self._deliver(outs)
+        for w in list(self._watchers):
+            w(outs)
+
+    def fail(self, error: BaseException) -> None:
+        """The simulation stops on ``error``: every request after it is refused."""
+        self._failure = error
+
+    def _refuse(self, on_done: Done | None) -> bool:
+        if self._failure is not None and on_done is not None:
+            on_done(None, UsarsimError(f"the simulation has stopped: {self._failure}"))
+            return True
+        return False
+
+    # lifecycle and delivery ------------------------------------------------------------
+    def set_deliver(self, deliver: OutputsHandler) -> None:
+        self._deliver = deliver
+
+    def add_output_watcher(self, watcher: OutputsHandler) -> None:
+        self._watchers.append(watcher)
+
+    def remove_output_watcher(self, watcher: OutputsHandler) -> None:
+        self._watchers = [w for w in self._watchers if w != watcher]
+
+    def start(self) -> None:
+        self.started = True
+
+    def stop(self) -> None:
+        self.stopped = True
+
+    def when_failed(self, fn: Callable[[BaseException], None]) -> None:
+        self.calls.append(("when_failed", (fn,)))
+
+    @property
+    def failure(self) -> BaseException | None:
+        return self._failure
+
+    # static facts ------------------------------------------------------------------------
+    @property
+    def world_name(self) -> str:
+        return self.world.name
+
+    @property
+    def start_poses(self) -> tuple[StartPose, ...]:
+        return self.world.start_poses
+
+    @property
+    def time(self) -> float:
+        return self.now
+
+    def describe(self, robot: RobotConfig) -> list[ItemDescription]:
+        return list(self.descriptions)
+
+    def describe_robot(self, robot: RobotConfig) -> tuple[RobotNumbers, list[ItemDescription]]:
+        return self.robot_numbers(robot), self.describe(robot)
+
+    def drive_accepts(self, robot: RobotConfig) -> frozenset[type]:
+        return frozenset({WheelSpeeds})
+
+    def package_frames(self, robot: RobotConfig, package: MissionPackage) -> tuple[LinkFrame, ...]:
+        return ()
+
+    def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
+        if self.numbers is not None:
+            return self.numbers
+        return RobotNumbers(vehicle_type="GroundVehicle", class_name=robot.class_name, steering_type="SkidSteered",
+                            mass_kg=14.0, max_speed=1.0, max_torque=10.0, max_front_steer=0.0, max_rear_steer=0.0,
+                            dimensions=(0.5, 0.4, 0.3), cog=(0.0, 0.0, 0.0), wheel_radius=0.1,
+                            wheel_separation=0.4, wheel_base=0.3)
+
+    def canonical_item_type(self, name: str) -> str:
+        return name
+
+    def live_conf(self, uid: int, item_type: str, name: str) -> Any:
+        return None
+
+    # robots ------------------------------------------------------------------------------
+    def spawn(self, uid: int, robot: RobotConfig, name: str, location: Any, rotation: Any, on_done: Done,
+              set_down: bool = False) -> None:
+        self.calls.append(("spawn", (uid, robot.class_name, name, tuple(location), tuple(rotation), set_down)))
+        if self._refuse(on_done):
+            return
+        if self.spawn_error is not None:
+            error, self.spawn_error = self.spawn_error, None
+            on_done(None, UsarsimError(error))
+            return
+        self.robots[uid] = Spawned(uid, robot, name, tuple(location), tuple(rotation), set_down)
+        on_done(uid, None)
+
+    def barrier(self, on_done: Done) -> None:
+        if not self._refuse(on_done):
+            on_done(self.now, None)
+
+    def remove(self, uid: int) -> None:
+        self.calls.append(("remove", (uid,)))
+        self.robots.pop(uid, None)
+
+    def drive(self, uid: int, command: DriveCommand) -> None:
+        self.calls.append(("drive", (uid, command)))
+
+    def drive_joints(self, uid: int, orders: list[JointOrder]) -> None:
+        self.calls.append(("drive_joints", (uid, list(orders))))
+
+    def operate(self, uid: int, item_type: Any, name: Any, opcode: Any, params: Any,
+                on_done: Done | None = None) -> None:
+        self.calls.append(("operate", (uid, item_type, name, opcode, params)))
+        if not self._refuse(on_done) and on_done is not None:
+            on_done(CommandResult(str(item_type), str(name or ""), ok=False), None)
+
+    def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
+        self.calls.append(("set_viewports", (uid, list(names))))
+        if not self._refuse(on_done):
+            on_done((self.now, [(n, "OK" if n else "Failed") for n in names]), None)
+
+    def report_victim(self, uid: int, name: str, location: Any, on_done: Done | None = None) -> None:
+        self.calls.append(("report_victim", (uid, name, tuple(location))))
+        if not self._refuse(on_done) and on_done is not None:
+            on_done(None, None)
+
+    def step(self, seconds: float, on_done: Callable[[float], None],
+             on_refused: Callable[[BaseException], None] | None = None) -> None:
+        self.calls.append(("step", (seconds,)))
+        if self._failure is not None:
+            if on_refused is not None:
+                on_refused(UsarsimError(f"the simulation has stopped: {self._failure}"))
+            return
+        self.now = round(self.now + seconds, 9)
+        on_done(self.now)
+
+    # ground truth and pictures -------------------------------------------------------------
+    def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
+        on_done([], None)
+
+    def set_multiview_cameras(self, count: int) -> None:
+        self.calls.append(("set_multiview_cameras", (count,)))
+
+    def render_service(self, max_fps: float) -> Any:
+        raise NotImplementedError("the fake facade renders no pictures")
+
+    # the radio -------------------------------------------------------------------------------
+    def open_radio(self, model: Any, on_change: Callable[[float, list[tuple[Any, bool]]], None]) -> None:
+        self.calls.append(("open_radio", (model,)))
+
+    def radio_watch(self, pairs: frozenset[Any]) -> None:
+        self.calls.append(("radio_watch", (pairs,)))
+
+    def radio_check(self, a: str, b: str, on_done: Done) -> None:
+        on_done((self.now, None), None)
+
+    def radio_link(self, a: str, b: str, on_done: Done) -> None:
+        on_done(None, None)
+
+    def robot_positions(self, on_done: Done) -> None:
+        on_done([(s.name, s.location, False) for s in self.robots.values()], None)
+
+    def walls_between_robots(self, a: str, b: str, on_done: Done) -> None:
+        on_done(0, None)
+
+    def walls_between(self, start: Any, end: Any, on_done: Done) -> None:
+        on_done(0, None)
+
+    def watch_frames(self, period_s: float, on_frame: Callable[[Any], None], *, radio_model: Any = None,
+                     links_period_s: float = 1.0) -> None:
+        self.calls.append(("watch_frames", (period_s,)))
