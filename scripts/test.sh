@@ -37,6 +37,9 @@ fi
   || echo "scripts/test.sh: tf2_msgs could not be built: the ROS 2 tests of /tf will fail" >&2
 # The house style (pyproject.toml [tool.ruff]): a finding fails the run before any test.
 "$USARSIM_PYTHON" -m ruff check src tests tools examples
+# The types (pyproject.toml [tool.mypy]: the protocol layer and the facade strictly): an error fails
+# the run before any test.
+"$USARSIM_PYTHON" -m mypy
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
 # The virtual environment's bin folder first on PATH, as '. .venv/bin/activate' would put it, so
 # that the tests find the 'usarsim' console script pip installed there (a Python that is no

@@ -116,8 +116,8 @@ class LineBuffer:
                 return data
             head, data = data[:min(ends)], data[min(ends):]
 
-        def one(m: re.Match) -> bytes:
-            line = m.group(1)
+        def one(m: re.Match[bytes]) -> bytes:
+            line: bytes = m.group(1)
             self.repeated_drives += (m.end() - m.start()) // len(line) - 1
             return line
 

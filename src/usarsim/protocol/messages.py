@@ -1109,13 +1109,13 @@ class _Reader:
             raise self.missing(key)
         return v
 
-    def float(self, seg: Segment) -> float:
+    def number(self, seg: Segment) -> float:
         try:
             return parse_float(seg.value)
         except ProtocolError as exc:
             raise self.error(seg.key, seg.value, "a number") from exc
 
-    def int(self, seg: Segment) -> int:
+    def integer(self, seg: Segment) -> int:
         try:
             return parse_int(seg.value)
         except ProtocolError as exc:
@@ -1144,13 +1144,13 @@ class _Reader:
 
     def opt_float(self, key: str) -> float | None:
         v = self.raw.get(key)
-        return None if v is None else self.float(Segment(key, v))
+        return None if v is None else self.number(Segment(key, v))
 
     def req_float(self, key: str) -> float:
-        return self.float(self.seg(key))
+        return self.number(self.seg(key))
 
     def req_int(self, key: str) -> int:
-        return self.int(self.seg(key))
+        return self.integer(self.seg(key))
 
     def req_vec3(self, key: str) -> Vec3:
         return self.vector(key, self.text(key))  # type: ignore[return-value]
@@ -1213,7 +1213,7 @@ def _parse_sta(r: _Reader) -> Message:
             time=time, light_toggle=light, light_intensity=intensity, battery_s=battery, view=view
         )
     joints = tuple(
-        (s.key, r.float(s)) for s in r.raw.segments if s.key.lower() not in _STA_KEYS
+        (s.key, r.number(s)) for s in r.raw.segments if s.key.lower() not in _STA_KEYS
     )
     return GroundVehicleStatus(
         vehicle_type=vehicle_type,
@@ -1260,7 +1260,7 @@ def _named_values(r: _Reader, field: str) -> list[tuple[str, Segment]]:
 def _sen_parse_range(r: _Reader, t: str) -> Reading:
     return RangeReading(
         sensor_type=t,
-        items=tuple(RangeItem(name=n, range_m=r.float(s)) for n, s in _named_values(r, "Range")),
+        items=tuple(RangeItem(name=n, range_m=r.number(s)) for n, s in _named_values(r, "Range")),
     )
 
 
@@ -1283,7 +1283,7 @@ def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
         fov_rad=r.vector("FOV", r.text("FOV"), 2),  # type: ignore[arg-type]
         ranges_m=r.vector("Range", r.text("Range"), None),
         frames=None if frame is None else r.req_int("Frames"),
-        frame=None if frame is None else r.int(Segment("Frame", frame)),
+        frame=None if frame is None else r.integer(Segment("Frame", frame)),
         split=frame is not None,
     )
 
@@ -1295,7 +1295,7 @@ def _sen_parse_odometry(r: _Reader, t: str) -> Reading:
 
 def _sen_parse_encoder(r: _Reader, t: str) -> Reading:
     return EncoderReading(
-        items=tuple(EncoderItem(name=n, tick=r.int(s)) for n, s in _named_values(r, "Tick"))
+        items=tuple(EncoderItem(name=n, tick=r.integer(s)) for n, s in _named_values(r, "Tick"))
     )
 
 
@@ -1392,7 +1392,7 @@ def _sen_parse_rfid(r: _Reader, t: str) -> Reading:
         if k == "id":
             if tag is not None:
                 tags.append(_rfid_tag_from(r, tag))
-            tag = {"tag_id": r.int(s)}
+            tag = {"tag_id": r.integer(s)}
         elif tag is not None and k == "location":
             tag["location"] = r.vector(s.key, s.value)
         elif tag is not None and k == "mem":

@@ -11,6 +11,8 @@ value a robot's client receives (:mod:`usarsim.readings`) into its message.
 
 from __future__ import annotations
 
+from typing import Any
+
 from usarsim.readings import CommandResult, EffecterState, PackageState, Refusal, RobotStatus, ZoomResult
 
 from . import messages as M
@@ -28,11 +30,18 @@ def effecter_status(closed: bool) -> str:
     return "CLOSED" if closed else "OPEN"
 
 
-def message_for(value, time: float | None) -> M.Message:
+def _stamped(time: float | None) -> float:
+    if time is None:
+        raise ValueError("a status or a result always has its simulated time")
+    return time
+
+
+def message_for(value: Any, time: float | None) -> M.Message:
     """The message that reports ``value`` (a reading, a status, a result) at simulated ``time``
     (None: a sensor without time stamps)."""
     v = value
     if isinstance(v, RobotStatus):
+        time = _stamped(time)
         if v.vehicle_type == "AerialVehicle":
             return M.AerialVehicleStatus(time=time, light_toggle=v.light_toggle, light_intensity=v.light_intensity,
                                          battery_s=v.battery_s, view=v.view)
@@ -40,16 +49,17 @@ def message_for(value, time: float | None) -> M.Message:
                                      light_toggle=v.light_toggle, light_intensity=v.light_intensity,
                                      battery_s=v.battery_s, view=v.view, vehicle_type=v.vehicle_type)
     if isinstance(v, EffecterState):
-        return M.EffecterStatus(time=time, effecter_type=v.effecter_type, name=v.name,
+        return M.EffecterStatus(time=_stamped(time), effecter_type=v.effecter_type, name=v.name,
                                 status=effecter_status(v.closed))
     if isinstance(v, PackageState):
-        return M.MisPkgStatus(time=time, name=v.name,
+        return M.MisPkgStatus(time=_stamped(time), name=v.name,
                               links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))
     if isinstance(v, ZoomResult):
-        return M.CameraZoomResult(time=time, cameras=tuple(M.CameraZoom(n, f, status_word(ok))
+        return M.CameraZoomResult(time=_stamped(time), cameras=tuple(M.CameraZoom(n, f, status_word(ok))
                                                            for n, f, ok in v.cameras), camera_type=v.camera_type)
     if isinstance(v, CommandResult):
-        return M.Result(time=time, item_type=v.item_type, name=v.name, status=status_word(v.ok), extra=v.extra)
+        return M.Result(time=_stamped(time), item_type=v.item_type, name=v.name, status=status_word(v.ok),
+                        extra=v.extra)
     if isinstance(v, Refusal):
         return M.error_reply(v.command, v.reason)
     return M.SensorMessage(time=time, reading=v)

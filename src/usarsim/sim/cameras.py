@@ -14,6 +14,7 @@ from usarsim.sensors.camera import OmniCam
 from usarsim.sim import robotspec
 
 if TYPE_CHECKING:
+    from usarsim.sim.render import Snapshot
     from usarsim.sim.robot import SimRobot
     from usarsim.sim.simulation import Simulation
 
@@ -82,7 +83,7 @@ class Cameras:
             self._multiview = None
         return result
 
-    def render_snapshot(self, reuse=None):
+    def render_snapshot(self, reuse: Snapshot | None = None) -> Snapshot:
         """A copy of the state for the render thread (taken between steps): ``reuse``, the
         previous snapshot, is refilled when the model is still the same."""
         from usarsim.sim.render import CameraState, Snapshot

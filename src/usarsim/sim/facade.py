@@ -11,19 +11,23 @@ The servers import nothing else from the simulation layer but :mod:`usarsim.sim.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
-from usarsim.config.robot import RobotConfig
+from usarsim.config.robot import MissionPackage, RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
-from usarsim.readings import CommandResult
+from usarsim.readings import CommandResult, ItemParams
 from usarsim.robots import drive_class
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, package_frames
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner
 from usarsim.sim.simulation import Simulation, describe_items
-from usarsim.sim.snapshot import FrameWatch, WorldFrame
+from usarsim.sim.snapshot import FrameWatch
+from usarsim.sim.worldframe import WorldFrame
+
+if TYPE_CHECKING:
+    from usarsim.sim.render import RenderService, Snapshot
 
 log = logging.getLogger("usarsim.sim")
 
@@ -115,7 +119,7 @@ class SimFacade:
         return drive_class(robot).ACCEPTS
 
     @staticmethod
-    def package_frames(robot: RobotConfig, package) -> tuple[LinkFrame, ...]:
+    def package_frames(robot: RobotConfig, package: MissionPackage) -> tuple[LinkFrame, ...]:
         """What GETGEO {Type MisPkg} and {Type Actuator} report of each link of a mission
         package (:func:`usarsim.sim.outputs.package_frames`)."""
         return package_frames(robot, package)
@@ -132,12 +136,13 @@ class SimFacade:
 
         return ITEMS.canonical(name) or name
 
-    def live_conf(self, uid: int, item_type: str, name: str):
+    def live_conf(self, uid: int, item_type: str, name: str) -> Any:
         """CONF fields of a robot's item that changed at run time, or None."""
         return self.sim.live_conf.get((uid, item_type, name))
 
     # Robots ------------------------------------------------------------------------
-    def spawn(self, uid: int, robot: RobotConfig, name: str, location, rotation, on_done: Done,
+    def spawn(self, uid: int, robot: RobotConfig, name: str, location: Sequence[float], rotation: Sequence[float],
+              on_done: Done,
               set_down: bool = False) -> None:
         self.runner.submit(Request(lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down),
                                    immediate=True, on_done=on_done))
@@ -160,7 +165,8 @@ class SimFacade:
         """Joint orders (MULTIDRIVE, MISPKG, SET Joint, CAMERA), applied together."""
         self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders), concurrent=True))
 
-    def operate(self, uid: int, item_type, name, opcode, params, on_done: Done | None = None) -> None:
+    def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None, params: ItemParams,
+                on_done: Done | None = None) -> None:
         """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF),
         handed to the server before ``on_done(result, error)``; ``error`` when it was not
         carried out (the simulation has stopped, or the operation failed on an unexpected
@@ -176,7 +182,8 @@ class SimFacade:
         self.runner.submit(Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)),
                                    immediate=True, on_done=on_done))
 
-    def report_victim(self, uid: int, name: str, location, on_done: Done | None = None) -> None:
+    def report_victim(self, uid: int, name: str, location: Sequence[float],
+                      on_done: Done | None = None) -> None:
         """``REPORT {Type Victim}``: recorded at the simulated instant it is carried out, as a
         RES output for the robot's client (observers such as the score see it too), handed to
         the server before ``on_done(result, error)``; ``error`` when it was not (the
@@ -202,12 +209,12 @@ class SimFacade:
         """How many robot cameras the MultiView shows at most (before the simulation starts)."""
         self.sim.cameras.multiview_cameras = count
 
-    def render_snapshot(self, reuse, on_done: Done) -> None:
+    def render_snapshot(self, reuse: Snapshot | None, on_done: Done) -> None:
         """A copy of the state for the render thread (``reuse``: the previous one)."""
         self.runner.submit(Request(lambda sim: sim.cameras.render_snapshot(reuse), immediate=True,
                                    on_done=on_done, concurrent=True))
 
-    def render_service(self, max_fps: float):
+    def render_service(self, max_fps: float) -> RenderService:
         """The render thread of the image server, fed with snapshots of this simulation."""
         from usarsim.sim.render import RenderService
 
@@ -249,7 +256,7 @@ class SimFacade:
         self.runner.submit(Request(lambda sim: RadioNet.walls_between_robots(sim, a, b), immediate=True,
                                    on_done=on_done))
 
-    def walls_between(self, start, end, on_done: Done) -> None:
+    def walls_between(self, start: Sequence[float], end: Sequence[float], on_done: Done) -> None:
         """``on_done(n)``: walls between two points of the world (USARSim frame)."""
         self.runner.submit(Request(lambda sim: RadioNet.walls_between(sim, start, end), immediate=True,
                                    on_done=on_done))

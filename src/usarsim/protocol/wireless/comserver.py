@@ -223,7 +223,8 @@ def parse_wcs_request(text: str) -> WcsRequest:
         raise ProtocolError(f"{word} takes {len(ports)} words ({word} {usage};), got {len(args)} in "
                             f"{shorten(text.strip())}")
     values = [parse_port(a, f"{word}: a port") if is_port else a for a, is_port in zip(args, ports)]
-    return cls(*values)
+    command: WcsRequest = cls(*values)
+    return command
 
 
 def format_wcs_request(cmd: WcsRequest) -> str:
