@@ -9,13 +9,18 @@ It sends no SEN line.  Robot files list effecters with the other items, under ``
 
 from __future__ import annotations
 
+from typing import TypeVar
+
 from usarsim.readings import EffecterState
-from usarsim.sensors.base import ITEMS, Item
+from usarsim.sensors.base import ITEMS, Item, ItemConfig
 
 __all__ = ["EFFECTERS", "Effecter"]
 
 
-class Effecter(Item):
+EC = TypeVar("EC", bound=ItemConfig)
+
+
+class Effecter(Item[EC]):
     """Base class of every effecter plugin."""
 
     PERIODIC = False

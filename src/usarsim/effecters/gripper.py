@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, kw_only=True)
 class GripperConfig(ItemConfig):
-    fingers: tuple = ()  # link names of the fingers (prismatic or revolute joints)
+    fingers: tuple[str, ...] = ()  # link names of the fingers (prismatic or revolute joints)
     open_value: float = 0.04  # joint value of an open finger (m or rad)
     closed_value: float = -0.02  # beyond touching: the fingers squeeze with their MaxTorque
 
@@ -28,13 +28,12 @@ class GripperConfig(ItemConfig):
 
 
 @EFFECTERS.register("Gripper")
-class Gripper(Effecter):
+class Gripper(Effecter[GripperConfig]):
     """``SET {Type Gripper} {Name g} {Opcode Open|Close}`` (or ``{Opcode Grip} {Params 1|0}``,
     1 closing) drives every finger to its open or closed value; a closed gripper holds an
     object with the fingers' force (their links' MaxTorque).  RES OK, then ``EFF {Status
     OPEN|CLOSED}``."""
 
-    Config = GripperConfig
     ALIASES = {"Fingers": "fingers", "Open": "open_value", "Closed": "closed_value"}
 
     def configure(self, view: WorldView) -> None:

@@ -30,11 +30,10 @@ class RfidReleaserConfig(ItemConfig):
 
 
 @EFFECTERS.register("RFIDReleaser")
-class RFIDReleaser(Effecter):
+class RFIDReleaser(Effecter[RfidReleaserConfig]):
     """``SET {Type RFIDReleaser} {Name Gun} {Opcode Release}`` drops a new tag on the ground
     under the robot (RES OK), or fails when the magazine is empty."""
 
-    Config = RfidReleaserConfig
     ALIASES = {"Capacity": "capacity", "NumberOfTags": "capacity"}
 
     def reset(self, view: WorldView) -> None:

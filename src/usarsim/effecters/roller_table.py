@@ -33,13 +33,12 @@ class RollerTableConfig(ItemConfig):
 
 
 @EFFECTERS.register("RollerTable")
-class RollerTable(Effecter):
+class RollerTable(Effecter[RollerTableConfig]):
     """A conveyor on the robot: ``SET {Type RollerTable} {Name r} {Opcode Roll} {Params v}``
     (m/s along the robot's X, negative backwards, 0 or ``{Opcode Stop}`` stops) makes the
     rollers carry whatever lies on the table's top: each load is pushed towards that speed
     relative to the robot with up to grip x its weight."""
 
-    Config = RollerTableConfig
     ALIASES = {"Surface": "surface", "MaxSpeed": "max_speed_m_s", "Grip": "grip"}
 
     def configure(self, view: WorldView) -> None:

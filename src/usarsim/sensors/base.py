@@ -19,7 +19,7 @@ import math
 import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, Self, TypeVar, get_args
 
 import numpy as np
 
@@ -31,7 +31,7 @@ from usarsim.sim.outputs import ItemDescription
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
-    from usarsim.sim.view import WorldView
+    from usarsim.sim.view import RobotHandle, WorldView
 
 T = TypeVar("T", bound=type)
 
@@ -72,23 +72,40 @@ COMMON_ALIASES = {
 }
 
 
-class Item:
+C = TypeVar("C", bound="ItemConfig")  # an item's own settings
+
+
+class Item(Generic[C]):
     """What every mounted item plugin has: sensors (:class:`Sensor`), effecters
     (:class:`usarsim.effecters.Effecter`) and cameras (:class:`usarsim.sensors.camera.CameraItem`).
 
-    Subclasses set ``Config`` (a frozen dataclass derived from :class:`ItemConfig`),
-    ``ALIASES`` (USARSim ini key -> field name) and optionally ``PRESETS`` (named sets of
-    values, e.g. ``SICK``); registration gives ``TYPE``, the canonical USARSim type name.
+    A plugin names its settings (a frozen dataclass derived from :class:`ItemConfig`) as the
+    type argument of its base, ``class Sonar(RangeSensor[SonarConfig])``: ``self.config`` is
+    typed by it and the loader (:func:`build_config`) builds it (``Config``, set from the
+    argument; a class may still set ``Config`` itself).  It sets ``ALIASES`` (USARSim ini key
+    -> field name) and optionally ``PRESETS`` (named sets of values, e.g. ``SICK``);
+    registration gives ``TYPE``, the canonical USARSim type name.
     """
 
     TYPE: ClassVar[str] = ""
     LIVE_CONF: ClassVar[bool] = False  # True when SET operations change what CONF reports
     PERIODIC: ClassVar[bool] = False  # True for items that send SEN lines at their ScanInterval
-    Config: ClassVar[type] = ItemConfig
+    Config: ClassVar[type[ItemConfig]] = ItemConfig
     ALIASES: ClassVar[dict[str, str]] = {}
     PRESETS: ClassVar[dict[str, dict[str, Any]]] = {}
+    config: C
+    handle: RobotHandle  # the robot's bodies and sites in the model, set at every build
 
-    def __init__(self, item: MountedItem, config: ItemConfig, robot: RobotConfig, seed: int) -> None:
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "Config" in cls.__dict__:
+            return
+        for base in cls.__dict__.get("__orig_bases__", ()):  # class Sonar(RangeSensor[SonarConfig])
+            for arg in get_args(base):
+                if isinstance(arg, type) and issubclass(arg, ItemConfig):
+                    cls.Config = arg
+
+    def __init__(self, item: MountedItem, config: C, robot: RobotConfig, seed: int) -> None:
         self.item = item
         self.name = item.name
         self.config = config
@@ -127,7 +144,10 @@ class Item:
         return ItemDescription(self.TYPE, i.name, i.location, i.orientation, self.geo_mount(), self.conf_fields())
 
 
-class Sensor(Item):
+SC = TypeVar("SC", bound=SensorConfig)
+
+
+class Sensor(Item[SC]):
     """Base class of every sensor plugin: it measures at its ScanInterval of simulated
     time and sends SEN lines (protocol.md 6.3, 7).
 
@@ -139,9 +159,9 @@ class Sensor(Item):
     PERIODIC: ClassVar[bool] = True
     RESETTABLE: ClassVar[bool] = False  # {Opcode RESET} starts it over (Odometry, Encoder, Tachometer)
     SCANNABLE: ClassVar[bool] = False  # {Opcode SCAN} makes it scan at once (the range scanners)
-    Config: ClassVar[type] = SensorConfig
+    Config: ClassVar[type[ItemConfig]] = SensorConfig
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: SC, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         self._ubuf: np.ndarray | None = None
         self._upos = 0
@@ -151,7 +171,7 @@ class Sensor(Item):
         raise NotImplementedError
 
     @classmethod
-    def measure_group(cls, sensors: list[Sensor], view: WorldView) -> list[Any]:
+    def measure_group(cls, sensors: list[Self], view: WorldView) -> list[Any]:
         """Packed sensors: every item's part, measured together (override to batch)."""
         return [s.measure(view) for s in sensors]
 
@@ -254,7 +274,7 @@ class ItemKinds:
         registry = self.kind_of(name)
         return registry.canonical(name) if registry is not None else None
 
-    def get(self, name: str) -> type[Item]:
+    def get(self, name: str) -> type[Item[Any]]:
         registry = self.kind_of(name)
         if registry is None:
             # "sensor": a robot file lists every item under ``sensors:``
@@ -269,7 +289,7 @@ ITEMS = ItemKinds()
 SENSORS = ITEMS.new("sensor")
 
 
-def build_config(cls: type[Item], item: MountedItem, robot_path: str) -> ItemConfig:
+def build_config(cls: type[Item[Any]], item: MountedItem, robot_path: str) -> ItemConfig:
     """Turn an item's raw keys into its plugin's frozen Config.
 
     Accepts our field names and USARSim's ini names (any case); a ``preset`` key
@@ -302,7 +322,7 @@ def build_config(cls: type[Item], item: MountedItem, robot_path: str) -> ItemCon
         raise ConfigError(f"invalid {cls.TYPE} settings: {exc}", path=robot_path, key=key_base) from exc
 
 
-def _coerce(field: dataclasses.Field, value: Any, path: str, key: str) -> Any:
+def _coerce(field: dataclasses.Field[Any], value: Any, path: str, key: str) -> Any:
     t = field.type if isinstance(field.type, str) else getattr(field.type, "__name__", str(field.type))
     if t == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
@@ -331,7 +351,7 @@ def component_seed(world_seed: int, *parts: str) -> int:
     return int(np.random.SeedSequence(words).generate_state(1)[0])
 
 
-def make_item(item: MountedItem, robot: RobotConfig, world_seed: int, robot_key: str) -> Item:
+def make_item(item: MountedItem, robot: RobotConfig, world_seed: int, robot_key: str) -> Item[Any]:
     """The plugin of a robot file's item: its type looked up among sensors, effecters and
     cameras, its config built and checked, its generator seeded for this robot and item."""
     cls = ITEMS.get(item.item_type)

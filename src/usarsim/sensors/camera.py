@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from usarsim.readings import FieldValue, ItemParams, ZoomResult
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
@@ -15,7 +15,11 @@ if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
 
 
-class CameraItem(Item):
+IC = TypeVar("IC", bound=ItemConfig)
+CC = TypeVar("CC", bound="CameraConfig")
+
+
+class CameraItem(Item[IC]):
     """Base class of every camera plugin: a robot camera sends no SEN line over the control
     port; the image server draws what it sees (protocol.md 7.11, 10) with its current
     horizontal field of view, ``fov_rad``."""
@@ -47,7 +51,7 @@ class CameraConfig(ItemConfig):
 
 
 @CAMERAS.register("Camera")
-class Camera(CameraItem):
+class Camera(CameraItem[CC]):
     """A robot camera: its current field of view changes with ``SET {Opcode Zoom}``."""
 
     LIVE_CONF = True  # CameraFov follows the zoom
@@ -94,7 +98,6 @@ class OmniCamConfig(CameraConfig):
 
 
 @CAMERAS.register("OmniCam", "OmniCamera")
-class OmniCam(Camera):
+class OmniCam(Camera[OmniCamConfig]):
     """The omnidirectional camera of the OmniP2AT/OmniP2DX (protocol.md 9): no zoom."""
 
-    Config = OmniCamConfig

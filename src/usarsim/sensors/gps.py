@@ -128,7 +128,8 @@ def _rotation_about(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation matrix by ``angle`` (right-handed) about the unit vector ``axis``."""
     x, y, z = axis
     k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
+    rot: np.ndarray = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
+    return rot
 
 
 class Constellation:
@@ -164,7 +165,8 @@ class Constellation:
         pole = np.array([0.0, math.cos(lat), math.sin(lat)])  # the celestial pole, due north
         # the sky turns westwards: clockwise seen from above the pole
         turn = _rotation_about(pole, -2.0 * math.pi * time_s / self.period_s)
-        return self.directions0 @ turn.T
+        dirs: np.ndarray = self.directions0 @ turn.T
+        return dirs
 
     def directions_mj(self, time_s: float, latitude_deg: float) -> np.ndarray:
         """The same directions in the MuJoCo world frame: east-north-up (e, n, u) is
@@ -201,11 +203,10 @@ class GpsConfig(SensorConfig):
 
 
 @SENSORS.register("GPS")
-class GPS(Sensor):
+class GPS(Sensor[GpsConfig]):
     """Latitude/longitude of the sensor with satellite-dependent Gaussian noise; no fix
     with fewer than 4 satellites in view (see the module docstring)."""
 
-    Config = GpsConfig
     ALIASES = {"maxNoise": "max_noise_m", "minNoise": "min_noise_m"}
 
     def visible_satellites(self, view: WorldView) -> tuple[int, np.ndarray]:

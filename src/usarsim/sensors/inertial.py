@@ -56,14 +56,13 @@ class TachometerConfig(SensorConfig):
 
 
 @SENSORS.register("Tachometer")
-class Tachometer(Sensor):
+class Tachometer(Sensor[TachometerConfig]):
     """Spin speed (rad/s, the wheel joint's instantaneous velocity) and accumulated angle
     (rad, since spawn or the last RESET) of every wheel of the robot, in the robot file's
     wheel order; forward rotation is positive (as for Encoder, protocol.md 7.5).
     ``SET {Type Tachometer} {Opcode RESET}`` zeroes the angles (protocol.md 5.4)."""
 
     RESETTABLE = True
-    Config = TachometerConfig
 
     def configure(self, view: WorldView) -> None:
         h = self.handle
@@ -113,7 +112,7 @@ class ImuConfig(SensorConfig):
 
 
 @SENSORS.register("IMU")
-class IMU(Sensor):
+class IMU(Sensor[ImuConfig]):
     """UDK-style IMU: ``XYZAcceleration``, ``AngularVel``, ``AngularAccel``, ``Rotation``.
 
     * Acceleration (m/s^2) of the sensor point, in the sensor's frame (the robot's body
@@ -132,7 +131,6 @@ class IMU(Sensor):
     and angular acceleration.
     """
 
-    Config = ImuConfig
     ALIASES = {
         # named after the SEN segments (protocol.md 6.3); UDK IMU.uc has no settings
         "XYZAccelerationSigma": "acceleration_sigma_m_s2",
@@ -142,7 +140,7 @@ class IMU(Sensor):
         "IncludeGravity": "include_gravity",
     }
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: ImuConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         self._offset_mj = frames.to_mj_vec(self.item.location)  # mount, robot body frame (MuJoCo axes)
         self._mount_mj = frames.usar_euler_to_mj_mat(self.item.orientation)  # sensor axes in body axes
@@ -153,9 +151,9 @@ class IMU(Sensor):
         body axes), all in MuJoCo's frame, from the current qpos/qvel."""
         h, d = self.handle, view.data
         quat = d.qpos[h.root_qpos + 3:h.root_qpos + 7]
-        rot = np.empty(9)
-        mujoco.mju_quat2Mat(rot, quat)
-        rot = rot.reshape(3, 3)
+        flat = np.empty(9)
+        mujoco.mju_quat2Mat(flat, quat)
+        rot = flat.reshape(3, 3)
         v = d.qvel[h.root_qvel:h.root_qvel + 6]
         # free joint: linear velocity of the body origin in the world frame, angular
         # velocity in the body frame (MuJoCo's convention)
@@ -215,11 +213,10 @@ class InuConfig(SensorConfig):
 
 
 @SENSORS.register("INU")
-class INU(Sensor):
+class INU(Sensor[InuConfig]):
     """The robot's orientation (roll, pitch, yaw in the world, as GroundTruth), each angle
     plus N(Mean, Sigma), then wrapped into [0, 2 pi)."""
 
-    Config = InuConfig
     ALIASES = {"Sigma": "sigma_rad", "Mean": "mean_rad"}
 
     def measure(self, view: WorldView) -> OrientationReading:

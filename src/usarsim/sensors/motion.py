@@ -56,7 +56,7 @@ def _quantise(angle: float, resolution: float) -> float:
 
 
 @SENSORS.register("Odometry")
-class Odometry(Sensor):
+class Odometry(Sensor[OdometryConfig]):
     """Differential dead reckoning from the left and right wheel angles, quantised by
     EncoderResolution; pose relative to the spawn pose (or the last RESET); positive
     theta is a clockwise (right) turn, as in the Z-down frame.
@@ -84,11 +84,10 @@ class Odometry(Sensor):
 
     RESETTABLE = True
     LIVE_CONF = True  # CONF's TrackWidth follows a SET
-    Config = OdometryConfig
     ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel",
                "TrackWidth": "track_width_m"}
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: OdometryConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         self._set_track = 0.0  # a client's TrackWidth (m; 0: none), kept across model rebuilds
         wheels = {w.name: w for w in robot.wheels}
@@ -170,7 +169,7 @@ class EncoderConfig(SensorConfig):
 
 
 @SENSORS.register("Encoder")
-class Encoder(Sensor):
+class Encoder(Sensor[EncoderConfig]):
     """Tick = round(accumulated wheel angle / Resolution), forward rotation counting up;
     the noise is the counting's: each reading's change of angle is scaled by (1 + U(-Noise,
     Noise)) before it is added (protocol.md 7.5 scales the whole angle), so that a wheel at
@@ -178,7 +177,6 @@ class Encoder(Sensor):
 
     PACKED = True
     RESETTABLE = True
-    Config = EncoderConfig
     ALIASES = {"Resolution": "resolution_rad", "Wheel": "wheel", "Joint": "wheel"}
 
     def configure(self, view: WorldView) -> None:
@@ -221,10 +219,9 @@ class GroundTruthConfig(SensorConfig):
 
 
 @SENSORS.register("GroundTruth")
-class GroundTruth(Sensor):
+class GroundTruth(Sensor[GroundTruthConfig]):
     """The exact pose of the robot's origin in the world frame, no noise."""
 
-    Config = GroundTruthConfig
 
     def measure(self, view: WorldView) -> PoseReading:
         d = view.data
@@ -248,13 +245,12 @@ class InsConfig(SensorConfig):
 
 
 @SENSORS.register("INS")
-class INS(Sensor):
+class INS(Sensor[InsConfig]):
     """Integrates noisy increments of the true pose: each tick the true change of
     every Euler angle is scaled by (1 + N(meanRot, Sigma)) and the true displacement d
     gets d x N(meanPos, Sigma) per axis.  With Drifting, per-axis biases are drawn
     once.  Integration starts after the robot has been at rest for one tick."""
 
-    Config = InsConfig
     ALIASES = {"Sigma": "sigma", "Mean": "mean", "Precision": "precision", "Drifting": "drifting"}
 
     def _true(self, view: WorldView) -> tuple[np.ndarray, np.ndarray]:
@@ -297,7 +293,9 @@ class INS(Sensor):
             self.est_ori = self.est_ori + dori * (1.0 + self.rng.normal(self._mean_rot, c.sigma))
             self.est_loc = self.est_loc + dloc + moved * self.rng.normal(self._mean_pos, c.sigma)
         o = tuple(wrap_2pi(float(a)) for a in self.est_ori)
-        return PoseReading("INS", self.name, tuple(float(v) for v in self.est_loc), o)
+        x, y, z = (float(v) for v in self.est_loc)
+        roll, pitch, yaw = o
+        return PoseReading("INS", self.name, (x, y, z), (roll, pitch, yaw))
 
     def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         """``{Opcode POSE} {Params x,y,z,roll,pitch,yaw}`` (UDK, protocol.md 5.4): the

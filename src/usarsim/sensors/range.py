@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Self, TypeVar
 
 import numpy as np
 
@@ -33,8 +33,11 @@ class RangeSensorConfig(SensorConfig):
         check_range(self.min_range_m, self.max_range_m)
 
 
+RC = TypeVar("RC", bound=RangeSensorConfig)
+
+
 @SENSORS.register("RangeSensor")
-class RangeSensor(Sensor):
+class RangeSensor(Sensor[RC]):
     """One ray along the sensor's X axis; MaxRange when nothing is hit; clamped."""
 
     PACKED = True
@@ -92,18 +95,17 @@ class SonarConfig(RangeSensorConfig):
 
 
 @SENSORS.register("Sonar")
-class Sonar(RangeSensor):
+class Sonar(RangeSensor[SonarConfig]):
     """Cone model: a centre ray plus rays on concentric cones inside the beam angle;
     the range is the nearest hit among rays whose angle of incidence on the surface
     they hit is below the maximum (specular surfaces at grazing angles are not seen)."""
 
-    Config = SonarConfig
     RAY_KIND = "sonar"
     ALIASES = {**RangeSensor.ALIASES, "BeamAngle": "beam_angle_rad", "beamAngle": "beam_angle_rad",
                "maxAngleOfIncidence": "max_angle_of_incidence_rad", "numberOfCones": "number_of_cones",
                "tracesPerCone": "traces_per_cone"}
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: SonarConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         cfg = self.config
         yaws, pitches = [0.0], [0.0]
@@ -115,7 +117,8 @@ class Sonar(RangeSensor):
                 yaws.append(cone * math.cos(a))
                 pitches.append(cone * math.sin(a))
         self._dirs = unit_dirs_yaw_pitch(np.array(yaws), np.array(pitches))
-        self._stack = None  # the robot's stacked sonar mounts, built on the first group measurement
+        # the robot's stacked sonar mounts, built on the first group measurement
+        self._stack: tuple[Any, ...] | None = None
 
     def _directions(self) -> np.ndarray:
         return self._dirs
@@ -126,6 +129,7 @@ class Sonar(RangeSensor):
         dist, nrm, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True,
                                         kind=self.RAY_KIND)
         hit = np.isfinite(dist)
+        assert nrm is not None  # asked for
         if not hit.any():
             return math.inf
         cos_inc = np.abs(np.einsum("ij,ij->i", dirs, nrm))
@@ -139,7 +143,7 @@ class Sonar(RangeSensor):
                 ("BeamAngle", self.config.beam_angle_rad))
 
     @classmethod
-    def measure_group(cls, sensors: list[Sonar], view: WorldView) -> list[RangeItem]:
+    def measure_group(cls, sensors: list[Self], view: WorldView) -> list[RangeItem]:
         """All sonars of a robot in one batched cast: every cone ray from its own
         sonar's position, with the mount transforms stacked once per robot."""
         first = sensors[0]
@@ -162,6 +166,7 @@ class Sonar(RangeSensor):
         origins = locs @ rot.T + h.position_mj(d)
         u = local_dirs @ rot.T
         dist, nrm, _ = view.caster.cast_from(origins, u, reach, h.body_id, normals=True, kind=first.RAY_KIND)
+        assert nrm is not None  # asked for
         seen = np.isfinite(dist) & (np.abs(np.einsum("ij,ij->i", u, nrm)) >= cos_max[owner])
         nearest = np.minimum.reduceat(np.where(seen, dist, np.inf), starts)
         items = []
@@ -183,8 +188,7 @@ class IRConfig(RangeSensorConfig):
 
 
 @SENSORS.register("IR")
-class IR(RangeSensor):
+class IR(RangeSensor[IRConfig]):
     """A single ray that passes through the materials IR sees through (glass), protocol.md 7.2."""
 
-    Config = IRConfig
     RAY_KIND = "ir"

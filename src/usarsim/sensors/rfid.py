@@ -79,8 +79,7 @@ def _tag_and_data(text: str | None) -> tuple[int | None, str]:
 
 
 @SENSORS.register("RFID", "RFIDSensor")
-class RFID(Sensor):
-    Config = RfidConfig
+class RFID(Sensor[RfidConfig]):
     RAY_KIND = "laser"  # radio does not pass walls any better than light here; glass counts as a wall
     ALIASES = {"MaxRange": "max_range_m", "SensingMode": "sensing_mode", "ObstacleLoss": "obstacle_loss_db",
                "Threshold": "threshold_dbm"}
@@ -98,14 +97,15 @@ class RFID(Sensor):
         dist = np.linalg.norm(delta, axis=1)
         near = np.flatnonzero(dist <= c.max_range_m)
         out = []
-        if len(near) and c.sensing_mode > 0:
+        mode = int(c.sensing_mode)  # a number once the config is made
+        if len(near) and mode > 0:
             # walls on each line to a tag (a tag lying on a surface is not behind it)
             walls = view.caster.count_walls(np.broadcast_to(pos, (len(near), 3)), world[near], kind=self.RAY_KIND,
-                                            end_margin=0.01, stop_at_first=c.sensing_mode == 1)
+                                            end_margin=0.01, stop_at_first=mode == 1)
         for k, i in enumerate(near.tolist()):
-            if c.sensing_mode == 1 and walls[k] > 0:
+            if mode == 1 and walls[k] > 0:
                 continue
-            if c.sensing_mode == 2:
+            if mode == 2:
                 r = max(float(dist[i]), 0.01)
                 p = c.signal_at_1m_dbm - 10.0 * c.path_loss_exponent * math.log10(r) - c.obstacle_loss_db * walls[k]
                 if p < c.threshold_dbm:
@@ -116,6 +116,8 @@ class RFID(Sensor):
 
     def measure(self, view: WorldView) -> RfidReading:
         ents = view.entities
+        if ents is None:  # a world without entities has no tags
+            return RfidReading(self.name, ())
         tags = []
         for tid, loc in self._detected(view):
             mem = ents.tags[tid].memory
@@ -149,4 +151,4 @@ class RFID(Sensor):
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (("ScanInterval", c.scan_interval_s), ("MaxRange", c.max_range_m),
-                ("SensingMode", SENSING_MODES[c.sensing_mode]))
+                ("SensingMode", SENSING_MODES[int(c.sensing_mode)]))

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
@@ -53,8 +53,11 @@ class RangeScannerConfig(SensorConfig):
         return int(math.floor(self.fov_rad / self.resolution_rad + 1e-6)) + 1
 
 
+RSC = TypeVar("RSC", bound=RangeScannerConfig)
+
+
 @SENSORS.register("RangeScanner")
-class RangeScanner(Sensor):
+class RangeScanner(Sensor[RSC]):
     SCANNABLE = True
     Config = RangeScannerConfig
     RAY_KIND = "laser"  # which materials the beams pass through (world materials' see_through)
@@ -73,7 +76,7 @@ class RangeScanner(Sensor):
                           "fov_rad": 4.189, "scan_interval_s": 0.3},
     }
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: RSC, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         cfg = self.config
         n = cfg.beam_count
@@ -111,10 +114,9 @@ class IRScannerConfig(RangeScannerConfig):
 
 
 @SENSORS.register("IRScanner")
-class IRScanner(RangeScanner):
+class IRScanner(RangeScanner[IRScannerConfig]):
     """A scanning infrared range finder: its beams pass through what IR sees through (glass)."""
 
-    Config = IRScannerConfig
     RAY_KIND = "ir"
     PRESETS = {}
 
@@ -218,7 +220,7 @@ class RangeScanner3DConfig(SensorConfig):
 
 
 @SENSORS.register("RangeScanner3D", "3DRangeScanner")
-class RangeScanner3D(Sensor):
+class RangeScanner3D(Sensor[RangeScanner3DConfig]):
     """A 3D laser (a tilting or panning 2D scanner, as on Kurt3D): all beams of a sweep
     at one instant, every ScanInterval of simulated time, row-major -- one horizontal line
     per vertical step, the top row first, each row from its rightmost beam to its leftmost,
@@ -248,7 +250,6 @@ class RangeScanner3D(Sensor):
     """
 
     SCANNABLE = True
-    Config = RangeScanner3DConfig
     RAY_KIND = "laser"
     ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m",
                "HorizontalFOV": "horizontal_fov_rad", "HorizontalResolution": "horizontal_resolution_rad",
@@ -256,7 +257,7 @@ class RangeScanner3D(Sensor):
                "bYaw": "panning", "bPitch": "tilting", "Paning": "panning", "Panning": "panning",
                "Tilting": "tilting"}
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: RangeScanner3DConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         c = self.config
         problem = c.line_problem(self.name, c.split_rows)

@@ -62,8 +62,7 @@ class SoundConfig(SensorConfig):
 
 
 @SENSORS.register("Sound", "SoundSensor")
-class Sound(Sensor):
-    Config = SoundConfig
+class Sound(Sensor[SoundConfig]):
     ALIASES = {"Threshold": "threshold_db", "WallLoss": "wall_loss_db", "Sigma": "sigma_db"}
 
     def measure(self, view: WorldView) -> SoundReading:
@@ -105,8 +104,7 @@ class HumanMotionConfig(SensorConfig):
 
 
 @SENSORS.register("HumanMotion", "HumanMotionSensor")
-class HumanMotion(Sensor):
-    Config = HumanMotionConfig
+class HumanMotion(Sensor[HumanMotionConfig]):
     RAY_KIND = "camera"
     ALIASES = {"MaxRange": "max_range_m", "FOV": "fov_rad", "Sigma": "sigma"}
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Self
 
 import mujoco
 import numpy as np
@@ -103,15 +103,14 @@ class TouchConfig(SensorConfig):
 
 
 @SENSORS.register("Touch")
-class Touch(Sensor):
+class Touch(Sensor[TouchConfig]):
     """True while the sphere of ``Diameter`` at the mount touches (or has its centre
     inside) anything other than the robot's own bodies."""
 
     PACKED = True
-    Config = TouchConfig
     ALIASES = {"Diameter": "diameter_m"}
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: TouchConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         self._radius = self.config.diameter_m / 2.0
 
@@ -140,7 +139,8 @@ class Touch(Sensor):
 
     def _centre(self, view: WorldView) -> np.ndarray:
         d = view.data
-        return d.xpos[self._body] + d.xmat[self._body].reshape(3, 3) @ self._offset
+        centre: np.ndarray = d.xpos[self._body] + d.xmat[self._body].reshape(3, 3) @ self._offset
+        return centre
 
     def touching(self, view: WorldView, near: np.ndarray | None = None, centre: np.ndarray | None = None) -> bool:
         """Whether the sphere touches anything; ``near`` (the candidates within reach) and
@@ -186,7 +186,7 @@ class Touch(Sensor):
         return TouchItem(self.name, self.touching(view))
 
     @classmethod
-    def measure_group(cls, sensors: list[Sensor], view: WorldView) -> list[TouchItem]:
+    def measure_group(cls, sensors: list[Self], view: WorldView) -> list[TouchItem]:
         """Every touch sensor of a robot at once: with probes, each looks itself up among the
         last step's contacts (gathered once an instant for every robot); else they share
         their candidates (everything but the robot), so the distances to all of them are one

@@ -55,14 +55,13 @@ class VictSensorConfig(SensorConfig):
 
 
 @SENSORS.register("VictSensor", "VictimSensor")
-class VictSensor(Sensor):
-    Config = VictSensorConfig
+class VictSensor(Sensor[VictSensorConfig]):
     RAY_KIND = "camera"
     ALIASES = {"MaxRange": "max_range_m", "Distance": "max_range_m", "HorizontalFOV": "horizontal_fov_rad",
                "VerticalFOV": "vertical_fov_rad", "HorizontalStep": "horizontal_step_rad",
                "VerticalStep": "vertical_step_rad", "Sigma": "sigma", "Mean": "mean"}
 
-    def __init__(self, item: MountedItem, config: SensorConfig, robot: RobotConfig, seed: int) -> None:
+    def __init__(self, item: MountedItem, config: VictSensorConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         c = self.config
         nh = int(math.floor(c.horizontal_fov_rad / c.horizontal_step_rad + 1e-6)) + 1
