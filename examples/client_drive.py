@@ -97,8 +97,7 @@ class Explorer:
         elif touching and doing not in ("back", "escape-left", "escape-right"):
             self.do("back", f"bumper touching at ({x:.2f}, {y:.2f}): backing up, then turning {side}", side)
         elif doing != "back" and since_backed >= STAY_MAX_S and stayed >= STAY_MAX_S:
-            self.do("back", f"still at ({x:.2f}, {y:.2f}) after {stayed:.1f} s: backing up, then turning {side}",
-                    side)
+            self.do("back", f"still at ({x:.2f}, {y:.2f}) after {stayed:.1f} s: backing up, then turning {side}", side)
         elif doing == "back":
             if in_for >= BACK_S:
                 self.do(f"escape-{side}", f"turning {side} to get away", side)
@@ -132,8 +131,9 @@ def drive(args) -> None:
                 world = connect(args.host, args.port, lockstep=args.lockstep)
             except ClientError as exc:
                 if isinstance(exc.__cause__, OSError) and not isinstance(exc, ClientTimeout):
-                    raise ClientError(f"no simulator on {where}: start one with 'usarsim serve' "
-                                      "(or bash scripts/serve.sh)") from None
+                    raise ClientError(
+                        f"no simulator on {where}: start one with 'usarsim serve' (or bash scripts/serve.sh)"
+                    ) from None
                 raise
         stack.callback(world.close)
         start = args.start or world.start_poses[0].name
@@ -141,8 +141,10 @@ def drive(args) -> None:
         if args.port is not None:
             lockstep = runs_in_lockstep(world, robot)
             if lockstep and not args.lockstep:
-                raise ClientError(f"the simulator on {where} runs in lock-step (usarsim serve --lockstep): add "
-                                  "--lockstep to step its clock from here, or start it without --lockstep")
+                raise ClientError(
+                    f"the simulator on {where} runs in lock-step (usarsim serve --lockstep): add "
+                    "--lockstep to step its clock from here, or start it without --lockstep"
+                )
             if args.lockstep and not lockstep:
                 raise ClientError(f"the simulator on {where} runs in real time: leave out --lockstep")
         print(f"a P2AT at {start} on {world.level}, for {args.seconds:g} simulated seconds", flush=True)
@@ -166,8 +168,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--port", type=int, help="a running simulator's control port (default: start one)")
     ap.add_argument("--host", default="127.0.0.1")
-    ap.add_argument("--lockstep", action="store_true",
-                    help="with --port: the server was started with --lockstep; step its clock from here")
+    ap.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="with --port: the server was started with --lockstep; step its clock from here",
+    )
     ap.add_argument("--start", help="the start pose (default: the world's first)")
     ap.add_argument("--seconds", type=float, default=30.0, help="simulated seconds to drive (default 30)")
     args = ap.parse_args()

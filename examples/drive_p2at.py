@@ -223,8 +223,10 @@ class Explorer:
         (t, x, y, yaw), (t1, x1, y1, yaw1) = self.track[0], self.track[-1]
         if t1 - t < STUCK_S - 0.05:
             return 0.0
-        if math.hypot(x1 - x, y1 - y) < self.progress_m and abs(math.remainder(yaw1 - yaw, math.tau)) < \
-                self.progress_rad:
+        if (
+            math.hypot(x1 - x, y1 - y) < self.progress_m
+            and abs(math.remainder(yaw1 - yaw, math.tau)) < self.progress_rad
+        ):
             return t1 - t
         return 0.0
 
@@ -243,8 +245,15 @@ class Explorer:
         """Drive the wheels for ``doing``; ``side``: the way it turns until it gets going again."""
         self.side = side or self.side
         s = self.speed
-        left, right = {"forward": (s, s), "back": (-s, -s), "lunge": (s, s), "left": (-s, s), "right": (s, -s),
-                       "escape-left": (-s, s), "escape-right": (s, -s)}[doing]
+        left, right = {
+            "forward": (s, s),
+            "back": (-s, -s),
+            "lunge": (s, s),
+            "left": (-s, s),
+            "right": (s, -s),
+            "escape-left": (-s, s),
+            "escape-right": (s, -s),
+        }[doing]
         self.server.send(f"DRIVE {{Left {left:.3f}}} {{Right {right:.3f}}}")
         self.doing, self.since, self.since_pose = doing, self.now, self.pose
         print(f"t={self.now:5.1f} s {why}", flush=True)
@@ -253,14 +262,21 @@ class Explorer:
         """Back up (then turn); stuck again where it was a moment ago: lunge forward instead,
         every other time, and turn the other way (rocking free of what it is caught on)."""
         p = self.pose
-        again = (p is not None and self.got_away_from is not None and self.now - self.backed < 2 * (GETAWAY_S + STUCK_S)
-                 and math.hypot(p[0] - self.got_away_from[0], p[1] - self.got_away_from[1]) < AGAIN_M)
+        again = (
+            p is not None
+            and self.got_away_from is not None
+            and self.now - self.backed < 2 * (GETAWAY_S + STUCK_S)
+            and math.hypot(p[0] - self.got_away_from[0], p[1] - self.got_away_from[1]) < AGAIN_M
+        )
         self.tries = self.tries + 1 if again else 0
         if self.tries % 2:
             side = "left" if side == "right" else "right"
         self.backed, self.got_away_from = self.now, p
-        self.do("lunge" if self.tries % 2 else "back", f"{why}: {'lunging forward' if self.tries % 2 else 'backing up'}"
-                f", then turning {side}", side)
+        self.do(
+            "lunge" if self.tries % 2 else "back",
+            f"{why}: {'lunging forward' if self.tries % 2 else 'backing up'}, then turning {side}",
+            side,
+        )
 
     def decide(self, scan: str) -> None:
         ranges = numbers(field(scan, "Range"))
@@ -306,18 +322,21 @@ class Explorer:
             self.do("forward", f"forward {self.speed * self.wheel_radius:.2f} m/s (laser {ahead:.2f} m clear)")
 
 
-def drive(server: Server, start: str | None, speed_arg: str, seconds: float, lockstep: bool,
-          address: str) -> None:
+def drive(server: Server, start: str | None, speed_arg: str, seconds: float, lockstep: bool, address: str) -> None:
     print(server.read())  # NFO {Gametype ...} {Level ...} {TimeLimit ...}
     t1 = server.clock()
     time.sleep(0.5)
     server_lockstep = server.clock() == t1  # its clock stood still: it waits for STEP
     if server_lockstep and not lockstep:
-        raise Unsuitable(f"the simulator on {address} runs in lock-step (usarsim serve --lockstep): "
-                         "add --lockstep to step its clock from here, or start it without --lockstep")
+        raise Unsuitable(
+            f"the simulator on {address} runs in lock-step (usarsim serve --lockstep): "
+            "add --lockstep to step its clock from here, or start it without --lockstep"
+        )
     if lockstep and not server_lockstep:
-        raise Unsuitable(f"the simulator on {address} runs in real time: leave out --lockstep "
-                         "(it is for a server started with usarsim serve --lockstep)")
+        raise Unsuitable(
+            f"the simulator on {address} runs in real time: leave out --lockstep "
+            "(it is for a server started with usarsim serve --lockstep)"
+        )
     server.send("GETSTARTPOSES")
     poses = server.wait_for("NFO", "StartPoses")
     tokens = segments(poses)[1].split() if int(field(poses, "StartPoses")) > 0 else []
@@ -335,8 +354,10 @@ def drive(server: Server, start: str | None, speed_arg: str, seconds: float, loc
     geo = server.wait_for("GEO", "Type")
     wheel_radius = float(field(geo, "WheelRadius") or WHEEL_RADIUS_M)
     wheel_separation = float(field(geo, "WheelSeparation") or WHEEL_SEPARATION_M)
-    print(f"driving at {speed:.2f} rad/s for {seconds:g} s" + (" (lock-step: 0.1 s a step)" if lockstep else ""),
-          flush=True)
+    print(
+        f"driving at {speed:.2f} rad/s for {seconds:g} s" + (" (lock-step: 0.1 s a step)" if lockstep else ""),
+        flush=True,
+    )
 
     robot = Explorer(server, speed, wheel_radius, wheel_separation)
     if lockstep:
@@ -353,16 +374,20 @@ def drive(server: Server, start: str | None, speed_arg: str, seconds: float, loc
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description="Drive a P2AT around, turning away from what it sees ahead and "
-                                             "backing away from where it gets stuck.")
+    ap = argparse.ArgumentParser(
+        description="Drive a P2AT around, turning away from what it sees ahead and "
+        "backing away from where it gets stuck."
+    )
     ap.add_argument("--host", default="127.0.0.1", help="the server's address (default 127.0.0.1)")
     ap.add_argument("--port", type=int, default=3000, help="its control port (default 3000)")
     ap.add_argument("--start", help="the start pose to spawn at (default: the first the server lists)")
     ap.add_argument("--speed", default="2.0", help="wheel speed in rad/s, or 'max' (default 2.0)")
-    ap.add_argument("--seconds", type=float, default=30.0, help="how long to drive, in simulated seconds "
-                                                                 "(default 30)")
-    ap.add_argument("--lockstep", action="store_true",
-                    help="the server was started with --lockstep: advance its clock from here, 0.1 s a step")
+    ap.add_argument("--seconds", type=float, default=30.0, help="how long to drive, in simulated seconds (default 30)")
+    ap.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="the server was started with --lockstep: advance its clock from here, 0.1 s a step",
+    )
     args = ap.parse_args()
     if args.speed != "max":
         try:
@@ -374,8 +399,10 @@ def main() -> int:
         server = Server(args.host, args.port)
     except OSError as exc:
         why = "connection refused" if isinstance(exc, ConnectionRefusedError) else (exc.strerror or str(exc))
-        print(f"drive_p2at: no simulator on {address} ({why}): start one with 'usarsim serve' "
-              "(or bash scripts/serve.sh)", file=sys.stderr)
+        print(
+            f"drive_p2at: no simulator on {address} ({why}): start one with 'usarsim serve' (or bash scripts/serve.sh)",
+            file=sys.stderr,
+        )
         return 1
     try:
         drive(server, args.start, args.speed, args.seconds, args.lockstep, address)

@@ -1,5 +1,6 @@
 """Drive a robot of 'usarsim ros2' forward for 5 simulated seconds, then print where its odometry
 says it is: python examples/ros2_drive.py [ROBOT]   (ROBOT: its namespace, default robot1)."""
+
 import sys
 import time
 

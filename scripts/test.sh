@@ -35,8 +35,10 @@ if [ "${#debs[@]}" -gt 0 ] && command -v apt-get >/dev/null 2>&1; then
 fi
 "$USARSIM_PYTHON" -m usarsim.ros2.tf2_build \
   || echo "scripts/test.sh: tf2_msgs could not be built: the ROS 2 tests of /tf will fail" >&2
-# The house style (pyproject.toml [tool.ruff]): a finding fails the run before any test.
+# The house style (pyproject.toml [tool.ruff]: the lint rules and the layout ruff format gives): a
+# finding fails the run before any test.
 "$USARSIM_PYTHON" -m ruff check src tests tools examples
+"$USARSIM_PYTHON" -m ruff format --check src tests tools examples
 # The types (pyproject.toml [tool.mypy]: the protocol layer and the facade strictly): an error fails
 # the run before any test.
 "$USARSIM_PYTHON" -m mypy

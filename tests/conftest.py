@@ -22,8 +22,10 @@ FAST_TIER = os.environ.get("USARSIM_FAST_TIER") == "1"
 class _NoMuJoCo(importlib.abc.MetaPathFinder):
     def find_spec(self, name: str, path: object = None, target: object = None) -> None:
         if name == "mujoco" or name.startswith("mujoco."):
-            raise ImportError("the fast test tier (USARSIM_FAST_TIER=1) loads no MuJoCo: this test belongs in "
-                              "tests/unit or tests/integration, or its code imports the physics it does not need")
+            raise ImportError(
+                "the fast test tier (USARSIM_FAST_TIER=1) loads no MuJoCo: this test belongs in "
+                "tests/unit or tests/integration, or its code imports the physics it does not need"
+            )
 
 
 if FAST_TIER:
@@ -38,9 +40,13 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    parser.addoption("--update-golden", action="store_true", default=False,
-                     help="rewrite tests/golden/transcripts/*.txt from the current server output "
-                          "(same as USARSIM_UPDATE_GOLDEN=1); review the diff before committing")
+    parser.addoption(
+        "--update-golden",
+        action="store_true",
+        default=False,
+        help="rewrite tests/golden/transcripts/*.txt from the current server output "
+        "(same as USARSIM_UPDATE_GOLDEN=1); review the diff before committing",
+    )
 
 
 @pytest.fixture(scope="session")

@@ -25,8 +25,9 @@ class WaitTimeout(AssertionError):
     """A condition did not become true in time (an assertion failure, so tests fail cleanly)."""
 
 
-def wait_for(predicate: Callable[[], Any], timeout: float = DEFAULT_TIMEOUT, *, interval: float = 0.005,
-             what: str | None = None) -> Any:
+def wait_for(
+    predicate: Callable[[], Any], timeout: float = DEFAULT_TIMEOUT, *, interval: float = 0.005, what: str | None = None
+) -> Any:
     """Poll ``predicate`` until it returns something truthy; return that value.
 
     Raises :class:`WaitTimeout` (an AssertionError) after ``timeout`` seconds.
@@ -76,7 +77,7 @@ def segments(text: str) -> dict[str, str]:
         b = text.find("}", a)
         if b < 0:
             return out
-        body = text[a + 1:b].strip()
+        body = text[a + 1 : b].strip()
         key, _, value = body.partition(" ")
         out.setdefault(key, value.strip())
         pos = b + 1
@@ -93,7 +94,7 @@ def segment_list(text: str) -> list[str]:
         b = text.find("}", a)
         if b < 0:
             return out
-        out.append(text[a + 1:b])
+        out.append(text[a + 1 : b])
         pos = b + 1
 
 
@@ -256,17 +257,38 @@ def ground_truth(lines: list[Line]) -> list[tuple[float, tuple[float, float, flo
 class ServerThread:
     """An :class:`usarsim.server.app.Application` served by its own asyncio loop in a thread."""
 
-    def __init__(self, world, *, seed: int = 1, lockstep: bool = True, speed: float | None = None,
-                 max_connections: int = 64, robot_dirs: tuple[str, ...] = (), image=None,
-                 wireless_model: str | None = None):
+    def __init__(
+        self,
+        world,
+        *,
+        seed: int = 1,
+        lockstep: bool = True,
+        speed: float | None = None,
+        max_connections: int = 64,
+        robot_dirs: tuple[str, ...] = (),
+        image=None,
+        wireless_model: str | None = None,
+    ):
         from usarsim.server.app import Application
         from usarsim.server.wireless import WirelessOptions
 
         # every listener on a free port (0), so that tests never collide
         wireless = WirelessOptions(wcs_port=0, wss_port=0, interface_port=0, model=wireless_model)
-        self.app = Application(world, host="127.0.0.1", port=0, seed=seed, speed=speed, lockstep=lockstep,
-                               max_connections=max_connections, robot_dirs=robot_dirs, truth_port=0, image_port=0,
-                               image=image, wireless=wireless, web_port=0)
+        self.app = Application(
+            world,
+            host="127.0.0.1",
+            port=0,
+            seed=seed,
+            speed=speed,
+            lockstep=lockstep,
+            max_connections=max_connections,
+            robot_dirs=robot_dirs,
+            truth_port=0,
+            image_port=0,
+            image=image,
+            wireless=wireless,
+            web_port=0,
+        )
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._serve, name="test-server-loop", daemon=True)
         self.clients: list[Client] = []
@@ -297,6 +319,7 @@ class ServerThread:
 
     def on_loop(self, fn: Callable[[], Any]) -> Any:
         """Run ``fn()`` on the server's event loop and return its result."""
+
         async def run():
             return fn()
 
@@ -399,6 +422,7 @@ def gl_problem() -> str:
 # Driving a robot of a Simulation directly (on its own thread, no server): the typed DRIVE
 # commands of usarsim.controls, as the protocol makes them from DRIVE lines.
 
+
 def drive_skid(sim, uid: int, left, right, normalized: bool = False, light=None) -> None:
     """``DRIVE {Left} {Right}``."""
     from usarsim.controls import DriveCommand, WheelSpeeds
@@ -424,8 +448,7 @@ def drive_wheels(sim, uid: int, wheels, normalized: bool = False) -> None:
     """``DRIVE {WheelNumber n} {WheelSpeed v} {WheelSteer a} ...``: ``wheels`` as (n, v, a)."""
     from usarsim.controls import DriveCommand, SteeredWheel, SteeredWheels
 
-    sim.drive(uid, DriveCommand(parts=(SteeredWheels(tuple(SteeredWheel(*w) for w in wheels)),),
-                                normalized=normalized))
+    sim.drive(uid, DriveCommand(parts=(SteeredWheels(tuple(SteeredWheel(*w) for w in wheels)),), normalized=normalized))
 
 
 def drive_joint(sim, uid: int, name: str, value: float, order: int = 0) -> bool:

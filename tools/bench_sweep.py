@@ -33,8 +33,11 @@ def bench(workers: int, runs: int, duration: float, world: str, controller: str)
 
     with tempfile.TemporaryDirectory(prefix="usarsim-bench-sweep-") as tmp:
         path = Path(tmp) / "bench.yaml"
-        path.write_text(f"name: bench\nworld: {world}\nseeds: {runs}\nteam: P2AT\nduration: {duration}\n"
-                        f"clock: lockstep\ncontroller: {controller}\n", encoding="utf-8")
+        path.write_text(
+            f"name: bench\nworld: {world}\nseeds: {runs}\nteam: P2AT\nduration: {duration}\n"
+            f"clock: lockstep\ncontroller: {controller}\n",
+            encoding="utf-8",
+        )
         exp = load_experiment(path)
         t0 = time.monotonic()
         start_ray(workers, None)
@@ -50,14 +53,25 @@ def bench(workers: int, runs: int, duration: float, world: str, controller: str)
     elapsed = out.elapsed_s - out.ray_start_s  # the runs only: Ray was started before
     mean = statistics.fmean
     idle = max(0.0, workers * elapsed - sum(r["wall_s"] for r in rows)) / len(rows)
-    phases = {"start_s": mean(r["start_s"] for r in rows), "connect_s": mean(r["setup_s"] for r in rows),
-              "score_s": mean(r["stop_s"] for r in rows), "collect_s": mean(out.collect_s) if out.collect_s else 0.0,
-              "idle_s": idle}
-    return {"workers": workers, "runs": len(rows), "duration_s": duration, "ray_start_s": round(ray_start, 2),
-            "elapsed_s": round(elapsed, 2), "runs_per_hour": round(len(rows) / elapsed * 3600.0),
-            "control_s": round(mean(r["control_s"] for r in rows), 3),
-            "overhead_s": round(sum(phases.values()), 3), **{k: round(v, 3) for k, v in phases.items()},
-            "cpu_count": os.cpu_count()}
+    phases = {
+        "start_s": mean(r["start_s"] for r in rows),
+        "connect_s": mean(r["setup_s"] for r in rows),
+        "score_s": mean(r["stop_s"] for r in rows),
+        "collect_s": mean(out.collect_s) if out.collect_s else 0.0,
+        "idle_s": idle,
+    }
+    return {
+        "workers": workers,
+        "runs": len(rows),
+        "duration_s": duration,
+        "ray_start_s": round(ray_start, 2),
+        "elapsed_s": round(elapsed, 2),
+        "runs_per_hour": round(len(rows) / elapsed * 3600.0),
+        "control_s": round(mean(r["control_s"] for r in rows), 3),
+        "overhead_s": round(sum(phases.values()), 3),
+        **{k: round(v, 3) for k, v in phases.items()},
+        "cpu_count": os.cpu_count(),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -75,16 +89,24 @@ def main(argv: list[str] | None = None) -> int:
         for r in results:
             print(json.dumps(r))
         return 0
-    print(f"{args.runs} runs of {args.duration:g} simulated s ({args.world}, one P2AT, lock-step, "
-          f"{args.controller}) on {os.cpu_count()} CPUs")
-    print(f"{'workers':>7} {'Ray start':>9} {'start':>6} {'connect':>7} {'score':>6} {'collect':>7} {'idle':>6} "
-          f"{'overhead':>8} {'control':>7} {'elapsed':>7} {'runs/hour':>9}")
+    print(
+        f"{args.runs} runs of {args.duration:g} simulated s ({args.world}, one P2AT, lock-step, "
+        f"{args.controller}) on {os.cpu_count()} CPUs"
+    )
+    print(
+        f"{'workers':>7} {'Ray start':>9} {'start':>6} {'connect':>7} {'score':>6} {'collect':>7} {'idle':>6} "
+        f"{'overhead':>8} {'control':>7} {'elapsed':>7} {'runs/hour':>9}"
+    )
     for r in results:
-        print(f"{r['workers']:>7} {r['ray_start_s']:>8.2f}s {r['start_s']:>5.2f}s {r['connect_s']:>6.2f}s "
-              f"{r['score_s']:>5.2f}s {r['collect_s']:>6.3f}s {r['idle_s']:>5.2f}s {r['overhead_s']:>7.2f}s "
-              f"{r['control_s']:>6.2f}s {r['elapsed_s']:>6.1f}s {r['runs_per_hour']:>9}")
-    print("overhead per run = start + connect + score + collect + idle (the sweep's own cost); control: the "
-          "controller's simulated duration")
+        print(
+            f"{r['workers']:>7} {r['ray_start_s']:>8.2f}s {r['start_s']:>5.2f}s {r['connect_s']:>6.2f}s "
+            f"{r['score_s']:>5.2f}s {r['collect_s']:>6.3f}s {r['idle_s']:>5.2f}s {r['overhead_s']:>7.2f}s "
+            f"{r['control_s']:>6.2f}s {r['elapsed_s']:>6.1f}s {r['runs_per_hour']:>9}"
+        )
+    print(
+        "overhead per run = start + connect + score + collect + idle (the sweep's own cost); control: the "
+        "controller's simulated duration"
+    )
     return 0
 
 

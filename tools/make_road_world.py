@@ -220,8 +220,10 @@ def zone_exits(segs: dict[int, list[Lane]]) -> list[tuple[str, str]]:
     """Into the lot from both lanes of Avenue C beside it and out again onto both."""
     north, south = segs[3]  # Avenue C: lane 1 northbound, lane 2 southbound (block row 1: waypoints 5-8)
     return [
-        (f"{north.id}.6", f"{ZONE_ID}.0.3"), (f"{south.id}.6", f"{ZONE_ID}.0.4"),  # turning in
-        (f"{ZONE_ID}.0.4", f"{north.id}.7"), (f"{ZONE_ID}.0.3", f"{south.id}.7"),  # turning out
+        (f"{north.id}.6", f"{ZONE_ID}.0.3"),
+        (f"{south.id}.6", f"{ZONE_ID}.0.4"),  # turning in
+        (f"{ZONE_ID}.0.4", f"{north.id}.7"),
+        (f"{ZONE_ID}.0.3", f"{south.id}.7"),  # turning out
     ]
 
 
@@ -239,20 +241,44 @@ def objects() -> list[tuple[str, dict]]:
         out.append((comment, o))
 
     def cyl(name, center, radius, length, material, comment=""):
-        out.append((comment, {"name": name, "shape": "cylinder", "center": center, "radius": radius,
-                              "length": length, "material": material}))
+        out.append(
+            (
+                comment,
+                {
+                    "name": name,
+                    "shape": "cylinder",
+                    "center": center,
+                    "radius": radius,
+                    "length": length,
+                    "material": material,
+                },
+            )
+        )
 
     zc = ROAD_TOP + ROAD_THICK / 2
     length = 2 * ROAD_END
     for j, c in enumerate(STREETS):
-        box(f"road_{AVENUES[j]}", (0.0, c, zc), (length, ROAD, ROAD_THICK), "asphalt",
-            comment="road surfaces: avenues (north-south), then streets (east-west)" if j == 0 else "")
+        box(
+            f"road_{AVENUES[j]}",
+            (0.0, c, zc),
+            (length, ROAD, ROAD_THICK),
+            "asphalt",
+            comment="road surfaces: avenues (north-south), then streets (east-west)" if j == 0 else "",
+        )
     for i, c in enumerate(STREETS):
         box(f"road_{STREET_NAMES[i]}", (c, 0.0, zc), (ROAD, length, ROAD_THICK), "asphalt")
 
     # blocks: sidewalk slabs with buildings set back from the kerb
-    heights = ((5.0, 8.5, 6.0, 4.0), (7.0, 4.5), (9.0,), (6.5, 5.5, 4.5, 8.0), (4.0, 7.5), (5.0, 6.0, 9.0, 4.5),
-               (8.0,), (6.0, 4.0))
+    heights = (
+        (5.0, 8.5, 6.0, 4.0),
+        (7.0, 4.5),
+        (9.0,),
+        (6.5, 5.5, 4.5, 8.0),
+        (4.0, 7.5),
+        (5.0, 6.0, 9.0, 4.5),
+        (8.0,),
+        (6.0, 4.0),
+    )
     patterns = ("2x2", "2x1", "1", "2x2", "1x2", "2x2", "1", "2x1")
     k = 0
     for i in range(3):
@@ -262,8 +288,13 @@ def objects() -> list[tuple[str, dict]]:
             x0, x1, y0, y1 = block_bounds(i, j)
             cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
             tag = f"b{i + 1}{j + 1}"
-            box(f"{tag}_sidewalk", (cx, cy, -KERB / 2), (x1 - x0, y1 - y0, KERB), "sidewalk",
-                comment=f"block {tag} (row {i + 1} from the south, column {j + 1} from the west)")
+            box(
+                f"{tag}_sidewalk",
+                (cx, cy, -KERB / 2),
+                (x1 - x0, y1 - y0, KERB),
+                "sidewalk",
+                comment=f"block {tag} (row {i + 1} from the south, column {j + 1} from the west)",
+            )
             bx0, bx1, by0, by1 = x0 + SETBACK, x1 - SETBACK, y0 + SETBACK, y1 - SETBACK
             nx, ny = {"2x2": (2, 2), "2x1": (2, 1), "1x2": (1, 2), "1": (1, 1)}[patterns[k]]
             gap = 6.0  # alleys between buildings of a block
@@ -277,23 +308,30 @@ def objects() -> list[tuple[str, dict]]:
                     y = by0 + d / 2 + b * (d + gap)
                     box(f"{tag}_building{n + 1}", (x, y, -KERB - h / 2), (w, d, h), "building")
                     n += 1
-            for n, (px, py) in enumerate(((x0 + 1.0, y0 + 1.0), (x0 + 1.0, y1 - 1.0), (x1 - 1.0, y0 + 1.0),
-                                          (x1 - 1.0, y1 - 1.0))):
+            for n, (px, py) in enumerate(
+                ((x0 + 1.0, y0 + 1.0), (x0 + 1.0, y1 - 1.0), (x1 - 1.0, y0 + 1.0), (x1 - 1.0, y1 - 1.0))
+            ):
                 cyl(f"{tag}_pole{n + 1}", (px, py, -KERB - 3.0), 0.12, 6.0, "metal")  # street light poles
             k += 1
 
     # the parking lot: asphalt at road level, sidewalks on its edges, the driveway gap on the west
     tag = f"b{LOT_BLOCK[0] + 1}{LOT_BLOCK[1] + 1}"
-    box(f"{tag}_lot", ((LX0 + LX1) / 2, (LY0 + LY1) / 2, zc), (LX1 - LX0, LY1 - LY0, ROAD_THICK), "asphalt",
-        comment=f"block {tag}: the parking lot (zone {ZONE_ID}), driveway from Avenue C")
+    box(
+        f"{tag}_lot",
+        ((LX0 + LX1) / 2, (LY0 + LY1) / 2, zc),
+        (LX1 - LX0, LY1 - LY0, ROAD_THICK),
+        "asphalt",
+        comment=f"block {tag}: the parking lot (zone {ZONE_ID}), driveway from Avenue C",
+    )
     sw = SIDEWALK
     for name, (x0, x1, y0, y1) in (
-            ("south", (LX0, LX0 + sw, LY0, LY1)), ("north", (LX1 - sw, LX1, LY0, LY1)),
-            ("east", (LX0 + sw, LX1 - sw, LY1 - sw, LY1)),
-            ("west1", (LX0 + sw, LOT_MX - DRIVEWAY, LY0, LY0 + sw)),
-            ("west2", (LOT_MX + DRIVEWAY, LX1 - sw, LY0, LY0 + sw))):
-        box(f"{tag}_sidewalk_{name}", ((x0 + x1) / 2, (y0 + y1) / 2, -KERB / 2), (x1 - x0, y1 - y0, KERB),
-            "sidewalk")
+        ("south", (LX0, LX0 + sw, LY0, LY1)),
+        ("north", (LX1 - sw, LX1, LY0, LY1)),
+        ("east", (LX0 + sw, LX1 - sw, LY1 - sw, LY1)),
+        ("west1", (LX0 + sw, LOT_MX - DRIVEWAY, LY0, LY0 + sw)),
+        ("west2", (LOT_MX + DRIVEWAY, LX1 - sw, LY0, LY0 + sw)),
+    ):
+        box(f"{tag}_sidewalk_{name}", ((x0 + x1) / 2, (y0 + y1) / 2, -KERB / 2), (x1 - x0, y1 - y0, KERB), "sidewalk")
     for n, x in enumerate((-7.5, 10.5)):  # parked in unnumbered stalls beside the RNDF's spots
         box(f"{tag}_car{n + 1}", (x, sum(SPOT_Y) / 2, ROAD_TOP - CAR[2] / 2), (CAR[1], CAR[0], CAR[2]), "car")
 
@@ -312,8 +350,12 @@ def objects() -> list[tuple[str, dict]]:
 
 # (axis of the street, street index, side of its centre line (+1: east/north), block index, offset m)
 PARKED = (
-    ("x", 1, +1, 0, -20.0), ("x", 1, +1, 0, -13.0), ("x", 0, -1, 2, 15.0),
-    ("y", 1, -1, 0, 12.0), ("y", 2, +1, 1, -25.0), ("y", 3, -1, 2, 0.0),
+    ("x", 1, +1, 0, -20.0),
+    ("x", 1, +1, 0, -13.0),
+    ("x", 0, -1, 2, 15.0),
+    ("y", 1, -1, 0, 12.0),
+    ("y", 2, +1, 1, -25.0),
+    ("y", 3, -1, 2, 0.0),
     ("x", 2, -1, 2, 18.0),
 )
 
@@ -362,10 +404,15 @@ def geo(x: float, y: float) -> tuple[float, float]:
 
 
 def write_rndf(segs, path: Path) -> dict:
-    lines = [f"RNDF_name\t{NAME}", "num_segments\t8", "num_zones\t1", "format_version\t1.0",
-             "creation_date\t2007-11-03",
-             "/* A 3 x 3 block town of two-lane streets; every crossing is an all-way stop. */",
-             "/* Generated by tools/make_road_world.py with the world DM-Road_UrbanChallenge.yaml. */"]
+    lines = [
+        f"RNDF_name\t{NAME}",
+        "num_segments\t8",
+        "num_zones\t1",
+        "format_version\t1.0",
+        "creation_date\t2007-11-03",
+        "/* A 3 x 3 block town of two-lane streets; every crossing is an all-way stop. */",
+        "/* Generated by tools/make_road_world.py with the world DM-Road_UrbanChallenge.yaml. */",
+    ]
     exits = intersection_exits(segs) + zone_exits(segs)
     by_exit: dict[str, list[str]] = {}
     for a, b in exits:
@@ -378,8 +425,13 @@ def write_rndf(segs, path: Path) -> dict:
         lines += [f"segment\t{seg}", f"num_lanes\t{len(lanes)}", f"segment_name\t{name}"]
         for lane in lanes:
             wps = lane.waypoints()
-            lines += [f"lane\t{lane.id}", f"num_waypoints\t{len(wps)}", f"lane_width\t{LANE_FT}",
-                      "left_boundary\tdouble_yellow", "right_boundary\tsolid_white"]
+            lines += [
+                f"lane\t{lane.id}",
+                f"num_waypoints\t{len(wps)}",
+                f"lane_width\t{LANE_FT}",
+                "left_boundary\tdouble_yellow",
+                "right_boundary\tsolid_white",
+            ]
             checkpoint += 1
             cp_wp = f"{lane.id}.6"  # the middle of the second block along the lane
             checkpoints[cp_wp] = checkpoint
@@ -395,8 +447,13 @@ def write_rndf(segs, path: Path) -> dict:
                 lines.append(f"{wid}\t{la:.6f}\t{lo:.6f}")
             lines.append("end_lane")
         lines.append("end_segment")
-    lines += [f"zone\t{ZONE_ID}", f"num_spots\t{len(SPOT_X)}", "zone_name\tParking_Lot",
-              f"perimeter\t{ZONE_ID}.0", f"num_perimeterpoints\t{len(PERIMETER)}"]
+    lines += [
+        f"zone\t{ZONE_ID}",
+        f"num_spots\t{len(SPOT_X)}",
+        "zone_name\tParking_Lot",
+        f"perimeter\t{ZONE_ID}.0",
+        f"num_perimeterpoints\t{len(PERIMETER)}",
+    ]
     for n in range(1, len(PERIMETER) + 1):
         for entry in by_exit.get(f"{ZONE_ID}.0.{n}", []):
             lines.append(f"exit\t{ZONE_ID}.0.{n}\t{entry}")
@@ -423,10 +480,22 @@ MISSION = (1, 9, 17, 6, 12, 3, 15, 19, 8, 14, 2, 11)
 
 
 def write_mdf(path: Path) -> None:
-    lines = [f"MDF_name\t{NAME}_tour", f"RNDF\t{NAME}", "format_version\t1.0", "creation_date\t2007-11-03",
-             "checkpoints", f"num_checkpoints\t{len(MISSION)}", *[str(c) for c in MISSION], "end_checkpoints",
-             "speed_limits", "num_speed_limits\t9", *[f"{s}\t{STREET_MPH[0]}\t{STREET_MPH[1]}" for s in range(1, 9)],
-             f"{ZONE_ID}\t{LOT_MPH[0]}\t{LOT_MPH[1]}", "end_speed_limits", "end_file"]
+    lines = [
+        f"MDF_name\t{NAME}_tour",
+        f"RNDF\t{NAME}",
+        "format_version\t1.0",
+        "creation_date\t2007-11-03",
+        "checkpoints",
+        f"num_checkpoints\t{len(MISSION)}",
+        *[str(c) for c in MISSION],
+        "end_checkpoints",
+        "speed_limits",
+        "num_speed_limits\t9",
+        *[f"{s}\t{STREET_MPH[0]}\t{STREET_MPH[1]}" for s in range(1, 9)],
+        f"{ZONE_ID}\t{LOT_MPH[0]}\t{LOT_MPH[1]}",
+        "end_speed_limits",
+        "end_file",
+    ]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
@@ -509,33 +578,36 @@ HEADER = f"""\
 
 
 def write_world(objs, poses, path: Path) -> None:
-    lines = [HEADER.rstrip("\n"), "", f"name: {NAME}",
-             "description: town streets - 3 x 3 blocks of two-lane roads, all-way stops, a parking lot; "
-             "DARPA Urban Challenge RNDF and MDF beside it",
-             "time_limit_min: 0",
-             "floor:",
-             "  center: [0.0, 0.0]",
-             "  size: [300.0, 300.0]",
-             "  material: ground",
-             "geo_reference:",
-             f"  latitude_deg: {LAT0}",
-             f"  longitude_deg: {LON0}",
-             f"  scale_latitude_m: {SCALE_LAT}",
-             f"  scale_longitude_m: {SCALE_LON}",
-             f"ambient_light: {vec((SKY_AMBIENT,) * 3)}",
-             "lights:",
-             f"  - {{name: sun, type: directional, direction: {vec(SUN_DIRECTION)}, color: [1.0, 1.0, 1.0], "
-             f"intensity: {fmt(SUN_INTENSITY)}, cast_shadows: false}}",
-             "materials:",
-             "  ground: {rgba: [0.42, 0.48, 0.26, 1.0], friction: 0.8, texture: grass}"
-             "      # dry grass around the town",
-             "  asphalt: {rgba: [0.22, 0.22, 0.24, 1.0], friction: 1.0, texture: road}"
-             "     # dry asphalt, lane markings and stop lines",
-             "  sidewalk: {rgba: [0.68, 0.68, 0.66, 1.0], friction: 1.0, texture: concrete}    # concrete",
-             "  building: {rgba: [0.80, 0.74, 0.62, 1.0], friction: 0.8, texture: concrete}    # stucco walls",
-             "  metal: {rgba: [0.45, 0.47, 0.50, 1.0], friction: 0.6}       # light poles",
-             "  car: {rgba: [0.60, 0.12, 0.12, 1.0], friction: 0.8}         # parked cars",
-             "objects:"]
+    lines = [
+        HEADER.rstrip("\n"),
+        "",
+        f"name: {NAME}",
+        "description: town streets - 3 x 3 blocks of two-lane roads, all-way stops, a parking lot; "
+        "DARPA Urban Challenge RNDF and MDF beside it",
+        "time_limit_min: 0",
+        "floor:",
+        "  center: [0.0, 0.0]",
+        "  size: [300.0, 300.0]",
+        "  material: ground",
+        "geo_reference:",
+        f"  latitude_deg: {LAT0}",
+        f"  longitude_deg: {LON0}",
+        f"  scale_latitude_m: {SCALE_LAT}",
+        f"  scale_longitude_m: {SCALE_LON}",
+        f"ambient_light: {vec((SKY_AMBIENT,) * 3)}",
+        "lights:",
+        f"  - {{name: sun, type: directional, direction: {vec(SUN_DIRECTION)}, color: [1.0, 1.0, 1.0], "
+        f"intensity: {fmt(SUN_INTENSITY)}, cast_shadows: false}}",
+        "materials:",
+        "  ground: {rgba: [0.42, 0.48, 0.26, 1.0], friction: 0.8, texture: grass}      # dry grass around the town",
+        "  asphalt: {rgba: [0.22, 0.22, 0.24, 1.0], friction: 1.0, texture: road}"
+        "     # dry asphalt, lane markings and stop lines",
+        "  sidewalk: {rgba: [0.68, 0.68, 0.66, 1.0], friction: 1.0, texture: concrete}    # concrete",
+        "  building: {rgba: [0.80, 0.74, 0.62, 1.0], friction: 0.8, texture: concrete}    # stucco walls",
+        "  metal: {rgba: [0.45, 0.47, 0.50, 1.0], friction: 0.6}       # light poles",
+        "  car: {rgba: [0.60, 0.12, 0.12, 1.0], friction: 0.8}         # parked cars",
+        "objects:",
+    ]
     for comment, o in objs:
         if comment:
             lines.append(f"  # {comment}")
@@ -550,8 +622,10 @@ def write_world(objs, poses, path: Path) -> None:
         lines.append("  - {" + ", ".join(parts) + "}")
     lines.append("start_poses:")
     for (name, loc, rot), (seg, lane, block) in zip(poses, STARTS):
-        lines.append(f"  - {{name: {name}, location: {vec(loc)}, rotation: {vec(rot)}}}"
-                     f"  # lane {seg}.{lane}, block {block + 1} along it")
+        lines.append(
+            f"  - {{name: {name}, location: {vec(loc)}, rotation: {vec(rot)}}}"
+            f"  # lane {seg}.{lane}, block {block + 1} along it"
+        )
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
@@ -567,8 +641,7 @@ def main(argv=None) -> int:
     write_world(objs, poses, args.out / f"{NAME}.yaml")
     write_rndf(segs, args.out / f"{NAME}.rndf")
     write_mdf(args.out / f"{NAME}.mdf")
-    print(f"wrote {NAME}.yaml ({len(objs)} objects, {len(poses)} start poses), {NAME}.rndf, {NAME}.mdf "
-          f"to {args.out}")
+    print(f"wrote {NAME}.yaml ({len(objs)} objects, {len(poses)} start poses), {NAME}.rndf, {NAME}.mdf to {args.out}")
     return 0
 
 

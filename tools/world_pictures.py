@@ -18,14 +18,21 @@ import numpy as np
 from PIL import Image
 
 # The robot camera shown for each world: the start pose whose view tells most about it.
-ROBOT_VIEWS = {"DM-USAR_yellow": "PlayerStart1", "DM-USAR_orange": "PlayerStart5", "DM-USAR_red": "PlayerStart2",
-               "DM-CollapsedBuilding": "PlayerStart2", "DM-Harbour": "Quay1",
-               "DM-Road_UrbanChallenge": "PlayerStart1"}
+ROBOT_VIEWS = {
+    "DM-USAR_yellow": "PlayerStart1",
+    "DM-USAR_orange": "PlayerStart5",
+    "DM-USAR_red": "PlayerStart2",
+    "DM-CollapsedBuilding": "PlayerStart2",
+    "DM-Harbour": "Quay1",
+    "DM-Road_UrbanChallenge": "PlayerStart1",
+}
 # The view from above: (look-at point in the USARSim frame, azimuth and elevation in degrees,
 # distance in metres); None: the floor's centre, from the south-west, 0.75 of its size away.
-TOP_VIEWS = {"DM-Road_UrbanChallenge": ((-41.0, -41.0, 0.0), 0.0, -90.0, 55.0),  # a crossing, north up
-             "DM-CollapsedBuilding": ((0.0, 0.0, 0.0), 45.0, -40.0, 38.0),
-             "DM-Harbour": ((-5.0, 0.0, 0.0), 45.0, -40.0, 70.0)}
+TOP_VIEWS = {
+    "DM-Road_UrbanChallenge": ((-41.0, -41.0, 0.0), 0.0, -90.0, 55.0),  # a crossing, north up
+    "DM-CollapsedBuilding": ((0.0, 0.0, 0.0), 45.0, -40.0, 38.0),
+    "DM-Harbour": ((-5.0, 0.0, 0.0), 45.0, -40.0, 70.0),
+}
 WIDTH, HEIGHT = 480, 360
 MAX_BYTES = 120_000  # each file: a README stays light
 
@@ -58,16 +65,17 @@ def world_pictures(name: str, out: Path) -> list[tuple[Path, int]]:
         if pose.name == shown:
             uid = k
     sim.advance(1.0)
-    service = RenderService(lambda reuse, done: done(sim.cameras.render_snapshot(reuse), None), max_fps=0,
-                            shadows=True)
+    service = RenderService(lambda reuse, done: done(sim.cameras.render_snapshot(reuse), None), max_fps=0, shadows=True)
     written = []
     try:
         camera = service.render(WIDTH, HEIGHT, [Tile(uid, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=120)
         fl = world.floor
         look, azimuth, elevation, distance = TOP_VIEWS.get(
-            name, ((fl.center[0], fl.center[1], 0.0), 45.0, -50.0, 0.75 * max(fl.size)))
-        above, _ = service.render_free(WIDTH, HEIGHT, lookat=(look[0], -look[1], -look[2]), azimuth=azimuth,
-                                       elevation=elevation, distance=distance).result(timeout=120)
+            name, ((fl.center[0], fl.center[1], 0.0), 45.0, -50.0, 0.75 * max(fl.size))
+        )
+        above, _ = service.render_free(
+            WIDTH, HEIGHT, lookat=(look[0], -look[1], -look[2]), azimuth=azimuth, elevation=elevation, distance=distance
+        ).result(timeout=120)
         for kind, picture in (("above", above), ("camera", camera)):
             path = out / f"{name}-{kind}.png"
             written.append((path, save_png(picture, path)))

@@ -37,4 +37,5 @@ def require(extra: str, what: str) -> None:
     if absent:
         raise MissingExtraError(
             f"{what} needs the '{extra}' extra ({', '.join(absent)} not installed): "
-            f"pip install 'usarsim[{extra}]' (in a clone: pip install -e '.[{extra}]')")
+            f"pip install 'usarsim[{extra}]' (in a clone: pip install -e '.[{extra}]')"
+        )

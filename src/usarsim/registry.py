@@ -33,8 +33,10 @@ class Registry:
             for n in (name, *aliases):
                 known = self._by_lower.get(n.lower())
                 if known is not None:
-                    raise ValueError(f"{self.kind} name '{n}' is registered already (by {known.__module__}."
-                                     f"{known.__qualname__}); choose another name for {cls.__qualname__}")
+                    raise ValueError(
+                        f"{self.kind} name '{n}' is registered already (by {known.__module__}."
+                        f"{known.__qualname__}); choose another name for {cls.__qualname__}"
+                    )
             setattr(cls, "TYPE", name)  # noqa: B010  (every plugin class has TYPE; T is any class)
             for n in (name, *aliases):
                 self._by_lower[n.lower()] = cls

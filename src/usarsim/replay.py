@@ -82,9 +82,11 @@ class Recording:
         """A recording the server did not close: where it ends, in words (None when closed)."""
         if self.complete:
             return None
-        return (f"the recording ends at t={self.end_time:.3f} s, byte {self.end_byte} of {self.size} (it was not "
-                "closed: the server stopped without closing it, killed or crashed, or the file was cut short); "
-                "what it holds is replayed")
+        return (
+            f"the recording ends at t={self.end_time:.3f} s, byte {self.end_byte} of {self.size} (it was not "
+            "closed: the server stopped without closing it, killed or crashed, or the file was cut short); "
+            "what it holds is replayed"
+        )
 
 
 def read_recording(path: str | os.PathLike) -> Recording:
@@ -97,9 +99,11 @@ def read_recording(path: str | os.PathLike) -> Recording:
     try:
         contents = read_mcap(path, topics=[TOPIC])
     except DamagedRecording as exc:
-        raise ReplayError(f"{exc}: the file was changed after it was written (a disk or copy error); what comes "
-                          f"before that byte replays: head -c {exc.offset} {shlex.quote(name)} > part.mcap && "
-                          "usarsim replay part.mcap") from exc
+        raise ReplayError(
+            f"{exc}: the file was changed after it was written (a disk or copy error); what comes "
+            f"before that byte replays: head -c {exc.offset} {shlex.quote(name)} > part.mcap && "
+            "usarsim replay part.mcap"
+        ) from exc
     except RecordingError as exc:
         raise ReplayError(f"{exc}; give a recording made with usarsim serve --record") from exc
     except OSError as exc:
@@ -107,8 +111,10 @@ def read_recording(path: str | os.PathLike) -> Recording:
     meta = contents.metadata.get(METADATA_NAME)
     if meta is None:
         if not contents.complete:
-            raise ReplayError(f"{name} ends at byte {contents.end} before its run information (the server stopped "
-                              "as it started): nothing to replay")
+            raise ReplayError(
+                f"{name} ends at byte {contents.end} before its run information (the server stopped "
+                "as it started): nothing to replay"
+            )
         raise ReplayError(f"{name}: no '{METADATA_NAME}' metadata: not recorded by usarsim serve --record")
     chunks: list[Chunk] = []
     try:
@@ -116,11 +122,20 @@ def read_recording(path: str | os.PathLike) -> Recording:
         for _, _, data in contents.messages:
             chunks.append(decode_chunk(data))
     except (ValueError, KeyError, TypeError) as exc:
-        raise ReplayError(f"{name}: its transcript does not decode ({type(exc).__name__}: {exc}): not a usarsim "
-                          "recording, or one changed after it was written") from exc
+        raise ReplayError(
+            f"{name}: its transcript does not decode ({type(exc).__name__}: {exc}): not a usarsim "
+            "recording, or one changed after it was written"
+        ) from exc
     chunks.sort(key=lambda c: c.seq)
-    return Recording(name, info, chunks, complete=contents.complete, end_time=contents.end_ns / 1e9,
-                     end_byte=contents.end, size=contents.size)
+    return Recording(
+        name,
+        info,
+        chunks,
+        complete=contents.complete,
+        end_time=contents.end_ns / 1e9,
+        end_byte=contents.end,
+        size=contents.size,
+    )
 
 
 @dataclass
@@ -134,8 +149,10 @@ class Difference:
     replayed: str | None  # None: the server did not send the recorded line
 
     def describe(self) -> str:
-        head = (f"first difference: connection {self.conn} ({self.port}, recorded from {self.peer}), "
-                f"server line {self.line_no}, at t={self.sim_time:.3f} s")
+        head = (
+            f"first difference: connection {self.conn} ({self.port}, recorded from {self.peer}), "
+            f"server line {self.line_no}, at t={self.sim_time:.3f} s"
+        )
         rec = "(nothing)" if self.recorded is None else self.recorded
         rep = "(nothing within the timeout)" if self.replayed is None else self.replayed
         return f"{head}\n  recorded: {_clip(rec)}\n  replayed: {_clip(rep)}"
@@ -191,7 +208,7 @@ class _Conn:
                     break
                 line = raw.decode("latin-1").rstrip("\r\n") if raw.endswith(b"\n") else raw.decode("latin-1")
                 if _PONG.match(line):
-                    key = line.split("}", 1)[0][len("PONG {Id "):]
+                    key = line.split("}", 1)[0][len("PONG {Id ") :]
                     fut = self.pongs.pop(key, None)
                     if fut is not None and not fut.done():
                         fut.set_result(line)
@@ -225,17 +242,29 @@ class Replayer:
 
         info = self.rec.info
         try:
-            world = resolve_world(info.world_path if info.world_path and os.path.isfile(info.world_path)
-                                  else info.world)
+            world = resolve_world(
+                info.world_path if info.world_path and os.path.isfile(info.world_path) else info.world
+            )
         except UsarsimError as exc:
             raise ReplayError(f"the recorded world {info.world!r} cannot be loaded: {exc}") from exc
         opts = info.options
         dirs = tuple(d for d in opts.get("robot_dirs", []) if os.path.isdir(d))
-        return Application(world, host="127.0.0.1", port=0, seed=info.seed, speed=None, lockstep=True,
-                           max_connections=max(64, int(opts.get("max_connections") or 64)),
-                           robot_dirs=dirs, truth_port=0, image_port=None, wireless=None, web_port=None,
-                           max_robots=opts.get("max_robots"),
-                           max_line_bytes=int(opts.get("max_line_bytes") or 8192))
+        return Application(
+            world,
+            host="127.0.0.1",
+            port=0,
+            seed=info.seed,
+            speed=None,
+            lockstep=True,
+            max_connections=max(64, int(opts.get("max_connections") or 64)),
+            robot_dirs=dirs,
+            truth_port=0,
+            image_port=None,
+            wireless=None,
+            web_port=None,
+            max_robots=opts.get("max_robots"),
+            max_line_bytes=int(opts.get("max_line_bytes") or 8192),
+        )
 
     async def run(self) -> Report:
         t0 = time.perf_counter()
@@ -309,8 +338,13 @@ class Replayer:
             if lockstep:
                 if not await self._settle(True):
                     return
-                if last_in is not None and last_in is not conn and last_in.port == "control" \
-                        and not last_in.partial and not last_in.eof:
+                if (
+                    last_in is not None
+                    and last_in is not conn
+                    and last_in.port == "control"
+                    and not last_in.partial
+                    and not last_in.eof
+                ):
                     await self._confirm(last_in)
             assert conn.writer is not None
             conn.writer.write(ch.data)
@@ -399,8 +433,9 @@ class Replayer:
                 if replayed == recorded:
                     rep.identical += 1
                 elif rep.first is None:
-                    rep.first = Difference(conn.cid, conn.port, conn.peer, k + 1, conn.expected[k][0].sim_time,
-                                           recorded, replayed)
+                    rep.first = Difference(
+                        conn.cid, conn.port, conn.peer, k + 1, conn.expected[k][0].sim_time, recorded, replayed
+                    )
                 k += 1
             conn.compared = k
             # a recording the server did not close ends where it ends: what the server sent
@@ -429,8 +464,15 @@ class Replayer:
                         rep.identical += 1
                         continue
                     if rep.first is None:
-                        rep.first = Difference(conn.cid, conn.port, conn.peer, conn.expected.index((ch, recorded)) + 1,
-                                               ch.sim_time, recorded, replayed)
+                        rep.first = Difference(
+                            conn.cid,
+                            conn.port,
+                            conn.peer,
+                            conn.expected.index((ch, recorded)) + 1,
+                            ch.sim_time,
+                            recorded,
+                            replayed,
+                        )
                     if replayed is not None:
                         a, b = _NUMBER.findall(recorded), _NUMBER.findall(replayed)
                         if len(a) == len(b):
@@ -459,20 +501,26 @@ def format_report(path: str, rep: Report) -> str:
     info = rep.info
     clock = "lock-step" if info.lockstep else ("max speed" if info.speed is None else f"speed {info.speed:g}x")
     conns = ", ".join(f"{n} {p}" for p, n in sorted(rep.connections.items())) or "none"
-    out = [f"{path}: {info.world}, seed {info.seed}, {clock}, recorded by usarsim {info.version}",
-           f"replayed {sum(rep.connections.values())} connections ({conns}), {rep.client_lines} client lines up to "
-           f"t={rep.last_time:.3f} s, in {rep.wall_s:.1f} s"]
+    out = [
+        f"{path}: {info.world}, seed {info.seed}, {clock}, recorded by usarsim {info.version}",
+        f"replayed {sum(rep.connections.values())} connections ({conns}), {rep.client_lines} client lines up to "
+        f"t={rep.last_time:.3f} s, in {rep.wall_s:.1f} s",
+    ]
     if rep.skipped:
-        out.append("not replayed: " + ", ".join(f"{n} {p} connection{'s' if n != 1 else ''}"
-                                                for p, n in sorted(rep.skipped.items())))
+        out.append(
+            "not replayed: "
+            + ", ".join(f"{n} {p} connection{'s' if n != 1 else ''}" for p, n in sorted(rep.skipped.items()))
+        )
     if rep.ok:
         out.append(f"identical: all {rep.compared} server lines are the recorded ones")
         return "\n".join(out)
     out.append(f"{rep.identical} of {rep.compared} server lines compared are identical")
     if not info.lockstep and rep.numbers:
         worst = sorted(rep.numbers.items(), key=lambda kv: -kv[1])[:8]
-        out.append("largest differences of the numbers, by kind of line: " +
-                   "; ".join(f"{k}: {'different fields' if math.isinf(v) else f'{v:.4g}'}" for k, v in worst))
+        out.append(
+            "largest differences of the numbers, by kind of line: "
+            + "; ".join(f"{k}: {'different fields' if math.isinf(v) else f'{v:.4g}'}" for k, v in worst)
+        )
     if rep.first is not None:
         out.append(rep.first.describe())
     return "\n".join(out)

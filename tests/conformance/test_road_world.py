@@ -166,8 +166,11 @@ def test_exits_join_nearby_points_and_stops_are_before_a_crossing(world, rndf):
         pts, dirs = lane_geometry(world, lane)
         (x, y), (dx, dy) = pts[k], dirs[k]
         ahead = (x + 3.0 * dx, y + 3.0 * dy)  # 3 m on lies in the crossing road
-        crossing = [o for o in road_boxes if abs(_frame(o)[1][0] * dx + _frame(o)[1][1] * dy) < 1e-3
-                    and footprint_distance(o, *ahead) == 0.0]
+        crossing = [
+            o
+            for o in road_boxes
+            if abs(_frame(o)[1][0] * dx + _frame(o)[1][1] * dy) < 1e-3 and footprint_distance(o, *ahead) == 0.0
+        ]
         assert crossing, f"stop {stop} is not just before a crossing road"
 
 
@@ -192,8 +195,9 @@ def test_start_poses_are_on_lanes_facing_along_them_with_room_around(world, rndf
 
 
 def test_the_generator_writes_the_shipped_files(tmp_path):
-    out = subprocess.run([sys.executable, str(TOOL), "--out", str(tmp_path)], capture_output=True, text=True,
-                         timeout=60, check=False)
+    out = subprocess.run(
+        [sys.executable, str(TOOL), "--out", str(tmp_path)], capture_output=True, text=True, timeout=60, check=False
+    )
     assert out.returncode == 0, out.stderr
     for suffix in (".yaml", ".rndf", ".mdf"):
         made = (tmp_path / f"{NAME}{suffix}").read_bytes()

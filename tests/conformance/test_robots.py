@@ -64,8 +64,9 @@ def clearance(world, x: float, y: float, ground_z: float = 0.0) -> float:
         if o.shape == "box":
             half = np.abs(euler_to_mat(*o.rotation)) @ (np.array(o.size) / 2.0)
         elif o.shape in ("cylinder", "capsule", "sphere"):
-            half = np.abs(euler_to_mat(*o.rotation)) @ np.array([o.radius_m, o.radius_m, o.length_m / 2.0 + (
-                o.radius_m if o.shape != "cylinder" else 0.0)])
+            half = np.abs(euler_to_mat(*o.rotation)) @ np.array(
+                [o.radius_m, o.radius_m, o.length_m / 2.0 + (o.radius_m if o.shape != "cylinder" else 0.0)]
+            )
         else:
             continue
         top, bottom = o.center[2] - half[2], o.center[2] + half[2]
@@ -126,7 +127,8 @@ def test_every_start_pose_has_room_for_every_robot(world_path: Path):
     for pose in world.start_poses:
         room = clearance(world, pose.location[0], pose.location[1], sim._ground_below(pose.location))
         assert room >= footprint_radius(largest), (
-            f"{pose.name}: {room:.2f} m to the nearest obstacle, {largest.class_name} needs {footprint_radius(largest):.2f}")
+            f"{pose.name}: {room:.2f} m to the nearest obstacle, {largest.class_name} needs {footprint_radius(largest):.2f}"
+        )
 
 
 @pytest.mark.parametrize("world_path", WORLD_FILES, ids=lambda p: p.stem)
@@ -184,8 +186,9 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     elif robot.drive == "ackermann":
         drive_ackermann(sim, 1, None, -0.5 * robot.max_front_steer_rad, None)
     else:
-        drive_wheels(sim, 1, [(w.number, (-spin if w.side == "left" else spin), 0.0)
-                             for w in robot.wheels if w.number >= 0])
+        drive_wheels(
+            sim, 1, [(w.number, (-spin if w.side == "left" else spin), 0.0) for w in robot.wheels if w.number >= 0]
+        )
     sim.advance(1.0)
     _, (_, _, y_a) = sim.pose_of(1)
     sim.advance(1.0)
@@ -204,20 +207,37 @@ def test_robot_conf_and_geo_lines_match_its_file(path: Path, server_factory):
     c.send(f"INIT {{ClassName USARBot.{robot.class_name}}} {{Name R1}} {{Start PlayerStart1}}")
     c.step(0.2)
     g = robot.geometry
-    geo = M.format_message(M.RobotGeometry(vehicle_type=robot.vehicle_type, class_name=robot.class_name,
-                                           dimensions=g.dimensions, cog=g.cog, wheel_radius=g.wheel_radius_m,
-                                           wheel_separation=g.wheel_separation_m, wheel_base=g.wheel_base_m))
-    conf = M.format_message(M.RobotConfiguration(
-        vehicle_type=robot.vehicle_type, class_name=robot.class_name, steering_type=robot.steering_type,
-        mass_kg=robot.mass_kg, max_speed=robot.max_speed_rad_s, max_torque=robot.max_torque_nm,
-        max_front_steer=robot.max_front_steer_rad, max_rear_steer=robot.max_rear_steer_rad))
+    geo = M.format_message(
+        M.RobotGeometry(
+            vehicle_type=robot.vehicle_type,
+            class_name=robot.class_name,
+            dimensions=g.dimensions,
+            cog=g.cog,
+            wheel_radius=g.wheel_radius_m,
+            wheel_separation=g.wheel_separation_m,
+            wheel_base=g.wheel_base_m,
+        )
+    )
+    conf = M.format_message(
+        M.RobotConfiguration(
+            vehicle_type=robot.vehicle_type,
+            class_name=robot.class_name,
+            steering_type=robot.steering_type,
+            mass_kg=robot.mass_kg,
+            max_speed=robot.max_speed_rad_s,
+            max_torque=robot.max_torque_nm,
+            max_front_steer=robot.max_front_steer_rad,
+            max_rear_steer=robot.max_rear_steer_rad,
+        )
+    )
     assert c.ask("GETGEO {Type Robot}", "GEO").raw.decode() == geo
     assert c.ask("GETCONF {Type Robot}", "CONF").raw.decode() == conf
     assert f"{{SteeringType {robot.steering_type}}}" in conf and f"{{Name {robot.class_name}}}" in conf
 
 
-SCANNER_ROBOTS = [p for p in ROBOT_FILES
-                  if any(i.item_type in ("RangeScanner", "IRScanner") for i in load_robot(p).items)]
+SCANNER_ROBOTS = [
+    p for p in ROBOT_FILES if any(i.item_type in ("RangeScanner", "IRScanner") for i in load_robot(p).items)
+]
 
 
 @pytest.mark.parametrize("path", SCANNER_ROBOTS, ids=lambda p: p.stem)
@@ -235,6 +255,6 @@ def test_every_robots_laser_sees_past_its_own_body(path: Path):
     sim.advance(1.0)
     scans = [o.value for o in sim.take_outputs() if isinstance(o.value, RangeScanReading)]
     assert scans, "no scan in 1 s"
-    for s in scans[-len({x.name for x in scans}):]:
+    for s in scans[-len({x.name for x in scans}) :]:
         near = [r for r in s.ranges_m if r < 0.3]
         assert not near, f"{s.name}: {len(near)} of {len(s.ranges_m)} beams stop within 0.3 m"

@@ -121,10 +121,21 @@ class FakeFacade:
     def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
         if self.numbers is not None:
             return self.numbers
-        return RobotNumbers(vehicle_type="GroundVehicle", class_name=robot.class_name, steering_type="SkidSteered",
-                            mass_kg=14.0, max_speed=1.0, max_torque=10.0, max_front_steer=0.0, max_rear_steer=0.0,
-                            dimensions=(0.5, 0.4, 0.3), cog=(0.0, 0.0, 0.0), wheel_radius=0.1,
-                            wheel_separation=0.4, wheel_base=0.3)
+        return RobotNumbers(
+            vehicle_type="GroundVehicle",
+            class_name=robot.class_name,
+            steering_type="SkidSteered",
+            mass_kg=14.0,
+            max_speed=1.0,
+            max_torque=10.0,
+            max_front_steer=0.0,
+            max_rear_steer=0.0,
+            dimensions=(0.5, 0.4, 0.3),
+            cog=(0.0, 0.0, 0.0),
+            wheel_radius=0.1,
+            wheel_separation=0.4,
+            wheel_base=0.3,
+        )
 
     def canonical_item_type(self, name: str) -> str:
         return name
@@ -133,8 +144,16 @@ class FakeFacade:
         return None
 
     # robots ------------------------------------------------------------------------------
-    def spawn(self, uid: int, robot: RobotConfig, name: str, location: Any, rotation: Any, on_done: Done,
-              set_down: bool = False) -> None:
+    def spawn(
+        self,
+        uid: int,
+        robot: RobotConfig,
+        name: str,
+        location: Any,
+        rotation: Any,
+        on_done: Done,
+        set_down: bool = False,
+    ) -> None:
         self.calls.append(("spawn", (uid, robot.class_name, name, tuple(location), tuple(rotation), set_down)))
         if self._refuse(on_done):
             return
@@ -159,8 +178,9 @@ class FakeFacade:
     def drive_joints(self, uid: int, orders: list[JointOrder]) -> None:
         self.calls.append(("drive_joints", (uid, list(orders))))
 
-    def operate(self, uid: int, item_type: Any, name: Any, opcode: Any, params: Any,
-                on_done: Done | None = None) -> None:
+    def operate(
+        self, uid: int, item_type: Any, name: Any, opcode: Any, params: Any, on_done: Done | None = None
+    ) -> None:
         self.calls.append(("operate", (uid, item_type, name, opcode, params)))
         if not self._refuse(on_done) and on_done is not None:
             on_done(CommandResult(str(item_type), str(name or ""), ok=False), None)
@@ -175,8 +195,12 @@ class FakeFacade:
         if not self._refuse(on_done) and on_done is not None:
             on_done(None, None)
 
-    def step(self, seconds: float, on_done: Callable[[float], None],
-             on_refused: Callable[[BaseException], None] | None = None) -> None:
+    def step(
+        self,
+        seconds: float,
+        on_done: Callable[[float], None],
+        on_refused: Callable[[BaseException], None] | None = None,
+    ) -> None:
         self.calls.append(("step", (seconds,)))
         if self._failure is not None:
             if on_refused is not None:
@@ -217,6 +241,7 @@ class FakeFacade:
     def walls_between(self, start: Any, end: Any, on_done: Done) -> None:
         on_done(0, None)
 
-    def watch_frames(self, period_s: float, on_frame: Callable[[Any], None], *, radio_model: Any = None,
-                     links_period_s: float = 1.0) -> None:
+    def watch_frames(
+        self, period_s: float, on_frame: Callable[[Any], None], *, radio_model: Any = None, links_period_s: float = 1.0
+    ) -> None:
         self.calls.append(("watch_frames", (period_s,)))

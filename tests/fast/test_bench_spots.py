@@ -24,7 +24,7 @@ def _clear_of_objects(world, spots, clearance: float) -> bool:
         half = np.array(o.size[:2]) / 2.0
         if o.center[2] - o.size[2] / 2.0 >= -0.02:  # plates and ramps' feet do not block
             continue
-        for s in spots[len(world.start_poses):]:
+        for s in spots[len(world.start_poses) :]:
             if np.all(np.abs(np.array(s[:2]) - np.array(o.center[:2])) <= half + clearance - 1e-9):
                 return False
     return True
@@ -35,9 +35,9 @@ def test_spread_spots_are_farther_apart_than_the_tight_grid_and_clear_of_walls(n
     world = resolve_world("DM-USAR_yellow")
     tight, spread = free_spots(world, n), spread_spots(world, n)
     assert len(spread) == n and len(set(spread)) == n
-    grid = spread[len(world.start_poses):]
+    grid = spread[len(world.start_poses) :]
     assert _min_distance(grid) >= 0.7 * 0.99  # never closer than the tight grid's spacing
-    assert _min_distance(grid) > _min_distance(tight[len(world.start_poses):]) + 0.3
+    assert _min_distance(grid) > _min_distance(tight[len(world.start_poses) :]) + 0.3
     assert _clear_of_objects(world, spread, 0.4)
     # the start poses come first, as in the tight grid
     assert spread[: len(world.start_poses)] == tight[: len(world.start_poses)]

@@ -21,8 +21,12 @@ class Loop:
     def __init__(self, world):
         self.facade = FakeFacade(world)
         self.out: list = []
-        self.session = Session(SessionContext(facade=self.facade, peer="t", emit=self.out.append,
-                                              threadsafe=lambda fn: fn, admit=lambda: None), uid=3)
+        self.session = Session(
+            SessionContext(
+                facade=self.facade, peer="t", emit=self.out.append, threadsafe=lambda fn: fn, admit=lambda: None
+            ),
+            uid=3,
+        )
         self.state = core.ConnectionState()
 
     def send(self, line: str, chunk: int = 7) -> list:
@@ -32,7 +36,7 @@ class Loop:
         self.out.clear()
         got = []
         for i in range(0, len(data), chunk):  # cut anywhere, even inside a key
-            got += self.state.feed(data[i:i + chunk])
+            got += self.state.feed(data[i : i + chunk])
         return got
 
 
@@ -46,7 +50,8 @@ def test_the_clients_init_line_spawns_where_it_asks(loop):
     assert line == "INIT {ClassName USARBot.P2AT} {Name scout} {Location -9.5,4.0,-0.25} {Rotation 0.0,0.0,0.0}\r\n"
     loop.send(line)
     assert [a for n, a in loop.facade.calls if n == "spawn"] == [
-        (3, "P2AT", "scout", (-9.5, 4.0, -0.25), (0.0, 0.0, 0.0), True)]
+        (3, "P2AT", "scout", (-9.5, 4.0, -0.25), (0.0, 0.0, 0.0), True)
+    ]
 
 
 def test_replies_cut_anywhere_are_claimed_whole_and_an_error_is_raised(loop):
@@ -82,8 +87,13 @@ def test_garbage_lines_are_counted_not_fatal():
 
 
 def test_a_scans_angles_run_right_to_left_symmetric_about_ahead():
-    r = RangeScanReading(sensor_type="RangeScanner", name="Scanner1", resolution_rad=math.radians(1.0), fov_rad=math.radians(180.0),
-                         ranges_m=tuple([2.0] * 181))
+    r = RangeScanReading(
+        sensor_type="RangeScanner",
+        name="Scanner1",
+        resolution_rad=math.radians(1.0),
+        fov_rad=math.radians(180.0),
+        ranges_m=tuple([2.0] * 181),
+    )
     scan = core.scan_of(1.0, r, 20.0)
     assert scan.angles[0] == pytest.approx(-math.pi / 2) and scan.angles[-1] == pytest.approx(math.pi / 2)
     x, y = scan.points()[0]  # the first beam: to the right, USARSim's +Y

@@ -27,9 +27,16 @@ def top(modules: set[str], *names: str) -> set[str]:
     return {m for m in modules if any(m == n or m.startswith(n + ".") for n in names)}
 
 
-PROTOCOL_MODULES = ["usarsim.protocol", "usarsim.protocol.commands", "usarsim.protocol.messages",
-                    "usarsim.protocol.framing", "usarsim.protocol.grammar", "usarsim.protocol.numbers",
-                    "usarsim.protocol.outputs", "usarsim.protocol.wireless"]
+PROTOCOL_MODULES = [
+    "usarsim.protocol",
+    "usarsim.protocol.commands",
+    "usarsim.protocol.messages",
+    "usarsim.protocol.framing",
+    "usarsim.protocol.grammar",
+    "usarsim.protocol.numbers",
+    "usarsim.protocol.outputs",
+    "usarsim.protocol.wireless",
+]
 
 
 def test_protocol_loads_no_numpy_mujoco_asyncio_sim_or_server():
@@ -59,15 +66,27 @@ def test_the_servers_and_the_console_load_no_mujoco():
     """They are written against the facade's interface (usarsim.sim.api), so that the fast test
     tier runs them with a fake facade and no physics; only the composition root (server.app)
     brings the real simulation."""
-    mods = loaded_after(["usarsim.server.session", "usarsim.server.control", "usarsim.server.truth",
-                         "usarsim.server.wireless", "usarsim.server.image", "usarsim.web.console"])
+    mods = loaded_after(
+        [
+            "usarsim.server.session",
+            "usarsim.server.control",
+            "usarsim.server.truth",
+            "usarsim.server.wireless",
+            "usarsim.server.image",
+            "usarsim.web.console",
+        ]
+    )
     assert "usarsim.web.console" in mods and "usarsim.sim.api" in mods
-    assert top(mods, "mujoco", "usarsim.sim.simulation", "usarsim.sim.facade", "usarsim.sensors",
-               "usarsim.robots") == set()
+    assert (
+        top(mods, "mujoco", "usarsim.sim.simulation", "usarsim.sim.facade", "usarsim.sensors", "usarsim.robots")
+        == set()
+    )
 
 
-@pytest.mark.parametrize("module", ["usarsim.sim.simulation", "usarsim.sim.runner", "usarsim.sim.facade",
-                                    "usarsim.sensors", "usarsim.effecters"])
+@pytest.mark.parametrize(
+    "module",
+    ["usarsim.sim.simulation", "usarsim.sim.runner", "usarsim.sim.facade", "usarsim.sensors", "usarsim.effecters"],
+)
 def test_sim_loads_no_asyncio_protocol_or_server(module):
     mods = loaded_after([module])
     assert "mujoco" in top(mods, "mujoco")  # it really is the simulation layer
@@ -88,8 +107,9 @@ def _imports(path: Path) -> list[tuple[int, str]]:
         if isinstance(node, ast.Import):
             out += [(node.lineno, a.name) for a in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            out += [(node.lineno, node.module)] + [(node.lineno, f"{node.module}.{a.name}") for a in node.names
-                                                   if node.module == "usarsim.sim"]
+            out += [(node.lineno, node.module)] + [
+                (node.lineno, f"{node.module}.{a.name}") for a in node.names if node.module == "usarsim.sim"
+            ]
     return out
 
 
@@ -99,26 +119,34 @@ def _server_files() -> list[Path]:
 
 @pytest.mark.parametrize("path", _server_files(), ids=lambda p: str(p.relative_to(SRC)))
 def test_servers_reach_the_simulation_only_through_its_facade(path):
-    bad = [(line, mod) for line, mod in _imports(path)
-           if any(mod == b or mod.startswith(b + ".") for b in BELOW_THE_DOOR)
-           and not any(mod == d or mod.startswith(d + ".") for d in SIM_DOOR)]
+    bad = [
+        (line, mod)
+        for line, mod in _imports(path)
+        if any(mod == b or mod.startswith(b + ".") for b in BELOW_THE_DOOR)
+        and not any(mod == d or mod.startswith(d + ".") for d in SIM_DOOR)
+    ]
     assert not bad, f"{path.relative_to(SRC)} imports below the simulation's facade: {bad}"
     # and does not reach past the facade's methods: no facade.sim, facade.runner, facade.call
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    past = [(n.lineno, n.attr) for n in ast.walk(tree) if isinstance(n, ast.Attribute)
-            and n.attr in ("sim", "runner", "call") and _names_facade(n.value)]
+    past = [
+        (n.lineno, n.attr)
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Attribute) and n.attr in ("sim", "runner", "call") and _names_facade(n.value)
+    ]
     assert not past, f"{path.relative_to(SRC)} reaches past the facade: {past}"
 
 
 def _names_facade(node: ast.AST) -> bool:
-    return (isinstance(node, ast.Name) and node.id == "facade") or \
-        (isinstance(node, ast.Attribute) and node.attr == "facade")
+    return (isinstance(node, ast.Name) and node.id == "facade") or (
+        isinstance(node, ast.Attribute) and node.attr == "facade"
+    )
 
 
 def test_the_layering_check_sees_a_reach_past_the_facade(tmp_path):
     probe = tmp_path / "probe.py"
-    probe.write_text("from usarsim.sim.simulation import Simulation\n"
-                     "def f(server):\n    server.facade.call(lambda sim: sim.time)\n")
-    assert ("usarsim.sim.simulation" in {m for _, m in _imports(probe)})
+    probe.write_text(
+        "from usarsim.sim.simulation import Simulation\ndef f(server):\n    server.facade.call(lambda sim: sim.time)\n"
+    )
+    assert "usarsim.sim.simulation" in {m for _, m in _imports(probe)}
     tree = ast.parse(probe.read_text())
     assert any(isinstance(n, ast.Attribute) and n.attr == "call" and _names_facade(n.value) for n in ast.walk(tree))

@@ -65,9 +65,7 @@ CLIENT_LINES = [
     # §5.3b Ackermann
     (
         "DRIVE {Speed 3.0} {FrontSteer 0.5236} {RearSteer 0} {Normalized False} {Light False} {Flip False}",
-        c.Drive(
-            speed=3.0, front_steer=0.5236, rear_steer=0.0, normalized=False, light=False, flip=False
-        ),
+        c.Drive(speed=3.0, front_steer=0.5236, rear_steer=0.0, normalized=False, light=False, flip=False),
     ),
     (
         "Drive {Speed 2} {FrontSteer 0.3} {RearSteer -0.3}",
@@ -125,9 +123,7 @@ CLIENT_LINES = [
     # §5.3g
     (
         "MULTIDRIVE {FRFlipper 1.5} {FLFlipper 1.5} {RRFlipper -1.5} {RLFlipper 0}",
-        c.MultiDrive(
-            joints=(("FRFlipper", 1.5), ("FLFlipper", 1.5), ("RRFlipper", -1.5), ("RLFlipper", 0.0))
-        ),
+        c.MultiDrive(joints=(("FRFlipper", 1.5), ("FLFlipper", 1.5), ("RRFlipper", -1.5), ("RLFlipper", 0.0))),
     ),
     ("MULTIDRIVE", c.MultiDrive()),
     # §5.4 SET
@@ -371,9 +367,7 @@ def test_non_numbers_are_rejected(template: str) -> None:
         ("", ["empty line"]),
     ],
 )
-def test_error_messages_name_command_key_value_and_what_is_allowed(
-    line: str, fragments: list[str]
-) -> None:
+def test_error_messages_name_command_key_value_and_what_is_allowed(line: str, fragments: list[str]) -> None:
     with pytest.raises(ProtocolError) as info:
         parse_command(line)
     for fragment in fragments:
@@ -431,19 +425,14 @@ def _opt(strategy: st.SearchStrategy) -> st.SearchStrategy:
     return st.none() | strategy
 
 
-
 def _extra_segments(excluded: set[str]) -> st.SearchStrategy[tuple[Segment, ...]]:
     keys = _names.filter(
-        lambda k: k.lower() not in excluded
-        and not k.lower().startswith("viewport")
-        and k[0] not in "+-.0123456789"
+        lambda k: k.lower() not in excluded and not k.lower().startswith("viewport") and k[0] not in "+-.0123456789"
     )
     return st.lists(st.builds(Segment, keys, _texts), max_size=4).map(tuple)
 
 
-_link = st.builds(
-    c.LinkCommand, link=st.integers(-1, 99), value=_floats, order=st.sampled_from(sorted(c.LINK_ORDERS))
-)
+_link = st.builds(c.LinkCommand, link=st.integers(-1, 99), value=_floats, order=st.sampled_from(sorted(c.LINK_ORDERS)))
 
 COMMAND_STRATEGIES = {
     "Init": st.builds(
@@ -467,9 +456,7 @@ COMMAND_STRATEGIES = {
         front_steer=_opt(_floats),
         rear_steer=_opt(_floats),
         wheels=st.lists(
-            st.builds(
-                c.WheelDrive, number=st.integers(0, 64), speed=_opt(_floats), steer=_opt(_floats)
-            ),
+            st.builds(c.WheelDrive, number=st.integers(0, 64), speed=_opt(_floats), steer=_opt(_floats)),
             max_size=4,
         ).map(tuple),
         altitude_velocity=_opt(_floats),
@@ -490,9 +477,7 @@ COMMAND_STRATEGIES = {
             max_size=4,
         ).map(tuple),
     ),
-    "MultiDrive": st.builds(
-        c.MultiDrive, joints=st.lists(st.tuples(_names, _floats), max_size=6).map(tuple)
-    ),
+    "MultiDrive": st.builds(c.MultiDrive, joints=st.lists(st.tuples(_names, _floats), max_size=6).map(tuple)),
     "Set": st.builds(
         c.Set,
         type=_opt(_texts),
@@ -504,9 +489,7 @@ COMMAND_STRATEGIES = {
         config=_opt(_texts),
         viewports=st.lists(st.tuples(st.integers(0, 999), _texts), max_size=4).map(tuple),
         value=_opt(_texts),
-        segments=_extra_segments(
-            {"type", "name", "opcode", "params", "robot", "client", "config", "value"}
-        ),
+        segments=_extra_segments({"type", "name", "opcode", "params", "robot", "client", "config", "value"}),
     ),
     "GetGeo": st.builds(c.GetGeo, type=_opt(_texts), name=_opt(_texts)),
     "GetConf": st.builds(c.GetConf, type=_opt(_texts), name=_opt(_texts)),
@@ -590,9 +573,7 @@ _VALUES = st.one_of(
                      "99999999999999999999", "2.0", "-1", "0", "1", "3", "12", "\x00", "\ufffd"]),
     st.text(alphabet=st.sampled_from(list("0123456789.,-+eE x\t")), max_size=12),
 )  # fmt: skip
-_segment_text = st.tuples(st.sampled_from(_KNOWN_KEYS), _VALUES).map(
-    lambda kv: "{%s %s}" % kv
-)
+_segment_text = st.tuples(st.sampled_from(_KNOWN_KEYS), _VALUES).map(lambda kv: "{%s %s}" % kv)
 _structured_lines = st.tuples(
     st.sampled_from(_KNOWN_WORDS),
     st.lists(st.one_of(_segment_text, st.text(max_size=6)), max_size=8),
@@ -609,6 +590,7 @@ def test_parse_command_raises_only_protocol_error(line: str) -> None:
 
 
 # --------------------------------------------------------------------------- STEP, read directly
+
 
 def _general(line: str):
     """What the general path (split, then typed) makes of a line, or the error it raises."""
@@ -628,11 +610,15 @@ def _either(line: str):
 
 
 @settings(max_examples=400, deadline=None)
-@given(st.one_of(st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(repr),
-                 st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(lambda x: f"{x:g}"),
-                 st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(lambda x: f"{x:.3E}"),
-                 st.integers(min_value=0, max_value=10**6).map(str),
-                 st.sampled_from(["0", "1e-400", "1e999", ".5", "5.", "00.1", "1E+2", "-0.1", "nan", "0x1"])))
+@given(
+    st.one_of(
+        st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(repr),
+        st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(lambda x: f"{x:g}"),
+        st.floats(min_value=0.0, max_value=1e6, allow_nan=False).map(lambda x: f"{x:.3E}"),
+        st.integers(min_value=0, max_value=10**6).map(str),
+        st.sampled_from(["0", "1e-400", "1e999", ".5", "5.", "00.1", "1E+2", "-0.1", "nan", "0x1"]),
+    )
+)
 def test_a_plain_step_line_reads_as_the_general_path_reads_it(text):
     for line in (f"STEP {{Time {text}}}", f"STEP {{Time  {text}}}", f"step {{time {text}}}"):
         assert _either(line) == _general(line), line

@@ -20,9 +20,7 @@ def bytewise(data: bytes) -> list[bytes]:
     return [data[i : i + 1] for i in range(len(data))]
 
 
-@pytest.mark.parametrize(
-    "terminator", [b"\r\n", b"\n\r", b"\n", b"\r", b"\r\n\r\n", b"\n\n\n", b"\r\r"]
-)
+@pytest.mark.parametrize("terminator", [b"\r\n", b"\n\r", b"\n", b"\r", b"\r\n\r\n", b"\n\n\n", b"\r\r"])
 def test_every_terminator_ends_a_line(terminator: bytes) -> None:
     data = b"GETSTARTPOSES" + terminator + b"DRIVE {Left 1} {Right 1}" + terminator
     assert LineBuffer().feed(data) == ["GETSTARTPOSES", "DRIVE {Left 1} {Right 1}"]
@@ -130,16 +128,15 @@ def test_invalid_max_line_bytes() -> None:
 @settings(max_examples=50)
 @given(
     lines=st.lists(
-        st.text(alphabet=st.characters(min_codepoint=32, max_codepoint=126), min_size=1, max_size=40)
-        .filter(lambda s: not s.isspace()),
+        st.text(alphabet=st.characters(min_codepoint=32, max_codepoint=126), min_size=1, max_size=40).filter(
+            lambda s: not s.isspace()
+        ),
         max_size=12,
     ),
     terminator=st.sampled_from([b"\r\n", b"\n\r", b"\n", b"\r"]),
     cuts=st.lists(st.integers(min_value=0, max_value=600), max_size=10),
 )
-def test_any_split_of_the_stream_gives_the_same_lines(
-    lines: list[str], terminator: bytes, cuts: list[int]
-) -> None:
+def test_any_split_of_the_stream_gives_the_same_lines(lines: list[str], terminator: bytes, cuts: list[int]) -> None:
     data = b"".join(line.encode("ascii") + terminator for line in lines)
     points = sorted({min(c, len(data)) for c in cuts} | {0, len(data)})
     chunks = [data[a:b] for a, b in zip(points, points[1:])]
@@ -195,8 +192,15 @@ def test_a_drive_another_line_and_the_same_drive_are_all_kept() -> None:
     assert buf.repeated_drives == 0
 
 
-@pytest.mark.parametrize("line", ["DRIVE {Flip True}", "DRIVE {Name Arm} {Value 0.1} {Order 10}",
-                                  "DRIVE {ORDER 1} {Name Arm} {Value 1}", "DRIVE {flip true}"])
+@pytest.mark.parametrize(
+    "line",
+    [
+        "DRIVE {Flip True}",
+        "DRIVE {Name Arm} {Value 0.1} {Order 10}",
+        "DRIVE {ORDER 1} {Name Arm} {Value 1}",
+        "DRIVE {flip true}",
+    ],
+)
 def test_a_drive_with_order_or_flip_is_never_dropped(line: str) -> None:
     buf = drive_buffer()
     small = feed_all(buf, [f"{line}\r\n".encode()] * 3)
@@ -228,26 +232,40 @@ def test_a_big_read_that_begins_inside_a_line_keeps_that_line() -> None:
     ends that line, and the ``DRIVE}`` after it is a line of its own."""
     buf = drive_buffer()
     assert buf.feed(b"MISPKG {Name ") == []
-    assert buf.feed(b"DRIVE}\r\n" * 2 + b"GETGEO {Type Robot}\r\n" * 400) == \
-        ["MISPKG {Name DRIVE}", "DRIVE}"] + ["GETGEO {Type Robot}"] * 400
+    assert (
+        buf.feed(b"DRIVE}\r\n" * 2 + b"GETGEO {Type Robot}\r\n" * 400)
+        == ["MISPKG {Name DRIVE}", "DRIVE}"] + ["GETGEO {Type Robot}"] * 400
+    )
 
 
 def test_the_fast_path_gives_the_lines_of_the_line_by_line_rule() -> None:
     from usarsim.protocol.framing import REPEATED_DRIVE
 
-    data = (f"{SPEEDS}\r\n".encode() * 1000 + b"DRIVE {Flip True}\r\n" * 2
-            + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n")
+    data = (
+        f"{SPEEDS}\r\n".encode() * 1000
+        + b"DRIVE {Flip True}\r\n" * 2
+        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2
+        + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n"
+    )
     assert REPEATED_DRIVE.sub(rb"\1", data) == (
-        f"{SPEEDS}\r\n".encode() + b"DRIVE {Flip True}\r\n" * 2
-        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n")
+        f"{SPEEDS}\r\n".encode()
+        + b"DRIVE {Flip True}\r\n" * 2
+        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2
+        + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n"
+    )
 
 
 def _reference(lines: list[str]) -> tuple[list[str], int]:
     """The rule line by line: a repeatable DRIVE the same as the line before it is dropped."""
     kept: list[str] = []
     for line in lines:
-        if kept and line == kept[-1] and line.upper().startswith("DRIVE") \
-                and "order" not in line.lower() and "flip" not in line.lower():
+        if (
+            kept
+            and line == kept[-1]
+            and line.upper().startswith("DRIVE")
+            and "order" not in line.lower()
+            and "flip" not in line.lower()
+        ):
             continue
         kept.append(line)
     return kept, len(lines) - len(kept)
@@ -255,9 +273,22 @@ def _reference(lines: list[str]) -> tuple[list[str], int]:
 
 @settings(max_examples=60)
 @given(
-    runs=st.lists(st.tuples(st.sampled_from([SPEEDS, "DRIVE {Left 2} {Right 2}", "DRIVE {Flip True}",
-                                             "DRIVE {Order 1} {Value 2}", "GETGEO {Type Robot}", "drive {Light True}"]),
-                            st.integers(1, 300)), max_size=8),
+    runs=st.lists(
+        st.tuples(
+            st.sampled_from(
+                [
+                    SPEEDS,
+                    "DRIVE {Left 2} {Right 2}",
+                    "DRIVE {Flip True}",
+                    "DRIVE {Order 1} {Value 2}",
+                    "GETGEO {Type Robot}",
+                    "drive {Light True}",
+                ]
+            ),
+            st.integers(1, 300),
+        ),
+        max_size=8,
+    ),
     terminator=st.sampled_from([b"\r\n", b"\n"]),
     cuts=st.lists(st.integers(min_value=0, max_value=40_000), max_size=6),
 )

@@ -171,9 +171,7 @@ def test_parse_float_rejects(text: str) -> None:
         parse_float(text)
 
 
-@pytest.mark.parametrize(
-    ("text", "expected"), [("0", 0), ("-331", -331), ("+7", 7), ("2.0", 2), ("1e3", 1000)]
-)
+@pytest.mark.parametrize(("text", "expected"), [("0", 0), ("-331", -331), ("+7", 7), ("2.0", 2), ("1e3", 1000)])
 def test_parse_int(text: str, expected: int) -> None:
     assert parse_int(text) == expected
 
@@ -223,9 +221,7 @@ _value = st.text(
     segments=st.lists(st.tuples(_word, _value), max_size=8),
     gap=st.sampled_from(["", " ", "  ", "\t"]),
 )
-def test_formatted_segments_parse_back(
-    msg_type: str, segments: list[tuple[str, str]], gap: str
-) -> None:
+def test_formatted_segments_parse_back(msg_type: str, segments: list[tuple[str, str]], gap: str) -> None:
     line = msg_type + gap + gap.join(format_segment(k, v) for k, v in segments)
     raw = parse_line(line)
     assert raw.type == msg_type.upper()

@@ -30,20 +30,15 @@ GOLDEN = [
         m.StartPoses(
             poses=(
                 m.StartPose(name="PlayerStart1", location=(4.5, 1.9, 1.8), rotation=(0.0, 0.0, 0.0)),
-                m.StartPose(
-                    name="PlayerStart2", location=(10.24, 3.54, 10.05), rotation=(0.0, 0.0, 1.57)
-                ),
+                m.StartPose(name="PlayerStart2", location=(10.24, 3.54, 10.05), rotation=(0.0, 0.0, 1.57)),
             )
         ),
-        "NFO {StartPoses 2} {PlayerStart1 4.50,1.90,1.80 0.00,0.00,0.00 "
-        "PlayerStart2 10.24,3.54,10.05 0.00,0.00,1.57}",
+        "NFO {StartPoses 2} {PlayerStart1 4.50,1.90,1.80 0.00,0.00,0.00 PlayerStart2 10.24,3.54,10.05 0.00,0.00,1.57}",
     ),
     (m.StartPoses(poses=()), "NFO {StartPoses 0}"),
     (
         m.StartPoses(
-            poses=(
-                m.StartPose(name="BlueGoal", location=(-2.55, -0.001, -0.19), rotation=(0, -0.03, -0.01)),
-            )
+            poses=(m.StartPose(name="BlueGoal", location=(-2.55, -0.001, -0.19), rotation=(0, -0.03, -0.01)),)
         ),
         "NFO {StartPoses 1} {BlueGoal -2.55,0.00,-0.19 0.00,-0.03,-0.01}",
     ),
@@ -91,8 +86,7 @@ GOLDEN = [
     ),
     (
         m.AerialVehicleStatus(time=268.5, battery_s=1192),
-        "STA {Type AerialVehicle} {Time 268.50} {LightToggle False} {LightIntensity 0} "
-        "{Battery 1192} {View -1}",
+        "STA {Type AerialVehicle} {Time 268.50} {LightToggle False} {LightIntensity 0} {Battery 1192} {View -1}",
     ),
     # §6.3
     (
@@ -212,9 +206,7 @@ GOLDEN = [
     (
         m.SensorMessage(
             time=3.0,
-            reading=r.TachometerReading(
-                name="TachTest", velocities_rad_s=(1.2, 1.2), positions_rad=(3.4, 3.1)
-            ),
+            reading=r.TachometerReading(name="TachTest", velocities_rad_s=(1.2, 1.2), positions_rad=(3.4, 3.1)),
         ),
         "SEN {Time 3.0000} {Type Tachometer} {Name TachTest} {Vel 1.2000,1.2000} {Pos 3.4000,3.1000}",
     ),
@@ -284,8 +276,7 @@ GOLDEN = [
     ),
     (
         m.RobotGeometry(vehicle_type="AerialVehicle", class_name="AirRobot", dimensions=(1.0, 1.0, 0.2)),
-        "GEO {Type AerialVehicle} {Name AirRobot} {Dimensions 1.0000,1.0000,0.2000} "
-        "{COG 0.0000,0.0000,0.0000}",
+        "GEO {Type AerialVehicle} {Name AirRobot} {Dimensions 1.0000,1.0000,0.2000} {COG 0.0000,0.0000,0.0000}",
     ),
     (
         m.ItemGeometry(
@@ -354,12 +345,8 @@ GOLDEN = [
         m.ItemConfiguration(
             item_type="Sonar",
             items=(
-                m.ItemConf(
-                    name="F1", fields=(("MaxRange", "5.0000"), ("MinRange", "0.1000"), ("BeamAngle", "0.3491"))
-                ),
-                m.ItemConf(
-                    name="F2", fields=(("MaxRange", "5.0000"), ("MinRange", "0.1000"), ("BeamAngle", "0.3491"))
-                ),
+                m.ItemConf(name="F1", fields=(("MaxRange", "5.0000"), ("MinRange", "0.1000"), ("BeamAngle", "0.3491"))),
+                m.ItemConf(name="F2", fields=(("MaxRange", "5.0000"), ("MinRange", "0.1000"), ("BeamAngle", "0.3491"))),
             ),
         ),
         "CONF {Type Sonar} {Name F1} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491} "
@@ -397,7 +384,12 @@ GOLDEN = [
                             link=1, joint_type="Revolute", max_speed=0.17, max_torque=20.0, min_range=1.0, max_range=0.0
                         ),
                         m.LinkConfiguration(
-                            link=2, joint_type="Revolute", max_speed=0.17, max_torque=20.0, min_range=-0.16, max_range=0.4
+                            link=2,
+                            joint_type="Revolute",
+                            max_speed=0.17,
+                            max_torque=20.0,
+                            min_range=-0.16,
+                            max_range=0.4,
                         ),
                     ),
                 ),
@@ -480,31 +472,54 @@ GOLDEN = [
     (m.Stepped(time=12.34), "STEPPED {Time 12.3400}"),
     (m.Pong(id="7", time=1.5), "PONG {Id 7} {Time 1.5000}"),
     (m.Pong(), "PONG"),
-    (m.error_reply("init", "unknown start pose 'Nowhere' {known: PlayerStart1}\r\n"),
-     "ERROR {Command INIT} {Reason unknown start pose 'Nowhere' (known: PlayerStart1)}"),
+    (
+        m.error_reply("init", "unknown start pose 'Nowhere' {known: PlayerStart1}\r\n"),
+        "ERROR {Command INIT} {Reason unknown start pose 'Nowhere' (known: PlayerStart1)}",
+    ),
     (
         m.UnknownMessage(type="ACTSTA", segments=(Segment("Time", "1.00"), Segment("Name", "arm"))),
         "ACTSTA {Time 1.00} {Name arm}",
     ),
     # UDK actuator API (§5.8, §6.4, §6.7, §6.8)
     (
-        m.ActuatorStatus(time=1.5, name="arm", links=(m.LinkState(1, 0.5, -2.0), m.LinkState(2, -0.25, 0.0)),
-                         gripper=1),
+        m.ActuatorStatus(
+            time=1.5, name="arm", links=(m.LinkState(1, 0.5, -2.0), m.LinkState(2, -0.25, 0.0)), gripper=1
+        ),
         "ASTA {Time 1.5000} {Name arm} {Link 1} {Value 0.5000} {Torque -2.0000} {Link 2} {Value -0.2500} "
         "{Torque 0.0000} {Gripper 1}",
     ),
     (
-        m.ActuatorConfiguration(actuators=(m.ActuatorConfig("arm", (
-            m.ActuatorLinkConfiguration(1, "Revolute", 50.0, -1.5, 1.5),
-            m.ActuatorLinkConfiguration(2, "Prismatic", 20.0, 0.0, 0.3))), m.ActuatorConfig("pt", ()))),
+        m.ActuatorConfiguration(
+            actuators=(
+                m.ActuatorConfig(
+                    "arm",
+                    (
+                        m.ActuatorLinkConfiguration(1, "Revolute", 50.0, -1.5, 1.5),
+                        m.ActuatorLinkConfiguration(2, "Prismatic", 20.0, 0.0, 0.3),
+                    ),
+                ),
+                m.ActuatorConfig("pt", ()),
+            )
+        ),
         "CONF {Type Actuator} {Name arm} {Link 1} {JointType Revolute} {MaxTorque 50.0000} {MinValue -1.5000} "
         "{MaxValue 1.5000} {Link 2} {JointType Prismatic} {MaxTorque 20.0000} {MinValue 0.0000} {MaxValue 0.3000} "
         "{Name pt}",
     ),
     (
-        m.ActuatorGeometry(actuators=(m.ActuatorPose("arm", (0.1, 0.0, -0.2), (0.0, 0.0, 3.1416), "P3AT", (
-            m.ActuatorLinkGeometry(1, -1, (0.0, 0.0, 0.1), (0.0, 0.0, 0.0)),
-            m.ActuatorLinkGeometry(2, 0, (0.3, 0.0, 0.0), (0.0, 1.5708, 0.0)))),)),
+        m.ActuatorGeometry(
+            actuators=(
+                m.ActuatorPose(
+                    "arm",
+                    (0.1, 0.0, -0.2),
+                    (0.0, 0.0, 3.1416),
+                    "P3AT",
+                    (
+                        m.ActuatorLinkGeometry(1, -1, (0.0, 0.0, 0.1), (0.0, 0.0, 0.0)),
+                        m.ActuatorLinkGeometry(2, 0, (0.3, 0.0, 0.0), (0.0, 1.5708, 0.0)),
+                    ),
+                ),
+            )
+        ),
         "GEO {Type Actuator} {Name arm} {Location 0.1000,0.0000,-0.2000} {Orientation 0.0000,0.0000,3.1416} "
         "{Mount P3AT} {Link 1} {Parent -1} {Location 0.0000,0.0000,0.1000} {Orientation 0.0000,0.0000,0.0000} "
         "{Link 2} {Parent 0} {Location 0.3000,0.0000,0.0000} {Orientation 0.0000,1.5708,0.0000}",
@@ -626,11 +641,15 @@ _names = st.text(
     max_size=12,
 ).filter(lambda s: s.lower() not in {"none"})
 _words = _names
-_texts = st.text(
-    alphabet=st.characters(min_codepoint=32, max_codepoint=126, blacklist_characters="{}"),
-    min_size=1,
-    max_size=24,
-).map(str.strip).filter(bool)
+_texts = (
+    st.text(
+        alphabet=st.characters(min_codepoint=32, max_codepoint=126, blacklist_characters="{}"),
+        min_size=1,
+        max_size=24,
+    )
+    .map(str.strip)
+    .filter(bool)
+)
 
 
 def _dec(places: int, bound: int = 10**6) -> st.SearchStrategy[float]:

@@ -26,7 +26,7 @@ VALUE = st.from_regex(r"[A-Za-z0-9_.,\-]([A-Za-z0-9_.,\- ]{0,10}[A-Za-z0-9_.,\-]
 PORT = st.integers(1, 65535)
 CENTI_DBM = st.integers(-20_000, 2_000).map(lambda n: n / 100)  # what "%.2f" reads back exactly
 SIX_DIGITS = st.floats(-1e6, 1e6, allow_nan=False).map(lambda x: float(f"{x:.6g}"))
-METRES = st.integers(-10**7, 10**7).map(lambda n: n / 10_000)  # what vec4 reads back exactly
+METRES = st.integers(-(10**7), 10**7).map(lambda n: n / 10_000)  # what vec4 reads back exactly
 REASON = st.from_regex(r"[A-Za-z][A-Za-z.]{0,30}", fullmatch=True)
 
 WCS_REQUESTS = st.one_of(
@@ -37,8 +37,7 @@ WCS_REQUESTS = st.one_of(
     # an unknown first word (not one of the four), words after it
     st.builds(lambda a, rest: w.WcsUnknown(" ".join(["X" + a, *rest])), WORD, st.lists(WORD, max_size=3)),
 )
-WCS_REPLIES = st.one_of(st.just(w.WcsOk()), st.builds(w.WcsSignal, CENTI_DBM),
-                        st.builds(w.WcsFail, VALUE))
+WCS_REPLIES = st.one_of(st.just(w.WcsOk()), st.builds(w.WcsSignal, CENTI_DBM), st.builds(w.WcsFail, VALUE))
 UPPER_WORD = st.from_regex(r"X[A-Z0-9]{0,8}", fullmatch=True)  # never a known request word
 SEGMENTS = st.lists(st.builds(Segment, WORD, st.one_of(st.just(""), VALUE)), max_size=3).map(tuple)
 WSS_REQUESTS = st.one_of(
@@ -57,11 +56,16 @@ WSS_REPLIES = st.one_of(
     st.builds(w.WssError, REASON),
 )
 GETOBS = st.one_of(st.builds(w.GetObsRobots, VALUE, VALUE), st.builds(w.GetObsPoints, VALUE, VALUE))
-INTERFACE_REQUESTS = st.one_of(st.just(w.GetPos()), GETOBS, st.just(w.GetObsIncomplete()),
-                               st.builds(w.InterfaceUnknown, UPPER_WORD, SEGMENTS))
+INTERFACE_REQUESTS = st.one_of(
+    st.just(w.GetPos()), GETOBS, st.just(w.GetObsIncomplete()), st.builds(w.InterfaceUnknown, UPPER_WORD, SEGMENTS)
+)
 INTERFACE_REPLIES = st.one_of(
-    st.builds(w.Positions, st.lists(st.builds(w.RobotPosition, WORD, st.tuples(METRES, METRES, METRES),
-                                              st.booleans()), max_size=5).map(tuple)),
+    st.builds(
+        w.Positions,
+        st.lists(st.builds(w.RobotPosition, WORD, st.tuples(METRES, METRES, METRES), st.booleans()), max_size=5).map(
+            tuple
+        ),
+    ),
     st.builds(w.NumObs, st.integers(-1, 100), st.one_of(st.none(), GETOBS)),
 )
 
@@ -72,7 +76,7 @@ def split_all(data: bytes, sizes) -> list[bytes]:
     for n in itertools.cycle(sizes):
         if i >= len(data):
             return out
-        out.append(data[i:i + n])
+        out.append(data[i : i + n])
         i += n
     return out
 
@@ -94,18 +98,34 @@ def test_comserver_commands_parse_and_format_exactly(text, cmd):
     assert w.format_wcs_request(cmd) == text + ";"
 
 
-@pytest.mark.parametrize("text, cmd", [
-    ("register A0 10.0.0.1", w.WcsRegister("A0", "10.0.0.1")),  # the word in any case
-    ("  Listen\tB0  0400 ", w.WcsListen("B0", 400)),
-    (" \xff\xfe\x00", w.WcsUnknown("\xff\xfe\x00")),
-])
+@pytest.mark.parametrize(
+    "text, cmd",
+    [
+        ("register A0 10.0.0.1", w.WcsRegister("A0", "10.0.0.1")),  # the word in any case
+        ("  Listen\tB0  0400 ", w.WcsListen("B0", 400)),
+        (" \xff\xfe\x00", w.WcsUnknown("\xff\xfe\x00")),
+    ],
+)
 def test_comserver_commands_are_read_as_robots_write_them(text, cmd):
     assert w.parse_wcs_request(text) == cmd
 
 
-@pytest.mark.parametrize("text", ["OPEN A0 1", "register A0", "GETSS A0", "LISTEN A0 port", "LISTEN A0 0",
-                                  "OPEN A0 1 B0 99999", "LISTEN A0 \u00b2", "LISTEN A0 -5", "REGISTER a b c", " ",
-                                  ""])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "OPEN A0 1",
+        "register A0",
+        "GETSS A0",
+        "LISTEN A0 port",
+        "LISTEN A0 0",
+        "OPEN A0 1 B0 99999",
+        "LISTEN A0 \u00b2",
+        "LISTEN A0 -5",
+        "REGISTER a b c",
+        " ",
+        "",
+    ],
+)
 def test_malformed_comserver_commands_raise_protocol_error(text):
     with pytest.raises(ProtocolError):
         w.parse_wcs_request(text)
@@ -115,8 +135,17 @@ def test_the_command_word_names_a_kind_of_bad_command():
     assert w.wcs_request_word(" open A0 1") == "OPEN" and w.wcs_request_word("  ") == ""
 
 
-@pytest.mark.parametrize("cmd", [w.WcsRegister("A 0", "ip"), w.WcsRegister("A;", "ip"), w.WcsListen("A", 0),
-                                 w.WcsOpen("A", 1, "", 2), w.WcsUnknown("X;Y"), w.WcsUnknown(" ")])
+@pytest.mark.parametrize(
+    "cmd",
+    [
+        w.WcsRegister("A 0", "ip"),
+        w.WcsRegister("A;", "ip"),
+        w.WcsListen("A", 0),
+        w.WcsOpen("A", 1, "", 2),
+        w.WcsUnknown("X;Y"),
+        w.WcsUnknown(" "),
+    ],
+)
 def test_commands_that_cannot_be_read_back_are_not_formatted(cmd):
     with pytest.raises(ProtocolError):
         w.format_wcs_request(cmd)
@@ -236,18 +265,23 @@ def test_send_frames_are_formatted_binary_safe():
 def test_dropped_frames_say_why_and_their_kind():
     out = w.SendParser(max_bytes=10).feed(b"HELLO;SEND x;SEND 11 y;SEND 3 abcd;CLOSE x;")
     assert [(p.kind, str(p)) for p in out] == [
-        ("unknown", "unknown message b'HELLO'..."), ("no-length", "SEND without a length"),
+        ("unknown", "unknown message b'HELLO'..."),
+        ("no-length", "SEND without a length"),
         ("too-long", "SEND of 11 bytes, more than 10"),
         ("wrong-length", "SEND of 3 bytes not followed by ';' (a wrong length)"),
-        ("close", "CLOSE not followed by ';'")]
+        ("close", "CLOSE not followed by ';'"),
+    ]
     assert all(isinstance(p, w.SendProblem) and isinstance(p, str) for p in out)
 
 
 SEPARATORS = st.sampled_from([b"", b" ", b"\r\n", b" \t "])
 
 
-@given(st.lists(st.tuples(st.binary(max_size=40), SEPARATORS), max_size=6), st.booleans(),
-       st.lists(st.integers(1, 17), min_size=1, max_size=4))
+@given(
+    st.lists(st.tuples(st.binary(max_size=40), SEPARATORS), max_size=6),
+    st.booleans(),
+    st.lists(st.integers(1, 17), min_size=1, max_size=4),
+)
 def test_send_frames_round_trip_in_any_split(frames, close, sizes):
     data = b"".join(sep + w.format_send(p) for p, sep in frames) + (w.CLOSE_FRAME if close else b"")
     parser = w.SendParser()
@@ -280,9 +314,18 @@ def test_after_garbage_the_stream_recovers_at_the_next_semicolon(garbage, payloa
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(st.one_of(st.sampled_from([b"SEND ", b"CLOSE", b";", b" ", b"\r\n", b"12 ", b"3 ", b"0 ",
-                                           b"99999999999 ", b"SEN", b"CLO"]), st.binary(max_size=12)), max_size=30),
-       st.lists(st.integers(1, 11), min_size=1, max_size=4))
+@given(
+    st.lists(
+        st.one_of(
+            st.sampled_from(
+                [b"SEND ", b"CLOSE", b";", b" ", b"\r\n", b"12 ", b"3 ", b"0 ", b"99999999999 ", b"SEN", b"CLO"]
+            ),
+            st.binary(max_size=12),
+        ),
+        max_size=30,
+    ),
+    st.lists(st.integers(1, 11), min_size=1, max_size=4),
+)
 def test_any_bytes_give_the_same_events_in_any_split_and_never_raise(parts, sizes):
     """(A dropped frame's text quotes what had arrived of it; its kind does not vary.)"""
     data = b"".join(parts)
@@ -317,26 +360,29 @@ def test_wss_requests_parse_and_format_exactly(line, req):
     assert w.format_wss_request(req) == line + "\r\n"
 
 
-@pytest.mark.parametrize("line, req", [
-    ("init {robot A0} {port 5, 6 ,7}", w.WssInit("A0", (5, 6, 7))),
-    ("INIT {Robot A0} {Port 5,,6,}", w.WssInit("A0", (5, 6))),
-    # the reference WSS reads INIT's list as unsigned integers: 0 is accepted (protocol.md 12.2)
-    ("INIT {Robot r} {Port 0}", w.WssInit("r", (0,))),
-    ("INIT {Robot r} {Port 0,5}", w.WssInit("r", (0, 5))),
-    ("INIT {Robot r} {Port 65536}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
-    ("INIT {Robot r} {Port -1}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
-    ("DNS {Robot B0} {Port 0}", w.WssDns("B0")),  # 0: the default port, as the reference reads it
-    ("INIT {Robot H1} {Port a,b}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
-    ("INIT {Robot} {Port 1}", w.WssInvalid("INIT", w.REASON_EMPTY_NAME)),
-    ("INIT {Port x}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),  # the ports are checked first
-    ("GETSS {Robot}", w.WssInvalid("GETSS", w.REASON_EMPTY_NAME)),
-    ("GETSS", w.WssInvalid("GETSS", w.REASON_EMPTY_NAME)),
-    ("DNS {Robot H2} {Port x}", w.WssInvalid("DNS", w.REASON_PORT_NOT_INTEGER)),
-    ("DNS {Port 0}", w.WssInvalid("DNS", w.REASON_EMPTY_NAME)),  # port 0 is valid (the default)
-    ("DNS {Port 7}", w.WssInvalid("DNS", w.REASON_EMPTY_NAME)),
-    ("REVERSEDNS {Port -3}", w.WssInvalid("REVERSEDNS", w.REASON_PORT_NOT_INTEGER)),
-    ("REVERSEDNS", w.WssInvalid("REVERSEDNS", w.REASON_PORT_NOT_INTEGER)),
-])
+@pytest.mark.parametrize(
+    "line, req",
+    [
+        ("init {robot A0} {port 5, 6 ,7}", w.WssInit("A0", (5, 6, 7))),
+        ("INIT {Robot A0} {Port 5,,6,}", w.WssInit("A0", (5, 6))),
+        # the reference WSS reads INIT's list as unsigned integers: 0 is accepted (protocol.md 12.2)
+        ("INIT {Robot r} {Port 0}", w.WssInit("r", (0,))),
+        ("INIT {Robot r} {Port 0,5}", w.WssInit("r", (0, 5))),
+        ("INIT {Robot r} {Port 65536}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
+        ("INIT {Robot r} {Port -1}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
+        ("DNS {Robot B0} {Port 0}", w.WssDns("B0")),  # 0: the default port, as the reference reads it
+        ("INIT {Robot H1} {Port a,b}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),
+        ("INIT {Robot} {Port 1}", w.WssInvalid("INIT", w.REASON_EMPTY_NAME)),
+        ("INIT {Port x}", w.WssInvalid("INIT", w.REASON_PORTS_NOT_INTEGER)),  # the ports are checked first
+        ("GETSS {Robot}", w.WssInvalid("GETSS", w.REASON_EMPTY_NAME)),
+        ("GETSS", w.WssInvalid("GETSS", w.REASON_EMPTY_NAME)),
+        ("DNS {Robot H2} {Port x}", w.WssInvalid("DNS", w.REASON_PORT_NOT_INTEGER)),
+        ("DNS {Port 0}", w.WssInvalid("DNS", w.REASON_EMPTY_NAME)),  # port 0 is valid (the default)
+        ("DNS {Port 7}", w.WssInvalid("DNS", w.REASON_EMPTY_NAME)),
+        ("REVERSEDNS {Port -3}", w.WssInvalid("REVERSEDNS", w.REASON_PORT_NOT_INTEGER)),
+        ("REVERSEDNS", w.WssInvalid("REVERSEDNS", w.REASON_PORT_NOT_INTEGER)),
+    ],
+)
 def test_wss_requests_with_bad_values_name_the_wss_error(line, req):
     assert w.parse_wss_request(line) == req
 
@@ -347,8 +393,17 @@ def test_malformed_wss_lines_raise_protocol_error(line):
         w.parse_wss_request(line)
 
 
-@pytest.mark.parametrize("req", [w.WssGetSS("a}"), w.WssGetSS(" a"), w.WssDns("", 5), w.WssInit("A", (70000,)),
-                                 w.WssReverseDns(70000), w.WssUnknown("A B")])
+@pytest.mark.parametrize(
+    "req",
+    [
+        w.WssGetSS("a}"),
+        w.WssGetSS(" a"),
+        w.WssDns("", 5),
+        w.WssInit("A", (70000,)),
+        w.WssReverseDns(70000),
+        w.WssUnknown("A B"),
+    ],
+)
 def test_wss_requests_that_cannot_be_read_back_are_not_formatted(req):
     with pytest.raises(ProtocolError):
         w.format_wss_request(req)
@@ -372,8 +427,10 @@ WSS_REPLY_TEXTS = [
     (w.WssSignal("H2", math.nan, w.SS_MODEL_NAN), "SS {Robot H2} {Strength NaN} {Error Model.Returned.NaN}"),
     (w.WssDnsReply("B0", 40123), "DNSREPLY {Robot B0} {Port 40123}"),
     (w.WssDnsReply("Nobody", -1, w.DNS_NO_ROBOT), "DNSREPLY {Robot Nobody} {Port -1} {Error NoSuchRobot}"),
-    (w.WssDnsReply("H2", -1, w.DNS_NOT_LISTENING),
-     "DNSREPLY {Robot H2} {Port -1} {Error RobotDoesNotListenOnThisPort}"),
+    (
+        w.WssDnsReply("H2", -1, w.DNS_NOT_LISTENING),
+        "DNSREPLY {Robot H2} {Port -1} {Error RobotDoesNotListenOnThisPort}",
+    ),
     (w.WssReverseDnsReply(40123, robot="A0"), "REVERSEDNSREPLY {Port 40123} {Robot A0}"),
     (w.WssReverseDnsReply(1, error=w.REVERSEDNS_UNKNOWN_PORT), "REVERSEDNSREPLY {Port 1} {Error UnknownOrIllegalPort}"),
     (w.WssError(w.REASON_INIT_FIRST), "ERROR {Reason Must.Use.INIT.Method.First}"),
@@ -393,8 +450,14 @@ def test_wss_replies_are_the_servers_exact_words(reply, line):
 
 
 def test_wss_strength_has_six_significant_digits():
-    assert [w.fmt_wss_dbm(x) for x in (-73.1234567, -60.0, -0.0001234567, -1234567.0, math.nan, -math.inf)] == \
-        ["-73.1235", "-60", "-0.000123457", "-1.23457e+06", "NaN", "-INF"]
+    assert [w.fmt_wss_dbm(x) for x in (-73.1234567, -60.0, -0.0001234567, -1234567.0, math.nan, -math.inf)] == [
+        "-73.1235",
+        "-60",
+        "-0.000123457",
+        "-1.23457e+06",
+        "NaN",
+        "-INF",
+    ]
 
 
 @given(WSS_REPLIES)
@@ -402,8 +465,18 @@ def test_wss_replies_round_trip(reply):
     assert w.parse_wss_reply(w.format_wss_reply(reply)) == reply
 
 
-@pytest.mark.parametrize("line", ["SS {Robot A}", "DNSREPLY {Robot A} {Port x}", "INITREPLY", "ERROR {Why x}",
-                                  "HELLO {A 1}", "REVERSEDNSREPLY {Robot A}", "SS {Robot A} {Strength loud}"])
+@pytest.mark.parametrize(
+    "line",
+    [
+        "SS {Robot A}",
+        "DNSREPLY {Robot A} {Port x}",
+        "INITREPLY",
+        "ERROR {Why x}",
+        "HELLO {A 1}",
+        "REVERSEDNSREPLY {Robot A}",
+        "SS {Robot A} {Strength loud}",
+    ],
+)
 def test_what_is_not_a_wss_reply_raises_protocol_error(line):
     with pytest.raises(ProtocolError):
         w.parse_wss_reply(line)
@@ -426,12 +499,15 @@ def test_interface_requests_parse_and_format_exactly(line, req):
     assert w.format_interface_request(req) == line + "\r\n"
 
 
-@pytest.mark.parametrize("line, req", [
-    ("getobs {from A0} {to B0} {Start 1,2,3} {End 4,5,6}", w.GetObsRobots("A0", "B0")),  # From/To wins
-    ("GETOBS {From A0} {Start 1,2,3} {End 4,5,6}", w.GetObsPoints("1,2,3", "4,5,6")),
-    ("GETOBS {From A0} {To}", w.GetObsIncomplete()),
-    ("GETOBS {Start 1,2}", w.GetObsIncomplete()),
-])
+@pytest.mark.parametrize(
+    "line, req",
+    [
+        ("getobs {from A0} {to B0} {Start 1,2,3} {End 4,5,6}", w.GetObsRobots("A0", "B0")),  # From/To wins
+        ("GETOBS {From A0} {Start 1,2,3} {End 4,5,6}", w.GetObsPoints("1,2,3", "4,5,6")),
+        ("GETOBS {From A0} {To}", w.GetObsIncomplete()),
+        ("GETOBS {Start 1,2}", w.GetObsIncomplete()),
+    ],
+)
 def test_getobs_takes_the_first_complete_pair(line, req):
     assert w.parse_interface_request(line) == req
 
@@ -451,9 +527,13 @@ def test_malformed_interface_lines_raise_protocol_error(line):
 
 INTERFACE_REPLY_TEXTS = [
     (w.Positions(), "POSITIONS {Robots 0}"),
-    (w.Positions((w.RobotPosition("A0", (-10.0, 0.004, -0.00001)), w.RobotPosition("B0", (10.0, 0.0, -0.6), True))),
-     ("POSITIONS {Robots 2} {Name A0 Location -10.0000,0.0040,0.0000 BatteryEmpty False} "
-      "{Name B0 Location 10.0000,0.0000,-0.6000 BatteryEmpty True}")),
+    (
+        w.Positions((w.RobotPosition("A0", (-10.0, 0.004, -0.00001)), w.RobotPosition("B0", (10.0, 0.0, -0.6), True))),
+        (
+            "POSITIONS {Robots 2} {Name A0 Location -10.0000,0.0040,0.0000 BatteryEmpty False} "
+            "{Name B0 Location 10.0000,0.0000,-0.6000 BatteryEmpty True}"
+        ),
+    ),
     (w.NumObs(6, w.GetObsRobots("A6", "B6")), "NUMOBS {From A6} {To B6} {ObstCount 6}"),
     (w.NumObs(-1, w.GetObsPoints("1,2", "1,2,3")), "NUMOBS {Start 1,2} {End 1,2,3} {ObstCount -1}"),
     (w.NumObs(-1), "NUMOBS {ObstCount -1}"),
@@ -476,11 +556,18 @@ def test_interface_replies_round_trip(reply):
     assert w.parse_interface_reply(w.format_interface_reply(reply)) == reply
 
 
-@pytest.mark.parametrize("line", ["POSITIONS {Robots 2} {Name A Location 1,2,3 BatteryEmpty False}",
-                                  "POSITIONS {Name A Location 1,2,3 BatteryEmpty False}",
-                                  "POSITIONS {Robots 1} {Name A Location 1,2 BatteryEmpty False}",
-                                  "POSITIONS {Robots 1} {Name A At 1,2,3}", "NUMOBS {From A} {To B}",
-                                  "NUMOBS {ObstCount many}", "STA {Time 1}"])
+@pytest.mark.parametrize(
+    "line",
+    [
+        "POSITIONS {Robots 2} {Name A Location 1,2,3 BatteryEmpty False}",
+        "POSITIONS {Name A Location 1,2,3 BatteryEmpty False}",
+        "POSITIONS {Robots 1} {Name A Location 1,2 BatteryEmpty False}",
+        "POSITIONS {Robots 1} {Name A At 1,2,3}",
+        "NUMOBS {From A} {To B}",
+        "NUMOBS {ObstCount many}",
+        "STA {Time 1}",
+    ],
+)
 def test_what_is_not_an_interface_reply_raises_protocol_error(line):
     with pytest.raises(ProtocolError):
         w.parse_interface_reply(line)
@@ -488,11 +575,46 @@ def test_what_is_not_an_interface_reply_raises_protocol_error(line):
 
 # --------------------------------------------------------------------------- fuzz: lines
 
-TOKENS = ["INIT", "GETSS", "DNS", "REVERSEDNS", "GETPOS", "GETOBS", "SS", "DNSREPLY", "REVERSEDNSREPLY", "ERROR",
-          "INITREPLY", "POSITIONS", "NUMOBS", "{Robot A0}", "{Port 5,6}", "{Port x}", "{Port 99999}", "{Port -1}",
-          "{From A}", "{To B}", "{Start 1,2,3}", "{End 1e999,nan,2}", "{Strength NaN}", "{Strength INF}",
-          "{Error x}", "{Status OK}", "{Robots 1}", "{Name A Location 1,2,3 BatteryEmpty False}",
-          "{ObstCount 3}", "{Reason R}", "{", "}", "{}", "{Robot}", "\x00", "\ufffd", " ", "9" * 30]
+TOKENS = [
+    "INIT",
+    "GETSS",
+    "DNS",
+    "REVERSEDNS",
+    "GETPOS",
+    "GETOBS",
+    "SS",
+    "DNSREPLY",
+    "REVERSEDNSREPLY",
+    "ERROR",
+    "INITREPLY",
+    "POSITIONS",
+    "NUMOBS",
+    "{Robot A0}",
+    "{Port 5,6}",
+    "{Port x}",
+    "{Port 99999}",
+    "{Port -1}",
+    "{From A}",
+    "{To B}",
+    "{Start 1,2,3}",
+    "{End 1e999,nan,2}",
+    "{Strength NaN}",
+    "{Strength INF}",
+    "{Error x}",
+    "{Status OK}",
+    "{Robots 1}",
+    "{Name A Location 1,2,3 BatteryEmpty False}",
+    "{ObstCount 3}",
+    "{Reason R}",
+    "{",
+    "}",
+    "{}",
+    "{Robot}",
+    "\x00",
+    "\ufffd",
+    " ",
+    "9" * 30,
+]
 
 
 @settings(max_examples=500, deadline=None)
@@ -514,8 +636,10 @@ def test_any_line_is_a_request_reply_or_protocol_error(line):
 @given(st.lists(st.sampled_from(TOKENS), min_size=1, max_size=8).map(" ".join))
 def test_parsed_requests_format_back_to_lines_that_parse_the_same(line):
     """What a server parsed, a client can send again (known requests, canonical form)."""
-    for parse, fmt in ((w.parse_wss_request, w.format_wss_request),
-                       (w.parse_interface_request, w.format_interface_request)):
+    for parse, fmt in (
+        (w.parse_wss_request, w.format_wss_request),
+        (w.parse_interface_request, w.format_interface_request),
+    ):
         try:
             req = parse(line)
         except ProtocolError:
@@ -528,9 +652,11 @@ def test_parsed_requests_format_back_to_lines_that_parse_the_same(line):
 
 
 def test_the_wireless_protocols_import_no_asyncio_numpy_simulation_or_server():
-    code = ("import sys, usarsim.protocol.wireless\n"
-            "print(','.join(sorted(m for m in sys.modules if m.split('.')[0] in {'asyncio', 'numpy', 'mujoco'}"
-            " or m.startswith(('usarsim.sim', 'usarsim.server', 'usarsim.config')))))")
+    code = (
+        "import sys, usarsim.protocol.wireless\n"
+        "print(','.join(sorted(m for m in sys.modules if m.split('.')[0] in {'asyncio', 'numpy', 'mujoco'}"
+        " or m.startswith(('usarsim.sim', 'usarsim.server', 'usarsim.config')))))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == ""

@@ -18,17 +18,20 @@ MANUAL = dict(pd0_dbm=-49.67, d0_m=2.0, path_loss_exponent=1.09, wall_db=6.625, 
 # --------------------------------------------------------------------------- the formula
 
 
-@pytest.mark.parametrize("distance, walls, expected", [
-    # S = -49.67 - 10.9 log10(d / 2) - min(walls, 5) 6.625, worked out by hand
-    (2.0, 0, -49.67),                      # at the reference distance
-    (20.0, 0, -60.57),                     # log10(10) = 1
-    (4.0, 1, -59.5762),                    # 10.9 x 0.30103 = 3.28123; - 6.625
-    (200.0, 2, -84.72),                    # 10.9 x 2 = 21.8; - 13.25
-    (20.0, 5, -93.695),                    # 5 walls: 33.125 dB
-    (20.0, 6, -93.695),                    # the cap: a sixth wall costs nothing more
-    (20.0, 40, -93.695),
-    (1.0, 0, -46.38877),                   # closer than d0: stronger than P(d0)
-])
+@pytest.mark.parametrize(
+    "distance, walls, expected",
+    [
+        # S = -49.67 - 10.9 log10(d / 2) - min(walls, 5) 6.625, worked out by hand
+        (2.0, 0, -49.67),  # at the reference distance
+        (20.0, 0, -60.57),  # log10(10) = 1
+        (4.0, 1, -59.5762),  # 10.9 x 0.30103 = 3.28123; - 6.625
+        (200.0, 2, -84.72),  # 10.9 x 2 = 21.8; - 13.25
+        (20.0, 5, -93.695),  # 5 walls: 33.125 dB
+        (20.0, 6, -93.695),  # the cap: a sixth wall costs nothing more
+        (20.0, 40, -93.695),
+        (1.0, 0, -46.38877),  # closer than d0: stronger than P(d0)
+    ],
+)
 def test_the_wall_attenuation_factor_formula_to_a_hundredth_of_a_db(distance, walls, expected):
     assert waf_signal_dbm(distance, walls, **MANUAL) == pytest.approx(expected, abs=0.01)
     assert PRESETS["waf"].signal_dbm(distance, walls) == pytest.approx(expected, abs=0.01)
@@ -36,10 +39,22 @@ def test_the_wall_attenuation_factor_formula_to_a_hundredth_of_a_db(distance, wa
 
 def test_the_presets_hold_the_manual_and_the_later_code_constants():
     waf, w09, dist, perfect = (PRESETS[k] for k in ("waf", "waf2009", "distance", "perfect"))
-    assert (waf.pd0_dbm, waf.d0_m, waf.path_loss_exponent, waf.max_walls, waf.wall_db, waf.cutoff_dbm) == \
-        (-49.67, 2.0, 1.09, 5, 6.625, -93.0)
-    assert (w09.pd0_dbm, w09.d0_m, w09.path_loss_exponent, w09.max_walls, w09.wall_db, w09.cutoff_dbm) == \
-        (-49.67, 2.0, 1.0, None, 6.325, -93.0)
+    assert (waf.pd0_dbm, waf.d0_m, waf.path_loss_exponent, waf.max_walls, waf.wall_db, waf.cutoff_dbm) == (
+        -49.67,
+        2.0,
+        1.09,
+        5,
+        6.625,
+        -93.0,
+    )
+    assert (w09.pd0_dbm, w09.d0_m, w09.path_loss_exponent, w09.max_walls, w09.wall_db, w09.cutoff_dbm) == (
+        -49.67,
+        2.0,
+        1.0,
+        None,
+        6.325,
+        -93.0,
+    )
     # waf2009: -49.67 - 10 log10(10 / 2) - 6 x 6.325 (no cap) = -94.61897
     assert w09.signal_dbm(10.0, 6) == pytest.approx(-94.619, abs=0.01)
     # distance only: walls do not matter
@@ -103,18 +118,28 @@ CacheDistance=0.5
     f = load_wireless_file(p)
     assert f.listen_port == 6000 and f.interface_port is None and f.debug
     m = resolve_model(f.radio)
-    assert (m.pd0_dbm, m.d0_m, m.path_loss_exponent, m.cutoff_dbm, m.max_walls, m.wall_db, m.cache_distance_m) == \
-        (-50.0, 1.0, 2.0, -85.0, 3, 7.5, 0.5)
+    assert (m.pd0_dbm, m.d0_m, m.path_loss_exponent, m.cutoff_dbm, m.max_walls, m.wall_db, m.cache_distance_m) == (
+        -50.0,
+        1.0,
+        2.0,
+        -85.0,
+        3,
+        7.5,
+        0.5,
+    )
 
 
-@pytest.mark.parametrize("text, message", [
-    ("eAtenFac=5\n", "unknown key 'eAtenFac' (did you mean 'eAttenFac'?)"),
-    ("eN=fast\n", "expected a number, got 'fast'"),
-    ("ListenPort=99999\n", "expected a port number"),
-    ("Model=magic\n", "is not a radio model"),
-    ("eDo=0\n", "eDo > 0"),
-    ("just words\n", "expected 'Key=Value'"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("eAtenFac=5\n", "unknown key 'eAtenFac' (did you mean 'eAttenFac'?)"),
+        ("eN=fast\n", "expected a number, got 'fast'"),
+        ("ListenPort=99999\n", "expected a port number"),
+        ("Model=magic\n", "is not a radio model"),
+        ("eDo=0\n", "eDo > 0"),
+        ("just words\n", "expected 'Key=Value'"),
+    ],
+)
 def test_a_bad_ini_file_names_the_line_and_the_key(tmp_path, text, message):
     p = tmp_path / "bad.ini"
     p.write_text("[USARBotAPI.ComConnection]\n" + text)
@@ -154,7 +179,7 @@ def test_a_world_chooses_its_radio_model(tmp_path):
 def feed_all(parser: SendParser, data: bytes, chunk: int) -> list:
     out = []
     for i in range(0, len(data), chunk):
-        out += parser.feed(data[i:i + chunk])
+        out += parser.feed(data[i : i + chunk])
     return out
 
 

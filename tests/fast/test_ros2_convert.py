@@ -21,17 +21,36 @@ from usarsim.ros2.convert import (
 )
 from usarsim.ros2.robot import RobotSpec
 
-P2AT_GEO = M.RobotGeometry(class_name="P2AT", dimensions=(0.5238, 0.4968, 0.2913), wheel_radius=0.13,
-                           wheel_separation=0.4712, wheel_base=0.2884)
-P2AT_CONF = M.RobotConfiguration(class_name="P2AT", steering_type="SkidSteered", mass_kg=14.0, max_speed=5.385,
-                                 max_torque=60.0)
-SEDAN_GEO = M.RobotGeometry(class_name="Sedan", dimensions=(4.785, 1.78, 1.415), wheel_radius=0.3143,
-                            wheel_separation=1.545, wheel_base=2.67)
-SEDAN_CONF = M.RobotConfiguration(class_name="Sedan", steering_type="AckermanSteered", mass_kg=1445.0, max_speed=159.0,
-                                  max_torque=800.0, max_front_steer=0.557)
+P2AT_GEO = M.RobotGeometry(
+    class_name="P2AT",
+    dimensions=(0.5238, 0.4968, 0.2913),
+    wheel_radius=0.13,
+    wheel_separation=0.4712,
+    wheel_base=0.2884,
+)
+P2AT_CONF = M.RobotConfiguration(
+    class_name="P2AT", steering_type="SkidSteered", mass_kg=14.0, max_speed=5.385, max_torque=60.0
+)
+SEDAN_GEO = M.RobotGeometry(
+    class_name="Sedan", dimensions=(4.785, 1.78, 1.415), wheel_radius=0.3143, wheel_separation=1.545, wheel_base=2.67
+)
+SEDAN_CONF = M.RobotConfiguration(
+    class_name="Sedan",
+    steering_type="AckermanSteered",
+    mass_kg=1445.0,
+    max_speed=159.0,
+    max_torque=800.0,
+    max_front_steer=0.557,
+)
 AIR_GEO = M.RobotGeometry(vehicle_type="AerialVehicle", class_name="AirRobot", dimensions=(1.0, 1.0, 0.2))
-AIR_CONF = M.RobotConfiguration(vehicle_type="AerialVehicle", class_name="AirRobot", steering_type="None",
-                                mass_kg=1.3, max_speed=1.0, max_torque=0.0001)
+AIR_CONF = M.RobotConfiguration(
+    vehicle_type="AerialVehicle",
+    class_name="AirRobot",
+    steering_type="None",
+    mass_kg=1.3,
+    max_speed=1.0,
+    max_torque=0.0001,
+)
 
 
 def test_axes_turn_half_a_turn_about_x():
@@ -84,24 +103,38 @@ def test_ackermann_steering_from_geometry():
 
 def test_aerial_velocities_and_robots_without_cmd_vel():
     k = Kinematics.of(AIR_GEO, AIR_CONF)
-    assert drive_of(k, 0.5, 0.2, 0.3, 0.4) == {"linear_velocity": 0.5, "lateral_velocity": -0.2,
-                                              "altitude_velocity": 0.3, "rotational_velocity": -0.4}
-    static = Kinematics.of(M.RobotGeometry(vehicle_type="StaticPlatform", class_name="ComStation",
-                                           dimensions=(1.0, 1.0, 1.0)),
-                           M.RobotConfiguration(vehicle_type="StaticPlatform", class_name="ComStation",
-                                                steering_type="None", mass_kg=1.0, max_speed=0.0, max_torque=0.0))
+    assert drive_of(k, 0.5, 0.2, 0.3, 0.4) == {
+        "linear_velocity": 0.5,
+        "lateral_velocity": -0.2,
+        "altitude_velocity": 0.3,
+        "rotational_velocity": -0.4,
+    }
+    static = Kinematics.of(
+        M.RobotGeometry(vehicle_type="StaticPlatform", class_name="ComStation", dimensions=(1.0, 1.0, 1.0)),
+        M.RobotConfiguration(
+            vehicle_type="StaticPlatform",
+            class_name="ComStation",
+            steering_type="None",
+            mass_kg=1.0,
+            max_speed=0.0,
+            max_torque=0.0,
+        ),
+    )
     assert static.kind == "none"
     with pytest.raises(ValueError, match="takes no cmd_vel"):
         drive_of(static, 1.0, 0.0, 0.0, 0.0)
 
 
-@pytest.mark.parametrize(("text", "spec"), [
-    ("P2AT", RobotSpec("P2AT")),
-    ("P2AT:robot1", RobotSpec("P2AT", None, "robot1")),
-    ("P2AT@PlayerStart2:r2", RobotSpec("P2AT", "PlayerStart2", "r2")),
-    ("Sedan@1,-2.5,-0.3:car", RobotSpec("Sedan", None, "car", (1.0, -2.5, -0.3), 0.0)),
-    ("Kenaf@1,2,3,1.57", RobotSpec("Kenaf", None, None, (1.0, 2.0, 3.0), 1.57)),
-])
+@pytest.mark.parametrize(
+    ("text", "spec"),
+    [
+        ("P2AT", RobotSpec("P2AT")),
+        ("P2AT:robot1", RobotSpec("P2AT", None, "robot1")),
+        ("P2AT@PlayerStart2:r2", RobotSpec("P2AT", "PlayerStart2", "r2")),
+        ("Sedan@1,-2.5,-0.3:car", RobotSpec("Sedan", None, "car", (1.0, -2.5, -0.3), 0.0)),
+        ("Kenaf@1,2,3,1.57", RobotSpec("Kenaf", None, None, (1.0, 2.0, 3.0), 1.57)),
+    ],
+)
 def test_robot_specifications(text, spec):
     assert RobotSpec.parse(text) == spec
 
@@ -114,8 +147,9 @@ def test_bad_robot_specifications(text):
 
 def test_holonomic_wheels_turn_along_their_velocity():
     geo = M.RobotGeometry(class_name="Lisa", dimensions=(0.5, 0.5, 0.6), wheel_radius=0.08, wheel_separation=0.38)
-    conf = M.RobotConfiguration(class_name="Lisa", steering_type="HolonomSteered", mass_kg=20.0, max_speed=20.0,
-                                max_torque=8.0)
+    conf = M.RobotConfiguration(
+        class_name="Lisa", steering_type="HolonomSteered", mass_kg=20.0, max_speed=20.0, max_torque=8.0
+    )
     k = Kinematics.of(geo, conf)
     assert k.kind == "holonomic"
     assert drive_of(k, 0.4, 0.0, 0.0, 0.0)["wheels"] == [(0, pytest.approx(5.0), 0.0), (1, pytest.approx(5.0), 0.0)]

@@ -26,9 +26,17 @@ def test_radio_contact_share_counts_the_seconds_a_link_holds():
     sc = Scorer(WORLD)
     for k in range(10):
         up = k < 7  # R1-R2 in contact for 7 of 10 samples; R3 never
-        sc.frame(frame(float(k), [robot(1, "R1", 0.0), robot(2, "R2", 1.0), robot(3, "R3", 9.0)],
-                       links=(LinkFrame("r1", "r2", -60.0, 1.0, 0, up), LinkFrame("r1", "r3", -95.0, 9.0, 3, False),
-                              LinkFrame("r2", "r3", -95.0, 8.0, 3, False))))
+        sc.frame(
+            frame(
+                float(k),
+                [robot(1, "R1", 0.0), robot(2, "R2", 1.0), robot(3, "R3", 9.0)],
+                links=(
+                    LinkFrame("r1", "r2", -60.0, 1.0, 0, up),
+                    LinkFrame("r1", "r3", -95.0, 9.0, 3, False),
+                    LinkFrame("r2", "r3", -95.0, 8.0, 3, False),
+                ),
+            )
+        )
     r = sc.result()
     assert r["robots"]["R1"]["radio_contact_share"] == pytest.approx(0.7)
     assert r["robots"]["R2"]["radio_contact_share"] == pytest.approx(0.7)
@@ -50,8 +58,16 @@ def test_an_empty_battery_loses_the_robot_and_a_push_is_one_collision():
 def test_sensed_victims_count_unless_the_team_reports_and_then_reports_count():
     sc = Scorer(WORLD)
     sc.frame(frame(0.0, [robot(1, "R1", 0.0)]))
-    sc.output(Output(1, 0.0, VictimReading("VictSensor", (VictimPart("Head", (1.0, 0.0, 0.0), "Ben"),
-                                                           VictimPart("Head", (1.0, 0.0, 0.0), None))), "SEN"))
+    sc.output(
+        Output(
+            1,
+            0.0,
+            VictimReading(
+                "VictSensor", (VictimPart("Head", (1.0, 0.0, 0.0), "Ben"), VictimPart("Head", (1.0, 0.0, 0.0), None))
+            ),
+            "SEN",
+        )
+    )
     assert sc.result()["team"]["victims_found"] == 1
     assert sc.result()["team"]["score"] == pytest.approx(50.0)
     sc.output(Output(1, 0.0, CommandResult("Victim", "V1", True, (("Location", (-5.0, -3.0, 0.0)),)), "RES"))

@@ -20,8 +20,9 @@ class Wire:
     def __init__(self, world, *, admit=lambda: None, **fake):
         self.facade = FakeFacade(world, **fake)
         self.sent: list = []
-        ctx = SessionContext(facade=self.facade, peer="test:1", emit=self.sent.append, threadsafe=lambda fn: fn,
-                             admit=admit)
+        ctx = SessionContext(
+            facade=self.facade, peer="test:1", emit=self.sent.append, threadsafe=lambda fn: fn, admit=admit
+        )
         self.session = Session(ctx, uid=7)
 
     def __call__(self, line: str) -> str:
@@ -62,12 +63,15 @@ def test_init_at_a_location_copied_from_getstartposes_is_that_pose(wire):
     assert spawn[2] == "Robot7"  # no Name: named after the connection
 
 
-@pytest.mark.parametrize(("line", "reason"), [
-    ("INIT {Start PlayerStart1}", "INIT needs (ClassName USARBot.<class>)"),  # braces in a reason would end it
-    ("INIT {ClassName USARBot.NoSuchBot} {Start PlayerStart1}", "NoSuchBot"),
-    ("INIT {ClassName USARBot.P2AT} {Start Nowhere}", "unknown start pose 'Nowhere' (known: PlayerStart1, "),
-    ("INIT {ClassName USARBot.P2AT} {Location nan,0,0}", "all finite (NaN and infinity are not allowed)"),
-])
+@pytest.mark.parametrize(
+    ("line", "reason"),
+    [
+        ("INIT {Start PlayerStart1}", "INIT needs (ClassName USARBot.<class>)"),  # braces in a reason would end it
+        ("INIT {ClassName USARBot.NoSuchBot} {Start PlayerStart1}", "NoSuchBot"),
+        ("INIT {ClassName USARBot.P2AT} {Start Nowhere}", "unknown start pose 'Nowhere' (known: PlayerStart1, "),
+        ("INIT {ClassName USARBot.P2AT} {Location nan,0,0}", "all finite (NaN and infinity are not allowed)"),
+    ],
+)
 def test_a_bad_init_is_answered_with_an_error_and_nothing_spawns(wire, line, reason):
     w = wire()
     out = w(line)
@@ -76,8 +80,12 @@ def test_a_bad_init_is_answered_with_an_error_and_nothing_spawns(wire, line, rea
 
 
 def test_init_inside_a_wall_is_refused_with_the_solid_named(wire, yellow_world):
-    inside = next((x, y, -0.3) for x in range(-12, 13) for y in range(-12, 13)
-                  if yellow_world.solid_at((x, y, -0.3), movable=False))
+    inside = next(
+        (x, y, -0.3)
+        for x in range(-12, 13)
+        for y in range(-12, 13)
+        if yellow_world.solid_at((x, y, -0.3), movable=False)
+    )
     w = wire()
     out = w("INIT {ClassName USARBot.P2AT} {Location %d,%d,-0.3}" % inside[:2])
     assert out.startswith("ERROR {Command INIT} {Reason location ") and "is inside" in out
@@ -88,17 +96,20 @@ def test_a_second_init_and_a_full_server_are_refused(wire):
     w = wire()
     w("INIT {ClassName USARBot.P2AT} {Start PlayerStart1}")
     assert w("INIT {ClassName USARBot.P2AT} {Start PlayerStart2}").startswith(
-        "ERROR {Command INIT} {Reason this connection has its robot already")
+        "ERROR {Command INIT} {Reason this connection has its robot already"
+    )
     full = wire(admit=lambda: "the server has 4 robots (serve --max-robots 4)")
     assert full("INIT {ClassName USARBot.P2AT} {Start PlayerStart1}") == (
-        "ERROR {Command INIT} {Reason the server has 4 robots (serve --max-robots 4)}\r\n")
+        "ERROR {Command INIT} {Reason the server has 4 robots (serve --max-robots 4)}\r\n"
+    )
     assert full.calls("spawn") == []
 
 
 def test_a_spawn_the_simulation_refuses_is_an_error_and_init_may_be_sent_again(wire):
     w = wire(spawn_error="robot name 'scout' is taken")
     assert w("INIT {ClassName USARBot.P2AT} {Start PlayerStart1} {Name scout}") == (
-        "ERROR {Command INIT} {Reason robot name 'scout' is taken}\r\n")
+        "ERROR {Command INIT} {Reason robot name 'scout' is taken}\r\n"
+    )
     assert w.session.state == NEW and w.session.robot is None
     w("INIT {ClassName USARBot.P2AT} {Start PlayerStart1} {Name scout2}")
     assert w.session.state == ALIVE
@@ -152,7 +163,10 @@ def test_reports_are_named_in_order_and_need_a_robot(wire):
     w("REPORT {Type Victim} {Location 4,5,6} {Name Anna}")
     w("REPORT {Type Victim} {Location 7,8,9}")
     assert [(n, loc) for _, n, loc in w.calls("report_victim")] == [
-        ("Victim1", (1.0, 2.0, 3.0)), ("Anna", (4.0, 5.0, 6.0)), ("Victim3", (7.0, 8.0, 9.0))]
+        ("Victim1", (1.0, 2.0, 3.0)),
+        ("Anna", (4.0, 5.0, 6.0)),
+        ("Victim3", (7.0, 8.0, 9.0)),
+    ]
 
 
 def test_getgeo_and_getconf_of_the_robot_format_the_drives_numbers(wire):
@@ -181,8 +195,9 @@ def test_the_session_holds_its_lines_while_the_spawn_is_under_way(yellow_world):
     facade = FakeFacade(yellow_world)
     facade.spawn = lambda uid, robot, name, loc, rot, on_done, set_down=False: pending.append(on_done)
     sent: list = []
-    session = Session(SessionContext(facade=facade, peer="t", emit=sent.append, threadsafe=lambda fn: fn,
-                                     admit=lambda: None), uid=1)
+    session = Session(
+        SessionContext(facade=facade, peer="t", emit=sent.append, threadsafe=lambda fn: fn, admit=lambda: None), uid=1
+    )
     session.handle_line("INIT {ClassName USARBot.P2AT} {Start PlayerStart1}")
     assert session.state == SPAWNING and session.holding
     pending[0](1, None)

@@ -14,8 +14,14 @@ from usarsim.sweep.stats import poisson_cdf, poisson_interval, poisson_total_int
 
 # Garwood's 95 % limits for an observed count (Garwood 1936; the same as chi2(0.025, 2k) / 2
 # and chi2(0.975, 2k + 2) / 2 of the usual tables)
-GARWOOD = {0: (0.0, 3.689), 1: (0.0253, 5.572), 2: (0.2422, 7.225), 5: (1.6235, 11.668),
-           10: (4.7954, 18.390), 100: (81.364, 121.627)}
+GARWOOD = {
+    0: (0.0, 3.689),
+    1: (0.0253, 5.572),
+    2: (0.2422, 7.225),
+    5: (1.6235, 11.668),
+    10: (4.7954, 18.390),
+    100: (81.364, 121.627),
+}
 
 
 @pytest.mark.parametrize("count", sorted(GARWOOD))

@@ -23,13 +23,16 @@ def test_a_box_turned_by_45_degrees_is_a_diamond_reaching_its_height():
     assert len(poly) == 4
     r = math.sqrt(2.0)
     assert sorted((round(x, 3), round(y, 3)) for x, y in poly) == sorted(
-        [(round(5 - r, 3), 1.0), (round(5 + r, 3), 1.0), (5.0, round(1 - r, 3)), (5.0, round(1 + r, 3))])
+        [(round(5 - r, 3), 1.0), (round(5 + r, 3), 1.0), (5.0, round(1 - r, 3)), (5.0, round(1 + r, 3))]
+    )
     assert top == pytest.approx(1.0) and bottom == pytest.approx(0.0)
 
 
 def test_a_cylinder_lying_on_its_side_is_a_rectangle_of_its_length():
     # its axis (own Z) turned by 90 degrees of pitch to lie along X
-    poly, top, _ = footprint(shape_points("cylinder", radius=0.1, length=2.0), (0.0, 0.0, -0.1), (0.0, math.pi / 2, 0.0))
+    poly, top, _ = footprint(
+        shape_points("cylinder", radius=0.1, length=2.0), (0.0, 0.0, -0.1), (0.0, math.pi / 2, 0.0)
+    )
     xs = [p[0] for p in poly]
     ys = [p[1] for p in poly]
     assert max(xs) - min(xs) == pytest.approx(2.0, abs=1e-3) and max(ys) - min(ys) == pytest.approx(0.2, abs=1e-3)
@@ -39,8 +42,9 @@ def test_a_cylinder_lying_on_its_side_is_a_rectangle_of_its_length():
 
 
 def test_a_mesh_outline_comes_from_its_vertices():
-    poly, top, _ = footprint(shape_points("mesh", mesh_file=str(DATA / "wedge.obj"), scale=(2.0, 1.0, 1.0)),
-                             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    poly, top, _ = footprint(
+        shape_points("mesh", mesh_file=str(DATA / "wedge.obj"), scale=(2.0, 1.0, 1.0)), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    )
     assert area(poly) == pytest.approx(2.0) and top == pytest.approx(0.5)
 
 

@@ -82,8 +82,9 @@ def load_transcript(path: Path) -> Transcript:
         elif line.startswith("C! "):
             data = ast.literal_eval(line[3:])
             if not isinstance(data, bytes) or not data.endswith((b"\r", b"\n")):
-                raise ValueError(f"{path}:{n}: 'C!' needs a bytes literal ending in a line terminator, "
-                                 "such as b'...\\r\\n'")
+                raise ValueError(
+                    f"{path}:{n}: 'C!' needs a bytes literal ending in a line terminator, such as b'...\\r\\n'"
+                )
             entries.append(Entry(data, line, pending_comments))
             pending_comments = []
         elif line.startswith("S: ") or line == "S:":
@@ -93,8 +94,15 @@ def load_transcript(path: Path) -> Transcript:
     for key in ("world", "seed", "lockstep"):
         if key not in settings:
             raise ValueError(f"{path}: header line '# {key}: ...' is missing")
-    return Transcript(path, header, settings["world"], int(settings["seed"]),
-                      settings["lockstep"].lower() == "true", greeting, entries)
+    return Transcript(
+        path,
+        header,
+        settings["world"],
+        int(settings["seed"]),
+        settings["lockstep"].lower() == "true",
+        greeting,
+        entries,
+    )
 
 
 def write_transcript(t: Transcript, greeting: list[bytes], answers: list[list[bytes]]) -> None:

@@ -13,15 +13,21 @@ import pytest
 from helpers import Client
 from usarsim.protocol import messages as M
 
-P2AT_CONF = ("CONF {Type Actuator} {Name CameraPanTilt} {Link 1} {JointType Revolute} {MaxTorque 20.0000} "
-             "{MinValue -3.1416} {MaxValue 3.1416} {Link 2} {JointType Revolute} {MaxTorque 20.0000} "
-             "{MinValue -0.1600} {MaxValue 0.4000}")
-P2AT_GEO = ("GEO {Type Actuator} {Name CameraPanTilt} {Location 0.0000,0.0000,0.0000} "
-            "{Orientation 0.0000,0.0000,0.0000} {Mount P2AT} {Link 1} {Parent 0} {Location 0.1239,0.0000,-0.2036} "
-            "{Orientation 3.1416,0.0000,0.0000} {Link 2} {Parent 1} {Location 0.0000,0.0000,0.0599} "
-            "{Orientation 1.5708,0.0000,0.0000}")
-ASTA = re.compile(r"ASTA \{Time (\d+\.\d{4})\} \{Name (\w+)\}((?: \{Link \d+\} \{Value -?\d+\.\d{4}\} "
-                  r"\{Torque -?\d+\.\d{4}\})+)")
+P2AT_CONF = (
+    "CONF {Type Actuator} {Name CameraPanTilt} {Link 1} {JointType Revolute} {MaxTorque 20.0000} "
+    "{MinValue -3.1416} {MaxValue 3.1416} {Link 2} {JointType Revolute} {MaxTorque 20.0000} "
+    "{MinValue -0.1600} {MaxValue 0.4000}"
+)
+P2AT_GEO = (
+    "GEO {Type Actuator} {Name CameraPanTilt} {Location 0.0000,0.0000,0.0000} "
+    "{Orientation 0.0000,0.0000,0.0000} {Mount P2AT} {Link 1} {Parent 0} {Location 0.1239,0.0000,-0.2036} "
+    "{Orientation 3.1416,0.0000,0.0000} {Link 2} {Parent 1} {Location 0.0000,0.0000,0.0599} "
+    "{Orientation 1.5708,0.0000,0.0000}"
+)
+ASTA = re.compile(
+    r"ASTA \{Time (\d+\.\d{4})\} \{Name (\w+)\}((?: \{Link \d+\} \{Value -?\d+\.\d{4}\} "
+    r"\{Torque -?\d+\.\d{4}\})+)"
+)
 
 
 @pytest.fixture
@@ -150,8 +156,10 @@ def test_act_gripper_closes_and_opens_the_arms_gripper(server_factory, tmp_path)
     c.send("INIT {ClassName USARBot.ArmGripper} {Name G} {Start PlayerStart1}")
     c.step(0.5)
     conf = c.ask("GETCONF {Type Actuator} {Name Arm}", "CONF").text
-    assert conf.startswith("CONF {Type Actuator} {Name Arm} {Link 1} {JointType Prismatic} {MaxTorque 100.0000} "
-                           "{MinValue 0.0000} {MaxValue 0.2000} {Link 2} {JointType Prismatic}"), conf
+    assert conf.startswith(
+        "CONF {Type Actuator} {Name Arm} {Link 1} {JointType Prismatic} {MaxTorque 100.0000} "
+        "{MinValue 0.0000} {MaxValue 0.2000} {Link 2} {JointType Prismatic}"
+    ), conf
     c.send("ACT {Name Arm} {Gripper 1}")
     got = [ln.text for ln in c.step(1.5) if ln.text.startswith(("RES", "EFF"))]
     assert got[-1].endswith("{Type Gripper} {Name Gripper1} {Status CLOSED}"), got

@@ -77,8 +77,7 @@ def _p2at_with(item_type: str, name: str, **params):
     from usarsim.config.robot import MountedItem
 
     p2at = resolve_robot("P2AT")
-    return dataclasses.replace(p2at, items=(*p2at.items, MountedItem(item_type=item_type, name=name,
-                                                                        params=params)))
+    return dataclasses.replace(p2at, items=(*p2at.items, MountedItem(item_type=item_type, name=name, params=params)))
 
 
 def test_the_sensor_example_reports_the_pose_at_its_rate_within_its_noise(doc_plugins, test_world):

@@ -35,6 +35,7 @@ def yellow():
 def walls(yellow):
     """The floor map of the world's tall solids only (walls, stacks, table legs: what the
     brains must never touch; low boxes may be driven against or over)."""
+
     def top(o) -> float:
         return -(o.center[2] - (o.size[2] if o.shape == "box" else 2 * o.radius_m) / 2.0)
 
@@ -141,8 +142,7 @@ def test_frontier_explorer_sees_most_of_the_arena_in_300_s(yellow):
         start = next(p for p in world.start_poses if p.name == "PlayerStart1")
         referee = Referee(yellow, start.location[:2])
         robot = world.spawn("P2AT", "X1", start=start.name)
-        brain = FrontierExplorer(robot, bounds=ARENA, origin=(start.location[0], start.location[1],
-                                                              start.rotation[2]))
+        brain = FrontierExplorer(robot, bounds=ARENA, origin=(start.location[0], start.location[1], start.rotation[2]))
         world.step(0.2)
         shares = {}
 
@@ -155,8 +155,10 @@ def test_frontier_explorer_sees_most_of_the_arena_in_300_s(yellow):
         wall = time.monotonic() - wall
         truth = robot.ground_truth()
     share, near = referee.arena_share(), referee.arena_share(near=True)
-    print(f"frontier: {ran:.0f} simulated s in {wall:.1f} s wall; arena floor swept {100 * share:.1f} %, within "
-          f"3 m {100 * near:.1f} %; done {brain.done}")
+    print(
+        f"frontier: {ran:.0f} simulated s in {wall:.1f} s wall; arena floor swept {100 * share:.1f} %, within "
+        f"3 m {100 * near:.1f} %; done {brain.done}"
+    )
     assert share >= 0.6
     assert near >= 0.6
     assert shares[min(shares, key=lambda t: abs(t - 120))] >= 0.6  # well before the end
@@ -201,8 +203,9 @@ def explore(yellow, robots: int, seconds: float, radio: bool) -> tuple[float, fl
         bots, explorers, radios = [], [], []
         for k, p in enumerate(poses):
             bots.append(world.spawn("P2AT", f"R{k + 1}", start=p.name))
-            explorers.append(FrontierExplorer(bots[-1], bounds=ARENA,
-                                              origin=(p.location[0], p.location[1], p.rotation[2])))
+            explorers.append(
+                FrontierExplorer(bots[-1], bounds=ARENA, origin=(p.location[0], p.location[1], p.rotation[2]))
+            )
             if radio:
                 radios.append(Radio(server.host, server.ports["comserver"], bots[-1].name))
         team = Team(explorers, radios or None)
@@ -218,8 +221,10 @@ def test_four_explorers_sharing_maps_over_the_radio_beat_one(yellow):
     team = explore(yellow, 4, 90.0, radio=True)
     team_wall = time.monotonic() - wall
     one = explore(yellow, 1, 90.0, radio=False)
-    print(f"90 simulated s: 4 robots swept {100 * team[0]:.1f} % of the arena's floor ({100 * team[1]:.1f} % within "
-          f"3 m; {team_wall:.1f} s wall), one robot {100 * one[0]:.1f} % ({100 * one[1]:.1f} %)")
+    print(
+        f"90 simulated s: 4 robots swept {100 * team[0]:.1f} % of the arena's floor ({100 * team[1]:.1f} % within "
+        f"3 m; {team_wall:.1f} s wall), one robot {100 * one[0]:.1f} % ({100 * one[1]:.1f} %)"
+    )
     assert team[2] > 4 * 3 * 30  # every robot heard every other several times a second
     assert team[1] > one[1] + 0.08  # more floor seen from near
     assert team[0] >= one[0] - 0.01
@@ -247,9 +252,23 @@ def test_a_brain_runs_from_the_command_line_against_a_real_time_server():
     fast), for 6 simulated seconds."""
     with launch(world="DM-USAR_yellow", seed=1, lockstep=False, speed=2.0) as server:
         env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
-        proc = subprocess.run([sys.executable, "-m", "usarsim.brains.wander", "--port", str(server.port),
-                               "--location", "0.8,-1.5,-0.25", "--seconds", "6"],
-                              capture_output=True, text=True, timeout=120, env=env)
+        proc = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "usarsim.brains.wander",
+                "--port",
+                str(server.port),
+                "--location",
+                "0.8,-1.5,-0.25",
+                "--seconds",
+                "6",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=env,
+        )
     assert proc.returncode == 0, proc.stderr
     assert "Wander: ran" in proc.stdout
     metres = float(proc.stdout.split("drove ")[1].split(" m")[0])
@@ -260,11 +279,13 @@ def test_a_brain_runs_from_the_command_line_against_a_real_time_server():
 def test_the_brains_load_no_mujoco_simulation_or_server():
     """A brain talks to the simulator over the wire only, as the client does: it runs where
     no simulator is installed to run (checked in a fresh interpreter)."""
-    code = ("import sys\n"
-            "import usarsim.brains.team, usarsim.brains.victim, usarsim.brains.wander, usarsim.brains.wall_follower\n"
-            "print(' '.join(m for m in sys.modules if m.split('.')[0] == 'mujoco' or "
-            "m.startswith(('usarsim.sim', 'usarsim.server', 'usarsim.sensors', 'usarsim.robots'))))\n"
-            "print('usarsim.brains.frontier' in sys.modules)\n")
+    code = (
+        "import sys\n"
+        "import usarsim.brains.team, usarsim.brains.victim, usarsim.brains.wander, usarsim.brains.wall_follower\n"
+        "print(' '.join(m for m in sys.modules if m.split('.')[0] == 'mujoco' or "
+        "m.startswith(('usarsim.sim', 'usarsim.server', 'usarsim.sensors', 'usarsim.robots'))))\n"
+        "print('usarsim.brains.frontier' in sys.modules)\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     loaded, probe = out.stdout.splitlines()

@@ -27,8 +27,9 @@ FREE_PORTS = tuple(x for opt in PORT_OPTIONS for x in (opt, "0"))
 
 
 def usarsim(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "usarsim", *args], capture_output=True, text=True,
-                          timeout=timeout, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "usarsim", *args], capture_output=True, text=True, timeout=timeout, check=False
+    )
 
 
 class Serve:
@@ -38,10 +39,17 @@ class Serve:
         """``prelude``: Python run in the server's process before the command (a fault to inject)."""
         self._stderr = open(stderr_path, "wb")
         self.stderr_path = stderr_path
-        command = ["-m", "usarsim"] if not prelude else [
-            "-c", f"{prelude}\nimport sys\nfrom usarsim.cli import main\nsys.exit(main(sys.argv[1:]))"]
-        self.proc = subprocess.Popen([sys.executable, *command, "serve", *args], stdout=subprocess.PIPE,
-                                     stderr=self._stderr, stdin=subprocess.DEVNULL)
+        command = (
+            ["-m", "usarsim"]
+            if not prelude
+            else ["-c", f"{prelude}\nimport sys\nfrom usarsim.cli import main\nsys.exit(main(sys.argv[1:]))"]
+        )
+        self.proc = subprocess.Popen(
+            [sys.executable, *command, "serve", *args],
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            stdin=subprocess.DEVNULL,
+        )
         self._sel = selectors.DefaultSelector()
         self._sel.register(self.proc.stdout, selectors.EVENT_READ)
         self._buf = b""
@@ -54,8 +62,9 @@ class Serve:
                 raise AssertionError(f"no line from usarsim serve within {timeout} s; stderr: {self.stderr()}")
             chunk = os.read(self.proc.stdout.fileno(), 4096)
             if not chunk:
-                raise AssertionError(f"usarsim serve closed its stdout (exit {self.proc.poll()}); "
-                                     f"stderr: {self.stderr()}")
+                raise AssertionError(
+                    f"usarsim serve closed its stdout (exit {self.proc.poll()}); stderr: {self.stderr()}"
+                )
             self._buf += chunk
         line, self._buf = self._buf.split(b"\n", 1)
         return line.decode()
@@ -142,13 +151,22 @@ def test_robots_list_says_each_robot_and_its_drive_without_none():
     assert re.search(r"^\s+kit: Camera, GPS, GroundTruth, IMU, Sonar$", out, re.M)
 
 
-@pytest.mark.parametrize(("args", "said"), [
-    (("serve", "--speed", "fast"), "usarsim serve: error: argument --speed: expected a number > 0 or 'max', "
-                                   "got 'fast'; see 'usarsim serve --help'"),
-    (("serve", "--wrold", "x"), "usarsim serve: error: unrecognized arguments: --wrold x (did you mean --world?); "
-                                "see 'usarsim serve --help'"),
-    (("serv",), "did you mean 'serve'?"),
-])
+@pytest.mark.parametrize(
+    ("args", "said"),
+    [
+        (
+            ("serve", "--speed", "fast"),
+            "usarsim serve: error: argument --speed: expected a number > 0 or 'max', "
+            "got 'fast'; see 'usarsim serve --help'",
+        ),
+        (
+            ("serve", "--wrold", "x"),
+            "usarsim serve: error: unrecognized arguments: --wrold x (did you mean --world?); "
+            "see 'usarsim serve --help'",
+        ),
+        (("serv",), "did you mean 'serve'?"),
+    ],
+)
 def test_a_usage_error_is_one_line_with_a_suggestion(args, said):
     out = usarsim(*args)
     assert out.returncode == 2
@@ -170,8 +188,10 @@ def _fake_python(folder: Path, venv: bool) -> Path:
     if venv:
         (folder / "pyvenv.cfg").write_text("home = /usr/bin\n")
     python = folder / "bin" / "python"
-    python.write_text('#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then echo "PATH=$PATH"; '
-                      'echo "usarsim=$(command -v usarsim)"; fi\nexit 0\n')
+    python.write_text(
+        '#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then echo "PATH=$PATH"; '
+        'echo "usarsim=$(command -v usarsim)"; fi\nexit 0\n'
+    )
     script = folder / "bin" / "usarsim"
     script.write_text("#!/bin/sh\necho usarsim 0\n")
     for f in (python, script):
@@ -193,11 +213,20 @@ def test_test_script_puts_the_venv_bin_folder_first_on_path(tmp_path, venv):
     so that the 'usarsim' console script is found (test_console_script_is_installed runs)."""
     python = _fake_python(tmp_path / "env", venv)
     tools = _fake_chromium(tmp_path / "tools")
-    path = os.pathsep.join([str(tools)] + [d for d in os.environ.get("PATH", "").split(os.pathsep)
-                                           if d and not (Path(d) / "usarsim").exists()])
+    path = os.pathsep.join(
+        [str(tools)]
+        + [d for d in os.environ.get("PATH", "").split(os.pathsep) if d and not (Path(d) / "usarsim").exists()]
+    )
     env = {**os.environ, "PATH": path, "USARSIM_PYTHON": str(python)}
-    out = subprocess.run(["bash", str(ROOT / "scripts" / "test.sh")], capture_output=True, text=True,
-                         timeout=60, check=False, env=env, cwd=tmp_path)
+    out = subprocess.run(
+        ["bash", str(ROOT / "scripts" / "test.sh")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        env=env,
+        cwd=tmp_path,
+    )
     assert out.returncode == 0, out.stderr
     given = re.search(r"^PATH=(.*)$", out.stdout, re.M).group(1)
     found = re.search(r"^usarsim=(.*)$", out.stdout, re.M).group(1)
@@ -216,14 +245,29 @@ def _run_test_script(tmp_path: Path, *args: str, cores: int, failing: str = "") 
     folder = tmp_path / "env" / "bin"
     folder.mkdir(parents=True)
     python = folder / "python"
-    python.write_text('#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then shift 2; echo "$*" >> "$PYTEST_LOG"; '
-                      'case "$*" in *"$PYTEST_FAIL"*) [ -n "$PYTEST_FAIL" ] && exit 1;; esac; fi\nexit 0\n')
+    python.write_text(
+        '#!/bin/sh\nif [ "$1 $2" = "-m pytest" ]; then shift 2; echo "$*" >> "$PYTEST_LOG"; '
+        'case "$*" in *"$PYTEST_FAIL"*) [ -n "$PYTEST_FAIL" ] && exit 1;; esac; fi\nexit 0\n'
+    )
     python.chmod(0o755)
     tools = _fake_chromium(tmp_path / "tools")
-    env = {**os.environ, "PATH": f"{tools}{os.pathsep}{os.environ.get('PATH', '')}", "USARSIM_PYTHON": str(python),
-           "PYTEST_LOG": str(log), "PYTEST_FAIL": failing, "OMP_NUM_THREADS": str(cores)}  # nproc reads it
-    out = subprocess.run(["bash", str(ROOT / "scripts" / "test.sh"), *args], capture_output=True, text=True,
-                         timeout=60, check=False, env=env, cwd=tmp_path)
+    env = {
+        **os.environ,
+        "PATH": f"{tools}{os.pathsep}{os.environ.get('PATH', '')}",
+        "USARSIM_PYTHON": str(python),
+        "PYTEST_LOG": str(log),
+        "PYTEST_FAIL": failing,
+        "OMP_NUM_THREADS": str(cores),
+    }  # nproc reads it
+    out = subprocess.run(
+        ["bash", str(ROOT / "scripts" / "test.sh"), *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        env=env,
+        cwd=tmp_path,
+    )
     return out.returncode, log.read_text().splitlines() if log.exists() else []
 
 
@@ -261,7 +305,8 @@ def test_readme_says_how_to_get_the_command_after_the_first_two():
         "```bash",
         "bash scripts/serve.sh    # install, then start the simulator on DM-USAR_yellow (control port 3000)",
         "bash scripts/test.sh     # install with the test dependencies, then run the whole test suite",
-        "```"]
+        "```",
+    ]
     after = next(ln for ln in lines[6:] if ln.strip())
     assert ". .venv/bin/activate" in after and "usarsim" in after
 
@@ -270,8 +315,10 @@ def test_readme_says_how_to_get_the_command_after_the_first_two():
 
 
 def test_validate_shipped_files():
-    for path, prefix in ((SHIPPED / "worlds" / "DM-USAR_yellow.yaml", "ok: world DM-USAR_yellow: "),
-                         (SHIPPED / "robots" / "P2AT.yaml", "ok: robot P2AT: ")):
+    for path, prefix in (
+        (SHIPPED / "worlds" / "DM-USAR_yellow.yaml", "ok: world DM-USAR_yellow: "),
+        (SHIPPED / "robots" / "P2AT.yaml", "ok: robot P2AT: "),
+    ):
         out = usarsim("validate", str(path))
         assert out.returncode == 0, out.stderr
         assert out.stdout.startswith(prefix)
@@ -279,12 +326,15 @@ def test_validate_shipped_files():
         assert out.stderr == ""
 
 
-@pytest.mark.parametrize("name, prefix", [
-    ("DM-USAR_yellow", "ok: world DM-USAR_yellow: "),
-    ("dm-usar_red", "ok: world DM-USAR_red: "),
-    ("P2AT", "ok: robot P2AT: "),
-    ("USARBot.P2DX", "ok: robot P2DX: "),
-])
+@pytest.mark.parametrize(
+    "name, prefix",
+    [
+        ("DM-USAR_yellow", "ok: world DM-USAR_yellow: "),
+        ("dm-usar_red", "ok: world DM-USAR_red: "),
+        ("P2AT", "ok: robot P2AT: "),
+        ("USARBot.P2DX", "ok: robot P2DX: "),
+    ],
+)
 def test_validate_a_shipped_world_or_robot_by_name(name, prefix):
     out = usarsim("validate", name)
     assert out.returncode == 0, out.stderr
@@ -347,7 +397,8 @@ def test_serve_stops_with_exit_1_when_the_simulation_stops_on_an_error(serve):
         c.send("INIT {ClassName P2AT} {Name R1} {Start PlayerStart2}")
         c.send("STEP {Time 0.2}")
         assert c.wait_line(lambda ln: ln.text.startswith(("ERROR", "STEPPED"))).text == (
-            "ERROR {Command STEP} {Reason the simulation has stopped: the world was not advanced}")
+            "ERROR {Command STEP} {Reason the simulation has stopped: the world was not advanced}"
+        )
         c.wait_closed(10)
     assert s.proc.wait(10) == 1
     err = s.stderr()
@@ -417,8 +468,7 @@ def test_serve_port_offset_moves_every_default_port(tmp_path):
             m = re.fullmatch(r"usarsim: (\w+) listening on 127\.0\.0\.1:(\d+)", line)
             assert m, line
             ports[m.group(1)] = int(m.group(2))
-        expected = {"control": 3000, "truth": 3989, "comserver": 5874, "wss": 50000, "cominterface": 7435,
-                    "web": 8080}
+        expected = {"control": 3000, "truth": 3989, "comserver": 5874, "wss": 50000, "cominterface": 7435, "web": 8080}
         assert {k: v for k, v in ports.items() if k != "image"} == {k: v + offset for k, v in expected.items()}
         assert ports["image"] not in (5003, 5003 + offset)  # given explicitly (0): a free port, no offset
         assert s.read_line() == f"usarsim: operator console at http://127.0.0.1:{8080 + offset}/"
@@ -451,9 +501,14 @@ def test_port_in_use_exits_1(tmp_path):
         out = usarsim("serve", "--port", str(port), *FREE_PORTS)
         assert out.returncode == 1
         assert f"cannot listen on 127.0.0.1, the control port {port} (--port)" in out.stderr
-        names = {"--truth-port": "the ground-truth port", "--image-port": "the image port",
-                 "--wcs-port": "the ComServer port", "--wss-port": "the WSS port",
-                 "--cominterface-port": "the ComServerInterface port", "--web-port": "the web port"}
+        names = {
+            "--truth-port": "the ground-truth port",
+            "--image-port": "the image port",
+            "--wcs-port": "the ComServer port",
+            "--wss-port": "the WSS port",
+            "--cominterface-port": "the ComServerInterface port",
+            "--web-port": "the web port",
+        }
         for option, name in names.items():
             args = [x for opt in PORT_OPTIONS for x in (opt, str(port) if opt == option else "0")]
             busy_one = usarsim("serve", "--port", "0", *args)
@@ -461,11 +516,14 @@ def test_port_in_use_exits_1(tmp_path):
             assert f"cannot listen on 127.0.0.1, {name} {port} ({option})" in busy_one.stderr
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--port", "70000"], "expected a port number"),
-    (["--speed", "fast"], "expected a number > 0 or 'max'"),
-    (["--speed", "0"], "expected a number > 0 or 'max'"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--port", "70000"], "expected a port number"),
+        (["--speed", "fast"], "expected a number > 0 or 'max'"),
+        (["--speed", "0"], "expected a number > 0 or 'max'"),
+    ],
+)
 def test_bad_option_values_are_rejected(args, message):
     out = usarsim("serve", *args)
     assert out.returncode == 2
@@ -513,8 +571,25 @@ def test_bench_targets_runs_a_sitting_and_judges_every_target_it_measured():
     import json
 
     # one run of each (tests/unit/test_bench_targets.py judges several runs)
-    out = usarsim("bench", "--targets", "--counts", "2", "3", "--runs", "1", "--seconds", "0.5", "--count", "100",
-                  "--frames", "5", "--sizes", "320x240", "--json", timeout=300)
+    out = usarsim(
+        "bench",
+        "--targets",
+        "--counts",
+        "2",
+        "3",
+        "--runs",
+        "1",
+        "--seconds",
+        "0.5",
+        "--count",
+        "100",
+        "--frames",
+        "5",
+        "--sizes",
+        "320x240",
+        "--json",
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout.strip().splitlines()[-1])
     assert r["machine"]["cores"] == os.cpu_count() and r["machine"]["mujoco"]
@@ -546,9 +621,14 @@ def test_bench_profile_says_where_the_time_goes():
     assert sim["physics (MuJoCo steps)"] > 0 and sim["handing instants to the measuring thread"] > 0
     # the physics split by MuJoCo's own timers: its parts fit in it, and the solver has work
     parts = {k: v for k, v in sim.items() if k.startswith("  of which")}
-    assert set(parts) == {"  of which collision, broad phase", "  of which collision, narrow phase",
-                          "  of which making constraints", "  of which solving constraints",
-                          "  of which kinematics, inertia", "  of which the rest of its step"}
+    assert set(parts) == {
+        "  of which collision, broad phase",
+        "  of which collision, narrow phase",
+        "  of which making constraints",
+        "  of which solving constraints",
+        "  of which kinematics, inertia",
+        "  of which the rest of its step",
+    }
     assert parts["  of which solving constraints"] > 0 and parts["  of which collision, narrow phase"] > 0
     assert sum(parts.values()) <= sim["physics (MuJoCo steps)"] * 1.05
     assert r["contacts"]["contacts"] >= 8 and r["contacts"]["islands"] >= 1  # two P2ATs on their wheels
@@ -596,8 +676,14 @@ def test_bench_env_prints_steps_per_second():
 def test_talk_sends_typed_lines_and_prints_the_answers(serve):
     port = serve("--port", "0", "--lockstep").port()
     lines = "GETSTARTPOSES\nINIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}\nSTEP {Time 0.2}\n"
-    out = subprocess.run([sys.executable, "-m", "usarsim.client.talk", "--port", str(port), "--hide", "SEN,MISSTA"],
-                         input=lines, capture_output=True, text=True, timeout=60, check=False)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim.client.talk", "--port", str(port), "--hide", "SEN,MISSTA"],
+        input=lines,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert out.returncode == 0, out.stderr
     said = out.stdout.splitlines()
     assert said[0] == NFO_ON_CONNECT.decode().strip()
@@ -610,7 +696,13 @@ def test_talk_without_a_simulator_says_so_in_one_line():
     with socket.socket() as s:  # a port nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    out = subprocess.run([sys.executable, "-m", "usarsim.client.talk", "--port", str(port)], input="",
-                         capture_output=True, text=True, timeout=60, check=False)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim.client.talk", "--port", str(port)],
+        input="",
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert out.returncode == 1 and len(out.stderr.splitlines()) == 1
     assert f"no simulator on 127.0.0.1:{port}" in out.stderr and "usarsim serve" in out.stderr

@@ -61,8 +61,13 @@ def test_after_a_step_every_robot_has_read_up_to_the_new_time(server):
             t = world.step(0.1)
             for r in robots:
                 # GroundTruth every 0.1 s: its latest reading is the one at the new time
-                times = [m.time for m in r.messages if getattr(m, "reading", None) is not None
-                         and isinstance(m.reading, PoseReading) and m.reading.sensor_type == "GroundTruth"]
+                times = [
+                    m.time
+                    for m in r.messages
+                    if getattr(m, "reading", None) is not None
+                    and isinstance(m.reading, PoseReading)
+                    and m.reading.sensor_type == "GroundTruth"
+                ]
                 assert times and times[-1] == pytest.approx(t, abs=1e-4), (r.name, times[-3:], t)
                 r.take_messages()
 
@@ -221,6 +226,7 @@ def test_a_robot_cameras_picture_as_a_numpy_array():
 def test_commands_sent_before_a_step_take_effect_in_it_every_time(server):
     """A DRIVE goes out on the robot's connection, the STEP on the world's: the client makes
     sure the DRIVE is in the simulation first, so that two runs are alike."""
+
     def run():
         with launch(world="DM-USAR_yellow", seed=3) as srv, srv.connect() as world:
             robot = world.spawn("P2AT", start="PlayerStart1")
@@ -240,8 +246,10 @@ def test_robots_talk_over_the_simulated_radio_only_while_the_link_holds(tmp_path
     # a short-range radio: the link holds within about 4 m only (cutoff -53 dBm)
     ini = tmp_path / "radio.ini"
     ini.write_text("[USARBot.ComServer]\nModel=distance\neCutoff=-53\n")
-    with launch(world="DM-USAR_yellow", seed=1, wireless=True,
-                extra_args=("--wireless-config", str(ini))) as srv, srv.connect() as world:
+    with (
+        launch(world="DM-USAR_yellow", seed=1, wireless=True, extra_args=("--wireless-config", str(ini))) as srv,
+        srv.connect() as world,
+    ):
         a = world.spawn("P2AT", name="A", start="PlayerStart1")
         b = world.spawn("P2AT", name="B", location=(-9.5, 2.0, -0.25))  # 2 m away
         far = world.spawn("P2AT", name="C", start="PlayerStart8")  # 8 m away

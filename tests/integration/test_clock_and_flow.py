@@ -22,8 +22,12 @@ def wall_seconds_for(server, sim_seconds: float) -> float:
     """Wall time the server takes to run ``sim_seconds`` of simulated time."""
     t0 = sim_time(server)
     w0 = time.perf_counter()
-    wait_for(lambda: sim_time(server) >= t0 + sim_seconds, timeout=30, interval=0.002,
-             what=f"{sim_seconds} simulated seconds")
+    wait_for(
+        lambda: sim_time(server) >= t0 + sim_seconds,
+        timeout=30,
+        interval=0.002,
+        what=f"{sim_seconds} simulated seconds",
+    )
     return time.perf_counter() - w0
 
 
@@ -69,8 +73,11 @@ def test_a_client_that_never_reads_is_bounded_and_harms_nobody(server_factory):
         return next(c for c in srv.app.control.connections.values() if c.session and c.session.robot_name == "Sleeper")
 
     # its output piles up until the server holds back its periodic lines
-    wait_for(lambda: srv.on_loop(lambda: sleeper_conn().dropped_periodic) > 100, timeout=60,
-             what="periodic lines dropped for the sleeper")
+    wait_for(
+        lambda: srv.on_loop(lambda: sleeper_conn().dropped_periodic) > 100,
+        timeout=60,
+        what="periodic lines dropped for the sleeper",
+    )
     for _ in range(3):
         buffered = srv.on_loop(lambda: sleeper_conn().transport.get_write_buffer_size())
         held = srv.on_loop(lambda: len(sleeper_conn()._held))
@@ -88,7 +95,7 @@ def test_a_client_that_never_reads_is_bounded_and_harms_nobody(server_factory):
     got = b""
     deadline = time.monotonic() + 30
     while b"GEO {Type GroundVehicle}" not in got and time.monotonic() < deadline:
-        got = (got + sleeper.recv(1 << 20))[-(1 << 21):]
+        got = (got + sleeper.recv(1 << 20))[-(1 << 21) :]
     assert b"GEO {Type GroundVehicle}" in got
     sleeper.close()
     wait_for(lambda: srv.robot_count() == 1, what="the sleeper's robot removed")

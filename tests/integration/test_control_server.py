@@ -23,21 +23,38 @@ from helpers import (
 from usarsim.protocol.messages import StartPoses, parse_message
 
 NFO_ON_CONNECT = b"NFO {Gametype BotDeathMatch} {Level DM-USAR_yellow} {TimeLimit 0}\r\n"
-ROBOT_GEO = ("GEO {Type GroundVehicle} {Name P2AT} {Dimensions 0.5238,0.4968,0.2913} {COG 0.0000,0.0000,0.0000} "
-             "{WheelRadius 0.1300} {WheelSeparation 0.4712} {WheelBase 0.2884}")
-ROBOT_CONF = ("CONF {Type GroundVehicle} {Name P2AT} {SteeringType SkidSteered} {Mass 14.0000} {MaxSpeed 5.3850} "
-              "{MaxTorque 60.0000} {MaxFrontSteer 0.0000} {MaxRearSteer 0.0000}")
-SCANNER_CONF = ("CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} "
-                "{Fov 3.1415} {Paning True} {Tilting False}")
-SCANNER_GEO = ("GEO {Type RangeScanner} {Name Scanner1 Location 0.1440,0.0000,-0.0920 "
-               "Orientation 0.0000,0.0000,0.0000 Mount HARD}")
+ROBOT_GEO = (
+    "GEO {Type GroundVehicle} {Name P2AT} {Dimensions 0.5238,0.4968,0.2913} {COG 0.0000,0.0000,0.0000} "
+    "{WheelRadius 0.1300} {WheelSeparation 0.4712} {WheelBase 0.2884}"
+)
+ROBOT_CONF = (
+    "CONF {Type GroundVehicle} {Name P2AT} {SteeringType SkidSteered} {Mass 14.0000} {MaxSpeed 5.3850} "
+    "{MaxTorque 60.0000} {MaxFrontSteer 0.0000} {MaxRearSteer 0.0000}"
+)
+SCANNER_CONF = (
+    "CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} "
+    "{Fov 3.1415} {Paning True} {Tilting False}"
+)
+SCANNER_GEO = (
+    "GEO {Type RangeScanner} {Name Scanner1 Location 0.1440,0.0000,-0.0920 Orientation 0.0000,0.0000,0.0000 Mount HARD}"
+)
 # protocol.md 9.1: x, y, yaw of the P2AT sonar rings
 SONAR_LAYOUT = {
-    "F1": (0.145, -0.130, -1.5708), "F2": (0.185, -0.115, -0.8727), "F3": (0.220, -0.080, -0.5236),
-    "F4": (0.240, -0.025, -0.1745), "F5": (0.240, 0.025, 0.1745), "F6": (0.220, 0.080, 0.5236),
-    "F7": (0.185, 0.115, 0.8727), "F8": (0.145, 0.130, 1.5708), "R1": (-0.145, 0.130, 1.5708),
-    "R2": (-0.185, 0.115, 2.2689), "R3": (-0.220, 0.080, 2.6180), "R4": (-0.240, 0.025, 2.9671),
-    "R5": (-0.240, -0.025, -2.9671), "R6": (-0.220, -0.080, -2.6180), "R7": (-0.185, -0.115, -2.2689),
+    "F1": (0.145, -0.130, -1.5708),
+    "F2": (0.185, -0.115, -0.8727),
+    "F3": (0.220, -0.080, -0.5236),
+    "F4": (0.240, -0.025, -0.1745),
+    "F5": (0.240, 0.025, 0.1745),
+    "F6": (0.220, 0.080, 0.5236),
+    "F7": (0.185, 0.115, 0.8727),
+    "F8": (0.145, 0.130, 1.5708),
+    "R1": (-0.145, 0.130, 1.5708),
+    "R2": (-0.185, 0.115, 2.2689),
+    "R3": (-0.220, 0.080, 2.6180),
+    "R4": (-0.240, 0.025, 2.9671),
+    "R5": (-0.240, -0.025, -2.9671),
+    "R6": (-0.220, -0.080, -2.6180),
+    "R7": (-0.185, -0.115, -2.2689),
     "R8": (-0.145, -0.130, -1.5708),
 }
 SONAR_NAMES = list(SONAR_LAYOUT)
@@ -167,13 +184,20 @@ def test_a_command_split_across_two_writes(server):
         c.nfo()
         c.send_raw(b"INIT {ClassName USAR")
         # the server holds the partial line until the rest arrives
-        wait_for(lambda: server.on_loop(lambda: [x.buffer.pending_bytes for x in
-                                                 server.app.control.connections.values()]) == [20],
-                 what="the server to hold 20 pending bytes")
+        wait_for(
+            lambda: (
+                server.on_loop(lambda: [x.buffer.pending_bytes for x in server.app.control.connections.values()])
+                == [20]
+            ),
+            what="the server to hold 20 pending bytes",
+        )
         c.send_raw(b"Bot.P2AT} {Start PlayerStart1}\r\nGETSTA")
-        wait_for(lambda: server.on_loop(lambda: [x.buffer.pending_bytes for x in
-                                                 server.app.control.connections.values()]) == [6],
-                 what="the server to hold 6 pending bytes")
+        wait_for(
+            lambda: (
+                server.on_loop(lambda: [x.buffer.pending_bytes for x in server.app.control.connections.values()]) == [6]
+            ),
+            what="the server to hold 6 pending bytes",
+        )
         c.send_raw(b"RTPOSES\r\n")
         assert c.next_line().text.startswith("NFO {StartPoses")
         assert c.ask("GETGEO {Type Robot}", "GEO").text == ROBOT_GEO
@@ -186,16 +210,31 @@ def test_a_command_split_across_two_writes(server):
 def wait_alive(server, count: int = 1) -> None:
     """Wait until ``count`` sessions have a spawned robot (the spawn runs on the simulation
     thread and is confirmed to the session asynchronously)."""
+
     def alive() -> int:
-        return server.on_loop(lambda: sum(1 for x in server.app.control.connections.values()
-                                          if x.session is not None and x.session.state == "alive"))
+        return server.on_loop(
+            lambda: sum(
+                1
+                for x in server.app.control.connections.values()
+                if x.session is not None and x.session.state == "alive"
+            )
+        )
+
     wait_for(lambda: alive() == count, what=f"{count} spawned robot(s)")
 
 
 def wait_no_spawn_in_flight(server) -> None:
-    wait_for(lambda: server.on_loop(lambda: not any(x.session is not None and x.session.state == "spawning"
-                                                    for x in server.app.control.connections.values())),
-             what="no spawn in flight")
+    wait_for(
+        lambda: server.on_loop(
+            lambda: (
+                not any(
+                    x.session is not None and x.session.state == "spawning"
+                    for x in server.app.control.connections.values()
+                )
+            )
+        ),
+        what="no spawn in flight",
+    )
 
 
 @pytest.fixture
@@ -238,7 +277,7 @@ def test_sonar_conf_repeats_groups_f1_first(robot):
     line = robot.ask("GETCONF {Type Sonar}", "CONF").text
     segs = segment_list(line)
     assert segs[0] == "Type Sonar"
-    groups = [segs[i:i + 4] for i in range(1, len(segs), 4)]
+    groups = [segs[i : i + 4] for i in range(1, len(segs), 4)]
     assert [g[0] for g in groups] == [f"Name {n}" for n in SONAR_NAMES]
     for g in groups:
         assert g[1:] == ["MaxRange 5.0000", "MinRange 0.1000", "BeamAngle 0.3491"]
@@ -251,17 +290,26 @@ def test_range_scanner_conf_and_geo(robot):
     assert robot.ask("GETCONF {Type rangescanner} {Name SCANNER1}", "CONF").text == SCANNER_CONF
 
 
-@pytest.mark.parametrize("query, reply", [
-    ("GETCONF {Type Odometry}",
-     "CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099} {TrackWidth 0.5520}"),
-    ("GETCONF {Type GroundTruth}", "CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}"),
-    ("GETCONF {Type INS}", "CONF {Type INS} {Name INS} {ScanInterval 0.2000}"),
-    ("GETGEO {Type Odometry}",
-     "GEO {Type Odometry} {Name Odometry Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount HARD}"),
-    ("GETGEO {Type Encoder}",
-     "GEO {Type Encoder} {Name ECLeft Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount LeftFWheel} "
-     "{Name ECRight Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount RightFWheel}"),
-])
+@pytest.mark.parametrize(
+    "query, reply",
+    [
+        (
+            "GETCONF {Type Odometry}",
+            "CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099} {TrackWidth 0.5520}",
+        ),
+        ("GETCONF {Type GroundTruth}", "CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}"),
+        ("GETCONF {Type INS}", "CONF {Type INS} {Name INS} {ScanInterval 0.2000}"),
+        (
+            "GETGEO {Type Odometry}",
+            "GEO {Type Odometry} {Name Odometry Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount HARD}",
+        ),
+        (
+            "GETGEO {Type Encoder}",
+            "GEO {Type Encoder} {Name ECLeft Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount LeftFWheel} "
+            "{Name ECRight Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000 Mount RightFWheel}",
+        ),
+    ],
+)
 def test_other_items_geo_and_conf(robot, query, reply):
     assert robot.ask(query, query[3:7]).text == reply
 
@@ -274,27 +322,37 @@ def test_encoder_conf_groups(robot):
 
 
 def test_encoder_conf_matches_the_ut_example(robot):
-    assert robot.ask("GETCONF {Type Encoder}", "CONF").text == \
-        "CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}"
+    assert (
+        robot.ask("GETCONF {Type Encoder}", "CONF").text
+        == "CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}"
+    )
 
 
 def test_geo_and_conf_by_name(robot):
-    assert robot.ask("GETGEO {Type Sonar} {Name F5}", "GEO").text == \
-        "GEO {Type Sonar} {Name F5 Location 0.2400,0.0250,0.0000 Orientation 0.0000,0.0000,0.1745 Mount HARD}"
-    assert robot.ask("GETCONF {Type Sonar} {Name r8}", "CONF").text == \
-        "CONF {Type Sonar} {Name R8} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}"
+    assert (
+        robot.ask("GETGEO {Type Sonar} {Name F5}", "GEO").text
+        == "GEO {Type Sonar} {Name F5 Location 0.2400,0.0250,0.0000 Orientation 0.0000,0.0000,0.1745 Mount HARD}"
+    )
+    assert (
+        robot.ask("GETCONF {Type Sonar} {Name r8}", "CONF").text
+        == "CONF {Type Sonar} {Name R8} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}"
+    )
     assert robot.ask("GETCONF {Type Encoder} {Name ECRight}", "CONF").text.startswith(
-        "CONF {Type Encoder} {Name ECRight} {Resolution ")
+        "CONF {Type Encoder} {Name ECRight} {Resolution "
+    )
     assert "ECLeft" not in robot.history[-1].text
 
 
-@pytest.mark.parametrize("query, reply", [
-    ("GETGEO {Type Gripper}", "GEO {Type Gripper}"),
-    ("GETCONF {Type Gripper}", "CONF {Type Gripper}"),
-    ("GETCONF {Type Camera} {Name Camera2}", "CONF {Type Camera} {Name Camera2}"),
-    ("GETGEO {Type Sonar} {Name X9}", "GEO {Type Sonar} {Name X9}"),
-    ("GETCONF {Type MisPkg} {Name TeleMaxArm}", "CONF {Type MisPkg} {Name TeleMaxArm}"),
-])
+@pytest.mark.parametrize(
+    "query, reply",
+    [
+        ("GETGEO {Type Gripper}", "GEO {Type Gripper}"),
+        ("GETCONF {Type Gripper}", "CONF {Type Gripper}"),
+        ("GETCONF {Type Camera} {Name Camera2}", "CONF {Type Camera} {Name Camera2}"),
+        ("GETGEO {Type Sonar} {Name X9}", "GEO {Type Sonar} {Name X9}"),
+        ("GETCONF {Type MisPkg} {Name TeleMaxArm}", "CONF {Type MisPkg} {Name TeleMaxArm}"),
+    ],
+)
 def test_bare_replies_when_nothing_matches(robot, query, reply):
     line = robot.ask(query, query[3:7])
     assert line.raw == (reply + "\r\n").encode()
@@ -307,8 +365,9 @@ def test_every_sensor_line_arrives_crlf_terminated_with_a_name(robot):
     lines = robot.step(0.4)
     for ln in lines:
         assert ln.raw.endswith(b"\r\n") and b"\r" not in ln.raw[:-2] and b"\n" not in ln.raw[:-2], ln.raw
-    by_type = {t: sensor_lines(lines, t) for t in ("Sonar", "RangeScanner", "Odometry", "GroundTruth", "INS",
-                                                   "Encoder")}
+    by_type = {
+        t: sensor_lines(lines, t) for t in ("Sonar", "RangeScanner", "Odometry", "GroundTruth", "INS", "Encoder")
+    }
     for t, found in by_type.items():
         assert found, f"no SEN line of type {t}"
         for ln in found:
@@ -359,8 +418,10 @@ def test_sensor_rates_follow_scan_intervals(robot):
 def test_sta_battery_counts_down_from_1200(robot):
     lines = robot.step(0.2) + robot.step(5.0)
     sta = [ln for ln in lines if ln.text.startswith("STA ")]
-    assert sta[0].text == ("STA {Type GroundVehicle} {Time 0.00} {FrontSteer 0.0000} {RearSteer 0.0000} "
-                           "{LightToggle False} {LightIntensity 0} {Battery 1200} {View 0}")  # its camera: MultiView tile 0
+    assert sta[0].text == (
+        "STA {Type GroundVehicle} {Time 0.00} {FrontSteer 0.0000} {RearSteer 0.0000} "
+        "{LightToggle False} {LightIntensity 0} {Battery 1200} {View 0}"
+    )  # its camera: MultiView tile 0
     battery = [int(segments(ln.text)["Battery"]) for ln in sta]
     assert battery == sorted(battery, reverse=True)
     assert battery[0] == 1200
@@ -393,17 +454,20 @@ def test_set_odometry_reset(robot):
     res = [ln for ln in lines if ln.text.startswith("RES ")]
     assert len(res) == 1
     assert re.fullmatch(r"RES \{Time \d+\.\d\d\} \{Type Odometry\} \{Name Odometry\} \{Status OK\}", res[0].text)
-    after = odometry_poses(lines[lines.index(res[0]):])
+    after = odometry_poses(lines[lines.index(res[0]) :])
     assert after
     for x, y, theta in after:
         assert abs(x) < 0.01 and abs(y) < 0.01 and abs(math.remainder(theta, 2 * math.pi)) < 0.01
 
 
-@pytest.mark.parametrize("command, reply", [
-    ("SET {Type Foo} {Name Bar} {Opcode Baz}", "{Type Foo} {Name Bar} {Status Failed}"),
-    ("SET {Type Odometry} {Name Nope} {Opcode RESET}", "{Type Odometry} {Name Nope} {Status Failed}"),
-    ("SET {Type Odometry} {Name Odometry} {Opcode Fly}", "{Type Odometry} {Name Odometry} {Status Failed}"),
-])
+@pytest.mark.parametrize(
+    "command, reply",
+    [
+        ("SET {Type Foo} {Name Bar} {Opcode Baz}", "{Type Foo} {Name Bar} {Status Failed}"),
+        ("SET {Type Odometry} {Name Nope} {Opcode RESET}", "{Type Odometry} {Name Nope} {Status Failed}"),
+        ("SET {Type Odometry} {Name Odometry} {Opcode Fly}", "{Type Odometry} {Name Odometry} {Status Failed}"),
+    ],
+)
 def test_set_on_unknown_item_or_opcode_fails(robot, command, reply):
     robot.send(command)
     res = [ln.text for ln in robot.step(0.2) if ln.text.startswith("RES ")]
@@ -414,8 +478,10 @@ def test_set_on_unknown_item_or_opcode_fails(robot, command, reply):
 def test_drive_right_after_init_in_one_write_is_applied(server):
     with server.connect() as c:
         c.nfo()
-        c.send_raw(b"INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}\r\n"
-                   b"DRIVE {Left 3} {Right 3}\r\nSTEP {Time 2.0}\r\n")
+        c.send_raw(
+            b"INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}\r\n"
+            b"DRIVE {Left 3} {Right 3}\r\nSTEP {Time 2.0}\r\n"
+        )
         lines = c.lines_until("STEPPED")
         gts = ground_truth(lines)
         assert gts[-1][1][0] - gts[0][1][0] > 0.3
@@ -433,7 +499,7 @@ MALFORMED = {
     "drive-overflow": b"DRIVE {Left 1e999} {Right -1e999}\r\n",
     "step-bad": b"STEP {Time -1}\r\nSTEP {Time abc}\r\nSTEP\r\n",
     "init-bad-location": b"INIT {ClassName USARBot.P2AT} {Location 1e9,0,0}\r\n"
-                        b"INIT {ClassName USARBot.P2AT} {Location nan,0,0}\r\n",
+    b"INIT {ClassName USARBot.P2AT} {Location nan,0,0}\r\n",
 }
 
 

@@ -37,11 +37,16 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-FENCE = re.compile(r"(?:<!-- file: (?P<file>[\w./-]+) -->\s*\n)?^(?P<indent>[ \t]*)```(?P<lang>\w*)\n(?P<body>.*?)^(?P=indent)```",
-                   re.S | re.M)
+FENCE = re.compile(
+    r"(?:<!-- file: (?P<file>[\w./-]+) -->\s*\n)?^(?P<indent>[ \t]*)```(?P<lang>\w*)\n(?P<body>.*?)^(?P=indent)```",
+    re.S | re.M,
+)
 LINK = re.compile(r"\]\((docs/[\w-]+\.md)(?:#[\w-]*)?\)")
-NOT_RUN = (re.compile(r"^bash scripts/test\.sh\b"), re.compile(r"^(\.|source) \.venv/bin/activate$"),
-           re.compile(r"^(python -m )?pip install\b"))
+NOT_RUN = (
+    re.compile(r"^bash scripts/test\.sh\b"),
+    re.compile(r"^(\.|source) \.venv/bin/activate$"),
+    re.compile(r"^(python -m )?pip install\b"),
+)
 COMMENT = re.compile(r"\s#\s?")
 SERVER = re.compile(r"^(usarsim serve|bash scripts/serve\.sh)\b")
 LISTENING = re.compile(r"usarsim: control listening on|listening on \S+:\d+")
@@ -60,7 +65,7 @@ def commands(page: str) -> list[tuple[str, str, str | None]]:
     text = (ROOT / page).read_text(encoding="utf-8")
     out: list[tuple[str, str, str | None]] = []
     for m in FENCE.finditer(text):
-        body = "\n".join(ln[len(m.group("indent")):] for ln in m.group("body").splitlines())
+        body = "\n".join(ln[len(m.group("indent")) :] for ln in m.group("body").splitlines())
         if m.group("file"):
             out.append(("file", m.group("file"), body + "\n"))
         if m.group("lang") != "bash":
@@ -85,8 +90,12 @@ def commands(page: str) -> list[tuple[str, str, str | None]]:
 
 
 def _env() -> dict[str, str]:
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "USARSIM_PYTHON": sys.executable,
-           "PYTHONUNBUFFERED": "1"}
+    env = {
+        **os.environ,
+        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
+        "USARSIM_PYTHON": sys.executable,
+        "PYTHONUNBUFFERED": "1",
+    }
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     return env
 
@@ -101,8 +110,14 @@ class Background:
         self.command = command
         self.log = log
         with open(log, "wb") as err:
-            self.proc = subprocess.Popen(["bash", "-c", "exec " + _as_run(command)], cwd=cwd, env=_env(),
-                                         stdout=subprocess.PIPE, stderr=err, start_new_session=True)
+            self.proc = subprocess.Popen(
+                ["bash", "-c", "exec " + _as_run(command)],
+                cwd=cwd,
+                env=_env(),
+                stdout=subprocess.PIPE,
+                stderr=err,
+                start_new_session=True,
+            )
         self.out = ""
         sel = selectors.DefaultSelector()
         sel.register(self.proc.stdout, selectors.EVENT_READ)
@@ -138,15 +153,29 @@ class Background:
 
 
 def _run(command: str, cwd: Path) -> None:
-    out = subprocess.run(["bash", "-c", _as_run(command)], cwd=cwd, env=_env(), capture_output=True, text=True,
-                         timeout=COMMAND_TIMEOUT_S, check=False, stdin=subprocess.DEVNULL)
-    assert out.returncode == 0, (f"{command!r} exited {out.returncode}\n--- stdout\n{out.stdout[-3000:]}\n"
-                                 f"--- stderr\n{out.stderr[-3000:]}")
+    out = subprocess.run(
+        ["bash", "-c", _as_run(command)],
+        cwd=cwd,
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=COMMAND_TIMEOUT_S,
+        check=False,
+        stdin=subprocess.DEVNULL,
+    )
+    assert out.returncode == 0, (
+        f"{command!r} exited {out.returncode}\n--- stdout\n{out.stdout[-3000:]}\n--- stderr\n{out.stderr[-3000:]}"
+    )
 
 
 def test_the_readme_links_the_reference_pages():
-    assert {"docs/commands.md", "docs/protocol.md", "docs/performance.md", "docs/recording.md",
-            "docs/experiments.md"} <= set(pages())
+    assert {
+        "docs/commands.md",
+        "docs/protocol.md",
+        "docs/performance.md",
+        "docs/recording.md",
+        "docs/experiments.md",
+    } <= set(pages())
     for page in pages():
         assert (ROOT / page).is_file(), page
 

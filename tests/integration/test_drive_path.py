@@ -12,8 +12,10 @@ import pytest
 from helpers import ground_truth
 
 # NIST's Iridium test UI sends this line for its Stop button, whatever the robot.
-IRIDIUM_STOP = ("DRIVE {Left 0} {Right 0} {Speed 0} {AltitudeVelocity 0} {LinearVelocity 0} {LateralVelocity 0} "
-                "{RotationalVelocity 0}")
+IRIDIUM_STOP = (
+    "DRIVE {Left 0} {Right 0} {Speed 0} {AltitudeVelocity 0} {LinearVelocity 0} {LateralVelocity 0} "
+    "{RotationalVelocity 0}"
+)
 
 
 def travelled(c, seconds: float) -> tuple[float, float]:
@@ -23,12 +25,15 @@ def travelled(c, seconds: float) -> tuple[float, float]:
     return math.hypot(p1[0] - p0[0], p1[1] - p0[1]), math.remainder(o1[2] - o0[2], 2 * math.pi)
 
 
-@pytest.mark.parametrize("cls, go", [
-    ("P2AT", "DRIVE {Left 3} {Right 3}"),
-    ("AirRobot", "DRIVE {LinearVelocity 1}"),
-    ("Sedan", "DRIVE {Speed 5} {FrontSteer 0}"),
-    ("ERS", "DRIVE {LinearVelocity 0.1}"),
-])
+@pytest.mark.parametrize(
+    "cls, go",
+    [
+        ("P2AT", "DRIVE {Left 3} {Right 3}"),
+        ("AirRobot", "DRIVE {LinearVelocity 1}"),
+        ("Sedan", "DRIVE {Speed 5} {FrontSteer 0}"),
+        ("ERS", "DRIVE {LinearVelocity 0.1}"),
+    ],
+)
 def test_the_iridium_stop_line_stops_every_kind_of_robot(server_factory, test_world, cls, go):
     srv = server_factory(world=test_world, seed=3)
     c = srv.connect()
@@ -151,8 +156,9 @@ def test_a_robot_file_is_checked_by_its_drive_model(tmp_path):
 def test_an_init_of_a_robot_whose_drive_is_not_registered_is_refused(server_factory, test_world, tmp_path):
     robots = tmp_path / "robots"
     robots.mkdir()
-    (robots / "HoverBot.yaml").write_text(UNICYCLE_ROBOT.replace("class_name: UniBot", "class_name: HoverBot")
-                                          .replace("drive: unicycle", "drive: hover"))
+    (robots / "HoverBot.yaml").write_text(
+        UNICYCLE_ROBOT.replace("class_name: UniBot", "class_name: HoverBot").replace("drive: unicycle", "drive: hover")
+    )
     srv = server_factory(world=test_world, seed=3, robot_dirs=(str(robots),))
     c = srv.connect()
     c.nfo()

@@ -96,14 +96,18 @@ def test_ackermann_speed_steering_and_sta(server_factory, test_world, robots_dir
     c = spawn(server_factory, test_world, robots_dir, "TestCar", -8.0, -8.0, 1.5708)
     assert c.ask("GETCONF {Type Robot}", "CONF").text == (
         "CONF {Type GroundVehicle} {Name TestCar} {SteeringType AckermanSteered} {Mass 1000.0000} "
-        "{MaxSpeed 40.0000} {MaxTorque 500.0000} {MaxFrontSteer 0.6000} {MaxRearSteer 0.0000}")
+        "{MaxSpeed 40.0000} {MaxTorque 500.0000} {MaxFrontSteer 0.6000} {MaxRearSteer 0.0000}"
+    )
     c.send("DRIVE {Speed 10} {FrontSteer 0} {RearSteer 0}")
     c.step(2.0)
     speed, rate, sta, _ = motion(c, 1.0)
     assert speed == pytest.approx(0.3 * 10, rel=0.05) and abs(rate) < 0.01  # wheel radius 0.3 m
-    assert re.fullmatch(r"STA \{Type GroundVehicle\} \{Time \d+\.\d{2}\} \{FrontSteer -?0\.0\d{3}\} "
-                        r"\{RearSteer 0\.0000\} \{LightToggle False\} \{LightIntensity 0\} \{Battery \d+\} "
-                        r"\{View -1\}", sta), sta
+    assert re.fullmatch(
+        r"STA \{Type GroundVehicle\} \{Time \d+\.\d{2}\} \{FrontSteer -?0\.0\d{3}\} "
+        r"\{RearSteer 0\.0000\} \{LightToggle False\} \{LightIntensity 0\} \{Battery \d+\} "
+        r"\{View -1\}",
+        sta,
+    ), sta
     c.send("DRIVE {Speed 5} {FrontSteer 0.3}")  # no RearSteer: it keeps its value
     c.step(2.0)
     speed, rate, sta, _ = motion(c, 1.0)
@@ -148,8 +152,11 @@ def test_aerial_drive_hovers_climbs_flies_and_turns(server_factory, test_world):
     c.send("INIT {ClassName USARBot.AirRobot} {Name Air} {Location -6,0,-1.0} {Rotation 0,0,0}")
     lines = c.step(1.0)
     sta = [ln.text for ln in lines if ln.text.startswith("STA")][-1]
-    assert re.fullmatch(r"STA \{Type AerialVehicle\} \{Time \d+\.\d{2}\} \{LightToggle False\} \{LightIntensity 0\} "
-                        r"\{Battery \d+\} \{View 0\}", sta), sta
+    assert re.fullmatch(
+        r"STA \{Type AerialVehicle\} \{Time \d+\.\d{2}\} \{LightToggle False\} \{LightIntensity 0\} "
+        r"\{Battery \d+\} \{View 0\}",
+        sta,
+    ), sta
     gts = ground_truth(lines)
     assert gts[-1][1][2] == pytest.approx(-1.0, abs=0.01)  # it hovers where it was put
     c.send("DRIVE {AltitudeVelocity 0.5}")
@@ -244,8 +251,12 @@ def _joint_angle(srv, joint: str) -> float:
 
 def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factory, test_world):
     # standing on its legs
-    srv, c = _legged(server_factory, test_world, "INIT {ClassName USARBot.ERS} {Name Dog} {Location -6,0,-0.3} "
-                     "{Rotation 0,0,0}", -0.157)
+    srv, c = _legged(
+        server_factory,
+        test_world,
+        "INIT {ClassName USARBot.ERS} {Name Dog} {Location -6,0,-0.3} {Rotation 0,0,0}",
+        -0.157,
+    )
     c.send("DRIVE {LinearVelocity 0.1}")
     c.step(2.0)
     speed, rate, _, (p0, p1) = motion(c, 2.0)
@@ -264,8 +275,12 @@ def test_the_robot_dog_stands_trots_turns_and_takes_joint_commands(server_factor
 
 def test_the_humanoid_stands_walks_turns_side_steps_and_takes_joint_commands(server_factory, test_world):
     # a start pose 1 m up: a walking robot is set down on its feet (trunk 0.36 m up), not dropped
-    srv, c = _legged(server_factory, test_world, "INIT {ClassName USARBot.QRIO} {Name Q} {Location -6,0,-1.0} "
-                     "{Rotation 0,0,0}", -0.365)
+    srv, c = _legged(
+        server_factory,
+        test_world,
+        "INIT {ClassName USARBot.QRIO} {Name Q} {Location -6,0,-1.0} {Rotation 0,0,0}",
+        -0.365,
+    )
     c.send("DRIVE {LinearVelocity 0.1}")
     c.step(3.0)
     speed, rate, _, (p0, p1) = motion(c, 4.0)
@@ -305,8 +320,14 @@ def test_the_humanoid_keeps_its_feet_under_changing_commands(test_world):
     rng = random.Random(7)
     worst = 0.0
     for _ in range(12):
-        drive_velocities(sim, 1, None, rng.uniform(-0.1, 0.1), rng.choice([0.0, rng.uniform(-0.02, 0.02)]),
-                         rng.choice([0.0, rng.uniform(-0.4, 0.4)]))
+        drive_velocities(
+            sim,
+            1,
+            None,
+            rng.uniform(-0.1, 0.1),
+            rng.choice([0.0, rng.uniform(-0.02, 0.02)]),
+            rng.choice([0.0, rng.uniform(-0.4, 0.4)]),
+        )
         for _ in range(rng.choice([2, 7, 15])):
             sim.advance(0.2)
             _, (roll, pitch, _) = sim.pose_of(1)

@@ -16,8 +16,10 @@ def spawn(server, start="PlayerStart1", rotation=None, z=None):
         c.send(f"INIT {{ClassName USARBot.P2AT}} {{Name R1}} {{Start {start}}}")
     else:
         p = server.app.world.start_pose(start)
-        c.send(f"INIT {{ClassName USARBot.P2AT}} {{Name R1}} {{Location {p.location[0]},{p.location[1]},{z}}} "
-               f"{{Rotation {rotation}}}")
+        c.send(
+            f"INIT {{ClassName USARBot.P2AT}} {{Name R1}} {{Location {p.location[0]},{p.location[1]},{z}}} "
+            f"{{Rotation {rotation}}}"
+        )
     c.step(2.0)
     return c
 
@@ -44,6 +46,7 @@ def test_flip_rights_an_overturned_robot_and_is_ignored_when_upright(server):
     def up():
         def get(sim):
             return float(sim.data.xmat[sim.robots[1].handle.body_id][8])
+
         return server.on_sim(get)
 
     assert up() < -0.9
@@ -60,7 +63,6 @@ def test_flip_rights_an_overturned_robot_and_is_ignored_when_upright(server):
     assert math.dist(before[0], after[0]) < 0.01
 
 
-
 def test_a_robot_removed_while_being_righted_is_forgotten_and_the_other_is_righted(server):
     from usarsim.sim.systems.righting import Righting
 
@@ -68,13 +70,16 @@ def test_a_robot_removed_while_being_righted_is_forgotten_and_the_other_is_right
     p = server.app.world.start_pose("PlayerStart2")
     second = server.connect()
     second.nfo()
-    second.send(f"INIT {{ClassName USARBot.P2AT}} {{Name R2}} {{Location {p.location[0]},{p.location[1]},-0.5}} "
-                "{Rotation 3.1416,0,0}")
+    second.send(
+        f"INIT {{ClassName USARBot.P2AT}} {{Name R2}} {{Location {p.location[0]},{p.location[1]},-0.5}} "
+        "{Rotation 3.1416,0,0}"
+    )
     second.step(2.0)
 
     def righting():
-        return server.on_sim(lambda sim: sorted(uid for s in sim.systems if isinstance(s, Righting)
-                                                for uid in s.righting))
+        return server.on_sim(
+            lambda sim: sorted(uid for s in sim.systems if isinstance(s, Righting) for uid in s.righting)
+        )
 
     def up(uid):
         return server.on_sim(lambda sim: float(sim.data.xmat[sim.robots[uid].handle.body_id][8]))

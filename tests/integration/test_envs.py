@@ -52,8 +52,10 @@ def test_gymnasium_check_env(env_id):
         assert set(space.spaces) == {"laser", "sonar", "odometry", "battery", "victims"}
         assert space["laser"].shape == (30,) and space["laser"].high.max() == pytest.approx(20.0)
         assert space["sonar"].shape == (16,) and space["sonar"].high.max() == pytest.approx(5.0)
-        assert all(s.dtype == np.float32 and np.all(np.isfinite(s.low)) and np.all(np.isfinite(s.high))
-                   for s in space.spaces.values())
+        assert all(
+            s.dtype == np.float32 and np.all(np.isfinite(s.low)) and np.all(np.isfinite(s.high))
+            for s in space.spaces.values()
+        )
     finally:
         env.close()
     assert env.unwrapped.sim.server is None  # close() stopped the simulator
@@ -74,8 +76,10 @@ def test_made_by_module_path_with_chosen_observations():
 
 def test_the_environments_load_no_mujoco_or_simulation():
     """usarsim.envs is a client of the simulator: the spaces come from GETGEO and GETCONF."""
-    code = ("import sys, usarsim.envs\n"
-            "print(sorted(m for m in sys.modules if m == 'mujoco' or m.startswith(('usarsim.sim', 'usarsim.server'))))")
+    code = (
+        "import sys, usarsim.envs\n"
+        "print(sorted(m for m in sys.modules if m == 'mujoco' or m.startswith(('usarsim.sim', 'usarsim.server'))))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True)
     assert out.stdout.strip() == "[]"
 
@@ -217,8 +221,14 @@ def test_messages_cross_only_links_the_radio_model_holds_and_a_flipped_robot_lea
     # robot_3 starts upside down
     ini = tmp_path / "radio.ini"
     ini.write_text("[USARBot.ComServer]\nModel=waf\neCutoff=-75\n")
-    env = TeamExplore(robots=4, starts=["PlayerStart1", "PlayerStart2", NE_CORNER, UPSIDE_DOWN_AT_START7],
-                      message_size=3, wireless_config=str(ini), shared_reward=False, time_limit_s=2.0)
+    env = TeamExplore(
+        robots=4,
+        starts=["PlayerStart1", "PlayerStart2", NE_CORNER, UPSIDE_DOWN_AT_START7],
+        message_size=3,
+        wireless_config=str(ini),
+        shared_reward=False,
+        time_limit_s=2.0,
+    )
     assert env.radio.cutoff_dbm == -75.0
     try:
         env.reset(seed=4)

@@ -22,26 +22,33 @@ def client(server_factory, test_world):
 
 
 def test_queries_before_init_are_answered_with_an_error(client):
-    for line, word in (("GETGEO {Type Robot}", "GETGEO"), ("GETCONF {Type Robot}", "GETCONF"),
-                       ("SET {Type Odometry} {Opcode RESET}", "SET")):
+    for line, word in (
+        ("GETGEO {Type Robot}", "GETGEO"),
+        ("GETCONF {Type Robot}", "GETCONF"),
+        ("SET {Type Odometry} {Opcode RESET}", "SET"),
+    ):
         reply = client.ask(line, "ERROR")
         assert reply.text == f"ERROR {{Command {word}}} {{Reason no robot on this connection: send INIT first}}"
 
 
-@pytest.mark.parametrize("line, reason", [
-    ("INIT {ClassName USARBot.P2ATT} {Location 0,0,-0.3}", "unknown robot class 'USARBot.P2ATT'"),
-    ("INIT {ClassName USARBot.P2AT} {Start Nowhere}", "unknown start pose 'Nowhere'"),
-    ("INIT {ClassName USARBot.P2AT} {Location 500,0,-0.3}", "outside the world"),
-    ("INIT {Name R}", "INIT needs (ClassName USARBot.<class>)"),
-])
+@pytest.mark.parametrize(
+    "line, reason",
+    [
+        ("INIT {ClassName USARBot.P2ATT} {Location 0,0,-0.3}", "unknown robot class 'USARBot.P2ATT'"),
+        ("INIT {ClassName USARBot.P2AT} {Start Nowhere}", "unknown start pose 'Nowhere'"),
+        ("INIT {ClassName USARBot.P2AT} {Location 500,0,-0.3}", "outside the world"),
+        ("INIT {Name R}", "INIT needs (ClassName USARBot.<class>)"),
+    ],
+)
 def test_an_init_that_spawns_nothing_says_why_and_no_robot_answers_after_it(client, line, reason):
     client.send(line)
     lines = client.step(0.2)
     assert any(e.startswith("ERROR {Command INIT} {Reason ") and reason in e for e in errors(lines)), lines
     assert not [ln for ln in lines if ln.text.startswith("STA")]
     # no robot exists: its data are not given out
-    assert client.ask("GETCONF {Type Robot}", "ERROR").text.endswith("{Reason no robot on this connection: "
-                                                                      "send INIT first}")
+    assert client.ask("GETCONF {Type Robot}", "ERROR").text.endswith(
+        "{Reason no robot on this connection: send INIT first}"
+    )
 
 
 def test_a_second_init_and_bad_steps_are_answered(client):
@@ -101,6 +108,8 @@ def test_a_set_that_fails_on_an_unexpected_error_is_answered(client):
     client.srv.sim.operate = broken_operate
     client.send("SET {Type Odometry} {Opcode RESET}")
     lines = client.step(0.2)
-    assert errors(lines) == ["ERROR {Command SET} {Reason the request failed on an unexpected error (RuntimeError; "
-                             "the server's log has the traceback)}"]
+    assert errors(lines) == [
+        "ERROR {Command SET} {Reason the request failed on an unexpected error (RuntimeError; "
+        "the server's log has the traceback)}"
+    ]
     assert [ln for ln in client.step(0.2) if ln.text.startswith("STEPPED")]  # the world goes on

@@ -74,12 +74,14 @@ def run_watched(port: int, *args: str, example: Path = EXAMPLE) -> tuple[subproc
     its robot was, (time, x, y), by its GroundTruth sensor."""
     tap = Tap(port)
     try:
-        out = subprocess.run([sys.executable, str(example), "--port", str(tap.port), *args], capture_output=True,
-                             text=True, timeout=180)
+        out = subprocess.run(
+            [sys.executable, str(example), "--port", str(tap.port), *args], capture_output=True, text=True, timeout=180
+        )
     finally:
         tap.close()
-    return out, [(float(m.group(1)), float(m.group(2)), float(m.group(3)))
-                 for m in map(GROUND_TRUTH.match, tap.lines) if m]
+    return out, [
+        (float(m.group(1)), float(m.group(2)), float(m.group(3))) for m in map(GROUND_TRUTH.match, tap.lines) if m
+    ]
 
 
 def longest_stay(samples: list[tuple[float, float, float]]) -> tuple[float, tuple[float, float, float]]:
@@ -105,8 +107,12 @@ def decisions(out: str) -> list[tuple[float, str]]:
 def test_the_example_spawns_at_the_first_pose_and_turns_before_the_wall(server_factory, tmp_path):
     (tmp_path / "WallAhead.yaml").write_text(WORLD)
     srv = server_factory(world=load_world(tmp_path / "WallAhead.yaml"), lockstep=False, speed=1.0)  # real time
-    proc = subprocess.Popen([sys.executable, str(EXAMPLE), "--port", str(srv.port), "--speed", "max",
-                             "--seconds", "8"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, str(EXAMPLE), "--port", str(srv.port), "--speed", "max", "--seconds", "8"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     poses = []  # the robot's ground truth while the example drives it
     deadline = time.monotonic() + 40.0
     while proc.poll() is None and time.monotonic() < deadline:
@@ -124,8 +130,11 @@ def test_the_example_spawns_at_the_first_pose_and_turns_before_the_wall(server_f
     assert math.hypot(x0, y0) < 0.3 and abs(yaw0) < 0.1  # spawned at Zeta, facing the wall
     steps = decisions(out)
     assert re.fullmatch(r"forward 0\.70 m/s \(laser 2\.\d\d m clear\)", steps[0][1]), out  # 5.385 rad/s x 0.13 m
-    turns = [(float(m.group(2)), m.group(1)) for _, what in steps
-             if (m := re.fullmatch(r"turning (left|right) on the spot \(laser (\d+\.\d+) m ahead\)", what))]
+    turns = [
+        (float(m.group(2)), m.group(1))
+        for _, what in steps
+        if (m := re.fullmatch(r"turning (left|right) on the spot \(laser (\d+\.\d+) m ahead\)", what))
+    ]
     assert turns, out
     # it turns when something is nearer than 1 m ahead (printed to 2 decimals: 0.996 m reads 1.00)
     assert all(ahead <= 1.0 for ahead, _ in turns)
@@ -147,8 +156,9 @@ def test_it_backs_away_from_a_kerb_none_of_its_sensors_sees(tmp_path):
     steps = decisions(out.stdout)
     assert steps[0] == (0.0, "forward 0.26 m/s (laser 20.00 m clear)"), out.stdout
     # the next decision: it noticed it made no headway for a second, where it was
-    m = re.fullmatch(r"stuck for 1\.\d s at \((-?\d+\.\d\d), (-?\d+\.\d\d)\): backing up, then turning (left|right)",
-                     steps[1][1])
+    m = re.fullmatch(
+        r"stuck for 1\.\d s at \((-?\d+\.\d\d), (-?\d+\.\d\d)\): backing up, then turning (left|right)", steps[1][1]
+    )
     assert m, out.stdout
     t_stuck, x, y = steps[1][0], float(m.group(1)), float(m.group(2))
     # against the kerb (the robot's centre within its half length of the kerb's middle line)
@@ -182,8 +192,10 @@ def test_the_demo_explores_the_yellow_arena_for_60_s_from_every_start_pose_witho
             gap = max(b[0] - a[0] for a, b in zip(samples, samples[1:]))
             stay, (t, x, y) = longest_stay(samples)
             if span < 59.0 or gap > 0.11 or stay > STALL_MAX_S:
-                problems.append(f"{start} at {speed}: stood still {stay:.1f} s at ({x:.2f}, {y:.2f}) from t={t:.1f} "
-                                f"(ground truth over {span:.1f} s, every {gap:.2f} s at most)")
+                problems.append(
+                    f"{start} at {speed}: stood still {stay:.1f} s at ({x:.2f}, {y:.2f}) from t={t:.1f} "
+                    f"(ground truth over {span:.1f} s, every {gap:.2f} s at most)"
+                )
     assert not problems, "\n".join(problems)
 
     out, samples = outputs[poses[0], "max"]
@@ -197,8 +209,9 @@ def test_the_demo_explores_the_yellow_arena_for_60_s_from_every_start_pose_witho
 def test_client_drive_explores_for_60_s_without_standing_still_over_3_s():
     """examples/client_drive.py (the client library) on a running lock-step server."""
     with launch(world="DM-USAR_yellow", lockstep=True) as srv:
-        out, samples = run_watched(srv.port, "--lockstep", "--seconds", "60",
-                                   example=EXAMPLE.parent / "client_drive.py")
+        out, samples = run_watched(
+            srv.port, "--lockstep", "--seconds", "60", example=EXAMPLE.parent / "client_drive.py"
+        )
     assert out.returncode == 0 and out.stderr == "", out.stderr
     assert out.stdout.rstrip().splitlines()[-1].startswith("t= 60.0 s stopped: odometry")
     assert samples[-1][0] - samples[0][0] > 59.0
@@ -211,8 +224,10 @@ def test_a_lockstep_server_without_lockstep_is_one_line_and_exit_1():
         out = run_example("--port", str(srv.port), "--seconds", "5", timeout=60)
         both = run_example("--port", str(srv.port), "--seconds", "1", "--lockstep", timeout=60)
     assert out.returncode == 1
-    assert out.stderr == (f"drive_p2at: the simulator on 127.0.0.1:{srv.port} runs in lock-step (usarsim serve "
-                          "--lockstep): add --lockstep to step its clock from here, or start it without --lockstep\n")
+    assert out.stderr == (
+        f"drive_p2at: the simulator on 127.0.0.1:{srv.port} runs in lock-step (usarsim serve "
+        "--lockstep): add --lockstep to step its clock from here, or start it without --lockstep\n"
+    )
     assert "INIT" not in out.stdout  # it said so before it spawned anything
     assert both.returncode == 0 and both.stderr == "" and "t=  1.0 s stopped at" in both.stdout
 
@@ -223,8 +238,10 @@ def test_without_a_server_it_exits_1_at_once_saying_why_in_one_line():
     out = run_example("--port", str(port), "--seconds", "5", timeout=20)
     assert out.returncode == 1
     assert time.monotonic() - t0 < 10
-    assert out.stderr == (f"drive_p2at: no simulator on 127.0.0.1:{port} (connection refused): start one with "
-                          "'usarsim serve' (or bash scripts/serve.sh)\n")
+    assert out.stderr == (
+        f"drive_p2at: no simulator on 127.0.0.1:{port} (connection refused): start one with "
+        "'usarsim serve' (or bash scripts/serve.sh)\n"
+    )
     assert out.stdout == ""
 
 

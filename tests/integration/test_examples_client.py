@@ -17,8 +17,13 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def run(name: str, *args: str, timeout: float = 180) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, str(EXAMPLES / name), *args], capture_output=True, text=True,
-                          timeout=timeout, stdin=subprocess.DEVNULL)
+    return subprocess.run(
+        [sys.executable, str(EXAMPLES / name), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        stdin=subprocess.DEVNULL,
+    )
 
 
 def free_port() -> int:
@@ -50,8 +55,10 @@ def test_client_drive_drives_and_reports_its_odometry():
 def test_client_drive_without_a_server_says_so_in_one_line():
     port = free_port()
     out = run("client_drive.py", "--port", str(port), "--seconds", "5", timeout=60)
-    one_line_and_exit_1(out, f"client_drive: no simulator on 127.0.0.1:{port}: start one with 'usarsim serve' "
-                             "(or bash scripts/serve.sh)")
+    one_line_and_exit_1(
+        out,
+        f"client_drive: no simulator on 127.0.0.1:{port}: start one with 'usarsim serve' (or bash scripts/serve.sh)",
+    )
     assert out.stdout == ""
 
 
@@ -59,9 +66,12 @@ def test_client_drive_on_a_lockstep_server_needs_lockstep_and_steps_it_with_it()
     with launch(lockstep=True) as srv:
         without = run("client_drive.py", "--port", str(srv.port), "--seconds", "2", timeout=60)
         with_it = run("client_drive.py", "--port", str(srv.port), "--lockstep", "--seconds", "2", timeout=60)
-    one_line_and_exit_1(without, f"client_drive: the simulator on 127.0.0.1:{srv.port} runs in lock-step (usarsim "
-                                 "serve --lockstep): add --lockstep to step its clock from here, or start it without "
-                                 "--lockstep")
+    one_line_and_exit_1(
+        without,
+        f"client_drive: the simulator on 127.0.0.1:{srv.port} runs in lock-step (usarsim "
+        "serve --lockstep): add --lockstep to step its clock from here, or start it without "
+        "--lockstep",
+    )
     assert with_it.returncode == 0, with_it.stderr
     assert re.search(r"^t=  2\.0 s stopped: odometry 0\.[3-9]\d, ", with_it.stdout, re.M), with_it.stdout  # drove
 
@@ -73,10 +83,14 @@ def test_client_drive_on_a_real_time_server_runs_without_lockstep_and_refuses_it
         both = run("drive_p2at.py", "--port", str(srv.port), "--lockstep", "--seconds", "2", timeout=60)
     assert real_time.returncode == 0, real_time.stderr
     assert re.search(r"^t=\s*2\.\d s stopped: odometry \d\.\d\d, ", real_time.stdout, re.M), real_time.stdout
-    one_line_and_exit_1(stepping, f"client_drive: the simulator on 127.0.0.1:{srv.port} runs in real time: leave out "
-                                  "--lockstep")
-    one_line_and_exit_1(both, f"drive_p2at: the simulator on 127.0.0.1:{srv.port} runs in real time: leave out "
-                              "--lockstep (it is for a server started with usarsim serve --lockstep)")
+    one_line_and_exit_1(
+        stepping, f"client_drive: the simulator on 127.0.0.1:{srv.port} runs in real time: leave out --lockstep"
+    )
+    one_line_and_exit_1(
+        both,
+        f"drive_p2at: the simulator on 127.0.0.1:{srv.port} runs in real time: leave out "
+        "--lockstep (it is for a server started with usarsim serve --lockstep)",
+    )
 
 
 def test_gym_explore_runs_an_episode():

@@ -15,8 +15,13 @@ HIDE = "import sys\nfor m in {modules!r}: sys.modules[m] = None\n"
 
 
 def run_without(modules: tuple[str, ...], code: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", HIDE.format(modules=modules) + code], capture_output=True,
-                          text=True, timeout=120, check=False)
+    return subprocess.run(
+        [sys.executable, "-c", HIDE.format(modules=modules) + code],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
 
 
 def usarsim_without(modules: tuple[str, ...], *argv: str) -> subprocess.CompletedProcess:
@@ -26,13 +31,16 @@ def usarsim_without(modules: tuple[str, ...], *argv: str) -> subprocess.Complete
 HEAVY = EXTRAS["sweep"] + EXTRAS["record"]
 
 
-@pytest.mark.parametrize(("argv", "extra"), [
-    (("sweep", "explorers.yaml"), "sweep"),
-    (("report", "results/explorers"), "sweep"),
-    (("replay", "run.mcap"), "record"),
-    (("serve", "--record", "run.mcap"), "record"),
-    (("serve", "--foxglove"), "record"),
-])
+@pytest.mark.parametrize(
+    ("argv", "extra"),
+    [
+        (("sweep", "explorers.yaml"), "sweep"),
+        (("report", "results/explorers"), "sweep"),
+        (("replay", "run.mcap"), "record"),
+        (("serve", "--record", "run.mcap"), "record"),
+        (("serve", "--foxglove"), "record"),
+    ],
+)
 def test_a_command_needing_a_missing_extra_says_which_in_one_line(argv, extra):
     out = usarsim_without(HEAVY, *argv)
     assert out.returncode == 1, out.stderr

@@ -48,16 +48,22 @@ start_poses:
 
 # A roof 3 m above the floor (its underside at z = -3.0), 200 m square: a ray 5 degrees
 # above the horizon rises 3 m within 34 m, so every satellite in the sky is shaded.
-ROOFED_WORLD = OPEN_WORLD.replace("name: GpsOpen", "name: GpsRoofed") + """\
+ROOFED_WORLD = (
+    OPEN_WORLD.replace("name: GpsOpen", "name: GpsRoofed")
+    + """\
 objects:
   - {name: roof, shape: box, center: [0.0, 0.0, -3.05], size: [200.0, 200.0, 0.1]}
 """
+)
 
 # A 30 m tall wall 1 m east of the origin, 200 m long: it hides the eastern sky.
-WALLED_WORLD = OPEN_WORLD.replace("name: GpsOpen", "name: GpsWalled") + """\
+WALLED_WORLD = (
+    OPEN_WORLD.replace("name: GpsOpen", "name: GpsWalled")
+    + """\
 objects:
   - {name: wall, shape: box, center: [0.0, 1.5, -15.0], size: [200.0, 1.0, 30.0]}
 """
+)
 
 
 def write_world(tmp_path, text: str, name: str):
@@ -77,8 +83,9 @@ def gps_robot(tmp_path, **params):
     return load_robot(path)
 
 
-def run(world, robot, *, seed: int = 0, spawns=((0.0, 0.0, 0.0),), settle: float = 1.0,
-        seconds: float = 2.0) -> tuple[Simulation, dict[int, list[tuple[float, GpsReading]]]]:
+def run(
+    world, robot, *, seed: int = 0, spawns=((0.0, 0.0, 0.0),), settle: float = 1.0, seconds: float = 2.0
+) -> tuple[Simulation, dict[int, list[tuple[float, GpsReading]]]]:
     """Spawn one robot per (x, y, yaw) in ``spawns``, let them settle, then collect the
     (time, reading) pairs of each robot's GPS over ``seconds``."""
     sim = Simulation(world, seed=seed)
@@ -115,8 +122,11 @@ def sigma_of(r: GpsReading) -> float:
 @pytest.fixture(scope="module")
 def worlds(tmp_path_factory):
     d = tmp_path_factory.mktemp("gps_worlds")
-    return {"open": write_world(d, OPEN_WORLD, "GpsOpen"), "roofed": write_world(d, ROOFED_WORLD, "GpsRoofed"),
-            "walled": write_world(d, WALLED_WORLD, "GpsWalled")}
+    return {
+        "open": write_world(d, OPEN_WORLD, "GpsOpen"),
+        "roofed": write_world(d, ROOFED_WORLD, "GpsRoofed"),
+        "walled": write_world(d, WALLED_WORLD, "GpsWalled"),
+    }
 
 
 # --------------------------------------------------------------------------- pure helpers
@@ -248,8 +258,9 @@ def test_geo_reference_of_the_view_is_used(worlds, tmp_path):
     sim, _ = run(worlds["open"], gps_robot(tmp_path), seconds=0.0)
     gps = sim.robots[1].sensors[0]
     v = sim.view()
-    geo = GeoReference(latitude_deg=-33.8568, longitude_deg=151.2153, scale_latitude_m=110900.0,
-                       scale_longitude_m=92390.0)  # Sydney: south and east hemispheres
+    geo = GeoReference(
+        latitude_deg=-33.8568, longitude_deg=151.2153, scale_latitude_m=110900.0, scale_longitude_m=92390.0
+    )  # Sydney: south and east hemispheres
     view = types.SimpleNamespace(model=v.model, data=v.data, time=v.time, caster=v.caster, geo=geo)
     r = gps.measure(view)
     assert r.fix and r.latitude[2] == "S" and r.longitude[2] == "E"
@@ -261,10 +272,13 @@ def test_geo_reference_of_the_view_is_used(worlds, tmp_path):
 
 def test_geo_reference_of_the_world_file_is_used(tmp_path):
     """End to end: a world's ``geo_reference`` reaches the sensor through the world view."""
-    text = OPEN_WORLD + """\
+    text = (
+        OPEN_WORLD
+        + """\
 geo_reference: {latitude_deg: -33.8568, longitude_deg: 151.2153, scale_latitude_m: 110900.0,
                 scale_longitude_m: 92390.0}
 """
+    )
     world = write_world(tmp_path, text, "GpsSydney")
     sim, out = run(world, gps_robot(tmp_path), seconds=0.4)
     tx, ty = true_sensor_xy(sim, 1)
@@ -314,8 +328,10 @@ def test_same_seed_same_readings_other_seed_other_noise(worlds, tmp_path):
 
 # --------------------------------------------------------------------------- the SEN line
 
-SEN_FIX = re.compile(r"SEN \{Time \d+\.\d{4}\} \{Type GPS\} \{Name GPS\} \{Latitude 39,8\.\d{4},N\} "
-                     r"\{Longitude 77,1[23]\.\d{4},W\} \{Fix 1\} \{Satellites \d+\}\r\n")
+SEN_FIX = re.compile(
+    r"SEN \{Time \d+\.\d{4}\} \{Type GPS\} \{Name GPS\} \{Latitude 39,8\.\d{4},N\} "
+    r"\{Longitude 77,1[23]\.\d{4},W\} \{Fix 1\} \{Satellites \d+\}\r\n"
+)
 
 
 def test_sen_line_matches_the_spec_and_parses_back(worlds, tmp_path):

@@ -83,10 +83,28 @@ LISTENING = re.compile(r"usarsim: (\w+) listening on 127\.0\.0\.1:(\d+)")
 def served(arena):
     """Step 4's ``usarsim serve --world MyArena.yaml``, every listener on a free port: the
     ports by listener name (control, truth)."""
-    args = ["--port", "0", "--truth-port", "0", "--image-port", "0", "--wcs-port", "0", "--wss-port", "0",
-            "--cominterface-port", "0", "--no-web"]
-    proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", "--world", str(arena), *args],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True)
+    args = [
+        "--port",
+        "0",
+        "--truth-port",
+        "0",
+        "--image-port",
+        "0",
+        "--wcs-port",
+        "0",
+        "--wss-port",
+        "0",
+        "--cominterface-port",
+        "0",
+        "--no-web",
+    ]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "usarsim", "serve", "--world", str(arena), *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        stdin=subprocess.DEVNULL,
+        text=True,
+    )
     lines: queue.Queue = queue.Queue()
     reader = threading.Thread(target=lambda: [lines.put(ln) for ln in proc.stdout], daemon=True)
     reader.start()
@@ -113,8 +131,12 @@ def ask_truth(conn: socket.socket, f, request: str) -> list[str]:
 
 
 def test_step_4_the_example_drives_a_p2at_from_the_first_start_pose_through_the_doorway(served):
-    proc = subprocess.Popen([sys.executable, str(EXAMPLE), "--port", str(served["control"]), "--seconds", "18"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, str(EXAMPLE), "--port", str(served["control"]), "--seconds", "18"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     track = []  # where the ground-truth service sees the robot while the example drives it
     with socket.create_connection(("127.0.0.1", served["truth"]), timeout=10) as conn, conn.makefile("rb") as f:
         deadline = time.monotonic() + 60

@@ -187,7 +187,7 @@ def test_the_multiview_tiles_four_robots_where_their_sta_view_says(server_factor
     assert img.shape == (480, 640, 3)  # 2 x 2 tiles of 320 x 240 (CameraNum 4, WideMode 0)
     for name, view in views.items():
         x, y = (view % 2) * 320, (view // 2) * 240
-        tile = img[y + 100:y + 140, x + 140:x + 180]
+        tile = img[y + 100 : y + 140, x + 140 : x + 180]
         assert colour_of(tile) == COLOURS[name], (name, view, tile.reshape(-1, 3).mean(axis=0))
     viewer.close()
 
@@ -234,11 +234,14 @@ def test_set_viewports_answers_per_viewport(server_factory, image_world):
     srv = serve(server_factory, image_world)
     robot = spawn(srv, "R1", "Red")
     robot.step(0.2)
-    res = robot.ask("SET {Type Viewports} {Config SingleView} {Viewport1 Camera} {Viewport2 Disable} "
-                    "{Viewport3 Nothing}", "RES")
+    res = robot.ask(
+        "SET {Type Viewports} {Config SingleView} {Viewport1 Camera} {Viewport2 Disable} {Viewport3 Nothing}", "RES"
+    )
     assert res.text.startswith("RES {Time ")
-    assert res.text.endswith("{Type Viewports} {Config SingleView} {Status OK} {Viewport1 Camera} {Status OK} "
-                             "{Viewport2 Disabled} {Status OK} {Viewport3 None} {Status Failed}")
+    assert res.text.endswith(
+        "{Type Viewports} {Config SingleView} {Status OK} {Viewport1 Camera} {Status OK} "
+        "{Viewport2 Disabled} {Status OK} {Viewport3 None} {Status Failed}"
+    )
 
 
 def test_an_omnidirectional_camera_renders_a_panorama(server_factory, image_world, tmp_path):
@@ -246,13 +249,22 @@ def test_an_omnidirectional_camera_renders_a_panorama(server_factory, image_worl
     its two ends show what lies behind (the open floor, not red)."""
     from usarsim.config.catalog import ROBOTS_DIR
 
-    text = (ROBOTS_DIR / "P2AT.yaml").read_text().replace(
-        "  - {type: Camera, name: Camera,", "  - {type: OmniCam, name: Omni, location: [0.0, 0.0, -0.3]}\n"
-                                           "  - {type: Camera, name: Camera,")
+    text = (
+        (ROBOTS_DIR / "P2AT.yaml")
+        .read_text()
+        .replace(
+            "  - {type: Camera, name: Camera,",
+            "  - {type: OmniCam, name: Omni, location: [0.0, 0.0, -0.3]}\n  - {type: Camera, name: Camera,",
+        )
+    )
     (tmp_path / "OmniBot.yaml").write_text(text.replace("class_name: P2AT", "class_name: OmniBot"))
-    srv = server_factory(world=image_world, robot_dirs=(str(tmp_path),),
-                         image=__import__("usarsim.server.image", fromlist=["ImageSettings"]).ImageSettings(
-                             image_type=0, width=480, height=120))
+    srv = server_factory(
+        world=image_world,
+        robot_dirs=(str(tmp_path),),
+        image=__import__("usarsim.server.image", fromlist=["ImageSettings"]).ImageSettings(
+            image_type=0, width=480, height=120
+        ),
+    )
     c = srv.connect()
     c.nfo()
     c.send("INIT {ClassName USARBot.OmniBot} {Name O} {Start Red}")
@@ -273,16 +285,21 @@ def test_the_camera_bench_reports_served_and_bare_frame_rates():
     import subprocess
     import sys
 
-    out = subprocess.run([sys.executable, "-m", "usarsim", "bench", "--cameras", "--sizes", "64x48", "--frames", "10",
-                          "--json"], capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim", "bench", "--cameras", "--sizes", "64x48", "--frames", "10", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     (row,) = json.loads(out.stdout)
     assert row["size"] == "64x48" and row["served_fps"] > 0 and row["bare_render_jpeg_fps"] > 0
     assert row["ratio"] == pytest.approx(row["served_fps"] / row["bare_render_jpeg_fps"], rel=0.01)
     # the same run serves the camera from the world in plain colours too, and says what textures cost
     assert row["served_plain_fps"] > 0
-    assert row["textures_cost_percent"] == pytest.approx(100 * (1 - row["served_fps"] / row["served_plain_fps"]),
-                                                         abs=0.2)
+    assert row["textures_cost_percent"] == pytest.approx(
+        100 * (1 - row["served_fps"] / row["served_plain_fps"]), abs=0.2
+    )
 
 
 def test_the_stereo_robot_renders_both_eyes(server_factory, image_world):
@@ -310,14 +327,19 @@ def test_the_stereo_robot_renders_both_eyes(server_factory, image_world):
 def test_the_headlight_lights_what_the_camera_sees(server_factory, tmp_path):
     from usarsim.config.world import load_world
 
-    dim = IMAGE_WORLD.replace("materials:", "ambient_light: [0.0, 0.0, 0.0]\nlights:\n"
-                              "  - {name: moon, type: directional, direction: [0.0, 0.0, 1.0], intensity: 0.05}\n"
-                              "materials:", 1)
+    dim = IMAGE_WORLD.replace(
+        "materials:",
+        "ambient_light: [0.0, 0.0, 0.0]\nlights:\n"
+        "  - {name: moon, type: directional, direction: [0.0, 0.0, 1.0], intensity: 0.05}\n"
+        "materials:",
+        1,
+    )
     (tmp_path / "Dim.yaml").write_text(dim.replace("name: CameraRange", "name: Dim"))
     from usarsim.server.image import ImageSettings
 
-    srv = server_factory(world=load_world(tmp_path / "Dim.yaml"), image=ImageSettings(image_type=0, width=160,
-                                                                                      height=120))
+    srv = server_factory(
+        world=load_world(tmp_path / "Dim.yaml"), image=ImageSettings(image_type=0, width=160, height=120)
+    )
     robot, viewer = bound_viewer(srv, "White")
     dark = viewer.picture()[40:80, 60:100].mean()
     robot.send("DRIVE {Light True}")

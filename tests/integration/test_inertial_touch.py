@@ -200,7 +200,8 @@ def test_imu_off_centre_and_rotated_mount(test_world, imu_pair):
     for c, a in zip(centre, ahead):
         # same rigid body: angular velocity with Y and Z flipped by the mount
         assert a.angular_velocity == pytest.approx(
-            (c.angular_velocity[0], -c.angular_velocity[1], -c.angular_velocity[2]), abs=1e-12)
+            (c.angular_velocity[0], -c.angular_velocity[1], -c.angular_velocity[2]), abs=1e-12
+        )
         assert a.orientation == c.orientation  # the robot's orientation, whatever the mount
     w = np.mean([c.angular_velocity[2] for c in centre])
     assert w < -0.5
@@ -257,7 +258,10 @@ def test_touch_bumper_against_the_wall(test_world, probe):
     assert sim.pose_of(1)[0][0] < WALL_FACE_X - 0.6
     # (Reach, 0.8 m ahead, is now in the 0.1 m thick wall: not asserted here)
     assert {k: touches(backed)[k] for k in ("Bumper", "Inside", "Belly")} == {
-        "Bumper": False, "Inside": False, "Belly": True}
+        "Bumper": False,
+        "Inside": False,
+        "Belly": True,
+    }
 
 
 def test_touch_feels_another_robot(test_world, probe):
@@ -277,23 +281,26 @@ def test_touch_feels_another_robot(test_world, probe):
     assert touches(outs[-1].value)["Reach"] is False
 
 
-@pytest.mark.parametrize("gtype, size, point, expected", [
-    ("plane", (1, 1, 0.1), (3.0, -7.0, 0.2), 0.2),
-    ("plane", (1, 1, 0.1), (0.0, 0.0, -0.1), -0.1),
-    ("sphere", (0.5, 0, 0), (0.0, 0.6, 0.0), 0.1),
-    ("sphere", (0.5, 0, 0), (0.0, 0.0, 0.2), -0.3),
-    ("capsule", (0.1, 0.5, 0), (0.0, 0.3, 0.4), 0.2),
-    ("capsule", (0.1, 0.5, 0), (0.0, 0.0, 0.8), 0.2),
-    ("cylinder", (0.2, 0.5, 0), (0.5, 0.0, 0.0), 0.3),
-    ("cylinder", (0.2, 0.5, 0), (0.0, 0.0, 0.7), 0.2),
-    ("cylinder", (0.2, 0.5, 0), (0.5, 0.0, 0.9), 0.5),
-    ("cylinder", (0.2, 0.5, 0), (0.1, 0.0, 0.0), -0.1),
-    ("box", (0.5, 1.0, 2.0), (0.7, 0.0, 0.0), 0.2),
-    ("box", (0.5, 1.0, 2.0), (0.8, 1.4, 0.0), 0.5),
-    ("box", (0.5, 1.0, 2.0), (0.0, 0.0, 1.5), -0.5),
-    ("ellipsoid", (1.0, 2.0, 3.0), (1.5, 0.0, 0.0), 0.5),
-    ("ellipsoid", (1.0, 2.0, 3.0), (0.0, 0.0, 2.9), -0.1),
-])
+@pytest.mark.parametrize(
+    "gtype, size, point, expected",
+    [
+        ("plane", (1, 1, 0.1), (3.0, -7.0, 0.2), 0.2),
+        ("plane", (1, 1, 0.1), (0.0, 0.0, -0.1), -0.1),
+        ("sphere", (0.5, 0, 0), (0.0, 0.6, 0.0), 0.1),
+        ("sphere", (0.5, 0, 0), (0.0, 0.0, 0.2), -0.3),
+        ("capsule", (0.1, 0.5, 0), (0.0, 0.3, 0.4), 0.2),
+        ("capsule", (0.1, 0.5, 0), (0.0, 0.0, 0.8), 0.2),
+        ("cylinder", (0.2, 0.5, 0), (0.5, 0.0, 0.0), 0.3),
+        ("cylinder", (0.2, 0.5, 0), (0.0, 0.0, 0.7), 0.2),
+        ("cylinder", (0.2, 0.5, 0), (0.5, 0.0, 0.9), 0.5),
+        ("cylinder", (0.2, 0.5, 0), (0.1, 0.0, 0.0), -0.1),
+        ("box", (0.5, 1.0, 2.0), (0.7, 0.0, 0.0), 0.2),
+        ("box", (0.5, 1.0, 2.0), (0.8, 1.4, 0.0), 0.5),
+        ("box", (0.5, 1.0, 2.0), (0.0, 0.0, 1.5), -0.5),
+        ("ellipsoid", (1.0, 2.0, 3.0), (1.5, 0.0, 0.0), 0.5),
+        ("ellipsoid", (1.0, 2.0, 3.0), (0.0, 0.0, 2.9), -0.1),
+    ],
+)
 def test_signed_distances(gtype, size, point, expected):
     import mujoco
 
@@ -381,9 +388,13 @@ def test_conf_fields_and_ini_aliases(probe):
     assert cfg.diameter_m == 0.01 and cfg.scan_interval_s == 0.1
 
     def config(sensor_type, **params):
-        return build_config(SENSORS.get(sensor_type), type(item)(
-            item_type=sensor_type, name="X", location=(0, 0, 0), orientation=(0, 0, 0), mount="HARD",
-            params=params), "robot.yaml")
+        return build_config(
+            SENSORS.get(sensor_type),
+            type(item)(
+                item_type=sensor_type, name="X", location=(0, 0, 0), orientation=(0, 0, 0), mount="HARD", params=params
+            ),
+            "robot.yaml",
+        )
 
     assert config("Touch", Diameter=0.02).diameter_m == 0.02
     assert config("INU", Sigma=0.1, Mean=0.01).sigma_rad == 0.1
@@ -401,12 +412,12 @@ def test_conf_fields_and_ini_aliases(probe):
 NUM = r"-?\d+\.\d{4}"
 LINE_SHAPES = {
     TachometerReading: rf"^SEN \{{Time {NUM}\}} \{{Type Tachometer\}} \{{Name TachTest\}} "
-                       rf"\{{Vel ({NUM},){{3}}{NUM}\}} \{{Pos ({NUM},){{3}}{NUM}\}}\r\n$",
+    rf"\{{Vel ({NUM},){{3}}{NUM}\}} \{{Pos ({NUM},){{3}}{NUM}\}}\r\n$",
     ImuReading: rf"^SEN \{{Time {NUM}\}} \{{Type IMU\}} \{{Name IMU\}} \{{XYZAcceleration ({NUM},){{2}}{NUM}\}} "
-                rf"\{{AngularVel ({NUM},){{2}}{NUM}\}} \{{AngularAccel ({NUM},){{2}}{NUM}\}} "
-                rf"\{{Rotation ({NUM},){{2}}{NUM}\}}\r\n$",
+    rf"\{{AngularVel ({NUM},){{2}}{NUM}\}} \{{AngularAccel ({NUM},){{2}}{NUM}\}} "
+    rf"\{{Rotation ({NUM},){{2}}{NUM}\}}\r\n$",
     OrientationReading: rf"^SEN \{{Time {NUM}\}} \{{Type INU\}} \{{Name INU\}} "
-                        rf"\{{Orientation ({NUM},){{2}}{NUM}\}}\r\n$",
+    rf"\{{Orientation ({NUM},){{2}}{NUM}\}}\r\n$",
     TouchReading: rf"^SEN \{{Time {NUM}\}} \{{Type Touch\}}( \{{Name \w+ Touch (True|False)\}}){{4}}\r\n$",
 }
 
@@ -445,4 +456,5 @@ def test_sen_lines_have_the_spec_shape_and_parse_back(test_world, probe):
     tach = TachometerReading("TachTest", (1.2, 1.2, 1.2, 1.2), (3.4, 3.4, 3.1, 3.1))
     assert format_message(SensorMessage(time=2.0, reading=tach)) == (
         "SEN {Time 2.0000} {Type Tachometer} {Name TachTest} {Vel 1.2000,1.2000,1.2000,1.2000} "
-        "{Pos 3.4000,3.4000,3.1000,3.1000}\r\n")
+        "{Pos 3.4000,3.4000,3.1000,3.1000}\r\n"
+    )

@@ -37,8 +37,12 @@ def test_the_heap_is_frozen_while_it_runs_a_removed_robot_is_collected_and_all_i
     try:
         p2at = resolve_robot("USARBot.P2AT")
         for uid, x in ((1, 0.0), (2, 2.0)):
-            _wait(facade, lambda done, uid=uid, x=x: facade.spawn(uid, p2at, f"R{uid}", (x, 0.0, 0.5), (0, 0, 0),
-                                                                  done, set_down=True))
+            _wait(
+                facade,
+                lambda done, uid=uid, x=x: facade.spawn(
+                    uid, p2at, f"R{uid}", (x, 0.0, 0.5), (0, 0, 0), done, set_down=True
+                ),
+            )
         assert sys.getswitchinterval() == SWITCH_INTERVAL_S
         # once the model has stood still: the world, both robots and everything imported
         wait_for(lambda: gc.get_freeze_count() > 10_000, timeout=10 * InterpreterTuning.SETTLE_S)

@@ -140,8 +140,10 @@ def test_separate_writes_on_three_connections_give_one_transcript(server_factory
     if different:
         first = runs[different[0]]
         diff = next((r, s) for r, s in zip(reference, first) if r != s)
-        pytest.fail(f"{len(different)} of {RUNS} runs with separate writes differ from the one with single "
-                    f"writes; the first difference: {diff}")
+        pytest.fail(
+            f"{len(different)} of {RUNS} runs with separate writes differ from the one with single "
+            f"writes; the first difference: {diff}"
+        )
 
 
 def test_lines_after_a_step_in_the_same_write_are_for_the_next_step(server):
@@ -201,10 +203,12 @@ def test_requests_in_one_write_are_answered_in_the_order_sent(server_factory, lo
         conn.write("INIT {ClassName USARBot.P2AT} {Start PlayerStart1}", "PING {Id 0}")
         conn.until(b"PONG")
         for k in range(1, 4):
-            conn.write("SET {Type Odometry} {Opcode RESET}", f"PING {{Id {k}}}", "GETSTARTPOSES",
-                       "GETGEO {Type Robot}")
-            answers = [" ".join(ln.split(" ")[:2]) for ln in conn.until(b"GEO ")
-                       if ln.startswith(("RES", "PONG", "NFO", "GEO"))]
+            conn.write("SET {Type Odometry} {Opcode RESET}", f"PING {{Id {k}}}", "GETSTARTPOSES", "GETGEO {Type Robot}")
+            answers = [
+                " ".join(ln.split(" ")[:2])
+                for ln in conn.until(b"GEO ")
+                if ln.startswith(("RES", "PONG", "NFO", "GEO"))
+            ]
             assert answers == ["RES {Time", "PONG {Id", "NFO {StartPoses", "GEO {Type"], answers
     finally:
         conn.close()

@@ -11,8 +11,10 @@ import pytest
 
 from helpers import segments, sen_type
 
-ROBOTS = ("INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}",
-          "INIT {ClassName USARBot.Kurt3D} {Name R2} {Start PlayerStart2}")
+ROBOTS = (
+    "INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}",
+    "INIT {ClassName USARBot.Kurt3D} {Name R2} {Start PlayerStart2}",
+)
 # STEPs of one physics step, of less than a report period, of several report periods and
 # of odd lengths, so that report instants fall inside and at the ends of STEPs
 STEPS = (0.004, 0.004, 0.1, 0.37, 0.2, 1.0, 0.052, 0.5, 0.004, 2.0)

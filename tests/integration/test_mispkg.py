@@ -14,14 +14,20 @@ from helpers import segments
 from usarsim.sim import frames
 
 # the real P2AT's line (protocol.md 6.8): link 1's frame turned over, link 2 above it along its Z
-GEO = ("GEO {Type MisPkg} {Name CameraPanTilt} {Link 1} {ParentLink -1} {Location 0.1239,0.0000,-0.2036} "
-       "{Orientation 3.1415,0.0000,0.0000} {Link 2} {ParentLink 1} {Location 0.0000,0.0000,0.0599} "
-       "{Orientation 1.5707,0.0000,0.0000}")
-CONF = ("CONF {Type MisPkg} {Name CameraPanTilt} {Link 1} {JointType Revolute} {MaxSpeed 0.1700} "
-        "{MaxTorque 20.0000} {MinRange 1.0000} {MaxRange 0.0000} {Link 2} {JointType Revolute} "
-        "{MaxSpeed 0.1700} {MaxTorque 20.0000} {MinRange -0.1600} {MaxRange 0.4000}")
-MISSTA = re.compile(r"MISSTA \{Time \d+\.\d{2}\} \{Name CameraPanTilt\} \{Link 1\} \{Value (-?\d+\.\d{4})\} "
-                    r"\{Torque (-?\d+\.\d{4})\} \{Link 2\} \{Value (-?\d+\.\d{4})\} \{Torque (-?\d+\.\d{4})\}")
+GEO = (
+    "GEO {Type MisPkg} {Name CameraPanTilt} {Link 1} {ParentLink -1} {Location 0.1239,0.0000,-0.2036} "
+    "{Orientation 3.1415,0.0000,0.0000} {Link 2} {ParentLink 1} {Location 0.0000,0.0000,0.0599} "
+    "{Orientation 1.5707,0.0000,0.0000}"
+)
+CONF = (
+    "CONF {Type MisPkg} {Name CameraPanTilt} {Link 1} {JointType Revolute} {MaxSpeed 0.1700} "
+    "{MaxTorque 20.0000} {MinRange 1.0000} {MaxRange 0.0000} {Link 2} {JointType Revolute} "
+    "{MaxSpeed 0.1700} {MaxTorque 20.0000} {MinRange -0.1600} {MaxRange 0.4000}"
+)
+MISSTA = re.compile(
+    r"MISSTA \{Time \d+\.\d{2}\} \{Name CameraPanTilt\} \{Link 1\} \{Value (-?\d+\.\d{4})\} "
+    r"\{Torque (-?\d+\.\d{4})\} \{Link 2\} \{Value (-?\d+\.\d{4})\} \{Torque (-?\d+\.\d{4})\}"
+)
 
 
 @pytest.fixture
@@ -47,10 +53,14 @@ def test_geo_and_conf_of_the_pan_tilt(robot):
     assert robot.ask("GETGEO {Type MisPkg}", "GEO").text == GEO
     # the actuator API reports the same frames (the UDK's numbers: rounded, Parent counted from 1)
     actuator = robot.ask("GETGEO {Type Actuator}", "GEO").text
-    assert actuator.endswith("{Link 1} {Parent 0} {Location 0.1239,0.0000,-0.2036} {Orientation 3.1416,0.0000,0.0000} "
-                             "{Link 2} {Parent 1} {Location 0.0000,0.0000,0.0599} {Orientation 1.5708,0.0000,0.0000}")
+    assert actuator.endswith(
+        "{Link 1} {Parent 0} {Location 0.1239,0.0000,-0.2036} {Orientation 3.1416,0.0000,0.0000} "
+        "{Link 2} {Parent 1} {Location 0.0000,0.0000,0.0599} {Orientation 1.5708,0.0000,0.0000}"
+    )
     assert robot.ask("GETCONF {Type MisPkg} {Name CameraPanTilt}", "CONF").text == CONF
-    assert robot.ask("GETGEO {Type MisPkg} {Name NoSuchPackage}", "GEO").text == "GEO {Type MisPkg} {Name NoSuchPackage}"
+    assert (
+        robot.ask("GETGEO {Type MisPkg} {Name NoSuchPackage}", "GEO").text == "GEO {Type MisPkg} {Name NoSuchPackage}"
+    )
 
 
 def test_missta_every_status_period_and_a_pan_at_its_max_speed(robot):
@@ -102,6 +112,7 @@ def test_the_camera_rides_on_the_tilt_link(robot, server):
             cam = next(s for s in r.sensors if s.TYPE == "Camera")
             _, rot = r.handle.sensor_frame(sim.data, cam.item.location, cam.item.orientation, cam.item.mount)
             return frames.mj_mat_to_usar_euler(rot), r.handle.orientation(sim.data)
+
         return server.on_sim(get)
 
     (_, p0, y0), (_, _, ry) = camera_yaw_pitch()
@@ -117,15 +128,22 @@ def test_a_wheel_speed_joint_command_and_bad_joint_commands(robot):
     robot.send("DRIVE {Name LeftFWheel} {Order 1} {Value 3.0} {Name RightFWheel} {Order 1} {Value 3.0}")
     robot.step(1.0)
     lines = robot.step(1.0)
-    ticks = [{n: int(t) for n, t in re.findall(r"\{Name (\w+) Tick (-?\d+)\}", ln.text)} for ln in lines
-             if ln.text.startswith("SEN") and "{Type Encoder}" in ln.text]
+    ticks = [
+        {n: int(t) for n, t in re.findall(r"\{Name (\w+) Tick (-?\d+)\}", ln.text)}
+        for ln in lines
+        if ln.text.startswith("SEN") and "{Type Encoder}" in ln.text
+    ]
     left = ticks[-1]["ECLeft"] - ticks[0]["ECLeft"]
     right = ticks[-1]["ECRight"] - ticks[0]["ECRight"]
     assert left > 100 and right > 100  # both front wheels spin forward (~3 rad/s x 0.9 s / 0.0174)
-    for line in ("DRIVE {Name NoSuchJoint} {Value 1} {Order 0}", "MULTIDRIVE {Nothing 1.0}",
-                 "MISPKG {Name CameraPanTilt} {Link 7} {Value 1}", "MISPKG {Name Nope} {Link 1} {Value 1}",
-                 "SET {Type Joint} {Name CameraPanTilt_Link1} {Opcode Fly} {Params 1}",
-                 "MISPKG {Name CameraPanTilt} {Link 1} {Value 1} {Order 99}"):
+    for line in (
+        "DRIVE {Name NoSuchJoint} {Value 1} {Order 0}",
+        "MULTIDRIVE {Nothing 1.0}",
+        "MISPKG {Name CameraPanTilt} {Link 7} {Value 1}",
+        "MISPKG {Name Nope} {Link 1} {Value 1}",
+        "SET {Type Joint} {Name CameraPanTilt_Link1} {Opcode Fly} {Params 1}",
+        "MISPKG {Name CameraPanTilt} {Link 1} {Value 1} {Order 99}",
+    ):
         robot.send(line)
         lines = robot.step(0.2)
         assert not [ln for ln in lines if ln.text.startswith(("RES", "GEO", "CONF"))], line
@@ -140,7 +158,10 @@ def test_a_locked_link_stays_put_and_says_so_in_conf(server_factory, test_world)
     c.send("INIT {ClassName USARBot.AirRobot} {Name A} {Location -6,0,-1} {Rotation 0,0,0}")
     c.step(0.4)
     conf = c.ask("GETCONF {Type MisPkg}", "CONF").text
-    assert "{Link 1} {JointType Revolute} {MaxSpeed 0.1700} {MaxTorque 20.0000} {MinRange 0.0000} {MaxRange 0.0000}" in conf
+    assert (
+        "{Link 1} {JointType Revolute} {MaxSpeed 0.1700} {MaxTorque 20.0000} {MinRange 0.0000} {MaxRange 0.0000}"
+        in conf
+    )
     c.send("MISPKG {Name CameraPanTilt} {Link 1} {Value 1.0} {Link 2} {Value -0.5}")
     pan, tilt = pantilt(c.step(4.0))[-1]
     assert abs(pan) < 1e-3 and tilt == pytest.approx(-0.5, abs=0.01)

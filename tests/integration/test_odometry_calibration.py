@@ -38,7 +38,9 @@ class Run:
         self.sim.spawn(1, robot or resolve_robot("P2AT"), "R", pose.location, pose.rotation, set_down=True)
         self.sim.advance(1.0)
         if track is not None:
-            res = self.sim.operate(1, "Odometry", "Odometry", "TrackWidth", ItemParams(values=(track,), text=f"{track}"))
+            res = self.sim.operate(
+                1, "Odometry", "Odometry", "TrackWidth", ItemParams(values=(track,), text=f"{track}")
+            )
             assert res.ok
         self.sim.take_outputs()
         self.odometry = self.truth = 0.0
@@ -110,8 +112,10 @@ def test_calibrated_odometry_follows_the_heading_around_a_square(yellow_world):
 
 def test_the_track_width_can_be_written_in_the_robot_file(yellow_world):
     p2at = resolve_robot("P2AT")
-    items = tuple(dataclasses.replace(i, params={**i.params, "TrackWidth": 0.56}) if i.item_type == "Odometry" else i
-                  for i in p2at.items)
+    items = tuple(
+        dataclasses.replace(i, params={**i.params, "TrackWidth": 0.56}) if i.item_type == "Odometry" else i
+        for i in p2at.items
+    )
     from_file = Run(yellow_world, robot=dataclasses.replace(p2at, items=items))
     from_set = Run(yellow_world, track=0.56)
     for run in (from_file, from_set):
@@ -129,8 +133,10 @@ def test_set_track_width_over_the_wire(server_factory):
     c.send("SET {Type Odometry} {Name Odometry} {Opcode TrackWidth} {Params 0.56}")
     c.send("SET {Type Odometry} {Name Odometry} {Opcode TrackWidth} {Params -1}")
     res = [ln.text for ln in c.step(0.1) if ln.text.startswith("RES ")]
-    assert res == ["RES {Time 0.40} {Type Odometry} {Name Odometry} {Status OK}",
-                   "RES {Time 0.40} {Type Odometry} {Name Odometry} {Status Failed}"]
+    assert res == [
+        "RES {Time 0.40} {Type Odometry} {Name Odometry} {Status OK}",
+        "RES {Time 0.40} {Type Odometry} {Name Odometry} {Status Failed}",
+    ]
 
 
 # Over the wire ----------------------------------------------------------------------------
@@ -186,9 +192,11 @@ class Wire:
         return dx * c + dy * s, -dx * s + dy * c, self.truth_yaw
 
 
-@pytest.mark.parametrize(("rate", "speed"), [(0.3, 0.0), (-0.8, 0.0), (1.5, 0.0), (-0.3, 0.3), (1.0, 0.2), (-1.5, 0.2)],
-                         ids=["0.3-in-place", "0.8-left-in-place", "1.5-in-place", "0.3-left-arc",
-                              "1.0-arc", "1.5-left-arc"])
+@pytest.mark.parametrize(
+    ("rate", "speed"),
+    [(0.3, 0.0), (-0.8, 0.0), (1.5, 0.0), (-0.3, 0.3), (1.0, 0.2), (-1.5, 0.2)],
+    ids=["0.3-in-place", "0.8-left-in-place", "1.5-in-place", "0.3-left-arc", "1.0-arc", "1.5-left-arc"],
+)
 def test_the_shipped_calibration_counts_turns_at_every_rate(server_factory, rate, speed):
     """A quarter turn at the rate asked for (rad/s; negative: to the left), in place or on an
     arc at ``speed`` m/s, from rest to rest: the odometry's turn is the true turn within 3 %
@@ -250,7 +258,8 @@ def test_encoders_of_a_robot_at_rest_keep_their_count(yellow_world):
     run.advance(1.0)
     run.sim.take_outputs()
     run.sim.advance(5.0)
-    ticks = [tuple(i.tick for i in o.value.items) for o in run.sim.take_outputs()
-             if isinstance(o.value, EncoderReading)]
+    ticks = [
+        tuple(i.tick for i in o.value.items) for o in run.sim.take_outputs() if isinstance(o.value, EncoderReading)
+    ]
     assert len(ticks) >= 45 and abs(ticks[0][0]) > 100  # 10 Hz; 2 s at 2 rad/s: 229 ticks of 1 degree
     assert set(ticks) == {ticks[0]}

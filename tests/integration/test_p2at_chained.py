@@ -43,8 +43,9 @@ def push_into_the_wall(world, robot, seconds: float = 12.0):
         x, y = x1, y1
         steepest = max(steepest, abs(math.remainder(pitch, 2 * math.pi)))
         qv = sim.data.qvel
-        speeds.append({side: tuple(float(qv[r.handle.joint_qvel[w]]) for w in wheels)
-                       for side, wheels in SIDES.items()})
+        speeds.append(
+            {side: tuple(float(qv[r.handle.joint_qvel[w]]) for w in wheels) for side, wheels in SIDES.items()}
+        )
     assert x > WALL_FACE_X - 0.3  # it reached the wall
     outs = sim.take_outputs()
     odo = [o.value for o in outs if isinstance(o.value, OdometryReading)][-1]

@@ -50,10 +50,10 @@ def test_the_ros_bridge_spawns_a_p3at_at_a_start_pose_reads_its_figures_and_driv
 
     conf = segments(c.ask("GETCONF {Type Robot}", "CONF").text)
     assert conf["Type"] == "GroundVehicle" and conf["Name"] == "P3AT" and conf["SteeringType"] == "SkidSteered"
-    assert float(conf["Mass"]) == pytest.approx(11.9)          # UDK CONF (protocol.md 6.7)
+    assert float(conf["Mass"]) == pytest.approx(11.9)  # UDK CONF (protocol.md 6.7)
     assert float(conf["MaxTorque"]) == pytest.approx(50000.0)  # UDK CONF, engine units
     max_speed = float(conf["MaxSpeed"])
-    assert max_speed == pytest.approx(0.7 / 0.098, rel=1e-3)   # the data sheet's 0.7 m/s
+    assert max_speed == pytest.approx(0.7 / 0.098, rel=1e-3)  # the data sheet's 0.7 m/s
     assert float(conf["MaxFrontSteer"]) == 0.0 and float(conf["MaxRearSteer"]) == 0.0
 
     geo = segments(c.ask("GETGEO {Type Robot}", "GEO").text)
@@ -61,7 +61,7 @@ def test_the_ros_bridge_spawns_a_p3at_at_a_start_pose_reads_its_figures_and_driv
     assert vec(geo["Dimensions"]) == pytest.approx((0.508, 0.497, 0.277))
     assert vec(geo["COG"]) == pytest.approx((0.0, 0.0, 0.0))
     wheel_radius = float(geo["WheelRadius"])
-    assert wheel_radius == pytest.approx(0.098)                # UDK GEO (protocol.md 6.8)
+    assert wheel_radius == pytest.approx(0.098)  # UDK GEO (protocol.md 6.8)
     assert float(geo["WheelSeparation"]) == pytest.approx(0.36)
     assert float(geo["WheelBase"]) == pytest.approx(0.248)
 

@@ -242,7 +242,7 @@ def _twin(test_world, perturb: bool):
     sim.advance(1.0)
     if perturb:  # robot 1 blows up: its chassis spins at an absurd rate
         h = sim.robots[1].handle
-        sim.data.qvel[h.root_qvel + 3:h.root_qvel + 6] = 5.0e4
+        sim.data.qvel[h.root_qvel + 3 : h.root_qvel + 6] = 5.0e4
     sim.advance(2.0)
     return sim
 

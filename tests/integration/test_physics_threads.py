@@ -34,8 +34,10 @@ def test_the_pool_gives_the_same_physics_bit_for_bit(yellow_world, monkeypatch):
     np.testing.assert_array_equal(pooled, one)
 
 
-@pytest.mark.parametrize(("cores", "robots", "want"), [(2, 64, 0), (2, 159, 0), (2, 160, 0), (2, 256, 0),
-                                                      (4, 64, 3), (4, 256, 3), (4, 16, 0), (16, 64, 8), (1, 256, 0)])
+@pytest.mark.parametrize(
+    ("cores", "robots", "want"),
+    [(2, 64, 0), (2, 159, 0), (2, 160, 0), (2, 256, 0), (4, 64, 3), (4, 256, 3), (4, 16, 0), (16, 64, 8), (1, 256, 0)],
+)
 def test_auto_leaves_a_core_to_the_measuring_thread(monkeypatch, cores, robots, want):
     monkeypatch.delenv("USARSIM_PHYSICS_THREADS", raising=False)
     monkeypatch.setattr(simulation.os, "sched_getaffinity", lambda pid: set(range(cores)))

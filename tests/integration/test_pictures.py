@@ -18,8 +18,14 @@ GL_PROBLEM = gl_problem()
 pytestmark = pytest.mark.skipif(bool(GL_PROBLEM), reason=GL_PROBLEM or "ok")
 
 WIDTH, HEIGHT = 320, 240
-WORLDS = ("DM-USAR_yellow", "DM-USAR_orange", "DM-USAR_red", "DM-CollapsedBuilding", "DM-Harbour",
-          "DM-Road_UrbanChallenge")
+WORLDS = (
+    "DM-USAR_yellow",
+    "DM-USAR_orange",
+    "DM-USAR_red",
+    "DM-CollapsedBuilding",
+    "DM-Harbour",
+    "DM-Road_UrbanChallenge",
+)
 # Picture statistics: a pixel is nearly black when its brightness (the mean of R, G and B,
 # 0..255) is below 12, nearly white above 248: detail is lost there (a camera's dark noise and
 # clipping).  Neither share may pass 2 % of a start pose's view.
@@ -49,8 +55,14 @@ def skin_mask(rgb: np.ndarray) -> np.ndarray:
         # hue of a pixel whose red is the largest channel (skin's): 60 (G - B) / chroma
         hue = np.where(chroma > 0, 60.0 * (g - b) / chroma, -1.0)
     red_max = (r >= g) & (r >= b)
-    return (red_max & (hue >= HUE_DEG[0]) & (hue <= HUE_DEG[1]) & (sat >= SATURATION[0])
-            & (sat <= SATURATION[1]) & (mx >= MIN_VALUE))
+    return (
+        red_max
+        & (hue >= HUE_DEG[0])
+        & (hue <= HUE_DEG[1])
+        & (sat >= SATURATION[0])
+        & (sat <= SATURATION[1])
+        & (mx >= MIN_VALUE)
+    )
 
 
 def skin_blobs(rgb: np.ndarray) -> np.ndarray:
@@ -58,8 +70,17 @@ def skin_blobs(rgb: np.ndarray) -> np.ndarray:
     two boards, where colours blend) go, a face or a hand stays."""
     m = skin_mask(rgb)
     out = m.copy()
-    out[1:-1, 1:-1] = (m[1:-1, 1:-1] & m[:-2, 1:-1] & m[2:, 1:-1] & m[1:-1, :-2] & m[1:-1, 2:]
-                       & m[:-2, :-2] & m[:-2, 2:] & m[2:, :-2] & m[2:, 2:])
+    out[1:-1, 1:-1] = (
+        m[1:-1, 1:-1]
+        & m[:-2, 1:-1]
+        & m[2:, 1:-1]
+        & m[1:-1, :-2]
+        & m[1:-1, 2:]
+        & m[:-2, :-2]
+        & m[:-2, 2:]
+        & m[2:, :-2]
+        & m[2:, 2:]
+    )
     out[0], out[-1], out[:, 0], out[:, -1] = False, False, False, False
     return out
 
@@ -81,8 +102,7 @@ class Camera:
         for k, (location, rotation) in enumerate(poses, start=1):
             self.sim.spawn(k, robot, f"R{k}", location, rotation, set_down=True)
         self.sim.advance(0.5)  # every robot landed
-        self.service = RenderService(lambda reuse, done: done(self.sim.cameras.render_snapshot(reuse), None),
-                                     max_fps=0)
+        self.service = RenderService(lambda reuse, done: done(self.sim.cameras.render_snapshot(reuse), None), max_fps=0)
 
     def picture(self, uid: int) -> np.ndarray:
         from usarsim.sim.tiles import Tile
@@ -221,7 +241,7 @@ def test_lane_markings_are_found_down_the_road():
     finally:
         cam.close()
     p = rgb.astype(float)
-    road = p[HEIGHT // 2 + 8:]  # the ground ahead, below the horizon
+    road = p[HEIGHT // 2 + 8 :]  # the ground ahead, below the horizon
     brightness = road.mean(axis=2)
     asphalt = np.median(brightness)
     white = (brightness > asphalt + 60) & (road.max(axis=2) - road.min(axis=2) < 40)
@@ -256,14 +276,14 @@ def test_lane_markings_keep_their_paint_far_down_the_road():
         p = cam.picture(1).astype(float)
     finally:
         cam.close()
-    asphalt = np.median(p[HEIGHT // 2 + 8:, WIDTH // 3:2 * WIDTH // 3].mean(axis=2))
+    asphalt = np.median(p[HEIGHT // 2 + 8 :, WIDTH // 3 : 2 * WIDTH // 3].mean(axis=2))
     light = asphalt / (255.0 * np.mean(ASPHALT))
     yellow = 255.0 * light * (YELLOW_PAINT[0] - YELLOW_PAINT[2])  # its red over its blue
     white = 255.0 * light * np.mean(WHITE_PAINT)
     # the far stretch: rows 3 to 31 below the horizon, the road from about 60 m to 4 m ahead
     rows = range(HEIGHT // 2 + 3, HEIGHT // 2 + 32)
-    yellow_kept = np.median([(p[r, :WIDTH // 2, 0] - p[r, :WIDTH // 2, 2]).max() / yellow for r in rows])
-    white_kept = np.median([(p[r, WIDTH // 2 + 10:].mean(axis=1).max() - asphalt) / (white - asphalt) for r in rows])
+    yellow_kept = np.median([(p[r, : WIDTH // 2, 0] - p[r, : WIDTH // 2, 2]).max() / yellow for r in rows])
+    white_kept = np.median([(p[r, WIDTH // 2 + 10 :].mean(axis=1).max() - asphalt) / (white - asphalt) for r in rows])
     assert yellow_kept > 0.75, (yellow_kept, yellow)
     assert white_kept > 0.75, (white_kept, white)
 
@@ -337,14 +357,18 @@ def test_every_approach_to_a_crossing_has_its_stop_line_on_its_own_lane():
     rgb, px_m = crossing_from_above()
     centre = rgb.shape[0] / 2
     shares = {}
-    approaches = {"from the south": rgb, "from the north": np.rot90(rgb, 2),
-                  "from the west": np.rot90(rgb, 1), "from the east": np.rot90(rgb, -1)}
+    approaches = {
+        "from the south": rgb,
+        "from the north": np.rot90(rgb, 2),
+        "from the west": np.rot90(rgb, 1),
+        "from the east": np.rot90(rgb, -1),
+    }
     for name, pic in approaches.items():
         p = pic.astype(float)
         white = (p.min(axis=2) > 190) & (p.max(axis=2) - p.min(axis=2) < 40)
         rows = slice(int(centre + 6.5 * px_m), int(centre + 8.5 * px_m))  # 7.5 m down the approach
-        own = white[rows, int(centre + 0.6 * px_m):int(centre + 3.1 * px_m)]  # its own lane (right)
-        other = white[rows, int(centre - 3.1 * px_m):int(centre - 0.6 * px_m)]  # the oncoming lane
+        own = white[rows, int(centre + 0.6 * px_m) : int(centre + 3.1 * px_m)]  # its own lane (right)
+        other = white[rows, int(centre - 3.1 * px_m) : int(centre - 0.6 * px_m)]  # the oncoming lane
         assert own.mean() > 0.06, (name, own.mean())  # a line 0.45 m wide across a band of 2 m
         assert other.mean() < 0.01, (name, other.mean())
         shares[name] = (own.mean(), other.mean())
@@ -359,7 +383,11 @@ def test_a_waving_victim_moves_in_the_picture(tmp_path, waving):
     from usarsim.sim.constants import WAVE_PERIOD_S
 
     p = tmp_path / "VictimAhead.yaml"
-    p.write_text(VICTIM_WORLD.replace("rotation: [0.0, 0.0, 1.5708]}", f"rotation: [0.0, 0.0, 1.5708], waving: {str(waving).lower()}}}"))
+    p.write_text(
+        VICTIM_WORLD.replace(
+            "rotation: [0.0, 0.0, 1.5708]}", f"rotation: [0.0, 0.0, 1.5708], waving: {str(waving).lower()}}}"
+        )
+    )
     world = load_world(p)
     cam = Camera(world, [(world.start_poses[0].location, world.start_poses[0].rotation)])
     try:

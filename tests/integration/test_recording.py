@@ -28,8 +28,14 @@ ENV = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
 
 
 def usarsim(*args: str, timeout: float = 180) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "usarsim", *args], capture_output=True, text=True,
-                          timeout=timeout, env=ENV, stdin=subprocess.DEVNULL)
+    return subprocess.run(
+        [sys.executable, "-m", "usarsim", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=ENV,
+        stdin=subprocess.DEVNULL,
+    )
 
 
 def read_all(path: Path) -> tuple[dict, dict[str, list]]:
@@ -80,13 +86,21 @@ def test_every_channel_decodes_and_agrees_with_the_run(recorded):
     info = meta["usarsim"]
     assert info["world"] == "DM-USAR_yellow" and info["seed"] == "3" and info["clock"] == "lockstep"
     assert json.loads(info["options"])["wireless"] is True
-    expected = {"/usarsim/transcript": "usarsim.TranscriptChunk", "/usarsim/world": "foxglove.SceneUpdate",
-                "/usarsim/robots": "foxglove.SceneUpdate", "/usarsim/objects": "foxglove.SceneUpdate",
-                "/tf": "foxglove.FrameTransforms", "/usarsim/log": "foxglove.Log",
-                "/R1/Scanner1": "foxglove.LaserScan", "/R1/odometry": "foxglove.PoseInFrame",
-                "/R1/pose": "foxglove.PoseInFrame", "/R1/state": "usarsim.RobotState",
-                "/R1/status": "usarsim.RobotStatus", "/K1/pose": "foxglove.PoseInFrame",
-                "/usarsim/radio/k1-r1": "usarsim.RadioLink"}
+    expected = {
+        "/usarsim/transcript": "usarsim.TranscriptChunk",
+        "/usarsim/world": "foxglove.SceneUpdate",
+        "/usarsim/robots": "foxglove.SceneUpdate",
+        "/usarsim/objects": "foxglove.SceneUpdate",
+        "/tf": "foxglove.FrameTransforms",
+        "/usarsim/log": "foxglove.Log",
+        "/R1/Scanner1": "foxglove.LaserScan",
+        "/R1/odometry": "foxglove.PoseInFrame",
+        "/R1/pose": "foxglove.PoseInFrame",
+        "/R1/state": "usarsim.RobotState",
+        "/R1/status": "usarsim.RobotStatus",
+        "/K1/pose": "foxglove.PoseInFrame",
+        "/usarsim/radio/k1-r1": "usarsim.RadioLink",
+    }
     scanners3d = [t for t in topics if t.startswith("/K1/") and topics[t][0][0] == "foxglove.PointCloud"]
     assert scanners3d, sorted(topics)
     for topic, schema in expected.items():
@@ -105,8 +119,11 @@ def test_every_channel_decodes_and_agrees_with_the_run(recorded):
     assert last.start_angle == pytest.approx(scan.angles[0]) and last.end_angle == pytest.approx(scan.angles[-1])
     assert last.start_angle == pytest.approx(-math.pi / 2, abs=0.01)
     # ... and every LaserScan is a SEN line of the transcript, to the digit
-    sen = [line for _, line in _server_lines(path, "control") if line.startswith("SEN") and "{Name Scanner1}" in line
-           and "RangeScanner}" in line]
+    sen = [
+        line
+        for _, line in _server_lines(path, "control")
+        if line.startswith("SEN") and "{Name Scanner1}" in line and "RangeScanner}" in line
+    ]
     assert len(sen) >= len(topics["/R1/Scanner1"]) > 5
     first = M.parse_message(sen[0])
     assert [round(r, 4) for r in topics["/R1/Scanner1"][0][2].ranges] == [round(r, 4) for r in first.reading.ranges_m]
@@ -198,8 +215,10 @@ def _altered(src: Path, dst: Path, change) -> None:
         w = Writer(g)
         w.start(profile="", library="test")
         schema_ids = {sid: w.register_schema(s.name, s.encoding, s.data) for sid, s in summary.schemas.items()}
-        channel_ids = {cid: w.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
-                                               dict(c.metadata)) for cid, c in summary.channels.items()}
+        channel_ids = {
+            cid: w.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0), dict(c.metadata))
+            for cid, c in summary.channels.items()
+        }
         f.seek(0)
         for m in make_reader(f).iter_metadata():
             w.add_metadata(m.name, dict(m.metadata))
@@ -223,13 +242,27 @@ def test_replay_check_names_the_first_line_that_differs(recorded, tmp_path):
 
     def change(c):
         # the battery of the R1 connection's STA at 1.0 s, one second less
-        if c.kind == "out" and c.port == "control" and c.text.startswith("STA") and c.sim_time >= 1.0 \
-                and "{Battery " in c.text:
+        if (
+            c.kind == "out"
+            and c.port == "control"
+            and c.text.startswith("STA")
+            and c.sim_time >= 1.0
+            and "{Battery " in c.text
+        ):
             before, rest = c.text.split("{Battery ", 1)
             value, after = rest.split("}", 1)
             target.update(line=c.text.rstrip("\r\n").split("\r\n")[0], conn=c.conn, t=c.sim_time)
-            return type(c)(c.seq, c.conn, c.port, c.peer, c.kind, c.sim_time, c.wall_time,
-                           f"{before}{{Battery {int(value) - 1}}}{after}", c.size)
+            return type(c)(
+                c.seq,
+                c.conn,
+                c.port,
+                c.peer,
+                c.kind,
+                c.sim_time,
+                c.wall_time,
+                f"{before}{{Battery {int(value) - 1}}}{after}",
+                c.size,
+            )
         return None
 
     _altered(path, bad, change)
@@ -264,10 +297,12 @@ def test_replay_refuses_what_is_not_a_recording(tmp_path):
     out = usarsim("replay", str(junk))
     assert out.returncode == 1 and out.stderr.strip() == (
         f"usarsim replay: {junk} is not an MCAP file (it does not start with MCAP's magic bytes); give a recording "
-        "made with usarsim serve --record")
+        "made with usarsim serve --record"
+    )
     out = usarsim("replay", str(tmp_path / "missing.mcap"))
-    assert out.returncode == 1 and out.stderr.strip().endswith("missing.mcap: no such file; give a recording made "
-                                                               "with usarsim serve --record")
+    assert out.returncode == 1 and out.stderr.strip().endswith(
+        "missing.mcap: no such file; give a recording made with usarsim serve --record"
+    )
     # an MCAP file that usarsim did not write: no run information
     other = tmp_path / "other.mcap"
     with other.open("wb") as f:
@@ -280,8 +315,19 @@ def test_replay_refuses_what_is_not_a_recording(tmp_path):
 
 
 def test_record_to_a_folder_that_does_not_exist_is_a_clear_error(tmp_path):
-    out = usarsim("serve", "--no-web", "--no-image", "--no-wireless", "--port", "0", "--truth-port", "0",
-                  "--record", str(tmp_path / "nowhere" / "run.mcap"), timeout=60)
+    out = usarsim(
+        "serve",
+        "--no-web",
+        "--no-image",
+        "--no-wireless",
+        "--port",
+        "0",
+        "--truth-port",
+        "0",
+        "--record",
+        str(tmp_path / "nowhere" / "run.mcap"),
+        timeout=60,
+    )
     assert out.returncode == 1
     assert "the recording" in out.stderr and "--record" in out.stderr
 
@@ -295,8 +341,9 @@ def test_foxglove_viewer_subscribes_to_a_laser_and_receives_it():
         await ws.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 7, "channelId": channel_id}]}))
 
     async def view(port: int) -> tuple[dict, bytes]:
-        async with websockets.connect(f"ws://127.0.0.1:{port}",
-                                      subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
+        async with websockets.connect(
+            f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]
+        ) as ws:
             channels = {}
             deadline = time.monotonic() + 30
             while time.monotonic() < deadline:
@@ -354,8 +401,10 @@ def test_camera_pictures_are_recorded_when_asked(tmp_path):
     from PIL import Image
 
     path = tmp_path / "cams.mcap"
-    with launch(record=path, extra_args=("--record-cameras", "5", "--record-camera-size", "160x120")) as srv, \
-            srv.connect() as world:
+    with (
+        launch(record=path, extra_args=("--record-cameras", "5", "--record-camera-size", "160x120")) as srv,
+        srv.connect() as world,
+    ):
         world.spawn("P2AT", name="R1")
         for _ in range(10):
             world.step(0.1)
@@ -383,8 +432,9 @@ def test_a_viewer_that_does_not_read_never_holds_the_simulation_back():
     websockets = pytest.importorskip("websockets")
 
     async def stalled_viewer(port: int, clock, seconds: float) -> tuple[float, float]:
-        async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"],
-                                      max_queue=4, close_timeout=1) as ws:
+        async with websockets.connect(
+            f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"], max_queue=4, close_timeout=1
+        ) as ws:
             channels = {}
             deadline = time.monotonic() + 2.5
             while time.monotonic() < deadline:  # subscribe to whatever is advertised meanwhile
@@ -396,8 +446,11 @@ def test_a_viewer_that_does_not_read_never_holds_the_simulation_back():
                     new = [c for c in json.loads(m)["channels"] if c["id"] not in channels]
                     for c in new:
                         channels[c["id"]] = c
-                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
-                        {"id": c["id"], "channelId": c["id"]} for c in new]}))
+                    await ws.send(
+                        json.dumps(
+                            {"op": "subscribe", "subscriptions": [{"id": c["id"], "channelId": c["id"]} for c in new]}
+                        )
+                    )
             assert len(channels) >= 5
             t0, w0 = clock(), time.monotonic()
             await asyncio.sleep(seconds)  # reading nothing: its socket fills, then the server's backlog
@@ -439,8 +492,11 @@ def test_a_viewer_that_vanishes_is_news_not_an_error_and_an_old_viewer_is_told_w
             m = await asyncio.wait_for(ws.recv(), 20)
             if isinstance(m, str) and json.loads(m).get("op") == "advertise":
                 chans = json.loads(m)["channels"]
-                await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
-                    {"id": c["id"], "channelId": c["id"]} for c in chans]}))
+                await ws.send(
+                    json.dumps(
+                        {"op": "subscribe", "subscriptions": [{"id": c["id"], "channelId": c["id"]} for c in chans]}
+                    )
+                )
                 subscribed += len(chans)
         await asyncio.sleep(0.5)  # messages flow to it
         _abort(ws)

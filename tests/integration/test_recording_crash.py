@@ -28,8 +28,14 @@ LOST_AT_MOST_S = 2.0
 
 
 def replay(*args: str, timeout: float = 180) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "usarsim", "replay", *args], capture_output=True, text=True,
-                          timeout=timeout, env=ENV, stdin=subprocess.DEVNULL)
+    return subprocess.run(
+        [sys.executable, "-m", "usarsim", "replay", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=ENV,
+        stdin=subprocess.DEVNULL,
+    )
 
 
 def _drive_then_kill(path: Path, steps: int, *, lockstep: bool = True) -> float:
@@ -79,8 +85,9 @@ def test_replay_of_a_killed_recording_replays_what_it_holds_and_says_where_it_en
     out = replay(str(path), "--check")
     assert out.returncode == 0, out.stdout + out.stderr
     assert "Traceback" not in out.stderr
-    warning = re.search(r"usarsim replay: warning: the recording ends at t=(\d+\.\d+) s,.*it was not closed",
-                        out.stderr)
+    warning = re.search(
+        r"usarsim replay: warning: the recording ends at t=(\d+\.\d+) s,.*it was not closed", out.stderr
+    )
     assert warning, out.stderr
     end = float(warning.group(1))
     assert t_kill - LOST_AT_MOST_S <= end <= t_kill + 1e-9
@@ -154,7 +161,7 @@ def test_a_flipped_byte_inside_a_compressed_chunk_is_refused_in_one_line(recordi
 def test_the_traceback_goes_to_the_log_at_v_only(recording, tmp_path):
     offset, length = _chunks(recording)[0]
     data = bytearray(recording.read_bytes())
-    data[offset + length - 40:offset + length - 8] = bytes(32)
+    data[offset + length - 40 : offset + length - 8] = bytes(32)
     bad = tmp_path / "zeroed.mcap"
     bad.write_bytes(bytes(data))
     out = replay(str(bad), "-v")
@@ -165,7 +172,7 @@ def test_the_traceback_goes_to_the_log_at_v_only(recording, tmp_path):
 def test_garbage_over_a_record_is_refused_in_one_line(recording, tmp_path):
     offset, _ = _chunks(recording)[1]
     data = bytearray(recording.read_bytes())
-    data[offset:offset + 64] = bytes((200 + k) % 256 for k in range(64))
+    data[offset : offset + 64] = bytes((200 + k) % 256 for k in range(64))
     bad = tmp_path / "garbage.mcap"
     bad.write_bytes(bytes(data))
     _one_line_refusal(replay(str(bad)), f"{bad} is damaged at byte {offset} (a record of no MCAP kind, opcode 0xc8)")
@@ -175,7 +182,7 @@ def test_a_garbled_metadata_record_is_refused_in_one_line(recording, tmp_path):
     data = bytearray(recording.read_bytes())
     at = data.index(b"usarsim", 8) - 4 - 9  # the metadata record named usarsim: its opcode
     assert data[at] == 0x0C
-    data[at + 9:at + 13] = (1 << 30).to_bytes(4, "little")  # its name's length: beyond the record
+    data[at + 9 : at + 13] = (1 << 30).to_bytes(4, "little")  # its name's length: beyond the record
     bad = tmp_path / "garbled.mcap"
     bad.write_bytes(bytes(data))
     _one_line_refusal(replay(str(bad)), f"is damaged at byte {at} (a record that does not parse")
@@ -188,8 +195,12 @@ def test_a_recording_cut_short_replays_what_it_holds(recording, tmp_path, cut):
     with a warning."""
     chunks = _chunks(recording)
     offset, length = chunks[len(chunks) // 2]
-    keep = {"mid-chunk": offset + length // 2, "mid-header": offset + 5, "after-a-chunk": offset,
-            "zeros-after": offset}[cut]
+    keep = {
+        "mid-chunk": offset + length // 2,
+        "mid-header": offset + 5,
+        "after-a-chunk": offset,
+        "zeros-after": offset,
+    }[cut]
     part = tmp_path / f"{cut}.mcap"
     part.write_bytes(recording.read_bytes()[:keep] + (bytes(4096) if cut == "zeros-after" else b""))
     size = part.stat().st_size
@@ -198,8 +209,9 @@ def test_a_recording_cut_short_replays_what_it_holds(recording, tmp_path, cut):
     out = replay(str(part), "--check")
     assert out.returncode == 0, out.stdout + out.stderr
     assert "Traceback" not in out.stderr
-    assert re.search(rf"the recording ends at t=\d+\.\d+ s, byte {offset} of {size} \(it was not closed", out.stderr), \
+    assert re.search(rf"the recording ends at t=\d+\.\d+ s, byte {offset} of {size} \(it was not closed", out.stderr), (
         out.stderr
+    )
     assert "replayed 2 connections" in out.stdout and "identical: all" in out.stdout
 
 
@@ -207,8 +219,9 @@ def test_a_closed_recording_reads_as_the_mcap_reader_reads_it(recording):
     contents = read_mcap(recording)
     with recording.open("rb") as f:
         reader = make_reader(f)
-        expected = [(channel.topic, msg.log_time, msg.data) for _, channel, msg in
-                    reader.iter_messages(log_time_order=False)]
+        expected = [
+            (channel.topic, msg.log_time, msg.data) for _, channel, msg in reader.iter_messages(log_time_order=False)
+        ]
         stats = reader.get_summary().statistics
     assert contents.complete and contents.end == contents.size == recording.stat().st_size
     assert contents.messages == expected and contents.count == stats.message_count > 100

@@ -32,11 +32,15 @@ def nodes_server(server_factory, tmp_path):
 def test_path_nodes_are_listed_and_the_closest_is_found_before_init(nodes_server):
     c = nodes_server.connect()
     c.nfo()
-    assert c.ask("GETPATHNODES", "NFO").text == ("NFO {PathNodes 2} {Door 1.50,-2.25,-0.30 0.00,0.00,1.57 "
-                                                 "Corner -4.00,6.00,-0.30 0.00,0.00,0.00}")
-    assert c.ask("GETCLOSESTPATHNODE {Location 1,-1,0}", "NFO").text == "NFO {Pathnode Door} {Location 1.50,-2.25,-0.30}"
-    assert c.ask("GETCLOSESTPATHNODE {Location -3 5 0}", "NFO").text == ("NFO {Pathnode Corner} "
-                                                                        "{Location -4.00,6.00,-0.30}")
+    assert c.ask("GETPATHNODES", "NFO").text == (
+        "NFO {PathNodes 2} {Door 1.50,-2.25,-0.30 0.00,0.00,1.57 Corner -4.00,6.00,-0.30 0.00,0.00,0.00}"
+    )
+    assert (
+        c.ask("GETCLOSESTPATHNODE {Location 1,-1,0}", "NFO").text == "NFO {Pathnode Door} {Location 1.50,-2.25,-0.30}"
+    )
+    assert c.ask("GETCLOSESTPATHNODE {Location -3 5 0}", "NFO").text == (
+        "NFO {Pathnode Corner} {Location -4.00,6.00,-0.30}"
+    )
     assert c.ask("GETCLOSESTPATHNODE", "ERROR").text.startswith("ERROR {Command GETCLOSESTPATHNODE} {Reason ")
 
 
@@ -45,8 +49,10 @@ def test_a_world_without_path_nodes_says_so(server):
     c.nfo()
     assert c.ask("GETPATHNODES", "NFO").text == "NFO {PathNodes 0}"
     reply = c.ask("GETCLOSESTPATHNODE {Location 0,0,0}", "ERROR").text
-    assert reply == ("ERROR {Command GETCLOSESTPATHNODE} {Reason world DM-USAR_yellow has no path nodes (a world file "
-                     "lists them under path_nodes)}")
+    assert reply == (
+        "ERROR {Command GETCLOSESTPATHNODE} {Reason world DM-USAR_yellow has no path nodes (a world file "
+        "lists them under path_nodes)}"
+    )
 
 
 def test_control_getsta_is_answered_with_an_error(server):

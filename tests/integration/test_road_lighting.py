@@ -19,9 +19,11 @@ WIDTH, HEIGHT = 160, 120
 # ways): the middle of a crossing facing south (at the walls in the shade of a sun that
 # stands in the south), the parking lot facing west, and the open ground outside the town
 # near the floor's edge, facing north.
-PLACES = (("Crossing", "41,41,-0.25", "0,0,3.1416"),
-          ("Lot", "0,90,-0.25", "0,0,4.7124"),
-          ("Outskirts", "0,-142,-0.25", "0,0,0"))
+PLACES = (
+    ("Crossing", "41,41,-0.25", "0,0,3.1416"),
+    ("Lot", "0,90,-0.25", "0,0,4.7124"),
+    ("Outskirts", "0,-142,-0.25", "0,0,0"),
+)
 # The picture's lower part: rows from 10 below the horizon (the camera is level) down, the
 # ground within about 6 m of the camera, which is road at every place above but the last.
 GROUND_ROWS = slice(HEIGHT // 2 + 10, HEIGHT)
@@ -64,8 +66,7 @@ def test_the_road_world_is_lit_wherever_a_camera_looks(server_factory, road_worl
     viewer = Viewer(srv.app.image.port)
     try:
         for place, name, _ in robots:
-            first.send(f"SET {{Type Camera}} {{Robot {name}}} {{Name Camera}} "
-                       f"{{Client 127.0.0.1:{viewer.local_port}}}")
+            first.send(f"SET {{Type Camera}} {{Robot {name}}} {{Name Camera}} {{Client 127.0.0.1:{viewer.local_port}}}")
             first.step(0.1)
             picture = viewer.picture()
             assert picture.shape == (HEIGHT, WIDTH, 3)

@@ -45,8 +45,11 @@ def test_requests_waiting_for_a_step_that_never_comes_are_answered_at_the_stop(y
     answers: list = []
     done = threading.Event()
     for _ in range(3):  # lock-step: these wait for the next STEP
-        facade.call(lambda sim: sim.time, immediate=False,
-                    on_done=lambda r, e: (answers.append((r, e)), len(answers) == 3 and done.set()))
+        facade.call(
+            lambda sim: sim.time,
+            immediate=False,
+            on_done=lambda r, e: (answers.append((r, e)), len(answers) == 3 and done.set()),
+        )
     time.sleep(0.1)
     assert answers == []  # no STEP yet: nothing ran
     facade.stop()
@@ -92,8 +95,9 @@ def step(facade: SimFacade, seconds: float) -> tuple[str, object]:
     """A lock-step STEP: ("stepped", time) or ("refused", error); fail if neither comes."""
     done = threading.Event()
     box: list = []
-    facade.step(seconds, lambda t: (box.append(("stepped", t)), done.set()),
-                lambda e: (box.append(("refused", e)), done.set()))
+    facade.step(
+        seconds, lambda t: (box.append(("stepped", t)), done.set()), lambda e: (box.append(("refused", e)), done.set())
+    )
     assert done.wait(WAIT_S), "the STEP was never answered"
     return box[0]
 

@@ -26,10 +26,12 @@ from usarsim.sensors.scanner import LINE_LIMIT, RangeScanner3D, RangeScanner3DCo
 F = r"\d+\.\d{4}"
 SWEEP_LINE = re.compile(  # protocol.md 6.3: SEN {Time t} {Type RangeScanner3D} {Name Scanner} ...
     rf"SEN \{{Time ({F})\}} \{{Type RangeScanner3D\}} \{{Name Scanner3D\}} "
-    rf"\{{Resolution 0\.0436,0\.0436\}} \{{FOV 0\.4363,1\.0472\}} \{{Range ({F}(?:,{F})*)\}}")
+    rf"\{{Resolution 0\.0436,0\.0436\}} \{{FOV 0\.4363,1\.0472\}} \{{Range ({F}(?:,{F})*)\}}"
+)
 ROW_LINE = re.compile(  # the opt-in split form in RangeScanner3D's docstring
     rf"SEN \{{Time ({F})\}} \{{Type RangeScanner3D\}} \{{Name Scanner3D\}} \{{Frames (\d+)\}} \{{Frame (\d+)\}} "
-    rf"\{{Resolution ({F},{F})\}} \{{FOV 0\.4363,1\.0472\}} \{{Range ({F}(?:,{F})*)\}}")
+    rf"\{{Resolution ({F},{F})\}} \{{FOV 0\.4363,1\.0472\}} \{{Range ({F}(?:,{F})*)\}}"
+)
 # USARSim's own grid (USARBot.ini [USARBot.RangeScanner3D], protocol.md 7.3): 31 x 51 beams
 USARSIM_GRID = "horizontal_resolution_rad: 0.0209, vertical_resolution_rad: 0.0145"
 KURT3D_MOUNT_X = 0.05  # Scanner3D location in Kurt3D.yaml
@@ -109,11 +111,14 @@ def test_a_sweep_is_one_line_of_the_spec_form_that_reads_the_wall(server_factory
     if robot != "Kurt3D":
         return
     # the middle of the sweep (middle row, middle beam) looks straight ahead, level, at the wall
-    truth = {float(segments(ln.text)["Time"]): vec(segments(ln.text)["Location"])
-             for ln in lines if "{Type GroundTruth}" in ln.text}
+    truth = {
+        float(segments(ln.text)["Time"]): vec(segments(ln.text)["Location"])
+        for ln in lines
+        if "{Type GroundTruth}" in ln.text
+    }
     for t in times[-3:]:
         d = WALL_FACE_X - (truth[t][0] + KURT3D_MOUNT_X)
-        middle = got[t][(rows // 2) * cols:(rows // 2 + 1) * cols]
+        middle = got[t][(rows // 2) * cols : (rows // 2 + 1) * cols]
         assert middle[cols // 2] == pytest.approx(d, abs=0.01)
         # the first value is the rightmost beam; it reads the same plane further off: d / cos(yaw)
         assert middle[0] == pytest.approx(d / math.cos(cfg.horizontal_fov_rad / 2), abs=0.02)
@@ -130,7 +135,7 @@ def test_scan_opcode_sends_a_whole_sweep_after_its_res_in_the_chosen_form(server
         texts = [ln.text for ln in c.step(0.01)]
         res = next(i for i, t in enumerate(texts) if t.startswith("RES"))
         assert texts[res].endswith("{Type RangeScanner3D} {Name Scanner3D} {Status OK}")
-        return [t for t in texts[res + 1:] if "{Type RangeScanner3D}" in t]
+        return [t for t in texts[res + 1 :] if "{Type RangeScanner3D}" in t]
 
     def set_split(params: str) -> str:
         c.send(f"SET {{Type RangeScanner3D}} {{Name Scanner3D}} {{Opcode Split}} {{Params {params}}}")
@@ -171,8 +176,11 @@ def test_split_rows_in_the_robot_file_sends_usarsims_grid_one_row_a_line(server_
         assert {len(r) for _, _, r in sweep} == {51}
     assert all("{Resolution 0.0145,0.0209}" in ln.text for ln in lines if "{Type RangeScanner3D}" in ln.text)
     # the middle row's middle beam reads the wall straight ahead
-    truth = {float(segments(ln.text)["Time"]): vec(segments(ln.text)["Location"])
-             for ln in lines if "{Type GroundTruth}" in ln.text}
+    truth = {
+        float(segments(ln.text)["Time"]): vec(segments(ln.text)["Location"])
+        for ln in lines
+        if "{Type GroundTruth}" in ln.text
+    }
     t = max(got)
     assert got[t][15][2][25] == pytest.approx(WALL_FACE_X - (truth[t][0] + KURT3D_MOUNT_X), abs=0.01)
     # one line a sweep would be 15 kB: a SET asking for it fails and the form stays split
@@ -220,8 +228,7 @@ def test_the_bound_counts_the_scanners_max_range_and_name():
     assert LINE_LIMIT == M.LINE_LIMIT == 4096
     cfg = RangeScanner3DConfig()
     rows, cols = cfg.counts
-    widest = RangeScan3DReading("Scanner3D", (0.0436, 0.0436), (0.4363, 1.0472), (1000.0,) * (rows * cols),
-                                frames=rows)
+    widest = RangeScan3DReading("Scanner3D", (0.0436, 0.0436), (0.4363, 1.0472), (1000.0,) * (rows * cols), frames=rows)
     line = M.format_reading(widest, 999999999.9999)
     assert len(line.encode()) == cfg.longest_line("Scanner3D", False) == 2871
     split = M.format_reading(dataclasses.replace(widest, split=True), 999999999.9999).split("\r\n")
@@ -246,35 +253,48 @@ def test_a_sweep_formats_as_one_line_and_reads_back():
     ranges = tuple(1.0 + i / 8 for i in range(11 * 25))
     sweep = RangeScan3DReading("Scanner", (0.0436, 0.0436), (0.4363, 1.0472), ranges, frames=11)
     line = M.format_message(M.SensorMessage(12.5, sweep))
-    assert line == ("SEN {Time 12.5000} {Type RangeScanner3D} {Name Scanner} {Resolution 0.0436,0.0436} "
-                    "{FOV 0.4363,1.0472} {Range " + ",".join("%.4f" % v for v in ranges) + "}\r\n")
+    assert line == (
+        "SEN {Time 12.5000} {Type RangeScanner3D} {Name Scanner} {Resolution 0.0436,0.0436} "
+        "{FOV 0.4363,1.0472} {Range " + ",".join("%.4f" % v for v in ranges) + "}\r\n"
+    )
     assert len(line) < M.LINE_LIMIT
     back = M.parse_message(line[:-2])
     assert isinstance(back, M.SensorMessage) and back.time == 12.5
     r = back.reading
-    assert (r.name, r.resolution_rad, r.fov_rad, r.ranges_m) == (sweep.name, sweep.resolution_rad, sweep.fov_rad,
-                                                                  ranges)
+    assert (r.name, r.resolution_rad, r.fov_rad, r.ranges_m) == (
+        sweep.name,
+        sweep.resolution_rad,
+        sweep.fov_rad,
+        ranges,
+    )
     assert (r.frame, r.split) == (None, False)
     assert M.format_message(back) == line
     # the 3DRangeScanner spelling reads back as itself
     alias = M.parse_message(line.replace("RangeScanner3D", "3DRangeScanner"))
     assert alias.reading.sensor_type == "3DRangeScanner" and alias.reading.ranges_m == ranges
     # a sweep too long for one line is still one line unless it asks to be split
-    big = RangeScan3DReading("S", (0.0145, 0.0209), (0.4363, 1.0472), tuple(1000.0 for _ in range(31 * 51)),
-                             frames=31)
+    big = RangeScan3DReading("S", (0.0145, 0.0209), (0.4363, 1.0472), tuple(1000.0 for _ in range(31 * 51)), frames=31)
     assert M.format_message(M.SensorMessage(1.0, big)).count("\r\n") == 1
 
 
 def test_a_split_sweep_formats_one_line_per_row_and_a_row_reads_back():
-    big = RangeScan3DReading("S", (0.0145, 0.0209), (0.4363, 1.0472), tuple(1000.0 for _ in range(31 * 51)),
-                             frames=31, split=True)
+    big = RangeScan3DReading(
+        "S", (0.0145, 0.0209), (0.4363, 1.0472), tuple(1000.0 for _ in range(31 * 51)), frames=31, split=True
+    )
     text = M.format_message(M.SensorMessage(12.5, big))
     rows = text.split("\r\n")[:-1]
     assert len(rows) == 31 and text.endswith("\r\n")
     assert max(len(r) + 2 for r in rows) < M.LINE_LIMIT
-    assert rows[3].startswith("SEN {Time 12.5000} {Type RangeScanner3D} {Name S} {Frames 31} {Frame 3} "
-                              "{Resolution 0.0145,0.0209} {FOV 0.4363,1.0472} {Range 1000.0000,")
+    assert rows[3].startswith(
+        "SEN {Time 12.5000} {Type RangeScanner3D} {Name S} {Frames 31} {Frame 3} "
+        "{Resolution 0.0145,0.0209} {FOV 0.4363,1.0472} {Range 1000.0000,"
+    )
     back = M.parse_message(rows[3])
     assert isinstance(back, M.SensorMessage)
-    assert (back.reading.frames, back.reading.frame, back.reading.split, len(back.reading.ranges_m)) == (31, 3, True, 51)
+    assert (back.reading.frames, back.reading.frame, back.reading.split, len(back.reading.ranges_m)) == (
+        31,
+        3,
+        True,
+        51,
+    )
     assert M.format_message(back) == rows[3] + "\r\n"

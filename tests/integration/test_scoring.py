@@ -36,8 +36,9 @@ start_poses:
 """
 
 
-def scored(path, steps: int, *, world: str = "DM-USAR_yellow", spawn: dict, drive=None, before=None,
-           step_s: float = 0.1) -> dict:
+def scored(
+    path, steps: int, *, world: str = "DM-USAR_yellow", spawn: dict, drive=None, before=None, step_s: float = 0.1
+) -> dict:
     """Run one robot in lock-step for ``steps`` steps and return the --score-file JSON."""
     with launch(world=world, extra_args=("--score-file", str(path))) as srv, srv.connect() as w:
         robot = w.spawn("P2AT", name="R1", **spawn)
@@ -117,8 +118,10 @@ def test_report_is_answered_and_refused_on_the_wire():
             assert f.readline().startswith(b"NFO")
             s.sendall(b"REPORT {Type Victim} {Location 1,2,0}\r\n")  # no robot yet
             assert f.readline().startswith(b"ERROR {Command REPORT} {Reason ")
-            s.sendall(b"INIT {ClassName USARBot.P2AT} {Name R1}\r\nREPORT {Type Dog} {Location 1,2,0}\r\n"
-                      b"REPORT {Type Victim} {Location 1,2,0}\r\nREPORT {Type victim} {Location 3,4,0} {Name V9}\r\n")
+            s.sendall(
+                b"INIT {ClassName USARBot.P2AT} {Name R1}\r\nREPORT {Type Dog} {Location 1,2,0}\r\n"
+                b"REPORT {Type Victim} {Location 1,2,0}\r\nREPORT {Type victim} {Location 3,4,0} {Name V9}\r\n"
+            )
             got = [f.readline().decode() for _ in range(3)]
         assert got[0].startswith("ERROR {Command REPORT} {Reason REPORT: (Type Dog) is not a kind of report")
         assert got[1] == "RES {Time 0.00} {Type Victim} {Name Victim1} {Status OK} {Location 1.0000,2.0000,0.0000}\r\n"
@@ -129,8 +132,13 @@ def test_report_is_answered_and_refused_on_the_wire():
 
 
 def test_robots_lost_by_battery_flip_and_standing_still(tmp_path):
-    empty = scored(tmp_path / "g.json", 30, spawn={"location": (-4.0, 0.0, -0.3)},
-                   before=None, drive=lambda r, k: r.drive(left=1.0, right=1.0))
+    empty = scored(
+        tmp_path / "g.json",
+        30,
+        spawn={"location": (-4.0, 0.0, -0.3)},
+        before=None,
+        drive=lambda r, k: r.drive(left=1.0, right=1.0),
+    )
     assert empty["robots"]["R1"]["lost"] is None  # a short run of a robot that drives: not lost
     stuck = scored(tmp_path / "h.json", 62, spawn={"location": (-4.0, 0.0, -0.3)}, step_s=1.0)
     assert stuck["robots"]["R1"]["lost"] == "stuck" and stuck["team"]["robots_lost"] == 1
@@ -140,9 +148,27 @@ def test_robots_lost_by_battery_flip_and_standing_still(tmp_path):
 
 def test_serve_score_prints_the_live_score(tmp_path):
     """usarsim serve --score: a score line every 10 simulated seconds and one at the end."""
-    proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", "--lockstep", "--score", "--port", "0",
-                             "--truth-port", "0", "--no-web", "--no-image", "--no-wireless"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "usarsim",
+            "serve",
+            "--lockstep",
+            "--score",
+            "--port",
+            "0",
+            "--truth-port",
+            "0",
+            "--no-web",
+            "--no-image",
+            "--no-wireless",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     try:
         port = None
         while port is None:

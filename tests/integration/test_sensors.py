@@ -78,8 +78,24 @@ def test_sonar_noise_is_bounded_and_max_range_is_exact(test_world, p2at):
     assert f4.max() - f4.min() <= 2 * 0.001 * f4.mean() + 1e-6  # Noise 0.001, relative
     for r in sonar:
         values = {i.name: i.range_m for i in r.items}
-        assert list(values) == ["F1", "F2", "F3", "F4", "F5", "F6", "F7", "F8",
-                                "R1", "R2", "R3", "R4", "R5", "R6", "R7", "R8"]
+        assert list(values) == [
+            "F1",
+            "F2",
+            "F3",
+            "F4",
+            "F5",
+            "F6",
+            "F7",
+            "F8",
+            "R1",
+            "R2",
+            "R3",
+            "R4",
+            "R5",
+            "R6",
+            "R7",
+            "R8",
+        ]
         assert values["F1"] == 5.0  # nothing seen: exactly MaxRange, no noise
         assert all(0.1 <= v <= 5.0 for v in values.values())
 
@@ -90,7 +106,9 @@ def test_ground_truth_is_the_exact_pose(test_world, p2at):
     sim.advance(0.9)
     sim.take_outputs()
     sim.advance(0.1)  # to t = 2.0: one GroundTruth, at the end
-    gt = [o.value for o in sim.take_outputs() if isinstance(o.value, PoseReading) and o.value.sensor_type == "GroundTruth"]
+    gt = [
+        o.value for o in sim.take_outputs() if isinstance(o.value, PoseReading) and o.value.sensor_type == "GroundTruth"
+    ]
     assert len(gt) == 1
     assert sim.time == pytest.approx(2.0)
     loc, ori = sim.pose_of(1)
@@ -171,8 +189,9 @@ def test_set_encoder_reset_zeroes_the_ticks(wall_client):
     assert all(abs(int(i.split()[3])) > 50 for i in before)
     c.send("SET {Type Encoder} {Name ECLeft} {Opcode RESET}")
     lines = c.step(0.3)
-    assert [ln.text[ln.text.index("{Type"):] for ln in lines if ln.text.startswith("RES ")] == \
-        ["{Type Encoder} {Name ECLeft} {Status OK}"]
+    assert [ln.text[ln.text.index("{Type") :] for ln in lines if ln.text.startswith("RES ")] == [
+        "{Type Encoder} {Name ECLeft} {Status OK}"
+    ]
     after = {i.split()[1]: int(i.split()[3]) for i in segment_list(sensor_lines(lines, "Encoder")[-1].text)[2:]}
     assert abs(after["ECLeft"]) <= 1
     assert abs(after["ECRight"]) > 50  # only the named encoder

@@ -102,7 +102,8 @@ def test_the_roller_p2at_carries_a_parcel_off_its_front(server_factory, tmp_path
     c.send("INIT {ClassName USARBot.RollerP2AT} {Name Porter} {Start Here}")
     c.step(1.5)
     assert c.ask("GETCONF {Type RollerTable}", "CONF").text.startswith(
-        "CONF {Type RollerTable} {Name Roller} {MaxSpeed ")
+        "CONF {Type RollerTable} {Name Roller} {MaxSpeed "
+    )
     x0, _, z0 = _body(srv, "parcel")
     assert z0 > 0.3  # it lies on the table on the robot's back (MuJoCo z is up)
     c.step(1.0)
@@ -122,8 +123,9 @@ def test_the_roller_p2at_carries_a_parcel_off_its_front(server_factory, tmp_path
 def test_the_roller_table_carries_a_resting_load_at_its_speed(server_factory, tmp_path, speed):
     """The load's speed along the table, from 0.2 s after the rollers start, is within 10 % of
     what they were told (the robot stands)."""
-    srv, c = _serve(server_factory, tmp_path, PARCEL_WORLD.replace("[-0.12, 0.0, -0.40]", "[0.0, 0.0, -0.40]"),
-                    "Dispatch")
+    srv, c = _serve(
+        server_factory, tmp_path, PARCEL_WORLD.replace("[-0.12, 0.0, -0.40]", "[0.0, 0.0, -0.40]"), "Dispatch"
+    )
     c.send("INIT {ClassName USARBot.RollerP2AT} {Name Porter} {Start Here}")
     c.step(1.5)
     c.send(f"SET {{Type RollerTable}} {{Name Roller}} {{Opcode Roll}} {{Params {speed}}}")
@@ -155,7 +157,9 @@ def _jaws(c, robot: str, start: str, arm: str, fingers: list[int]) -> None:
 
 def _links(c, arm: str, links: list[int]) -> list[float]:
     """The values MISSTA reports of links of a mission package."""
-    line = next(ln.text for ln in reversed(c.step(0.2)) if ln.text.startswith("MISSTA") and f"{{Name {arm}}}" in ln.text)
+    line = next(
+        ln.text for ln in reversed(c.step(0.2)) if ln.text.startswith("MISSTA") and f"{{Name {arm}}}" in ln.text
+    )
     return [float(re.search(r"\{Link %d\} \{Value (-?[\d.]+)\}" % k, line).group(1)) for k in links]
 
 

@@ -28,8 +28,9 @@ def test_a_start_pose_spawns_with_its_exact_yaw(server):
 def test_a_pose_copied_from_getstartposes_spawns_where_start_does(server_factory):
     a, b = server_factory(), server_factory()
     _, by_name = _truth_after_init(a, "INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart4}")
-    _, copied = _truth_after_init(b, "INIT {ClassName USARBot.P2AT} {Name R1} {Location -15.50,-4.00,-0.25} "
-                                     "{Rotation 0.00,0.00,1.57}")
+    _, copied = _truth_after_init(
+        b, "INIT {ClassName USARBot.P2AT} {Name R1} {Location -15.50,-4.00,-0.25} {Rotation 0.00,0.00,1.57}"
+    )
     assert by_name[-1][1] == copied[-1][1]
     assert by_name[-1][2] == copied[-1][2]
 
@@ -40,8 +41,9 @@ def test_an_init_inside_a_wall_is_refused_with_the_wall_named(server):
     # the north outer wall of DM-USAR_yellow stands at x = 6.0, 0.1 m thick
     c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Location 6.0,1.0,-0.3} {Rotation 0,0,0}")
     err = c.wait_line("ERROR").text
-    assert err.startswith("ERROR {Command INIT} {Reason location 6.00,1.00,-0.30 is inside box 'outer_n' "
-                          "of DM-USAR_yellow"), err
+    assert err.startswith(
+        "ERROR {Command INIT} {Reason location 6.00,1.00,-0.30 is inside box 'outer_n' of DM-USAR_yellow"
+    ), err
     assert "GETSTARTPOSES" in err
     # nothing was spawned: no robot to ask about, and the connection may INIT again, in the open
     assert c.ask("GETCONF {Type Robot}", "ERROR").text.startswith("ERROR {Command GETCONF}")

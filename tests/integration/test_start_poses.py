@@ -58,8 +58,11 @@ def hidden_ahead(world) -> list[str]:
         if not low:
             continue
         if not standing:
-            problems += [f"{world.name} {pose.name}: {model.geom(g).name} {d:.2f} m ahead of the pose, at its height "
-                         f"({down[0]:.1f} m above the ground)" for g, d in low.items()]
+            problems += [
+                f"{world.name} {pose.name}: {model.geom(g).name} {d:.2f} m ahead of the pose, at its height "
+                f"({down[0]:.1f} m above the ground)"
+                for g, d in low.items()
+            ]
             continue
         # the laser's beams, from where it sits on a P2AT standing at the pose
         laser = ground + up * LASER_HEIGHT_M + forward * LASER_AHEAD_M
@@ -72,8 +75,10 @@ def hidden_ahead(world) -> list[str]:
                 seen.add(int(g))
         for g, d in low.items():
             if g not in seen:
-                problems.append(f"{world.name} {pose.name}: {model.geom(g).name} {d - HALF_LENGTH_M:.2f} m ahead "
-                                f"of the robot, below its laser ({LASER_HEIGHT_M:.2f} m up), which does not see it")
+                problems.append(
+                    f"{world.name} {pose.name}: {model.geom(g).name} {d - HALF_LENGTH_M:.2f} m ahead "
+                    f"of the robot, below its laser ({LASER_HEIGHT_M:.2f} m up), which does not see it"
+                )
     return problems
 
 
@@ -116,7 +121,9 @@ def test_the_check_finds_what_only_low_rays_meet(tmp_path):
     doll, kerb, floating = sorted(problems)
     assert kerb.startswith("LowThings FacingAKerb: world/kerb 1.14 m ahead of the robot")  # 9.9 - 8.5 - 0.26
     assert doll.startswith("LowThings FacingADoll: falsealarm/doll_head/Head 0.44 m ahead of the robot")
-    assert floating == "LowThings Floating: world/pillar 1.45 m ahead of the pose, at its height (3.0 m above the ground)"
+    assert (
+        floating == "LowThings Floating: world/pillar 1.45 m ahead of the pose, at its height (3.0 m above the ground)"
+    )
 
     moved = ARENA.format(kerb_y=3.0, pillar_y=8.0).replace("-8.8, 0.1", "-8.8, 1.0")
     (tmp_path / "LowThings.yaml").write_text(moved)

@@ -113,13 +113,18 @@ def test_the_command_line_prints_the_error_and_exits_1(tmp_path, capsys):
 
 
 def test_dry_run_lists_every_run_and_runs_none(tmp_path, capsys):
-    path = write(tmp_path, TWO_BY_TWO + "runs:\n  - {world: DM-USAR_orange, team: [{robot: P3AT, count: 2}], "
-                                        "seeds: [7], clock: max}\n")
+    path = write(
+        tmp_path,
+        TWO_BY_TWO + "runs:\n  - {world: DM-USAR_orange, team: [{robot: P3AT, count: 2}], seeds: [7], clock: max}\n",
+    )
     exp = load_experiment(path)
     assert [(r.world, r.seed, r.team_label, r.clock) for r in exp.runs] == [
-        ("DM-USAR_yellow", 1, "P2AT", "lockstep"), ("DM-USAR_yellow", 2, "P2AT", "lockstep"),
-        ("DM-USAR_red", 1, "P2AT", "lockstep"), ("DM-USAR_red", 2, "P2AT", "lockstep"),
-        ("DM-USAR_orange", 7, "2xP3AT", "max")]
+        ("DM-USAR_yellow", 1, "P2AT", "lockstep"),
+        ("DM-USAR_yellow", 2, "P2AT", "lockstep"),
+        ("DM-USAR_red", 1, "P2AT", "lockstep"),
+        ("DM-USAR_red", 2, "P2AT", "lockstep"),
+        ("DM-USAR_orange", 7, "2xP3AT", "max"),
+    ]
     assert [(m.name, m.start) for m in exp.runs[-1].team] == [("R1", "PlayerStart1"), ("R2", "PlayerStart2")]
     assert len({r.run_id for r in exp.runs}) == 5
     assert exp.axes == ("world", "team", "clock")
@@ -129,7 +134,9 @@ def test_dry_run_lists_every_run_and_runs_none(tmp_path, capsys):
     for r in exp.runs:
         assert r.run_id in text
     assert sum(line.endswith(" new") for line in text.splitlines()) == 5 and "DM-USAR_orange" in text
-    assert all(line == line.rstrip() for line in text.splitlines())  # no padding at the ends of lines and "2xP3AT" in text
+    assert all(
+        line == line.rstrip() for line in text.splitlines()
+    )  # no padding at the ends of lines and "2xP3AT" in text
     assert "5 runs: 0 done already" in text and "5 to run" in text
     assert not out.exists()  # nothing ran, nothing written
 
@@ -142,8 +149,7 @@ def score_columns(rows):
     return {r["run_id"]: tuple(r[k] for k in keys) for r in rows}
 
 
-def test_a_two_by_two_sweep_scores_every_run_repeats_identically_and_skips_what_is_done(local_ray, tmp_path,
-                                                                                         capsys):
+def test_a_two_by_two_sweep_scores_every_run_repeats_identically_and_skips_what_is_done(local_ray, tmp_path, capsys):
     path = write(tmp_path, TWO_BY_TWO)
     exp = load_experiment(path)
     out = tmp_path / "results"
@@ -152,7 +158,11 @@ def test_a_two_by_two_sweep_scores_every_run_repeats_identically_and_skips_what_
     assert "4 runs in" in printed and "(0 failed), 0 skipped as done" in printed
     rows = read_rows(out)
     assert sorted((r["world"], r["seed"]) for r in rows) == [
-        ("DM-USAR_red", 1), ("DM-USAR_red", 2), ("DM-USAR_yellow", 1), ("DM-USAR_yellow", 2)]
+        ("DM-USAR_red", 1),
+        ("DM-USAR_red", 2),
+        ("DM-USAR_yellow", 1),
+        ("DM-USAR_yellow", 2),
+    ]
     assert {r["run_id"] for r in rows} == {r.run_id for r in exp.runs}
     for r in rows:
         assert r["error"] is None and r["log"] == ""
@@ -187,7 +197,9 @@ def test_a_two_by_two_sweep_scores_every_run_repeats_identically_and_skips_what_
     edited = load_experiment(write(tmp_path, TWO_BY_TWO.replace("seeds: [1, 2]", "seeds: [1, 2, 3]")))
     more = run_sweep(edited, out, workers=2, progress=False)
     assert more.skipped == 4 and sorted((r["world"], r["seed"]) for r in more.rows) == [
-        ("DM-USAR_red", 3), ("DM-USAR_yellow", 3)]
+        ("DM-USAR_red", 3),
+        ("DM-USAR_yellow", 3),
+    ]
     stored = read_rows(out)
     assert len(stored) == 6
     assert {k: v for k, v in score_columns(stored).items() if k in score_columns(rows)} == score_columns(rows)
@@ -195,14 +207,17 @@ def test_a_two_by_two_sweep_scores_every_run_repeats_identically_and_skips_what_
 
 def test_a_failing_controller_is_recorded_with_its_error_and_run_again_next_time(local_ray, tmp_path, capsys):
     python = sys.executable
-    path = write(tmp_path, f"""\
+    path = write(
+        tmp_path,
+        f"""\
 name: failing
 duration: 5
 runs:
   - controller: {{command: "{python} -c 'import sys; print(\\"no map of {{world}}\\"); sys.exit(3)'", label: broken}}
   - controller: {{brain: usarsim.brains.wander:Wander, params: {{pose_source: compass}}}}
   - controller: usarsim.brains.wander:Wander
-""")
+""",
+    )
     out = tmp_path / "results"
     assert main(["sweep", str(path), "--out", str(out), "--no-progress"]) == 1  # a run failed
     captured = capsys.readouterr()
@@ -231,12 +246,33 @@ def constructed_rows() -> list[dict]:
         for controller, extra in (("Wander", 0.0), ("FrontierExplorer", 40.0)):
             for seed, noise in zip((1, 2, 3), (-4.0, 0.0, 4.0)):
                 area = base + extra + noise
-                rows.append({"run_id": f"{world}-{controller}-{seed}", "experiment": "made", "world": world,
-                             "seed": seed, "team": "P2AT", "robots_n": 1, "wireless": "world", "duration_s": 60.0,
-                             "clock": "lockstep", "controller": controller, "score": area + 50.0 * (seed % 2),
-                             "victims_found": seed % 2, "victims_reported": 0, "false_reports": 0, "area_m2": area,
-                             "distance_m": 10.0, "collisions": 0, "robots_lost": 0, "radio_contact_share": 0.0,
-                             "time_s": 60.2, "wall_s": 3.0, "error": None, "log": ""})
+                rows.append(
+                    {
+                        "run_id": f"{world}-{controller}-{seed}",
+                        "experiment": "made",
+                        "world": world,
+                        "seed": seed,
+                        "team": "P2AT",
+                        "robots_n": 1,
+                        "wireless": "world",
+                        "duration_s": 60.0,
+                        "clock": "lockstep",
+                        "controller": controller,
+                        "score": area + 50.0 * (seed % 2),
+                        "victims_found": seed % 2,
+                        "victims_reported": 0,
+                        "false_reports": 0,
+                        "area_m2": area,
+                        "distance_m": 10.0,
+                        "collisions": 0,
+                        "robots_lost": 0,
+                        "radio_contact_share": 0.0,
+                        "time_s": 60.2,
+                        "wall_s": 3.0,
+                        "error": None,
+                        "log": "",
+                    }
+                )
     rows.append(dict(rows[0], run_id="failed-one", seed=4, score=None, area_m2=None, error="boom", log="tail"))
     return rows
 
@@ -246,14 +282,19 @@ def test_the_summary_gives_mean_deviation_and_an_interval_suited_to_each_score(t
     assert 1.96 < t975(1000) < 1.99 and t975(40) == pytest.approx(2.021)
     s = Stat.of([96.0, 100.0, 104.0])
     assert s.mean == 100.0 and s.sd == pytest.approx(4.0)
-    assert (s.ci_low, s.ci_high) == pytest.approx((100.0 - 4.303 * 4.0 / math.sqrt(3), 100.0 + 4.303 * 4.0 / math.sqrt(3)))
+    assert (s.ci_low, s.ci_high) == pytest.approx(
+        (100.0 - 4.303 * 4.0 / math.sqrt(3), 100.0 + 4.303 * 4.0 / math.sqrt(3))
+    )
     assert Stat.of([5.0]).sd is None and Stat.of([]).mean is None
 
     rows = constructed_rows()
     groups = summarize(rows)
     assert [(g.config["world"], g.config["controller"], len(g.seeds), g.failed) for g in groups] == [
-        ("DM-USAR_yellow", "Wander", 3, 1), ("DM-USAR_yellow", "FrontierExplorer", 3, 0),
-        ("DM-USAR_red", "Wander", 3, 0), ("DM-USAR_red", "FrontierExplorer", 3, 0)]
+        ("DM-USAR_yellow", "Wander", 3, 1),
+        ("DM-USAR_yellow", "FrontierExplorer", 3, 0),
+        ("DM-USAR_red", "Wander", 3, 0),
+        ("DM-USAR_red", "FrontierExplorer", 3, 0),
+    ]
     assert groups[1].stat("area_m2").mean == pytest.approx(140.0)  # the failed run is not averaged
     # victims found 1, 0, 1: a t interval would be [-0.77, 2.10]; the exact Poisson one of 2
     # victims in 3 runs is [0.2422, 7.2247] / 3
@@ -274,7 +315,8 @@ def test_the_summary_gives_mean_deviation_and_an_interval_suited_to_each_score(t
     report = build_report(tmp_path)
     assert report.axes == ("world", "controller")
     assert sorted(p.name for p in report.plots) == sorted(
-        f"plot-{m}-by-{a}.png" for m in ("score", "victims_found", "area_m2") for a in ("world", "controller"))
+        f"plot-{m}-by-{a}.png" for m in ("score", "victims_found", "area_m2") for a in ("world", "controller")
+    )
     for p in report.plots:
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with open(tmp_path / "summary.csv", newline="") as f:

@@ -13,8 +13,19 @@ from usarsim.sweep.runner import execute
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "explorers.yaml"
 DOC = ROOT / "docs" / "experiments.md"
-SCORES = ("score", "victims_found", "victims_reported", "false_reports", "area_m2", "distance_m", "collisions",
-          "robots_lost", "radio_contact_share", "time_s", "robots")
+SCORES = (
+    "score",
+    "victims_found",
+    "victims_reported",
+    "false_reports",
+    "area_m2",
+    "distance_m",
+    "collisions",
+    "robots_lost",
+    "radio_contact_share",
+    "time_s",
+    "robots",
+)
 
 
 def test_the_shipped_sample_experiment_loads_into_twelve_runs():
@@ -25,7 +36,8 @@ def test_the_shipped_sample_experiment_loads_into_twelve_runs():
     assert sorted({r.controller.label for r in exp.runs}) == ["frontier", "wander"]
     assert {r.seed for r in exp.runs} == {1, 2, 3}
     assert {(r.duration_s, r.clock, r.team_label, r.wireless) for r in exp.runs} == {
-        (60.0, "lockstep", "P2AT", "world")}
+        (60.0, "lockstep", "P2AT", "world")
+    }
 
 
 def test_the_docs_show_the_shipped_file_and_its_runs():

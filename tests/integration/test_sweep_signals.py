@@ -30,8 +30,10 @@ duration: 3
 clock: lockstep
 controller: usarsim.brains.wander:Wander
 """
-STOPPED = re.compile(r"^usarsim: sweep stopped by (SIG\w+): (\d+) of (\d+) runs done and stored in (.+) \((\d+) "
-                     r"finished now, (\d+) failed\); run the same command again to run the other (\d+)$")
+STOPPED = re.compile(
+    r"^usarsim: sweep stopped by (SIG\w+): (\d+) of (\d+) runs done and stored in (.+) \((\d+) "
+    r"finished now, (\d+) failed\); run the same command again to run the other (\d+)$"
+)
 
 
 def start(path: Path, out: Path, *, sigint_ignored: bool = False) -> subprocess.Popen:
@@ -40,10 +42,15 @@ def start(path: Path, out: Path, *, sigint_ignored: bool = False) -> subprocess.
     SIGINT ignored, as a script's background job is."""
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     signals = signal.SIG_IGN if sigint_ignored else signal.SIG_DFL
-    return subprocess.Popen([sys.executable, "-m", "usarsim", "sweep", str(path), "--out", str(out), "--workers",
-                             "2", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=env, start_new_session=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signals))
+    return subprocess.Popen(
+        [sys.executable, "-m", "usarsim", "sweep", str(path), "--out", str(out), "--workers", "2", "--no-progress"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signals),
+    )
 
 
 def done_rows(out: Path) -> int:

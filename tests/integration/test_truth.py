@@ -27,8 +27,10 @@ rfid_tags:
 start_poses:
   - {name: Here, location: [-5.0, 0.0, -0.2], rotation: [0, 0, 0]}
 """
-LINE = re.compile(r"\{Name (\S+)\} \{Class (\S+)\} \{Time \d+\.\d{4}\} \{Location (-?\d+\.\d{4}),(-?\d+\.\d{4}),"
-                  r"(-?\d+\.\d{4})\} \{Rotation (\d+\.\d{4}),(\d+\.\d{4}),(\d+\.\d{4})\}")
+LINE = re.compile(
+    r"\{Name (\S+)\} \{Class (\S+)\} \{Time \d+\.\d{4}\} \{Location (-?\d+\.\d{4}),(-?\d+\.\d{4}),"
+    r"(-?\d+\.\d{4})\} \{Rotation (\d+\.\d{4}),(\d+\.\d{4}),(\d+\.\d{4})\}"
+)
 
 
 @pytest.fixture
@@ -62,8 +64,13 @@ def test_everything_then_by_class_and_name(served):
     rows = {(n, c): loc for n, c, loc in ask(truth, "{Class} {Name}")}
     everything = {(n, c): loc for n, c, loc in ask(truth, "{Other 1}")}
     assert set(everything) == set(rows)  # keys other than Class and Name are ignored
-    assert set(rows) == {("Scout", "P2AT"), ("Alice", "Victim"), ("11137", "RFIDTag"), ("glove", "FalseAlarm"),
-                         ("brick", "MovableObject")}
+    assert set(rows) == {
+        ("Scout", "P2AT"),
+        ("Alice", "Victim"),
+        ("11137", "RFIDTag"),
+        ("glove", "FalseAlarm"),
+        ("brick", "MovableObject"),
+    }
     assert rows[("11137", "RFIDTag")] == (1.0, 1.0, -0.02)
     assert rows[("Alice", "Victim")] == pytest.approx((2.0, -3.0, -0.1), abs=1e-3)
     scout = rows[("Scout", "P2AT")]

@@ -61,8 +61,21 @@ def turn(world, robot, rate: float, seconds: float = 3.0):
 
 def test_every_skid_steered_robot_is_tested():
     names = {p.stem for p in SKID_FILES}
-    assert {"P2AT", "P3AT", "P2DX", "ATRVJr", "Kurt2D", "Kurt3D", "Zerg", "Tarantula", "Kenaf", "TeleMax",
-            "Talon", "Soryu", "Rugbot"} <= names
+    assert {
+        "P2AT",
+        "P3AT",
+        "P2DX",
+        "ATRVJr",
+        "Kurt2D",
+        "Kurt3D",
+        "Zerg",
+        "Tarantula",
+        "Kenaf",
+        "TeleMax",
+        "Talon",
+        "Soryu",
+        "Rugbot",
+    } <= names
 
 
 @pytest.mark.parametrize("path", SKID_FILES, ids=lambda p: p.stem)

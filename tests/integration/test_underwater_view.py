@@ -73,17 +73,17 @@ def test_the_submarine_sees_murky_water_and_the_quay_camera_is_unchanged(server_
     # no sky: the camera is 2 m under water
     assert sky_share(under) < 0.005, sky_share(under)
     # the far end of the basin (the north quay 45 m ahead, at the horizon) is the water's colour
-    far = under[HORIZON - 6:HORIZON + 6].reshape(-1, 3).mean(axis=0)
+    far = under[HORIZON - 6 : HORIZON + 6].reshape(-1, 3).mean(axis=0)
     assert np.all(np.abs(far - water) < 10), (far, water)
     # the bottom fades into the water with distance: its difference from the water's colour
     # (the contrast a vision pipeline can use) near the picture's foot, 5 m ahead, is several
     # times what is left just below the horizon, 20 m and more ahead
     contrast = np.abs(under - water).mean(axis=(1, 2))
-    near, distant = contrast[HEIGHT - 20:].mean(), contrast[HORIZON + 2:HORIZON + 12].mean()
+    near, distant = contrast[HEIGHT - 20 :].mean(), contrast[HORIZON + 2 : HORIZON + 12].mean()
     assert near > 3 * distant and distant < 5, (near, distant)
     # the surface seen from below fills the upper part: brighter than the water ahead (the
     # water near the surface is lit more), and of the water's hue, green before blue and red
-    top = under[:HEIGHT // 8].reshape(-1, 3).mean(axis=0)
+    top = under[: HEIGHT // 8].reshape(-1, 3).mean(axis=0)
     assert top.mean() > 1.1 * far.mean(), (top, far)
     assert top[1] > top[0] and top[1] > top[2], top
 

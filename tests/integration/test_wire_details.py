@@ -24,5 +24,7 @@ def test_an_omnicam_zoom_is_answered_with_its_own_type(server_factory, test_worl
     c.send("SET {Type OmniCam} {Name Omni} {Opcode Zoom} {Params 0.5}")
     c.send("SET {Type Camera} {Name Camera} {Opcode Zoom} {Params 0.5}")
     res = [ln.text for ln in c.step(0.2) if ln.text.startswith("RES")]  # lock-step: at the next STEP
-    assert res == ["RES {Time 0.20} {Type OmniCam} {Name Omni} {FOV 6.2832} {Status Failed}",
-                   "RES {Time 0.20} {Type Camera} {Name Camera} {FOV 0.5000} {Status OK}"], res
+    assert res == [
+        "RES {Time 0.20} {Type OmniCam} {Name Omni} {FOV 6.2832} {Status Failed}",
+        "RES {Time 0.20} {Type Camera} {Name Camera} {FOV 0.5000} {Status OK}",
+    ], res

@@ -70,10 +70,12 @@ def test_a_blank_tag_reads_an_empty_mem_and_its_sen_pair_has_none(server_factory
 ZERO = "Location 0.0000,0.0000,0.0000 Orientation 0.0000,0.0000,0.0000"
 
 
-@pytest.mark.parametrize("robot, left, right", [("P2AT", "LeftFWheel", "RightFWheel"),
-                                                ("Kurt3D", "LeftMWheel", "RightMWheel")])
-def test_encoders_are_mounted_on_their_wheels_and_odometry_on_the_chassis(server_factory, test_world, robot,
-                                                                           left, right):
+@pytest.mark.parametrize(
+    "robot, left, right", [("P2AT", "LeftFWheel", "RightFWheel"), ("Kurt3D", "LeftMWheel", "RightMWheel")]
+)
+def test_encoders_are_mounted_on_their_wheels_and_odometry_on_the_chassis(
+    server_factory, test_world, robot, left, right
+):
     srv = server_factory(world=test_world)
     c = srv.connect()
     c.nfo()
@@ -82,10 +84,10 @@ def test_encoders_are_mounted_on_their_wheels_and_odometry_on_the_chassis(server
     # protocol.md 6.8: packed, one segment per item, the pose relative to the mount; an
     # encoder rides on its wheel (a robot part, e.g. RightFWheel)
     enc = c.ask("GETGEO {Type Encoder}", "GEO").text
-    assert enc == (f"GEO {{Type Encoder}} {{Name ECLeft {ZERO} Mount {left}}} "
-                   f"{{Name ECRight {ZERO} Mount {right}}}")
+    assert enc == (f"GEO {{Type Encoder}} {{Name ECLeft {ZERO} Mount {left}}} {{Name ECRight {ZERO} Mount {right}}}")
     assert c.ask("GETGEO {Type Encoder} {Name ECRight}", "GEO").text == (
-        f"GEO {{Type Encoder}} {{Name ECRight {ZERO} Mount {right}}}")
+        f"GEO {{Type Encoder}} {{Name ECRight {ZERO} Mount {right}}}"
+    )
     odo = c.ask("GETGEO {Type Odometry}", "GEO").text
     assert odo == f"GEO {{Type Odometry}} {{Name Odometry {ZERO} Mount HARD}}"
     # the UvA client's positional parse: the name, then exactly Location x Orientation r Mount m

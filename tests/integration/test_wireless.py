@@ -50,8 +50,14 @@ start_poses:
   - {name: Lane5, location: [10.5, -10.0, -0.2], rotation: [0.0, 0.0, 0.0]}
 """
 # ComStations (their centre rests 0.6 m above the floor) at the ends of the lanes
-STATIONS = {"A0": (-10.0, 0.0), "B0": (10.0, 0.0), "A6": (-10.0, 10.0), "B6": (10.0, 10.0),
-            "A5": (-6.0, -10.0), "B5": (6.0, -10.0)}
+STATIONS = {
+    "A0": (-10.0, 0.0),
+    "B0": (10.0, 0.0),
+    "A6": (-10.0, 10.0),
+    "B6": (10.0, 10.0),
+    "A5": (-6.0, -10.0),
+    "B5": (6.0, -10.0),
+}
 # walls on the line between two of them (from the geometry above)
 WALLS = {("A0", "B0"): 0, ("A6", "B6"): 6, ("A5", "B5"): 5, ("A0", "B5"): 2, ("A6", "B0"): 2, ("A0", "A6"): 0}
 
@@ -208,8 +214,10 @@ def wcs(radio):
     w.close()
     # the names belong to this connection until the server has seen it close
     cs = radio.app.wireless.comserver
-    wait_for(lambda: radio.on_loop(lambda: not any(n in cs.registered for n in STATIONS)),
-             what="the ComServer to forget the stations")
+    wait_for(
+        lambda: radio.on_loop(lambda: not any(n in cs.registered for n in STATIONS)),
+        what="the ComServer to forget the stations",
+    )
 
 
 @pytest.fixture
@@ -256,12 +264,18 @@ def test_two_robots_in_line_of_sight_exchange_messages_both_ways(radio, wcs, soc
         b.sendall(b"to A0 \x00")
         assert recv_exact(a, 7) == b"to A0 \x00"
         # the receiver learns who is calling from the peer port of the connection it accepted
-        assert cb.ask(f"REVERSEDNS {{Port {peer[1]}}}", "REVERSEDNSREPLY").text == \
-            f"REVERSEDNSREPLY {{Port {peer[1]}}} {{Robot A0}}"
-        assert ca.ask(f"REVERSEDNS {{Port {relay}}}", "REVERSEDNSREPLY").text == \
-            f"REVERSEDNSREPLY {{Port {relay}}} {{Robot B0}}"
-        assert ca.ask(f"DNS {{Robot B0}} {{Port {port_of(lb)}}}", "DNSREPLY").text == \
-            f"DNSREPLY {{Robot B0}} {{Port {relay}}}"  # the same port each time
+        assert (
+            cb.ask(f"REVERSEDNS {{Port {peer[1]}}}", "REVERSEDNSREPLY").text
+            == f"REVERSEDNSREPLY {{Port {peer[1]}}} {{Robot A0}}"
+        )
+        assert (
+            ca.ask(f"REVERSEDNS {{Port {relay}}}", "REVERSEDNSREPLY").text
+            == f"REVERSEDNSREPLY {{Port {relay}}} {{Robot B0}}"
+        )
+        assert (
+            ca.ask(f"DNS {{Robot B0}} {{Port {port_of(lb)}}}", "DNSREPLY").text
+            == f"DNSREPLY {{Robot B0}} {{Port {relay}}}"
+        )  # the same port each time
         a.close()
         assert at_eof(b)  # the WSS closes both sockets
     finally:
@@ -297,8 +311,10 @@ def test_getss_and_getobs_give_the_formula_for_a_known_geometry(radio, wcs):
             s = expected_dbm(radio, a, b, walls)
             reply = wcs.ask(f"GETSS {a} {b};")
             assert reply.startswith("OK:") and float(reply[3:-1]) == pytest.approx(s, abs=0.006), (a, b, reply)
-            assert iface.ask(f"GETOBS {{From {a}}} {{To {b}}}", "NUMOBS").text == \
-                f"NUMOBS {{From {a}}} {{To {b}}} {{ObstCount {walls}}}"
+            assert (
+                iface.ask(f"GETOBS {{From {a}}} {{To {b}}}", "NUMOBS").text
+                == f"NUMOBS {{From {a}}} {{To {b}}} {{ObstCount {walls}}}"
+            )
         # the open lane: -49.67 - 10.9 log10(20 / 2) = -60.57 dBm
         assert wcs.ask("GETSS B0 A0;") == "OK:-60.57;"
         s = expected_dbm(radio, "A0", "B5", 2)
@@ -310,8 +326,10 @@ def test_getss_and_getobs_give_the_formula_for_a_known_geometry(radio, wcs):
             assert float(ss.segment("Strength")) == pytest.approx(s, abs=0.001)
         assert wss.ask("GETSS {Robot A0}", "SS").text == "SS {Robot A0} {Strength INF} {Error SS.To.Self}"
         # between points: the six walls of lane y = 10, and past their ends
-        assert iface.ask("GETOBS {Start -9,10,-1} {End 9,10,-1}", "NUMOBS").text == \
-            "NUMOBS {Start -9,10,-1} {End 9,10,-1} {ObstCount 6}"
+        assert (
+            iface.ask("GETOBS {Start -9,10,-1} {End 9,10,-1}", "NUMOBS").text
+            == "NUMOBS {Start -9,10,-1} {End 9,10,-1} {ObstCount 6}"
+        )
         assert iface.ask("GETOBS {Start -9,14,-1} {End 9,14,-1}", "NUMOBS").segment("ObstCount") == "0"
         pos = iface.ask("GETPOS", "POSITIONS").text
         assert pos.startswith("POSITIONS {Robots 6} ")
@@ -395,8 +413,10 @@ def test_reversedns_names_the_caller_at_once_after_accept(radio, sockets):
             a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
             b, peer = lb.accept()
             try:
-                assert cb.ask(f"REVERSEDNS {{Port {peer[1]}}}", "REVERSEDNSREPLY").text == \
-                    f"REVERSEDNSREPLY {{Port {peer[1]}}} {{Robot A0}}", attempt
+                assert (
+                    cb.ask(f"REVERSEDNS {{Port {peer[1]}}}", "REVERSEDNSREPLY").text
+                    == f"REVERSEDNSREPLY {{Port {peer[1]}}} {{Robot A0}}"
+                ), attempt
             finally:
                 a.close()
                 b.close()
@@ -454,22 +474,24 @@ def test_wss_init_accepts_port_0_as_no_listening_port(radio, sockets):
     skips it for the default port, and a robot that declared only 0 is not listening."""
     wss = radio.app.wireless.wss
     lb = sockets(listener())
-    wait_for(lambda: radio.on_loop(lambda: "A0" not in wss.robots and "B0" not in wss.robots),
-             what="the WSS to forget")
+    wait_for(lambda: radio.on_loop(lambda: "A0" not in wss.robots and "B0" not in wss.robots), what="the WSS to forget")
     ca, cb = Client(wss.port), Client(wss.port)
     try:
         assert ca.ask("INIT {Robot A0} {Port 0}", "INITREPLY").text == "INITREPLY {Status OK}"
         assert cb.ask(f"INIT {{Robot B0}} {{Port 0,{port_of(lb)}}}", "INITREPLY").text == "INITREPLY {Status OK}"
         # to A0, which listens on no port
         for line in ("DNS {Robot A0}", "DNS {Robot A0} {Port 0}"):
-            assert cb.ask(line, "DNSREPLY").text == \
-                "DNSREPLY {Robot A0} {Port -1} {Error RobotDoesNotListenOnThisPort}", line
+            assert (
+                cb.ask(line, "DNSREPLY").text == "DNSREPLY {Robot A0} {Port -1} {Error RobotDoesNotListenOnThisPort}"
+            ), line
         # to B0: its first port that is not 0, also when asked {Port 0} (the default)
         relay = int(segments(ca.ask("DNS {Robot B0}", "DNSREPLY").text)["Port"])
         assert relay > 0
         assert ca.ask("DNS {Robot B0} {Port 0}", "DNSREPLY").text == f"DNSREPLY {{Robot B0}} {{Port {relay}}}"
-        assert ca.ask(f"DNS {{Robot B0}} {{Port {port_of(lb)}}}", "DNSREPLY").text == \
-            f"DNSREPLY {{Robot B0}} {{Port {relay}}}"
+        assert (
+            ca.ask(f"DNS {{Robot B0}} {{Port {port_of(lb)}}}", "DNSREPLY").text
+            == f"DNSREPLY {{Robot B0}} {{Port {relay}}}"
+        )
         a = sockets(socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT))
         b, _ = lb.accept()
         sockets(b)
@@ -491,18 +513,19 @@ def test_hostile_input_gets_the_documented_reply_and_never_takes_a_server_down(r
     sockets(bad.sock)
     bad.sock.sendall(bytes(b if b != 59 else 0 for b in os.urandom(3000)))  # 3 KB without a ';': dropped
     for text, reply in [
-            ("; HELLO;", "Fail: Unknown Message;"),
-            ("hello again;", "Fail: Unknown Message;"),
-            ("\xff\xfe\x00;", "Fail: Unknown Message;"),
-            ("OPEN A0 1;", "Fail: Incorrect Message;"),
-            ("register A0;", "Fail: Incorrect Message;"),
-            ("LISTEN Nobody 5;", "Fail: Robot Nobody not registered;"),
-            ("LISTEN A0 port;", "Fail: Incorrect Message;"),
-            ("REGISTER A0 10.9.9.9;", "Fail: Robot with name A0 already registered;"),
-            ("OPEN A0 1 B0 99999;", "Fail: Incorrect Message;"),
-            ("OPEN A0 1 B0 2;", "Fail: B0 not listening on port 2;"),
-            ("OPEN Nobody 1 B0 2;", "Fail: B0 not listening on port 2;"),
-            ("GETSS A0;", "Fail: Incorrect Message;")]:
+        ("; HELLO;", "Fail: Unknown Message;"),
+        ("hello again;", "Fail: Unknown Message;"),
+        ("\xff\xfe\x00;", "Fail: Unknown Message;"),
+        ("OPEN A0 1;", "Fail: Incorrect Message;"),
+        ("register A0;", "Fail: Incorrect Message;"),
+        ("LISTEN Nobody 5;", "Fail: Robot Nobody not registered;"),
+        ("LISTEN A0 port;", "Fail: Incorrect Message;"),
+        ("REGISTER A0 10.9.9.9;", "Fail: Robot with name A0 already registered;"),
+        ("OPEN A0 1 B0 99999;", "Fail: Incorrect Message;"),
+        ("OPEN A0 1 B0 2;", "Fail: B0 not listening on port 2;"),
+        ("OPEN Nobody 1 B0 2;", "Fail: B0 not listening on port 2;"),
+        ("GETSS A0;", "Fail: Incorrect Message;"),
+    ]:
         assert bad.ask(text) == reply, text
     # a robot that is not listening where it said: the server cannot connect out
     closed = socket.socket()
@@ -526,26 +549,29 @@ def test_hostile_input_gets_the_documented_reply_and_never_takes_a_server_down(r
     try:
         ws.send_raw(b"x" * 5000 + b"\r\n")  # too long: dropped
         for line, reply in [
-                ("INIT {Robot", "ERROR {Reason Must.Use.INIT.Method.First}"),
-                ("GETSS {Robot B0}", "ERROR {Reason Must.Use.INIT.Method.First}"),
-                ("INIT {Robot H1} {Port a,b}", "ERROR {Reason Ports.List.Must.Be.Integer}"),
-                ("INIT {Robot} {Port 1}", "ERROR {Reason Robot.Name.Must.Not.Be.Empty}"),
-                ("INIT {Robot H1} {Port 5,6}", "INITREPLY {Status OK}"),
-                ("INIT {Robot H1} {Port 5}", "ERROR {Reason Method.Unknown.Or.Can.INIT.only.once}"),
-                ("}}{{ \x01", "ERROR {Reason Method.Unknown.Or.Can.INIT.only.once}"),
-                ("DNS {Robot H2} {Port x}", "ERROR {Reason Port.Must.Be.Integer}"),
-                ("DNS {Robot Nobody}", "DNSREPLY {Robot Nobody} {Port -1} {Error NoSuchRobot}"),
-                ("DNS {Robot H1}", "DNSREPLY {Robot H1} {Port -1} {Error NoSuchRobot}"),
-                ("REVERSEDNS {Port 1}", "REVERSEDNSREPLY {Port 1} {Error UnknownOrIllegalPort}"),
-                ("REVERSEDNS {Port -3}", "ERROR {Reason Port.Must.Be.Integer}"),
-                ("GETSS {Robot}", "ERROR {Reason Robot.Name.Must.Not.Be.Empty}"),
-                ("GETSS {Robot Nobody}", "SS {Robot Nobody} {Strength NaN} {Error Robot.Does.Not.Exist}")]:
+            ("INIT {Robot", "ERROR {Reason Must.Use.INIT.Method.First}"),
+            ("GETSS {Robot B0}", "ERROR {Reason Must.Use.INIT.Method.First}"),
+            ("INIT {Robot H1} {Port a,b}", "ERROR {Reason Ports.List.Must.Be.Integer}"),
+            ("INIT {Robot} {Port 1}", "ERROR {Reason Robot.Name.Must.Not.Be.Empty}"),
+            ("INIT {Robot H1} {Port 5,6}", "INITREPLY {Status OK}"),
+            ("INIT {Robot H1} {Port 5}", "ERROR {Reason Method.Unknown.Or.Can.INIT.only.once}"),
+            ("}}{{ \x01", "ERROR {Reason Method.Unknown.Or.Can.INIT.only.once}"),
+            ("DNS {Robot H2} {Port x}", "ERROR {Reason Port.Must.Be.Integer}"),
+            ("DNS {Robot Nobody}", "DNSREPLY {Robot Nobody} {Port -1} {Error NoSuchRobot}"),
+            ("DNS {Robot H1}", "DNSREPLY {Robot H1} {Port -1} {Error NoSuchRobot}"),
+            ("REVERSEDNS {Port 1}", "REVERSEDNSREPLY {Port 1} {Error UnknownOrIllegalPort}"),
+            ("REVERSEDNS {Port -3}", "ERROR {Reason Port.Must.Be.Integer}"),
+            ("GETSS {Robot}", "ERROR {Reason Robot.Name.Must.Not.Be.Empty}"),
+            ("GETSS {Robot Nobody}", "SS {Robot Nobody} {Strength NaN} {Error Robot.Does.Not.Exist}"),
+        ]:
             ws.send(line)
             assert ws.next_line().text == reply, line
         assert ws2.ask("INIT {Robot H1} {Port 7}", "ERROR").text == "ERROR {Reason Robot.Alread.Exists}"
         assert ws2.ask("INIT {Robot H2} {Port 7}", "INITREPLY").text == "INITREPLY {Status OK}"
-        assert ws.ask("DNS {Robot H2} {Port 9}", "DNSREPLY").text == \
-            "DNSREPLY {Robot H2} {Port -1} {Error RobotDoesNotListenOnThisPort}"
+        assert (
+            ws.ask("DNS {Robot H2} {Port 9}", "DNSREPLY").text
+            == "DNSREPLY {Robot H2} {Port -1} {Error RobotDoesNotListenOnThisPort}"
+        )
         # H1 and H2 are not robots of the simulation: their link has no signal, the port refuses
         assert ws.ask("GETSS {Robot H2}", "SS").text == "SS {Robot H2} {Strength NaN} {Error Model.Returned.NaN}"
         relay = int(segments(ws.ask("DNS {Robot H2}", "DNSREPLY").text)["Port"])
@@ -557,18 +583,23 @@ def test_hostile_input_gets_the_documented_reply_and_never_takes_a_server_down(r
         ws2.close()
     # the ComServerInterface
     with Client(w.interface.port) as iface:
-        for line, reply in [("}{ garbage", None), ("GETOBS", "NUMOBS {ObstCount -1}"),
-                            ("GETOBS {Start 1,2} {End 1,2,3}", "NUMOBS {Start 1,2} {End 1,2,3} {ObstCount -1}"),
-                            ("GETOBS {From A0} {To Nobody}", "NUMOBS {From A0} {To Nobody} {ObstCount -1}"),
-                            ("FLY {To Moon}", None)]:
+        for line, reply in [
+            ("}{ garbage", None),
+            ("GETOBS", "NUMOBS {ObstCount -1}"),
+            ("GETOBS {Start 1,2} {End 1,2,3}", "NUMOBS {Start 1,2} {End 1,2,3} {ObstCount -1}"),
+            ("GETOBS {From A0} {To Nobody}", "NUMOBS {From A0} {To Nobody} {ObstCount -1}"),
+            ("FLY {To Moon}", None),
+        ]:
             iface.send(line)
             if reply is not None:
                 assert iface.next_line().text == reply, line
         iface.send_raw(b"x" * 5000 + b"\r\nGETPOS\r\nGETP")
         assert iface.next_line().text.startswith("POSITIONS {Robots 6} ")
     # every server still answers
-    for port, line, prefix in [(w.wss.port, "INIT {Robot Z} {Port 1}", "INITREPLY"),
-                               (w.interface.port, "GETPOS", "POSITIONS")]:
+    for port, line, prefix in [
+        (w.wss.port, "INIT {Robot Z} {Port 1}", "INITREPLY"),
+        (w.interface.port, "GETPOS", "POSITIONS"),
+    ]:
         with Client(port) as c:
             assert c.ask(line, prefix)
     assert wcs.ask("GETSS A0 B0;") == "OK:-60.57;"
@@ -587,9 +618,11 @@ def test_the_model_is_chosen_by_the_world_or_the_command_line(radio_world, tmp_p
     world naming waf2009: n 1, 6.325 dB a wall, no cap)."""
     p = tmp_path / "Radio2009.yaml"
     p.write_text(RADIO_WORLD.replace("name: RadioArena", "name: Radio2009") + "wireless: {model: waf2009}\n")
-    for world, model, expect, opens in [(radio_world, "perfect", "OK:0.00;", True),
-                                        (radio_world, "distance", "OK:-60.57;", True),
-                                        (load_world(p), None, "OK:-97.62;", False)]:
+    for world, model, expect, opens in [
+        (radio_world, "perfect", "OK:0.00;", True),
+        (radio_world, "distance", "OK:-60.57;", True),
+        (load_world(p), None, "OK:-97.62;", False),
+    ]:
         srv = ServerThread(world, seed=4, wireless_model=model).start()
         try:
             stations(srv, ["A6", "B6"])
@@ -762,8 +795,9 @@ def run_team(world, robot_dir) -> tuple[int, int]:
         for k in range(4):
             a = math.radians(90 * k + 45)
             # heading along the circle (clockwise seen from above), turning right: around the cross
-            robots.append(("Scout", f"M{k}", f"{8 * math.cos(a):.3f},{8 * math.sin(a):.3f},-0.2",
-                           f"0,0,{a + math.pi / 2:.4f}"))
+            robots.append(
+                ("Scout", f"M{k}", f"{8 * math.cos(a):.3f},{8 * math.sin(a):.3f},-0.2", f"0,0,{a + math.pi / 2:.4f}")
+            )
         clients = spawn(srv, robots, settle=0.2)
         for k in range(4):
             clients[12 + k].send("DRIVE {Left 4} {Right 3.4}")

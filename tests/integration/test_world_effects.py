@@ -112,8 +112,9 @@ def mesh_world(tmp_path_factory):
 @pytest.fixture(scope="module")
 def probe(tmp_path_factory):
     """A P2AT body with a long single beam, a sonar and a SICK scanner only."""
-    head = (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0].replace("class_name: P2AT",
-                                                                                  "class_name: Probe")
+    head = (
+        (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0].replace("class_name: P2AT", "class_name: Probe")
+    )
     path = tmp_path_factory.mktemp("probe") / "Probe.yaml"
     path.write_text(head + "\nsensors:\n" + PROBE_SENSORS)
     return load_robot(path)
@@ -200,8 +201,13 @@ def test_both_casters_agree_on_mirrors_and_grids(world):
     ref = RayCaster(m, d, "mujoco", see_through=ents.see_through)
     rng = np.random.default_rng(7)
     n = 3000
-    orig = np.column_stack([rng.uniform(0.0, 2.0, n), rng.choice([10.0, 20.0, -20.0, -10.0], n) + rng.uniform(-1, 1, n),
-                            rng.uniform(0.1, 0.9, n)])
+    orig = np.column_stack(
+        [
+            rng.uniform(0.0, 2.0, n),
+            rng.choice([10.0, 20.0, -20.0, -10.0], n) + rng.uniform(-1, 1, n),
+            rng.uniform(0.1, 0.9, n),
+        ]
+    )
     ang = rng.uniform(-1.2, 1.2, n)
     dirs = np.column_stack([np.cos(ang), np.sin(ang), rng.uniform(-0.2, 0.2, n)])
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)

@@ -72,8 +72,9 @@ def probe_robot(tmp_path, sensors: str, name: str = "Probe"):
     """A P2AT body with only the given sensor lines (YAML list items)."""
     from usarsim.config.catalog import ROBOTS_DIR
 
-    head = (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0].replace("class_name: P2AT",
-                                                                                  f"class_name: {name}")
+    head = (
+        (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0].replace("class_name: P2AT", f"class_name: {name}")
+    )
     path = tmp_path / f"{name}.yaml"
     path.write_text(head + "\nsensors:\n" + sensors)
     return load_robot(path)
@@ -105,13 +106,16 @@ def values(sim, kind, seconds, uid=1):
 
 
 def test_ir_sees_through_glass_where_laser_and_sonar_stop(world, tmp_path):
-    robot = probe_robot(tmp_path, """\
+    robot = probe_robot(
+        tmp_path,
+        """\
   - {type: IR, name: IR1, location: [0.27, 0.0, -0.1]}
   - {type: RangeSensor, name: Beam, location: [0.27, 0.0, -0.1]}
   - {type: Sonar, name: S1, location: [0.27, 0.0, -0.1]}
   - {type: IRScanner, name: IRScan, location: [0.27, 0.0, -0.1]}
   - {type: RangeScanner, name: Laser, location: [0.27, 0.0, -0.1], preset: SICK}
-""")
+""",
+    )
     sim = settled(world, robot, "Glass")
     x = sim.pose_of(1)[0][0] + 0.27
     readings = values(sim, RangeReading, 1.0)
@@ -205,21 +209,26 @@ def test_victim_sensor_conf_and_sen_lines(server_factory, world):
     c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start Victim}")
     c.step(1.0)
     conf = c.ask("GETCONF {Type VictSensor}", "CONF").text
-    assert conf == "CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}"
+    assert (
+        conf == "CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}"
+    )
     lines = [ln.text for ln in c.step(2.0) if ln.text.startswith("SEN") and "{Type VictSensor}" in ln.text]
     assert lines
     for text in lines:
-        assert re.fullmatch(r"SEN \{Time \d+\.\d{4}\} \{Type VictSensor\} \{Name VictSensor\}"
-                            r"( \{PartName (Head|Chest|Pelvis|Arm|Hand|Leg|Foot)\} \{Location -?\d+\.\d{4},-?\d+\.\d{4},-?\d+\.\d{4}\})+",
-                            text), text
+        assert re.fullmatch(
+            r"SEN \{Time \d+\.\d{4}\} \{Type VictSensor\} \{Name VictSensor\}"
+            r"( \{PartName (Head|Chest|Pelvis|Arm|Hand|Leg|Foot)\} \{Location -?\d+\.\d{4},-?\d+\.\d{4},-?\d+\.\d{4}\})+",
+            text,
+        ), text
     c.send("INIT {ClassName USARBot.P2AT} {Name R2} {Start Away}")  # ignored: one robot per connection
     d = srv.connect()
     d.nfo()
     d.send("INIT {ClassName USARBot.P2AT} {Name R2} {Start Away}")
     d.step(1.0)
     away = [ln.text for ln in d.step(1.6) if "{Type VictSensor}" in ln.text]
-    assert away and all(re.fullmatch(r"SEN \{Time \d+\.\d{4}\} \{Type VictSensor\} \{Status NoVictims\}", t)
-                        for t in away)
+    assert away and all(
+        re.fullmatch(r"SEN \{Time \d+\.\d{4}\} \{Type VictSensor\} \{Status NoVictims\}", t) for t in away
+    )
 
 
 # --------------------------------------------------------------------------- sound, human motion
@@ -304,9 +313,12 @@ def test_rfid_conf_names_each_readers_sensing_mode(server_factory, world, tmp_pa
     mode as its number or its name, and the reader senses as its CONF says."""
     robots = tmp_path / "robots"
     robots.mkdir()
-    probe_robot(robots, RFID.format(extra=", SensingMode: obstacle")
-                + "  - {type: RFID, name: Far, location: [0.0, 0.0, 0.0], MaxRange: 5.0, SensingMode: 2}\n",
-                name="Readers")
+    probe_robot(
+        robots,
+        RFID.format(extra=", SensingMode: obstacle")
+        + "  - {type: RFID, name: Far, location: [0.0, 0.0, 0.0], MaxRange: 5.0, SensingMode: 2}\n",
+        name="Readers",
+    )
     srv = server_factory(world=world, seed=4, robot_dirs=(str(robots),))
     c = srv.connect()
     c.nfo()
@@ -314,9 +326,11 @@ def test_rfid_conf_names_each_readers_sensing_mode(server_factory, world, tmp_pa
     c.step(1.0)
     assert c.ask("GETCONF {Type RFID}", "CONF").text == (
         "CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000} {SensingMode Obstacle}"
-        " {Name Far} {ScanInterval 0.2000} {MaxRange 5.0000} {SensingMode Attenuation}")
+        " {Name Far} {ScanInterval 0.2000} {MaxRange 5.0000} {SensingMode Attenuation}"
+    )
     assert c.ask("GETCONF {Type RFID} {Name Far}", "CONF").text == (
-        "CONF {Type RFID} {Name Far} {ScanInterval 0.2000} {MaxRange 5.0000} {SensingMode Attenuation}")
+        "CONF {Type RFID} {Name Far} {ScanInterval 0.2000} {MaxRange 5.0000} {SensingMode Attenuation}"
+    )
     # "obstacle" is mode 1: 11139, behind the wall, is not sensed (test_rfid_occlusion_and_signal_modes)
     sen = next(ln for ln in c.step(0.4) if ln.text.startswith("SEN") and "{Name RFID}" in ln.text)
     assert "{ID 11137} " in sen.text and "{ID 11139}" not in sen.text, sen.text
@@ -345,16 +359,21 @@ def test_a_tag_written_by_one_robot_is_read_back_by_another(server_factory, worl
     b.send("SET {Type RFID} {Name RFID} {Opcode Read} {Params 11137}")
     a.step(0.2)
     got = b.wait_line("RES")
-    assert re.fullmatch(r"RES \{Time \d+\.\d+\} \{Type RFID\} \{Name RFID\} \{Status OK\} \{ID 11137\} "
-                        r"\{Mem victim Alice, 2 m north\}", got.text), got.text
+    assert re.fullmatch(
+        r"RES \{Time \d+\.\d+\} \{Type RFID\} \{Name RFID\} \{Status OK\} \{ID 11137\} "
+        r"\{Mem victim Alice, 2 m north\}",
+        got.text,
+    ), got.text
     # the reader's SEN carries the memory too
     sen = b.wait_line(lambda ln: ln.text.startswith("SEN") and "{Type RFID}" in ln.text)
     assert "{ID 11137} {Location " in sen.text and "{Mem victim Alice, 2 m north}" in sen.text
     # a tag out of range, an unknown tag, a bad opcode: Failed
-    for line in ("SET {Type RFID} {Name RFID} {Opcode Read} {Params 11138}",
-                 "SET {Type RFID} {Name RFID} {Opcode Read} {Params 4242}",
-                 "SET {Type RFID} {Name RFID} {Opcode Read} {Params x}",
-                 "SET {Type RFID} {Name RFID} {Opcode Burn} {Params 11137}"):
+    for line in (
+        "SET {Type RFID} {Name RFID} {Opcode Read} {Params 11138}",
+        "SET {Type RFID} {Name RFID} {Opcode Read} {Params 4242}",
+        "SET {Type RFID} {Name RFID} {Opcode Read} {Params x}",
+        "SET {Type RFID} {Name RFID} {Opcode Burn} {Params 11137}",
+    ):
         assert set_res(a, line).segment("Status") == "Failed", line
     # erase
     assert set_res(a, "SET {Type RFID} {Name RFID} {Opcode Erase} {Params 11137}").segment("Status") == "OK"
@@ -401,16 +420,26 @@ def test_camera_zoom_is_clamped_and_answered(server_factory, world):
     c.step(0.5)
     assert c.ask("GETCONF {Type Camera}", "CONF").text == (
         "CONF {Type Camera} {Name Camera} {CameraDefFov 0.8727} {CameraMinFov 0.3491} {CameraMaxFov 1.5708} "
-        "{CameraFov 0.8727}")
+        "{CameraFov 0.8727}"
+    )
     assert c.ask("GETGEO {Type Camera}", "GEO").text == (
         "GEO {Type Camera} {Name Camera Location 0.0820,0.0002,0.0613 Orientation 0.0000,0.0000,0.0000 "
-        "Mount CameraPanTilt_Link2}")
-    cases = [("{Params 0.5}", "0.5000", "OK"), ("{Params 3.0}", "1.5708", "Failed"),
-             ("{Params 0.1}", "0.3491", "Failed"), ("{0.6}", "0.6000", "OK"), ("{Params 0}", "0.8727", "Failed")]
+        "Mount CameraPanTilt_Link2}"
+    )
+    cases = [
+        ("{Params 0.5}", "0.5000", "OK"),
+        ("{Params 3.0}", "1.5708", "Failed"),
+        ("{Params 0.1}", "0.3491", "Failed"),
+        ("{0.6}", "0.6000", "OK"),
+        ("{Params 0}", "0.8727", "Failed"),
+    ]
     for params, fov, status in cases:
         res = set_res(c, f"SET {{Type Camera}} {{Name Camera}} {{Opcode Zoom}} {params}").text
-        assert re.fullmatch(r"RES \{Time \d+\.\d+\} \{Type Camera\} \{Name Camera\} \{FOV %s\} \{Status %s\}"
-                            % (re.escape(fov), status), res), (params, res)
+        assert re.fullmatch(
+            r"RES \{Time \d+\.\d+\} \{Type Camera\} \{Name Camera\} \{FOV %s\} \{Status %s\}"
+            % (re.escape(fov), status),
+            res,
+        ), (params, res)
     set_res(c, "SET {Type Camera} {Name Camera} {Opcode Zoom} {Params 0.7}")
     assert c.ask("GETCONF {Type Camera} {Name Camera}", "CONF").text.endswith("{CameraFov 0.7000}")
     # cameras send no SEN on the control port
@@ -476,31 +505,49 @@ SEN_FORMS = {  # the exact shape of each SEN line (protocol.md 6.3)
     "IR": rf"SEN {T}\{{Type IR\}} \{{Name IR1 Range {F}\}}",
     "RangeSensor": rf"SEN {T}\{{Type RangeSensor\}} \{{Name Range1 Range {F}\}}",
     "RangeScanner": rf"SEN {T}\{{Type RangeScanner\}} \{{Name Scanner1\}} \{{Resolution 0\.0174\}} \{{FOV 3\.1415\}} "
-                    rf"\{{Range {F}(,{F}){{180}}\}}",
+    rf"\{{Range {F}(,{F}){{180}}\}}",
     "IRScanner": rf"SEN {T}\{{Type IRScanner\}} \{{Name IRScanner1\}} \{{Resolution 0\.0870\}} \{{FOV 3\.1400\}} "
-                 rf"\{{Range {F}(,{F}){{36}}\}}",
+    rf"\{{Range {F}(,{F}){{36}}\}}",
     "RangeScanner3D": rf"SEN {T}\{{Type RangeScanner3D\}} \{{Name Scanner3D\}} "
-                      rf"\{{Resolution 0\.0436,0\.0436\}} \{{FOV 0\.4363,1\.0472\}} \{{Range {F}(,{F}){{274}}\}}",
+    rf"\{{Resolution 0\.0436,0\.0436\}} \{{FOV 0\.4363,1\.0472\}} \{{Range {F}(,{F}){{274}}\}}",
     "Odometry": rf"SEN {T}\{{Type Odometry\}} \{{Name Odometry\}} \{{Pose {V3}\}}",
     "Encoder": rf"SEN {T}\{{Type Encoder\}} \{{Name ECLeft Tick -?\d+\}} \{{Name ECRight Tick -?\d+\}}",
     "Tachometer": rf"SEN {T}\{{Type Tachometer\}} \{{Name Tach\}} \{{Vel {F}(,{F}){{3}}\}} \{{Pos {F}(,{F}){{3}}\}}",
     "GPS": rf"SEN {T}\{{Type GPS\}} \{{Name GPS\}} \{{Latitude \d+,\d+\.\d{{4}},[NS]\}} "
-           rf"\{{Longitude \d+,\d+\.\d{{4}},[EW]\}} \{{Fix 1\}} \{{Satellites \d+\}}",
+    rf"\{{Longitude \d+,\d+\.\d{{4}},[EW]\}} \{{Fix 1\}} \{{Satellites \d+\}}",
     "INS": rf"SEN {T}\{{Type INS\}} \{{Name INS\}} \{{Location {V3}\}} \{{Orientation {V3}\}}",
     "IMU": rf"SEN {T}\{{Type IMU\}} \{{Name IMU\}} \{{XYZAcceleration {V3}\}} \{{AngularVel {V3}\}} "
-           rf"\{{AngularAccel {V3}\}} \{{Rotation {V3}\}}",
+    rf"\{{AngularAccel {V3}\}} \{{Rotation {V3}\}}",
     "INU": rf"SEN {T}\{{Type INU\}} \{{Name INU\}} \{{Orientation {V3}\}}",
     "Touch": rf"SEN {T}\{{Type Touch\}} \{{Name Bumper Touch (True|False)\}}",
     "GroundTruth": rf"SEN {T}\{{Type GroundTruth\}} \{{Name GroundTruth\}} \{{Location {V3}\}} \{{Orientation {V3}\}}",
     "RFID": rf"SEN {T}\{{Type RFID\}} \{{Name RFID\}}( \{{ID \d+\}} \{{Location {V3}\}}( \{{Mem [^{{}}]*\}})?)*",
     "VictSensor": rf"SEN {T}\{{Type VictSensor\}} (\{{Status NoVictims\}}|\{{Name VictSensor\}}"
-                  rf"( \{{PartName (Head|Chest|Pelvis|Arm|Hand|Leg|Foot)\}} \{{Location {V3}\}})+)",
+    rf"( \{{PartName (Head|Chest|Pelvis|Arm|Hand|Leg|Foot)\}} \{{Location {V3}\}})+)",
     "Sound": rf"SEN {T}\{{Type Sound\}} \{{Name Mic\}} \{{Loudness {F}\}} \{{Duration {F}\}}",
     "HumanMotion": rf"SEN {T}\{{Type HumanMotion\}} \{{Name HM\}} \{{Prob {F}\}}",
 }
-RATES = {"Sonar": 0.2, "IR": 0.2, "RangeSensor": 0.2, "RangeScanner": 0.2, "IRScanner": 0.2, "RangeScanner3D": 0.4,
-         "Odometry": 0.2, "Encoder": 0.1, "Tachometer": 0.2, "GPS": 0.2, "INS": 0.2, "IMU": 0.1, "INU": 0.1,
-         "Touch": 0.1, "GroundTruth": 0.1, "RFID": 0.2, "VictSensor": 0.8, "Sound": 0.1, "HumanMotion": 0.1}
+RATES = {
+    "Sonar": 0.2,
+    "IR": 0.2,
+    "RangeSensor": 0.2,
+    "RangeScanner": 0.2,
+    "IRScanner": 0.2,
+    "RangeScanner3D": 0.4,
+    "Odometry": 0.2,
+    "Encoder": 0.1,
+    "Tachometer": 0.2,
+    "GPS": 0.2,
+    "INS": 0.2,
+    "IMU": 0.1,
+    "INU": 0.1,
+    "Touch": 0.1,
+    "GroundTruth": 0.1,
+    "RFID": 0.2,
+    "VictSensor": 0.8,
+    "Sound": 0.1,
+    "HumanMotion": 0.1,
+}
 
 
 def test_a_robot_with_every_sensor_drives_through_the_world(server_factory, world, tmp_path):
@@ -543,8 +590,9 @@ def test_a_robot_with_every_sensor_drives_through_the_world(server_factory, worl
 def test_an_item_mounted_on_a_wheel_turns_with_it(world, tmp_path):
     """Mount a beam on the left front wheel (its hub, pointing forward): as the wheel rolls
     the beam sweeps round, down to the floor (0.13 m below the hub) and up into the sky."""
-    robot = probe_robot(tmp_path, "  - {type: RangeSensor, name: Spoke, location: [0.0, 0.0, 0.0], mount: LeftFWheel,"
-                                  " MaxRange: 3.0}\n")
+    robot = probe_robot(
+        tmp_path, "  - {type: RangeSensor, name: Spoke, location: [0.0, 0.0, 0.0], mount: LeftFWheel, MaxRange: 3.0}\n"
+    )
     from usarsim.sim.simulation import describe_items
 
     (desc,) = describe_items(robot)
@@ -559,26 +607,26 @@ def test_an_item_mounted_on_a_wheel_turns_with_it(world, tmp_path):
 
 
 CONF_LINES = (  # protocol.md 6.7: all items of a type in one line, repeated-key groups
-    'CONF {Type Sonar} {Name F1} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491} {Name F4} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}',
-    'CONF {Type IR} {Name IR1} {MaxRange 1.5000} {MinRange 0.2000}',
-    'CONF {Type RangeSensor} {Name Range1} {MaxRange 3.0000} {MinRange 0.0000}',
-    'CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} {Fov 3.1415} {Paning True} {Tilting False}',
-    'CONF {Type IRScanner} {Name IRScanner1} {MaxRange 10.0000} {MinRange 0.1000} {Resolution 0.0870} {Fov 3.1400} {Paning True} {Tilting False}',
-    'CONF {Type RangeScanner3D} {Name Scanner3D} {MaxRange 1000.0000} {MinRange 0.1000} {Resolution 0.0436,0.0436} {Fov 0.4363,1.0472} {Paning False} {Tilting True}',
-    'CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099} {TrackWidth 0.4712}',
-    'CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}',
-    'CONF {Type Tachometer} {Name Tach} {ScanInterval 0.2000}',
-    'CONF {Type GPS} {Name GPS} {ScanInterval 0.2000}',
-    'CONF {Type INS} {Name INS} {ScanInterval 0.2000}',
-    'CONF {Type IMU} {Name IMU} {ScanInterval 0.1000}',
-    'CONF {Type INU} {Name INU} {ScanInterval 0.1000}',
-    'CONF {Type Touch} {Name Bumper} {ScanInterval 0.1000}',
-    'CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}',
-    'CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000} {SensingMode Radius}',
-    'CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}',
-    'CONF {Type Sound} {Name Mic} {ScanInterval 0.1000}',
-    'CONF {Type HumanMotion} {Name HM} {ScanInterval 0.1000}',
-    'CONF {Type OmniCam} {Name Omni} {CameraDefFov 6.2832} {CameraMinFov 6.2832} {CameraMaxFov 6.2832} {CameraFov 6.2832}',
+    "CONF {Type Sonar} {Name F1} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491} {Name F4} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}",
+    "CONF {Type IR} {Name IR1} {MaxRange 1.5000} {MinRange 0.2000}",
+    "CONF {Type RangeSensor} {Name Range1} {MaxRange 3.0000} {MinRange 0.0000}",
+    "CONF {Type RangeScanner} {Name Scanner1} {MaxRange 20.0000} {MinRange 0.1000} {Resolution 0.0174} {Fov 3.1415} {Paning True} {Tilting False}",
+    "CONF {Type IRScanner} {Name IRScanner1} {MaxRange 10.0000} {MinRange 0.1000} {Resolution 0.0870} {Fov 3.1400} {Paning True} {Tilting False}",
+    "CONF {Type RangeScanner3D} {Name Scanner3D} {MaxRange 1000.0000} {MinRange 0.1000} {Resolution 0.0436,0.0436} {Fov 0.4363,1.0472} {Paning False} {Tilting True}",
+    "CONF {Type Odometry} {Name Odometry} {ScanInterval 0.2000} {EncoderResolution 0.0099} {TrackWidth 0.4712}",
+    "CONF {Type Encoder} {Name ECLeft} {Resolution 0.0174} {Name ECRight} {Resolution 0.0174}",
+    "CONF {Type Tachometer} {Name Tach} {ScanInterval 0.2000}",
+    "CONF {Type GPS} {Name GPS} {ScanInterval 0.2000}",
+    "CONF {Type INS} {Name INS} {ScanInterval 0.2000}",
+    "CONF {Type IMU} {Name IMU} {ScanInterval 0.1000}",
+    "CONF {Type INU} {Name INU} {ScanInterval 0.1000}",
+    "CONF {Type Touch} {Name Bumper} {ScanInterval 0.1000}",
+    "CONF {Type GroundTruth} {Name GroundTruth} {ScanInterval 0.1000}",
+    "CONF {Type RFID} {Name RFID} {ScanInterval 0.2000} {MaxRange 3.0000} {SensingMode Radius}",
+    "CONF {Type VictSensor} {Name VictSensor} {MaxRange 6.0000} {HorizontalFOV 0.6981} {VerticalFOV 0.6981}",
+    "CONF {Type Sound} {Name Mic} {ScanInterval 0.1000}",
+    "CONF {Type HumanMotion} {Name HM} {ScanInterval 0.1000}",
+    "CONF {Type OmniCam} {Name Omni} {CameraDefFov 6.2832} {CameraMinFov 6.2832} {CameraMaxFov 6.2832} {CameraFov 6.2832}",
 )
 
 
@@ -596,17 +644,22 @@ def test_conf_lines_of_every_sensor_type(server_factory, world, tmp_path):
         assert c.ask(f"GETCONF {{Type {stype}}}", "CONF").text == line
     # by name, one item of a packed type
     assert c.ask("GETCONF {Type Sonar} {Name F4}", "CONF").text == (
-        "CONF {Type Sonar} {Name F4} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}")
+        "CONF {Type Sonar} {Name F4} {MaxRange 5.0000} {MinRange 0.1000} {BeamAngle 0.3491}"
+    )
     assert c.ask("GETGEO {Type Sonar} {Name F4}", "GEO").text == (
-        "GEO {Type Sonar} {Name F4 Location 0.2400,-0.0250,0.0000 Orientation 0.0000,0.0000,-0.1745 Mount HARD}")
+        "GEO {Type Sonar} {Name F4 Location 0.2400,-0.0250,0.0000 Orientation 0.0000,0.0000,-0.1745 Mount HARD}"
+    )
 
 
 def test_ir_noise_statistics_and_min_range_clamp(world, tmp_path):
-    robot = probe_robot(tmp_path, """\
+    robot = probe_robot(
+        tmp_path,
+        """\
   - {type: IR, name: IR1, location: [0.27, 0.0, -0.1]}
   - {type: RangeSensor, name: Close, location: [0.93, 0.0, -0.1], MinRange: 0.2}
   - {type: RangeScanner3D, name: Scanner3D, location: [0.27, 0.0, -0.1]}
-""")
+""",
+    )
     sim = settled(world, robot, "Glass", seed=21)
     x = sim.pose_of(1)[0][0]
     readings = values(sim, RangeReading, 20.0)

@@ -65,11 +65,15 @@ def test_paper_on_the_orange_floor_is_slippery(tmp_path):
     assert paper.friction == pytest.approx(0.3)
     spin = {}
     for label in ("paper", "floor"):
-        text = TEST_WORLD.replace("materials:\n", "materials:\n  paper: {rgba: [0.9, 0.9, 0.9, 1.0], friction: %g}\n"
-                                  % paper.friction)
+        text = TEST_WORLD.replace(
+            "materials:\n", "materials:\n  paper: {rgba: [0.9, 0.9, 0.9, 1.0], friction: %g}\n" % paper.friction
+        )
         if label == "paper":  # a sheet under the robot where it meets the wall
-            text = text.replace("objects:\n", "objects:\n  - {name: sheet, shape: box, center: [4.4, 0.0, -0.0025], "
-                                "size: [1.2, 0.8, 0.005], material: paper}\n")
+            text = text.replace(
+                "objects:\n",
+                "objects:\n  - {name: sheet, shape: box, center: [4.4, 0.0, -0.0025], "
+                "size: [1.2, 0.8, 0.005], material: paper}\n",
+            )
         (tmp_path / "TestArena.yaml").write_text(text)
         world = load_world(tmp_path / "TestArena.yaml")
         sim = Simulation(world, seed=0)

@@ -24,8 +24,10 @@ from usarsim.ros2.tf2_build import ensure_tf2_msgs  # noqa: E402
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 # announce every 0.5 s, so that a subscriber that joins late finds the bridge quickly
-os.environ.setdefault("FASTDDS_DEFAULT_PROFILES_FILE",
-                      str(Path(__file__).resolve().parents[2] / "tools" / "ros2" / "fastdds_quick_discovery.xml"))
+os.environ.setdefault(
+    "FASTDDS_DEFAULT_PROFILES_FILE",
+    str(Path(__file__).resolve().parents[2] / "tools" / "ros2" / "fastdds_quick_discovery.xml"),
+)
 
 ROS_WORLD = """\
 # The ROS 2 tests' world: a 40 m x 40 m floor and one wall whose face is at x = 5.0 m.

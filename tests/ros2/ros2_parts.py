@@ -20,8 +20,15 @@ class Bridge:
 
     def __init__(self, port: int, domain: int, *args: str, env: dict[str, str] | None = None):
         cmd = [sys.executable, "-m", "usarsim", "ros2", "--port", str(port), "--domain", str(domain), *args]
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     text=True, env=env, start_new_session=True)
+        self.proc = subprocess.Popen(
+            cmd,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+            start_new_session=True,
+        )
         self.ready_line = self.proc.stdout.readline()  # the ready line, or '' when it failed
         self.stderr = ""
 

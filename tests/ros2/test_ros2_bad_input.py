@@ -28,20 +28,33 @@ def test_no_simulator_is_one_line(domain):
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]  # nothing listens there
-    out = subprocess.run([sys.executable, "-m", "usarsim", "ros2", "--port", str(port), "--domain", str(domain),
-                          "--robot", "P2AT"], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim", "ros2", "--port", str(port), "--domain", str(domain), "--robot", "P2AT"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
     assert out.returncode == 1
     assert "cannot connect to the simulator at 127.0.0.1" in one_line_error(out.stderr)
 
 
-@pytest.mark.parametrize(("args", "says"), [
-    (["--robot", "P2AT", "--domain", "233"], "ROS domain 233 is out of range"),
-    ([], "no robot to bridge"),
-    (["--robot", "P2AT:a", "--robot", "P3AT:a"], "two robots named a"),
-])
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (["--robot", "P2AT", "--domain", "233"], "ROS domain 233 is out of range"),
+        ([], "no robot to bridge"),
+        (["--robot", "P2AT:a", "--robot", "P3AT:a"], "two robots named a"),
+    ],
+)
 def test_bad_command_lines_are_one_line(args, says):
-    out = subprocess.run([sys.executable, "-m", "usarsim", "ros2", *args], capture_output=True, text=True,
-                         timeout=60, stdin=subprocess.DEVNULL)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim", "ros2", *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
     assert out.returncode == 1
     assert says in one_line_error(out.stderr)
 
@@ -49,8 +62,9 @@ def test_bad_command_lines_are_one_line(args, says):
 def test_bad_twists_unknown_classes_and_a_second_bridge(ros_sim, probe, domain):
     gt = probe.subscribe("/robot1/ground_truth", Odometry)
     other = probe.subscribe("/robot2/ground_truth", Odometry)
-    bridge, tap = ros_sim("--robot", "P2AT@Skid:robot1", "--robot", "NoSuchBot@Spare:ghost",
-                          "--robot", "P2AT@Spare:robot2", "--rtf", "5")
+    bridge, tap = ros_sim(
+        "--robot", "P2AT@Skid:robot1", "--robot", "NoSuchBot@Spare:ghost", "--robot", "P2AT@Spare:robot2", "--rtf", "5"
+    )
     probe.wait(lambda: len(gt) >= 3 and len(other) >= 3, what="both robots' ground truth")
     pub = probe.publisher("/robot1/cmd_vel", Twist)
     for bad in (math.nan, math.inf):

@@ -22,8 +22,18 @@ def test_the_bag_reads_back_and_every_message_deserialises(ros_sim, tmp_path):
     from rosbags.rosbag2 import Reader
 
     bag = tmp_path / "run"
-    bridge, _ = ros_sim("--robot", "P2AT@Skid:robot1", "--robot", "AirRobot@Air:drone", "--rtf", "0",
-                        "--duration", "3", "--bag", str(bag))
+    bridge, _ = ros_sim(
+        "--robot",
+        "P2AT@Skid:robot1",
+        "--robot",
+        "AirRobot@Air:drone",
+        "--rtf",
+        "0",
+        "--duration",
+        "3",
+        "--bag",
+        str(bag),
+    )
     bridge.proc.wait(60)
     assert bridge.stop() == 0, bridge.stderr
     meta = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
@@ -38,12 +48,18 @@ def test_the_bag_reads_back_and_every_message_deserialises(ros_sim, tmp_path):
             types[conn.topic] = conn.msgtype
             last[conn.topic] = msg
             assert 0 <= timestamp <= 3.05e9
-    for topic, msgtype in [("/clock", "rosgraph_msgs/msg/Clock"), ("/tf", "tf2_msgs/msg/TFMessage"),
-                           ("/tf_static", "tf2_msgs/msg/TFMessage"), ("/robot1/scan", "sensor_msgs/msg/LaserScan"),
-                           ("/robot1/odom", "nav_msgs/msg/Odometry"), ("/robot1/sonar/F1", "sensor_msgs/msg/Range"),
-                           ("/robot1/imu", "sensor_msgs/msg/Imu"), ("/robot1/gps/fix", "sensor_msgs/msg/NavSatFix"),
-                           ("/robot1/battery", "sensor_msgs/msg/BatteryState"),
-                           ("/drone/ground_truth", "nav_msgs/msg/Odometry")]:
+    for topic, msgtype in [
+        ("/clock", "rosgraph_msgs/msg/Clock"),
+        ("/tf", "tf2_msgs/msg/TFMessage"),
+        ("/tf_static", "tf2_msgs/msg/TFMessage"),
+        ("/robot1/scan", "sensor_msgs/msg/LaserScan"),
+        ("/robot1/odom", "nav_msgs/msg/Odometry"),
+        ("/robot1/sonar/F1", "sensor_msgs/msg/Range"),
+        ("/robot1/imu", "sensor_msgs/msg/Imu"),
+        ("/robot1/gps/fix", "sensor_msgs/msg/NavSatFix"),
+        ("/robot1/battery", "sensor_msgs/msg/BatteryState"),
+        ("/drone/ground_truth", "nav_msgs/msg/Odometry"),
+    ]:
         assert types.get(topic) == msgtype, f"{topic}: {types.get(topic)}"
     assert counts["/clock"] == 30  # 3 s of 0.1 s steps
     assert counts["/robot1/scan"] in (15, 16)  # the P2AT's laser: 5 Hz (and one as it stood in the world)

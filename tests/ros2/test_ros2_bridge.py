@@ -46,8 +46,11 @@ def test_sensors_clock_and_frames(ros_sim, probe):
     bridge, tap = ros_sim("--robot", "P2AT@Skid:robot1", "--rtf", "4")
     probe.wait(lambda: len(scans) >= 5 and len(odom) >= 5 and len(clock) >= 10 and tf, what="5 scans and odometry")
     # a late subscriber of /tf_static still gets it (transient local)
-    static = probe.subscribe("/tf_static", TFMessage, QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                                                                  durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    static = probe.subscribe(
+        "/tf_static",
+        TFMessage,
+        QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL),
+    )
     probe.wait(lambda: static, what="/tf_static")
 
     # /clock: simulated time, a step at a time, never backwards
@@ -92,8 +95,18 @@ def test_sensors_clock_and_frames(ros_sim, probe):
 
     # /tf_static: base_link to every sensor GETGEO names, at its mount in ROS axes
     frames = {t.child_frame_id: t for t in static[-1].transforms}
-    for name in ["Scanner1", "Odometry", "INS", "GroundTruth", "Camera", "VictSensor", "Touch", "RFID",
-                 *(f"F{i}" for i in range(1, 9)), *(f"R{i}" for i in range(1, 9))]:
+    for name in [
+        "Scanner1",
+        "Odometry",
+        "INS",
+        "GroundTruth",
+        "Camera",
+        "VictSensor",
+        "Touch",
+        "RFID",
+        *(f"F{i}" for i in range(1, 9)),
+        *(f"R{i}" for i in range(1, 9)),
+    ]:
         assert f"robot1/{name}" in frames, f"/tf_static lacks robot1/{name}"
         assert frames[f"robot1/{name}"].header.frame_id == "robot1/base_link"
     sc = frames["robot1/Scanner1"].transform.translation
@@ -119,8 +132,16 @@ def ground_truth_speed(gt: list, since: float, until: float) -> tuple[float, flo
     return d / dt, turn / dt
 
 
-def drive(probe, topic: str, gt: list, vx: float = 0.0, wz: float = 0.0, vz: float = 0.0, settle: float = 1.5,
-          measure: float = 3.0) -> tuple[float, float]:
+def drive(
+    probe,
+    topic: str,
+    gt: list,
+    vx: float = 0.0,
+    wz: float = 0.0,
+    vz: float = 0.0,
+    settle: float = 1.5,
+    measure: float = 3.0,
+) -> tuple[float, float]:
     """Publish one Twist; the ground-truth speed and turn rate over ``measure`` simulated seconds
     after ``settle``."""
     pub = probe.publisher(topic, Twist)

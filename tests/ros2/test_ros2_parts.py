@@ -102,6 +102,9 @@ def test_flippers_and_an_arm_follow_joint_commands(ros_sim, probe):
     m.name, m.position = ["FRFlipper", "TeleMaxArm_link2"], [0.5, 0.3]
     cmd.publish(m)
     probe.wait(lambda: abs(position("FRFlipper") - 0.5) < 0.02, timeout=60, what="the flipper at 0.5 rad")
-    probe.wait(lambda: position("TeleMaxArm_link2") is not None and abs(position("TeleMaxArm_link2") - 0.3) < 0.03,
-               timeout=60, what="the arm's link 2 at 0.3 rad")
+    probe.wait(
+        lambda: position("TeleMaxArm_link2") is not None and abs(position("TeleMaxArm_link2") - 0.3) < 0.03,
+        timeout=60,
+        what="the arm's link 2 at 0.3 rad",
+    )
     assert abs(position("FLFlipper")) < 0.05, "the other flippers stay"

@@ -36,8 +36,10 @@ def _run(server_factory, n: int, blow: int | None):
     for i, (x, y, z, yaw) in enumerate(spots):
         c = srv.connect()
         c.nfo()
-        c.send(f"INIT {{ClassName USARBot.P2AT}} {{Name R{i}}} {{Location {x:.2f},{y:.2f},{z:.2f}}} "
-               f"{{Rotation 0,0,{yaw:.4f}}}")
+        c.send(
+            f"INIT {{ClassName USARBot.P2AT}} {{Name R{i}}} {{Location {x:.2f},{y:.2f},{z:.2f}}} "
+            f"{{Rotation 0,0,{yaw:.4f}}}"
+        )
         c.sync()
         clients.append(c)
     stepper = clients[0]
@@ -49,10 +51,12 @@ def _run(server_factory, n: int, blow: int | None):
     t = 0.0
     while t < SECONDS - 1e-9:
         if abs(t - BLOW_AT_S) < 1e-9:
+
             def torque(sim, on: bool):
                 if blow is not None:
                     body = _robot(sim, f"R{blow}").handle.body_id
                     sim.data.xfrc_applied[body, 3:] = (ABSURD_TORQUE_NM, 0.0, 0.0) if on else 0.0
+
             srv.on_sim(lambda sim: torque(sim, True))
             stepper.step(0.02)
             srv.on_sim(lambda sim: torque(sim, False))
@@ -91,6 +95,7 @@ def test_a_blow_up_under_load_resets_that_robot_alone(server_factory, caplog):
     assert all(math.isfinite(v) for _, loc, ori in track for v in (*loc, *ori))
     (_, end, (roll, pitch, _)) = track[-1]
     assert abs(math.remainder(roll, 2 * math.pi)) < 0.3 and abs(math.remainder(pitch, 2 * math.pi)) < 0.3
+
     def late_path(lns) -> float:  # how far the robot went from a second after the blow-up on
         gt = ground_truth(lns)
         after = [loc for t, loc, _ in gt if t >= gt[0][0] + BLOW_AT_S + 1.0]
@@ -98,5 +103,7 @@ def test_a_blow_up_under_load_resets_that_robot_alone(server_factory, caplog):
 
     assert late_path(lines[hurt]) > 0.8 * late_path(calm_lines[hurt])  # it drives on at its pace
     assert clients[hurt].ask("GETSTARTPOSES", "NFO {StartPoses")
-    print(f"\n{n} robots; R{hurt} reset {srv.on_sim(lambda sim: _robot(sim, f'R{hurt}').resets)} "
-          f"time(s), logged {len(logged)} time(s); the {n - 1} others ran on exactly as without it")
+    print(
+        f"\n{n} robots; R{hurt} reset {srv.on_sim(lambda sim: _robot(sim, f'R{hurt}').resets)} "
+        f"time(s), logged {len(logged)} time(s); the {n - 1} others ran on exactly as without it"
+    )

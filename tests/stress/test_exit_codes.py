@@ -24,9 +24,13 @@ def test_bench_exits_0_after_large_runs(tmp_path):
     robots, seconds, cycles = scaled(64, 256), scaled(1, 5), scaled(2, 20)
     codes = []
     for i in range(cycles):
-        out = subprocess.run([sys.executable, "-m", "usarsim", "bench", "--robots", str(robots), "--seconds",
-                              str(seconds), "--json"], capture_output=True, text=True, timeout=900,
-                             stdin=subprocess.DEVNULL)
+        out = subprocess.run(
+            [sys.executable, "-m", "usarsim", "bench", "--robots", str(robots), "--seconds", str(seconds), "--json"],
+            capture_output=True,
+            text=True,
+            timeout=900,
+            stdin=subprocess.DEVNULL,
+        )
         codes.append(out.returncode)
         assert out.returncode == 0, (i, out.returncode, out.stderr[-3000:])
         result = json.loads(out.stdout.strip().splitlines()[-1])
@@ -40,11 +44,38 @@ def _serve_with_robots(tmp_path, robots: int, i: int) -> tuple[int, float]:
 
     err_path = tmp_path / f"serve{i}.err"
     with open(err_path, "w") as err:
-        proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", "--port", "0", "--port-offset", "0",
-                                 "--truth-port", "0", "--image-port", "0", "--web-port", "0", "--wcs-port", "0",
-                                 "--wss-port", "0", "--cominterface-port", "0", "--speed", "max",
-                                 "--max-connections", str(robots + 8)],
-                                stdout=subprocess.PIPE, stderr=err, text=True, stdin=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "usarsim",
+                "serve",
+                "--port",
+                "0",
+                "--port-offset",
+                "0",
+                "--truth-port",
+                "0",
+                "--image-port",
+                "0",
+                "--web-port",
+                "0",
+                "--wcs-port",
+                "0",
+                "--wss-port",
+                "0",
+                "--cominterface-port",
+                "0",
+                "--speed",
+                "max",
+                "--max-connections",
+                str(robots + 8),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=err,
+            text=True,
+            stdin=subprocess.DEVNULL,
+        )
         client = None
         try:
             ports: dict[str, int] = {}
@@ -55,9 +86,11 @@ def _serve_with_robots(tmp_path, robots: int, i: int) -> tuple[int, float]:
                 if m:
                     ports[m.group(1)] = int(m.group(2))
             poses = free_spots(resolve_world("DM-USAR_yellow"), robots)
-            client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(ports["control"]),
-                                       json.dumps(poses), "600"], stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL)
+            client = subprocess.Popen(
+                [sys.executable, "-m", "usarsim.bench", "--client", str(ports["control"]), json.dumps(poses), "600"],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
             deadline = time.monotonic() + 300
             while _robots_in_world(ports["truth"]) < robots:  # every robot in the world and driving
                 assert time.monotonic() < deadline, f"{robots} robots never all stood in the world"
@@ -93,6 +126,8 @@ def _robots_in_world(truth_port: int) -> int:
 def test_serve_with_many_robots_exits_0_on_sigterm(tmp_path):
     robots, cycles = scaled(32, 128), scaled(2, 20)
     results = [_serve_with_robots(tmp_path, robots, i) for i in range(cycles)]
-    print(f"\nserve with {robots} robots, SIGTERM: {cycles} runs, exit codes {[c for c, _ in results]}, "
-          f"{min(t for _, t in results):.2f} to {max(t for _, t in results):.2f} s to exit")
+    print(
+        f"\nserve with {robots} robots, SIGTERM: {cycles} runs, exit codes {[c for c, _ in results]}, "
+        f"{min(t for _, t in results):.2f} to {max(t for _, t in results):.2f} s to exit"
+    )
     assert all(c == 0 for c, _ in results), results

@@ -30,7 +30,7 @@ def witness_server(server_factory):
 def assert_world_runs(srv, seconds: float = 0.5) -> None:
     lines = srv.witness.step(seconds)
     assert len(sensor_lines(lines, "GroundTruth")) >= int(seconds / 0.1)
-    (_, loc, ori), = ground_truth(lines)[-1:]
+    ((_, loc, ori),) = ground_truth(lines)[-1:]
     assert all(math.isfinite(v) for v in (*loc, *ori)) and abs(ori[0]) < 0.1 and abs(ori[1]) < 0.1
 
 
@@ -38,18 +38,31 @@ def assert_alive(client) -> None:
     assert client.ask("GETSTARTPOSES", "NFO {StartPoses").text.startswith("NFO {StartPoses")
 
 
-@pytest.mark.parametrize("payload", [
-    os.urandom(4096) + b"\r\n",
-    b"DRIVE {Left \xff\xfe\xfd} {Right 1}\r\n",  # invalid UTF-8
-    b"DRIVE " + b"9" * 100_000 + b"\r\n",  # far longer than a line may be
-    b"\x00\x01\x02\r\n{{{{}}}}\r\n}}}{{\r\n",
-    b"INIT {ClassName USARBot.P2AT} {Location nan,0,0}\r\n",
-    b"INIT {ClassName USARBot.P2AT} {Location 1e308,1e308,1e308}\r\n",
-    b"INIT {ClassName USARBot.P2AT} {Location 500,500,-0.3}\r\n",  # outside the world
-    b"INIT {ClassName USARBot.NoSuchRobot} {Start PlayerStart2}\r\n",
-    b"DRIVE {Left 1} {Right 1}\r\nSET {Type Camera} {Name Camera} {Opcode Zoom} {Params 1}\r\n",  # before INIT
-], ids=["garbage", "bad-utf8", "over-long", "braces", "init-nan", "init-huge", "init-outside", "unknown-class",
-        "before-init"])
+@pytest.mark.parametrize(
+    "payload",
+    [
+        os.urandom(4096) + b"\r\n",
+        b"DRIVE {Left \xff\xfe\xfd} {Right 1}\r\n",  # invalid UTF-8
+        b"DRIVE " + b"9" * 100_000 + b"\r\n",  # far longer than a line may be
+        b"\x00\x01\x02\r\n{{{{}}}}\r\n}}}{{\r\n",
+        b"INIT {ClassName USARBot.P2AT} {Location nan,0,0}\r\n",
+        b"INIT {ClassName USARBot.P2AT} {Location 1e308,1e308,1e308}\r\n",
+        b"INIT {ClassName USARBot.P2AT} {Location 500,500,-0.3}\r\n",  # outside the world
+        b"INIT {ClassName USARBot.NoSuchRobot} {Start PlayerStart2}\r\n",
+        b"DRIVE {Left 1} {Right 1}\r\nSET {Type Camera} {Name Camera} {Opcode Zoom} {Params 1}\r\n",  # before INIT
+    ],
+    ids=[
+        "garbage",
+        "bad-utf8",
+        "over-long",
+        "braces",
+        "init-nan",
+        "init-huge",
+        "init-outside",
+        "unknown-class",
+        "before-init",
+    ],
+)
 def test_broken_lines_are_refused_and_everything_runs_on(witness_server, payload):
     srv = witness_server
     c = srv.connect()
@@ -66,14 +79,21 @@ def test_absurd_numbers_for_a_live_robot_change_nothing_else(witness_server):
     c.nfo()
     c.send("INIT {ClassName USARBot.P2AT} {Name Target} {Start PlayerStart3}")
     c.step(0.3)
-    for line in ["DRIVE {Left NaN} {Right inf}", "DRIVE {Left 1e308} {Right -1e308}", "DRIVE {Speed nan}",
-                 "MISPKG {Name CameraPanTilt} {Link 1} {Value nan}", "MISPKG {Name CameraPanTilt} {Link 2} {Value 1e300}",
-                 "MULTIDRIVE {CameraPanTilt_Link1 inf}", "SET {Type Camera} {Name Camera} {Opcode Zoom} {Params inf}",
-                 "SET {Type Joint} {Name CameraPanTilt_Link2} {Opcode Torque} {Params 1e30}",
-                 "CAMERA {Rotation nan,inf,-inf} {Zoom nan}", "INIT {ClassName USARBot.P2AT} {Name Twice}"]:
+    for line in [
+        "DRIVE {Left NaN} {Right inf}",
+        "DRIVE {Left 1e308} {Right -1e308}",
+        "DRIVE {Speed nan}",
+        "MISPKG {Name CameraPanTilt} {Link 1} {Value nan}",
+        "MISPKG {Name CameraPanTilt} {Link 2} {Value 1e300}",
+        "MULTIDRIVE {CameraPanTilt_Link1 inf}",
+        "SET {Type Camera} {Name Camera} {Opcode Zoom} {Params inf}",
+        "SET {Type Joint} {Name CameraPanTilt_Link2} {Opcode Torque} {Params 1e30}",
+        "CAMERA {Rotation nan,inf,-inf} {Zoom nan}",
+        "INIT {ClassName USARBot.P2AT} {Name Twice}",
+    ]:
         c.send(line)
     lines = c.step(1.0)
-    (_, loc, _), = ground_truth(lines)[-1:]
+    ((_, loc, _),) = ground_truth(lines)[-1:]
     assert all(math.isfinite(v) for v in loc)
     assert_alive(c)
     assert_world_runs(srv)
@@ -134,11 +154,18 @@ def test_the_truth_and_image_ports_shrug_off_garbage(witness_server):
 def test_repeated_drive_lines_collapse_but_actions_and_joint_orders_do_not():
     from usarsim.protocol.framing import REPEATED_DRIVE as _REPEATED_DRIVE
 
-    data = (b"DRIVE {Left 1} {Right 1}\r\n" * 1000 + b"DRIVE {Flip True}\r\n" * 2
-            + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n")
+    data = (
+        b"DRIVE {Left 1} {Right 1}\r\n" * 1000
+        + b"DRIVE {Flip True}\r\n" * 2
+        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2
+        + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\nDRIVE}\r\n"
+    )
     assert _REPEATED_DRIVE.sub(rb"\1", data) == (
-        b"DRIVE {Left 1} {Right 1}\r\n" + b"DRIVE {Flip True}\r\n" * 2
-        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2 + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n")
+        b"DRIVE {Left 1} {Right 1}\r\n"
+        + b"DRIVE {Flip True}\r\n" * 2
+        + b"DRIVE {Name Arm} {Value 0.1} {Order 10}\r\n" * 2
+        + b"MISPKG {Name DRIVE}\r\nDRIVE}\r\n"
+    )
 
 
 def test_limits_are_refused_and_logged(server_factory, caplog):
@@ -230,9 +257,11 @@ def test_wireless_and_web_connection_limits_are_refused_and_logged(witness_serve
     srv = witness_server
     wireless = srv.app.wireless
     with caplog.at_level(logging.INFO, logger="usarsim"):
-        for server, ask, answer in ((wireless.comserver, b"GETSS Witness Witness;", b"Fail"),
-                                    (wireless.wss, b"INIT {Robot W1} {Port 9000}\r\n", b"INITREPLY {Status OK}"),
-                                    (wireless.interface, b"GETPOS\r\n", b"POSITIONS {Robots 1}")):
+        for server, ask, answer in (
+            (wireless.comserver, b"GETSS Witness Witness;", b"Fail"),
+            (wireless.wss, b"INIT {Robot W1} {Port 9000}\r\n", b"INITREPLY {Status OK}"),
+            (wireless.interface, b"GETPOS\r\n", b"POSITIONS {Robots 1}"),
+        ):
             server.listener.max_connections = 1
             first = socket.create_connection(("127.0.0.1", server.port), timeout=5)
             second = socket.create_connection(("127.0.0.1", server.port), timeout=5)
@@ -283,8 +312,11 @@ def test_camera_bindings_cannot_grow_without_bound(witness_server, caplog):
     with caplog.at_level(logging.WARNING, logger="usarsim"):
         c.send("SET {Type Camera} {Robot Witness} {Name Camera} {Client 10.0.0.1}")
         c.send("SET {Type Camera} {Robot Witness} {Name Camera} {Client " + "9" * 5000 + "}")
-        burst = "".join(f"SET {{Type Camera}} {{Robot Witness}} {{Name Camera}} {{Client 10.{i >> 16}.{(i >> 8) & 255}."
-                        f"{i & 255}:{1000 + i % 50000}}}\r\n" for i in range(CameraBindings.MAX_BINDINGS + 500))
+        burst = "".join(
+            f"SET {{Type Camera}} {{Robot Witness}} {{Name Camera}} {{Client 10.{i >> 16}.{(i >> 8) & 255}."
+            f"{i & 255}:{1000 + i % 50000}}}\r\n"
+            for i in range(CameraBindings.MAX_BINDINGS + 500)
+        )
         c.send_raw(burst.encode())
         c.sync()
     assert len(bindings) == CameraBindings.MAX_BINDINGS
@@ -342,8 +374,10 @@ def test_ever_new_garbage_is_logged_within_bounds(witness_server, caplog):
         c.nfo()
         c.send_raw(junk)
         assert_alive(c)
-        for port, first, last, answers in ((wss, b"INIT {Robot G} {Port 9}\r\n", b"", 3001),
-                                           (interface, b"", b"GETPOS\r\n", 1)):
+        for port, first, last, answers in (
+            (wss, b"INIT {Robot G} {Port 9}\r\n", b"", 3001),
+            (interface, b"", b"GETPOS\r\n", 1),
+        ):
             with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
                 s.sendall(first + junk + last)
                 s.settimeout(10)
@@ -374,8 +408,10 @@ def test_wss_relay_ports_are_bounded(witness_server, monkeypatch, caplog):
     srv = witness_server
     port = srv.app.wireless.wss.port
     with Client(port) as a, Client(port) as b, caplog.at_level(logging.WARNING, logger="usarsim"):
-        assert a.ask("INIT {Robot Witness} {Port " + ",".join(str(p) for p in range(2000, 2400)) + "}",
-                     "INITREPLY").text == "INITREPLY {Status OK}"
+        assert (
+            a.ask("INIT {Robot Witness} {Port " + ",".join(str(p) for p in range(2000, 2400)) + "}", "INITREPLY").text
+            == "INITREPLY {Status OK}"
+        )
         assert b.ask("INIT {Robot Other} {Port 7}", "INITREPLY").text == "INITREPLY {Status OK}"
         replies = [b.ask(f"DNS {{Robot Witness}} {{Port {p}}}", "").text for p in range(2000, 2005)]
         assert all(r.startswith("DNSREPLY {Robot Witness} {Port ") for r in replies[:3])

@@ -41,8 +41,10 @@ def test_connect_init_drive_disconnect_cycles_leave_nothing_behind(server_factor
         s = socket.create_connection(("127.0.0.1", port), timeout=10)
         f = s.makefile("rb")
         f.readline()  # NFO
-        s.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name C{i}}} {{Location {-16 + (i % 5) * 1.5},-6,-0.3}}\r\n"
-                  "DRIVE {Left 2} {Right 2}\r\n".encode())
+        s.sendall(
+            f"INIT {{ClassName USARBot.P2AT}} {{Name C{i}}} {{Location {-16 + (i % 5) * 1.5},-6,-0.3}}\r\n"
+            "DRIVE {Left 2} {Right 2}\r\n".encode()
+        )
         while b"STA" not in f.readline():  # the robot exists and reports
             pass
         if i % 2:
@@ -67,8 +69,10 @@ def test_connect_init_drive_disconnect_cycles_leave_nothing_behind(server_factor
     assert threading.active_count() <= threads
     assert open_fds() <= fds + 2
     grown = rss_mb() - mem
-    print(f"\n{cycles} cycles in {elapsed:.1f} s; fds {fds} -> {open_fds()}, threads {threads}, "
-          f"memory {mem:.0f} MB -> {rss_mb():.0f} MB")
+    print(
+        f"\n{cycles} cycles in {elapsed:.1f} s; fds {fds} -> {open_fds()}, threads {threads}, "
+        f"memory {mem:.0f} MB -> {rss_mb():.0f} MB"
+    )
     assert grown < 40.0
 
 
@@ -81,7 +85,9 @@ def test_a_drive_flood_does_not_slow_the_other_robots(server_factory):
     for i in range(others):
         c = srv.connect()
         c.nfo()
-        c.send(f"INIT {{ClassName USARBot.Zerg}} {{Name O{i}}} {{Location {-19 + (i % 9) * 1.2},{-9 + (i // 9) * 1.2},-0.3}}")
+        c.send(
+            f"INIT {{ClassName USARBot.Zerg}} {{Name O{i}}} {{Location {-19 + (i % 9) * 1.2},{-9 + (i // 9) * 1.2},-0.3}}"
+        )
         clients.append(c)
     flooder = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
     flooder.recv(4096)
@@ -121,8 +127,10 @@ def test_a_drive_flood_does_not_slow_the_other_robots(server_factory):
     flooder.close()
     window = 3.0
     rates = [n / window for n in counts]
-    print(f"\n{flood_lines} DRIVE lines sent in {flood_s:.2f} s; STA rates of {others} robots: "
-          f"{min(rates):.2f} .. {max(rates):.2f} per s (5 expected)")
+    print(
+        f"\n{flood_lines} DRIVE lines sent in {flood_s:.2f} s; STA rates of {others} robots: "
+        f"{min(rates):.2f} .. {max(rates):.2f} per s (5 expected)"
+    )
     assert all(abs(r - 5.0) <= 0.5 + 1e-9 for r in rates), rates
 
 
@@ -146,9 +154,13 @@ def test_a_client_that_never_reads_is_bounded_and_harms_no_one(server_factory):
         mem = rss_mb()
 
         def lazy_stats():
-            rows = srv.on_loop(lambda: [(c.transport.get_write_buffer_size(), len(c._held), c.dropped_periodic)
-                                        for c in srv.app.control.connections.values()
-                                        if c.transport is not None and getattr(c.session, "robot_name", "") == "Lazy"])
+            rows = srv.on_loop(
+                lambda: [
+                    (c.transport.get_write_buffer_size(), len(c._held), c.dropped_periodic)
+                    for c in srv.app.control.connections.values()
+                    if c.transport is not None and getattr(c.session, "robot_name", "") == "Lazy"
+                ]
+            )
             return rows[0]
 
         t0 = time.monotonic()
@@ -167,9 +179,11 @@ def test_a_client_that_never_reads_is_bounded_and_harms_no_one(server_factory):
         sim_time = srv.on_sim(lambda sim: sim.time)
         buffered, held, dropped = lazy_stats()
         grown = rss_mb() - mem
-        print(f"\nbusy client got {n} SEN lines in {wall:.0f} s wall ({sim_time:.0f} simulated s); "
-              f"memory grew {grown:.1f} MB; the lazy client: {buffered} bytes waiting, {held} streams held "
-              f"latest-wins, {dropped} periodic lines dropped")
+        print(
+            f"\nbusy client got {n} SEN lines in {wall:.0f} s wall ({sim_time:.0f} simulated s); "
+            f"memory grew {grown:.1f} MB; the lazy client: {buffered} bytes waiting, {held} streams held "
+            f"latest-wins, {dropped} periodic lines dropped"
+        )
         assert n > 100 and grown < 60.0
         assert dropped > 0, "the lazy client's buffer never reached the high-water mark"
         reply = len(srv.connect().nfo().text) + len(srv.clients[-1].ask("GETSTARTPOSES", "NFO").text) + 4
@@ -198,9 +212,11 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
 
     lines = scaled(100_000, 1_000_000)
     srv, w = _real_time_witness(server_factory, seed=9)
-    floods = [(srv.app.truth.port, b"{Class Victim}\r\n{Class}\r\n"),
-              (srv.app.wireless.interface.port, b"GETOBS {Start -1e30,0,1} {End 1e30,0,1}\r\nGETPOS\r\n"),
-              (srv.app.wireless.wss.port, b"GETSS {Robot Witness}\r\n")]
+    floods = [
+        (srv.app.truth.port, b"{Class Victim}\r\n{Class}\r\n"),
+        (srv.app.wireless.interface.port, b"GETOBS {Start -1e30,0,1} {End 1e30,0,1}\r\nGETPOS\r\n"),
+        (srv.app.wireless.wss.port, b"GETSS {Robot Witness}\r\n"),
+    ]
     if not gl_problem():
         floods.append((srv.app.image.port, b"OKU" + struct.pack(">IIII", 0, 0, 64, 64)))
         with socket.create_connection(("127.0.0.1", srv.app.image.port), timeout=30) as first:
@@ -230,8 +246,9 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
             except OSError:
                 return
 
-    threads = [threading.Thread(target=pour, args=(k, s, u), daemon=True) for k, (s, (_, u)) in
-               enumerate(zip(socks, floods))]
+    threads = [
+        threading.Thread(target=pour, args=(k, s, u), daemon=True) for k, (s, (_, u)) in enumerate(zip(socks, floods))
+    ]
     for th in threads:
         th.start()
     window = scaled(4.0, 20.0)
@@ -254,8 +271,10 @@ def test_query_floods_on_the_other_ports_do_not_stall_the_world(server_factory):
     for s in socks:
         s.close()
     rate = count / window
-    print(f"\nfloods of {', '.join(str(n) for n in sent)} request lines on {len(floods)} ports: the robot's STA "
-          f"at {rate:.2f} per s (5 expected); memory grew {grown:.1f} MB")
+    print(
+        f"\nfloods of {', '.join(str(n) for n in sent)} request lines on {len(floods)} ports: the robot's STA "
+        f"at {rate:.2f} per s (5 expected); memory grew {grown:.1f} MB"
+    )
     assert abs(rate - 5.0) <= 0.5
     assert grown < 80.0
     assert min(sent) > 0
@@ -285,11 +304,16 @@ def test_a_client_that_asks_and_never_reads_is_bounded_and_loses_nothing(server_
     sta = 0
     while time.monotonic() < t0 + 4.0:
         sta += w.next_line(timeout=5.0).text.startswith("STA")
-    waiting = srv.on_loop(lambda: max(c.transport.get_write_buffer_size() for c in srv.app.control.connections.values()
-                                      if c.transport is not None))
+    waiting = srv.on_loop(
+        lambda: max(
+            c.transport.get_write_buffer_size() for c in srv.app.control.connections.values() if c.transport is not None
+        )
+    )
     grown = rss_mb() - mem
-    print(f"\nunread replies held at {waiting // 1024} kB (cap {REPLY_CAP_FACTOR * HIGH_WATER // 1024} kB); "
-          f"memory grew {grown:.1f} MB; the witness got {sta} STA lines in 4 s")
+    print(
+        f"\nunread replies held at {waiting // 1024} kB (cap {REPLY_CAP_FACTOR * HIGH_WATER // 1024} kB); "
+        f"memory grew {grown:.1f} MB; the witness got {sta} STA lines in 4 s"
+    )
     assert waiting < REPLY_CAP_FACTOR * HIGH_WATER + 256 * 1024
     assert grown < 40.0 and sta >= 18
     # it reads at last: every one of its questions is answered

@@ -25,10 +25,33 @@ def test_sigterm_during_load_closes_everything_within_5_s(tmp_path):
 
     n = scaled(16, 32)
     err = open(tmp_path / "serve.err", "w")
-    proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", "--port", "0", "--truth-port", "0",
-                             "--image-port", "0", "--web-port", "0", "--wcs-port", "0", "--wss-port", "0",
-                             "--cominterface-port", "0", "--speed", "max"],
-                            stdout=subprocess.PIPE, stderr=err, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "usarsim",
+            "serve",
+            "--port",
+            "0",
+            "--truth-port",
+            "0",
+            "--image-port",
+            "0",
+            "--web-port",
+            "0",
+            "--wcs-port",
+            "0",
+            "--wss-port",
+            "0",
+            "--cominterface-port",
+            "0",
+            "--speed",
+            "max",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=err,
+        text=True,
+    )
     ports = {}
     try:
         while len(ports) < 7:
@@ -38,12 +61,17 @@ def test_sigterm_during_load_closes_everything_within_5_s(tmp_path):
             if m:
                 ports[m.group(1)] = int(m.group(2))
         poses = free_spots(resolve_world("DM-USAR_yellow"), n)
-        client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(ports["control"]),
-                                   json.dumps(poses), "60"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        client = subprocess.Popen(
+            [sys.executable, "-m", "usarsim.bench", "--client", str(ports["control"]), json.dumps(poses), "60"],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         viewer = socket.create_connection(("127.0.0.1", ports["image"]), timeout=30)
         viewer.sendall(b"OK" * 4)
-        others = [socket.create_connection(("127.0.0.1", ports[k]), timeout=10)
-                  for k in ("truth", "comserver", "wss", "cominterface", "web")]
+        others = [
+            socket.create_connection(("127.0.0.1", ports[k]), timeout=10)
+            for k in ("truth", "comserver", "wss", "cominterface", "web")
+        ]
         time.sleep(3.0)
         t0 = time.monotonic()
         proc.send_signal(signal.SIGTERM)

@@ -21,13 +21,21 @@ def reference(owners, force, velocity, rated, capacity, used, seconds):
 
 
 @settings(max_examples=200, deadline=None)
-@given(robots=st.integers(1, 40), per_robot=st.integers(0, 8), seed=st.integers(0, 2**32 - 1),
-       seconds=st.sampled_from([0.0, 0.004, 0.02, 0.1, 1.0]), nan=st.booleans())
+@given(
+    robots=st.integers(1, 40),
+    per_robot=st.integers(0, 8),
+    seed=st.integers(0, 2**32 - 1),
+    seconds=st.sampled_from([0.0, 0.004, 0.02, 0.1, 1.0]),
+    nan=st.booleans(),
+)
 def test_the_compiled_drain_is_numpys_to_the_bit(robots, per_robot, seed, seconds, nan):
     rng = np.random.default_rng(seed)
     nu = robots * per_robot + int(rng.integers(0, 4))  # actuators of no robot too
-    owners = rng.permutation(np.concatenate([np.repeat(np.arange(1, robots + 1), per_robot),
-                                             np.zeros(nu - robots * per_robot, dtype=np.intp)])).astype(np.intp)
+    owners = rng.permutation(
+        np.concatenate(
+            [np.repeat(np.arange(1, robots + 1), per_robot), np.zeros(nu - robots * per_robot, dtype=np.intp)]
+        )
+    ).astype(np.intp)
     force = rng.normal(0.0, 20.0, nu)
     velocity = rng.normal(0.0, 5.0, nu)
     if nan and nu:

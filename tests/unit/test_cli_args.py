@@ -23,18 +23,21 @@ def _verbose(argv: list[str]) -> int:
     return args.verbose + getattr(args, "verbose_after", 0)
 
 
-@pytest.mark.parametrize("argv, level", [
-    (["serve"], 0),
-    (["-v", "serve"], 1),
-    (["serve", "-v"], 1),
-    (["serve", "-vv"], 2),
-    (["-vv", "serve"], 2),
-    (["-v", "serve", "--verbose"], 2),
-    (["validate", "P2AT", "-v"], 1),
-    (["worlds", "-v"], 1),
-    (["robots", "-vv"], 2),
-    (["bench", "-v"], 1),
-])
+@pytest.mark.parametrize(
+    "argv, level",
+    [
+        (["serve"], 0),
+        (["-v", "serve"], 1),
+        (["serve", "-v"], 1),
+        (["serve", "-vv"], 2),
+        (["-vv", "serve"], 2),
+        (["-v", "serve", "--verbose"], 2),
+        (["validate", "P2AT", "-v"], 1),
+        (["worlds", "-v"], 1),
+        (["robots", "-vv"], 2),
+        (["bench", "-v"], 1),
+    ],
+)
 def test_verbose_before_and_after_the_command(argv, level):
     assert _verbose(argv) == level
 
@@ -57,9 +60,15 @@ def test_default_ports_are_the_servers_defaults():
     from usarsim.server.app import Application
 
     defaults = {k: v.default for k, v in inspect.signature(Application).parameters.items()}
-    assert DEFAULT_PORTS == {"port": defaults["port"], "truth_port": defaults["truth_port"],
-                             "image_port": defaults["image_port"], "web_port": defaults["web_port"],
-                             "wcs_port": WCS_PORT, "wss_port": WSS_PORT, "cominterface_port": INTERFACE_PORT}
+    assert DEFAULT_PORTS == {
+        "port": defaults["port"],
+        "truth_port": defaults["truth_port"],
+        "image_port": defaults["image_port"],
+        "web_port": defaults["web_port"],
+        "wcs_port": WCS_PORT,
+        "wss_port": WSS_PORT,
+        "cominterface_port": INTERFACE_PORT,
+    }
 
 
 def test_serve_options_default_to_none_so_that_the_offset_applies():
@@ -70,8 +79,15 @@ def test_serve_options_default_to_none_so_that_the_offset_applies():
 
 
 def test_port_offset_adds_to_every_default():
-    assert resolve_ports({}, 100) == {"port": 3100, "truth_port": 4089, "image_port": 5103, "web_port": 8180,
-                                      "wcs_port": 5974, "wss_port": 50100, "cominterface_port": 7535}
+    assert resolve_ports({}, 100) == {
+        "port": 3100,
+        "truth_port": 4089,
+        "image_port": 5103,
+        "web_port": 8180,
+        "wcs_port": 5974,
+        "wss_port": 50100,
+        "cominterface_port": 7535,
+    }
 
 
 def test_an_explicit_port_keeps_its_value():
@@ -104,12 +120,15 @@ def test_port_offset_option_rejects_nonsense(text, capsys):
 # --------------------------------------------------------------------------- validate NAME
 
 
-@pytest.mark.parametrize("text, path", [
-    ("DM-USAR_yellow", WORLDS_DIR / "DM-USAR_yellow.yaml"),
-    ("dm-usar_yellow", WORLDS_DIR / "DM-USAR_yellow.yaml"),
-    ("P2AT", ROBOTS_DIR / "P2AT.yaml"),
-    ("usarbot.p2at", ROBOTS_DIR / "P2AT.yaml"),
-])
+@pytest.mark.parametrize(
+    "text, path",
+    [
+        ("DM-USAR_yellow", WORLDS_DIR / "DM-USAR_yellow.yaml"),
+        ("dm-usar_yellow", WORLDS_DIR / "DM-USAR_yellow.yaml"),
+        ("P2AT", ROBOTS_DIR / "P2AT.yaml"),
+        ("usarbot.p2at", ROBOTS_DIR / "P2AT.yaml"),
+    ],
+)
 def test_validate_finds_shipped_names(text, path):
     assert validate_target(text) == str(path)
 
@@ -184,10 +203,13 @@ def test_lag_warning_adds_up_and_comes_at_most_every_10_s(caplog):
         assert caplog.records == []
         r._note_lag(0.005, now=102.0)  # 0.006 in all: shown as 0.01
         assert [m.getMessage() for m in caplog.records] == [
-            "simulation behind real time: 0.01 simulated s skipped (the clock does not catch up in bursts)"]
+            "simulation behind real time: 0.01 simulated s skipped (the clock does not catch up in bursts)"
+        ]
         r._note_lag(0.3, now=105.0)  # within 10 s of the last warning: counted, not shown
         r._note_lag(0.2, now=113.0)
-        assert caplog.records[-1].getMessage() == ("simulation behind real time: 0.50 simulated s skipped in the "
-                                                   "last 11 s (the clock does not catch up in bursts)")
+        assert caplog.records[-1].getMessage() == (
+            "simulation behind real time: 0.50 simulated s skipped in the "
+            "last 11 s (the clock does not catch up in bursts)"
+        )
         r._note_lag(0.0, now=130.0)  # nothing since: nothing to say
         assert len(caplog.records) == 2

@@ -183,32 +183,61 @@ def test_a_bare_robot_file_gets_the_dataclass_defaults(tmp_path):
     p = write(tmp_path, ROBOT_BARE)
     wheel = {"radius_m": 0.05, "width_m": 0.02, "mass_kg": 0.5}
     assert load_robot(p) == R.RobotConfig(
-        class_name="Bare", path=str(p), vehicle_type="GroundVehicle", steering_type="SkidSteered", drive="skid",
-        mass_kg=4.0, max_speed_rad_s=4.0, max_torque_nm=10.0,
+        class_name="Bare",
+        path=str(p),
+        vehicle_type="GroundVehicle",
+        steering_type="SkidSteered",
+        drive="skid",
+        mass_kg=4.0,
+        max_speed_rad_s=4.0,
+        max_torque_nm=10.0,
         geometry=R.RobotGeometryConfig(dimensions=(0.3, 0.3, 0.2)),
-        chassis=(R.ChassisBox(size=(0.3, 0.2, 0.1), mass_kg=2.0),
-                 R.ChassisBox(shape="capsule", radius_m=0.02, length_m=0.1, mass_kg=0.5)),
-        wheels=(R.Wheel(name="L", position=(0.0, -0.15, 0.05), side="left", **wheel),
-                R.Wheel(name="R", position=(0.0, 0.15, 0.05), side="right", **wheel)),
-        links=(R.Link(name="arm", max_speed=1.0, max_torque=2.0,
-                      shapes=(R.ChassisBox(shape="sphere", radius_m=0.05, mass_kg=0.5),)),),
+        chassis=(
+            R.ChassisBox(size=(0.3, 0.2, 0.1), mass_kg=2.0),
+            R.ChassisBox(shape="capsule", radius_m=0.02, length_m=0.1, mass_kg=0.5),
+        ),
+        wheels=(
+            R.Wheel(name="L", position=(0.0, -0.15, 0.05), side="left", **wheel),
+            R.Wheel(name="R", position=(0.0, 0.15, 0.05), side="right", **wheel),
+        ),
+        links=(
+            R.Link(
+                name="arm",
+                max_speed=1.0,
+                max_torque=2.0,
+                shapes=(R.ChassisBox(shape="sphere", radius_m=0.05, mass_kg=0.5),),
+            ),
+        ),
         mission_packages=(R.MissionPackage(name="Arm", links=("arm",)),),
-        items=(R.MountedItem(item_type="Sonar", name="S1", params={}, key_path="sensors[0]"),))
+        items=(R.MountedItem(item_type="Sonar", name="S1", params={}, key_path="sensors[0]"),),
+    )
 
 
-@pytest.mark.parametrize("head, attribute, expected", [
-    ("vehicle_type: AerialVehicle\ndrive: aerial\naerial: {}\n", "aerial", R.AerialLimits()),
-    ("vehicle_type: AerialVehicle\ndrive: aerial\n", "aerial", R.AerialLimits()),
-    ("vehicle_type: NauticalVehicle\ndrive: nautical\nnautical: {volume_m3: 0.01}\n", "nautical",
-     R.NauticalSpec(volume_m3=0.01)),
-    (("vehicle_type: LeggedRobot\ndrive: legged\nlinks:\n"
-      "  - {name: hp, max_speed: 1.0, max_torque: 2.0}\n"
-      "  - {name: hr, parent: hp, max_speed: 1.0, max_torque: 2.0}\n"
-      "  - {name: kn, parent: hr, max_speed: 1.0, max_torque: 2.0}\n"
-      "gait:\n  stand_height_m: 0.2\n  legs: [{hip_pitch: hp, hip_roll: hr, knee: kn, upper_m: 0.1, lower_m: 0.1}]\n"),
-     "gait", R.Gait(legs=(R.Leg(hip_pitch="hp", hip_roll="hr", knee="kn", upper_m=0.1, lower_m=0.1),),
-                    stand_height_m=0.2)),
-])
+@pytest.mark.parametrize(
+    "head, attribute, expected",
+    [
+        ("vehicle_type: AerialVehicle\ndrive: aerial\naerial: {}\n", "aerial", R.AerialLimits()),
+        ("vehicle_type: AerialVehicle\ndrive: aerial\n", "aerial", R.AerialLimits()),
+        (
+            "vehicle_type: NauticalVehicle\ndrive: nautical\nnautical: {volume_m3: 0.01}\n",
+            "nautical",
+            R.NauticalSpec(volume_m3=0.01),
+        ),
+        (
+            (
+                "vehicle_type: LeggedRobot\ndrive: legged\nlinks:\n"
+                "  - {name: hp, max_speed: 1.0, max_torque: 2.0}\n"
+                "  - {name: hr, parent: hp, max_speed: 1.0, max_torque: 2.0}\n"
+                "  - {name: kn, parent: hr, max_speed: 1.0, max_torque: 2.0}\n"
+                "gait:\n  stand_height_m: 0.2\n  legs: [{hip_pitch: hp, hip_roll: hr, knee: kn, upper_m: 0.1, lower_m: 0.1}]\n"
+            ),
+            "gait",
+            R.Gait(
+                legs=(R.Leg(hip_pitch="hp", hip_roll="hr", knee="kn", upper_m=0.1, lower_m=0.1),), stand_height_m=0.2
+            ),
+        ),
+    ],
+)
 def test_a_bare_drive_section_gets_the_dataclass_defaults(tmp_path, head, attribute, expected):
     r = load_robot(write(tmp_path, f"class_name: Bare\nsteering_type: None\n{head}{BARE_BODY}"))
     assert getattr(r, attribute) == expected
@@ -218,23 +247,32 @@ def test_a_bare_world_file_gets_the_dataclass_defaults(tmp_path):
     (tmp_path / "tetra.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
     p = write(tmp_path, WORLD_BARE)
     assert load_world(p) == W.WorldConfig(
-        name="Bare", path=str(p), floor=W.Floor(center=(0.0, 0.0), size=(10.0, 8.0)),
+        name="Bare",
+        path=str(p),
+        floor=W.Floor(center=(0.0, 0.0), size=(10.0, 8.0)),
         materials={name: W.Material(name=name) for name in ("default", "glass", "floor")},
-        objects=(W.StaticObject(name="b", shape="box", center=(1.0, 1.0, -0.5), size=(1.0, 1.0, 1.0)),
-                 W.StaticObject(name="c", shape="cylinder", center=(2.0, 2.0, -0.5), radius_m=0.1, length_m=1.0),
-                 W.StaticObject(name="m", shape="mesh", center=(0.0, 3.0, 0.0),
-                                mesh_file=str((tmp_path / "tetra.obj").resolve()))),
+        objects=(
+            W.StaticObject(name="b", shape="box", center=(1.0, 1.0, -0.5), size=(1.0, 1.0, 1.0)),
+            W.StaticObject(name="c", shape="cylinder", center=(2.0, 2.0, -0.5), radius_m=0.1, length_m=1.0),
+            W.StaticObject(
+                name="m", shape="mesh", center=(0.0, 3.0, 0.0), mesh_file=str((tmp_path / "tetra.obj").resolve())
+            ),
+        ),
         start_poses=(W.StartPose(name="A", location=(0.0, 0.0, -0.2)),),
         victims=(W.Victim(name="v", location=(1.0, 2.0, -0.1)),),
         false_alarms=(W.FalseAlarm(name="fa", center=(1.0, 1.0, -0.1), size=(0.1, 0.1, 0.1)),),
         rfid_tags=(W.RfidTagConfig(tag_id=3, location=(1.0, 1.0, 0.0)),),
         water=(W.WaterVolume(name="pool", center=(0.0, 5.0, 0.0), size=(1.0, 1.0, 1.0)),),
-        lights=(W.Light(name="sun"),), wireless=W.WirelessConfig())
+        lights=(W.Light(name="sun"),),
+        wireless=W.WirelessConfig(),
+    )
 
 
 def test_a_point_light_casts_no_shadow_unless_asked(tmp_path):
-    p = write(tmp_path, WORLD_OK + "lights:\n  - {name: bulb, type: point}\n  - {name: lamp, type: point, "
-                                   "cast_shadows: true}\n")
+    p = write(
+        tmp_path,
+        WORLD_OK + "lights:\n  - {name: bulb, type: point}\n  - {name: lamp, type: point, cast_shadows: true}\n",
+    )
     assert [light.cast_shadows for light in load_world(p).lights] == [False, True]
 
 
@@ -308,10 +346,13 @@ def test_world_bad_shape_lists_the_allowed_shapes(tmp_path):
     assert "box" in str(err).split("allowed:", 1)[1]
 
 
-@pytest.mark.parametrize("old, new, key, what", [
-    ("{name: pipe,", "{name: w1,", "objects[1].name", "duplicate object name 'w1'"),
-    ("{name: B,", "{name: a,", "start_poses[1].name", "duplicate start pose name 'a'"),
-])
+@pytest.mark.parametrize(
+    "old, new, key, what",
+    [
+        ("{name: pipe,", "{name: w1,", "objects[1].name", "duplicate object name 'w1'"),
+        ("{name: B,", "{name: a,", "start_poses[1].name", "duplicate start pose name 'a'"),
+    ],
+)
 def test_world_duplicate_names(tmp_path, old, new, key, what):
     p = write(tmp_path, WORLD_OK.replace(old, new))
     err = config_error(load_world, p)

@@ -103,10 +103,17 @@ def test_yaw_is_applied_before_pitch_and_roll():
     np.testing.assert_allclose(nose, [0.0, math.cos(0.3), -math.sin(0.3)], atol=1e-12)
 
 
-@pytest.mark.parametrize("a, expected", [
-    (0.0, 0.0), (-1e-17, 0.0), (2 * math.pi, 0.0), (-math.pi / 2, 1.5 * math.pi), (7.0, 7.0 - 2 * math.pi),
-    (-4 * math.pi - 0.25, 2 * math.pi - 0.25),
-])
+@pytest.mark.parametrize(
+    "a, expected",
+    [
+        (0.0, 0.0),
+        (-1e-17, 0.0),
+        (2 * math.pi, 0.0),
+        (-math.pi / 2, 1.5 * math.pi),
+        (7.0, 7.0 - 2 * math.pi),
+        (-4 * math.pi - 0.25, 2 * math.pi - 0.25),
+    ],
+)
 def test_wrap_2pi(a, expected):
     r = frames.wrap_2pi(a)
     assert 0.0 <= r < 2 * math.pi

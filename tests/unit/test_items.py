@@ -35,11 +35,13 @@ def test_a_name_registered_twice_is_an_error():
         pass
 
     with pytest.raises(ValueError, match="'probe' is registered already"):
+
         @sensors.register("probe")
         class Again(Item):
             pass
 
     with pytest.raises(ValueError, match="'ProbeSensor' is registered already as a sensor"):
+
         @effecters.register("Pusher", "ProbeSensor")
         class Pusher(Item):
             pass
@@ -70,8 +72,9 @@ def test_make_item_makes_effecters_cameras_and_sensors_from_a_robot_file():
     assert isinstance(made["Gun"], RFIDReleaser) and isinstance(made["Gun"], Effecter)
     assert isinstance(made["Camera"], CameraItem) and not made["Camera"].PERIODIC
     assert isinstance(made["F1"], Sensor) and made["F1"].PERIODIC
-    gripper = make_item(MountedItem(item_type="gripper", name="Claw", params={"Fingers": ["CameraPanTilt_Link2"]}),
-                        robot, 0, "test")
+    gripper = make_item(
+        MountedItem(item_type="gripper", name="Claw", params={"Fingers": ["CameraPanTilt_Link2"]}), robot, 0, "test"
+    )
     assert isinstance(gripper, Gripper) and gripper.TYPE == "Gripper"
     assert gripper.config.fingers == ["CameraPanTilt_Link2"]
     assert gripper.conf_fields() == ()

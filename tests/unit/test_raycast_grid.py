@@ -18,8 +18,10 @@ SHAPES = ("box", "cylinder", "sphere", "capsule", "ellipsoid")
 def crowded_scene(seed: int, n: int = 120, spread: float = 6.0) -> str:
     """Robot-like free bodies and static shapes of every kind, some touching and overlapping."""
     rng = np.random.default_rng(seed)
-    parts = ['<geom name="floor" type="plane" size="0 0 1"/>',
-             '<geom name="wall" type="box" size="8 0.1 1" pos="0 6.5 1"/>']
+    parts = [
+        '<geom name="floor" type="plane" size="0 0 1"/>',
+        '<geom name="wall" type="box" size="8 0.1 1" pos="0 6.5 1"/>',
+    ]
     for i in range(n):
         shape = SHAPES[i % len(SHAPES)]
         size = " ".join(f"{v:.3f}" for v in rng.uniform(0.05, 0.6, 3))
@@ -42,10 +44,36 @@ def exhaustive(c: RayCaster, orig, dirs, cutoff, exclude=-1):
     dist, gid, nrm = np.empty(n), np.empty(n, np.int32), np.zeros((n, 3))
     planes = np.flatnonzero(c._visible & (c._gtype == raycast.PLANE))
     others = np.flatnonzero(c._visible & (c._gtype != raycast.PLANE))
-    one_cell = (-1e9, -1e9, 2e9, 1, 1, np.array([0, len(others)]), others.astype(np.int64), planes.astype(np.int64),
-                -1e9, 1e9)
-    raycast.cast_grid_kernel(orig, dirs, cutoff, c._gtype, c.m.geom_size, c.m.geom_rbound, c._gbody, c._visible,
-                             c.d.geom_xpos, c.d.geom_xmat, exclude, True, dist, gid, nrm, *one_cell)
+    one_cell = (
+        -1e9,
+        -1e9,
+        2e9,
+        1,
+        1,
+        np.array([0, len(others)]),
+        others.astype(np.int64),
+        planes.astype(np.int64),
+        -1e9,
+        1e9,
+    )
+    raycast.cast_grid_kernel(
+        orig,
+        dirs,
+        cutoff,
+        c._gtype,
+        c.m.geom_size,
+        c.m.geom_rbound,
+        c._gbody,
+        c._visible,
+        c.d.geom_xpos,
+        c.d.geom_xmat,
+        exclude,
+        True,
+        dist,
+        gid,
+        nrm,
+        *one_cell,
+    )
     return dist, gid, nrm
 
 
@@ -55,12 +83,12 @@ def awkward_rays(rng, n):
     orig[:, 2] = rng.uniform(-0.5, 2.5, n)
     dirs = rng.normal(size=(n, 3))
     k = n // 6
-    dirs[:k, 2] = 0.0                      # level, like lasers and sonars
-    dirs[k:2 * k, 1:] = 0.0                # along x
-    dirs[2 * k:3 * k, [0, 2]] = 0.0        # along y
-    dirs[3 * k:4 * k, :2] = 0.0            # straight up or down
-    orig[4 * k:5 * k, :2] = np.round(orig[4 * k:5 * k, :2])  # from grid corners (cells of 1 m at whole metres)
-    dirs[4 * k:5 * k] = [1.0, 1.0, 0.0]
+    dirs[:k, 2] = 0.0  # level, like lasers and sonars
+    dirs[k : 2 * k, 1:] = 0.0  # along x
+    dirs[2 * k : 3 * k, [0, 2]] = 0.0  # along y
+    dirs[3 * k : 4 * k, :2] = 0.0  # straight up or down
+    orig[4 * k : 5 * k, :2] = np.round(orig[4 * k : 5 * k, :2])  # from grid corners (cells of 1 m at whole metres)
+    dirs[4 * k : 5 * k] = [1.0, 1.0, 0.0]
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     return np.ascontiguousarray(orig), np.ascontiguousarray(dirs)
 
@@ -92,7 +120,8 @@ def test_the_grid_is_filed_again_when_something_moves():
     m = mujoco.MjModel.from_xml_string(
         '<mujoco><worldbody><geom type="plane" size="0 0 1"/>'
         '<body name="b" pos="3 0 0.5"><freejoint/><geom type="box" size="0.2 0.2 0.2"/></body>'
-        '<geom type="box" size="0.2 0.2 0.2" pos="-5 -5 0.5"/></worldbody></mujoco>')
+        '<geom type="box" size="0.2 0.2 0.2" pos="-5 -5 0.5"/></worldbody></mujoco>'
+    )
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
     c = RayCaster(m, d, "compiled")
@@ -129,7 +158,8 @@ def test_a_turned_mocap_body_is_filed_again():
     """A waving victim's arm is a mocap body turned at the same instant: its geom moves."""
     m = mujoco.MjModel.from_xml_string(
         '<mujoco><worldbody><body name="arm" mocap="true" pos="0 0 0.5">'
-        '<geom type="box" size="0.1 0.1 0.1" pos="2 0 0"/></body></worldbody></mujoco>')
+        '<geom type="box" size="0.1 0.1 0.1" pos="2 0 0"/></body></worldbody></mujoco>'
+    )
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
     c = RayCaster(m, d, "compiled")

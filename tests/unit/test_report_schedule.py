@@ -50,26 +50,41 @@ class HeapSchedule:
 
 
 def _robot(uid: int, sensors: list[tuple[float, str]], status: float):
-    return SimpleNamespace(uid=uid, removed=False, reports=[],
-                           config=SimpleNamespace(status_interval_s=status, mission_packages=()),
-                           sensors=[SimpleNamespace(PERIODIC=True, PACKED=False, TYPE=t, name=f"{t}{i}",
-                                                    config=SimpleNamespace(scan_interval_s=iv))
-                                    for i, (iv, t) in enumerate(sensors)])
+    return SimpleNamespace(
+        uid=uid,
+        removed=False,
+        reports=[],
+        config=SimpleNamespace(status_interval_s=status, mission_packages=()),
+        sensors=[
+            SimpleNamespace(
+                PERIODIC=True, PACKED=False, TYPE=t, name=f"{t}{i}", config=SimpleNamespace(scan_interval_s=iv)
+            )
+            for i, (iv, t) in enumerate(sensors)
+        ],
+    )
 
 
 INTERVALS = st.sampled_from([0.05, 0.1, 0.2, 0.25, 0.3, 1.0 / 3.0, 0.7])
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.tuples(st.integers(0, 200),  # spawn step (4 ms steps)
-                          st.lists(st.tuples(INTERVALS, st.sampled_from(["Sonar", "GPS", "INS"])), max_size=5),
-                          INTERVALS,
-                          st.one_of(st.none(), st.integers(0, 400))),  # removal step
-                min_size=1, max_size=8))
+@given(
+    st.lists(
+        st.tuples(
+            st.integers(0, 200),  # spawn step (4 ms steps)
+            st.lists(st.tuples(INTERVALS, st.sampled_from(["Sonar", "GPS", "INS"])), max_size=5),
+            INTERVALS,
+            st.one_of(st.none(), st.integers(0, 400)),
+        ),  # removal step
+        min_size=1,
+        max_size=8,
+    )
+)
 def test_the_same_reports_in_the_same_order_as_a_heap(robots):
     new, ref = ReportSchedule(), HeapSchedule()
-    spawns = sorted(((at, uid, sensors, status, gone) for uid, (at, sensors, status, gone) in enumerate(robots)),
-                    key=lambda r: r[0])
+    spawns = sorted(
+        ((at, uid, sensors, status, gone) for uid, (at, sensors, status, gone) in enumerate(robots)), key=lambda r: r[0]
+    )
     twins = {}
     dt = 0.004
     for step in range(450):
@@ -106,8 +121,13 @@ def test_reports_of_one_instant_reached_by_different_sums_come_in_float_order():
 
 def test_a_removed_robots_reports_are_forgotten_and_the_others_keep_their_order():
     kept, ref = ReportSchedule(), HeapSchedule()
-    pairs = [(_robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2),
-              _robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2)) for uid in range(4)]
+    pairs = [
+        (
+            _robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2),
+            _robot(uid, [(0.1, "Sonar"), (0.2, "GPS"), (0.3, "INS")], 0.2),
+        )
+        for uid in range(4)
+    ]
     for i, (a, b) in enumerate(pairs):
         kept.add_robot(a, 0.05 * i)
         ReportSchedule().add_robot(b, 0.05 * i)
@@ -135,7 +155,8 @@ def test_plans_hand_on_a_sensors_item_and_a_status_report_itself_in_order():
         now = step * 0.004
         want = [rep if rep.status else rep.item for rep in by_report.take_due(now)]
         got = [x for plan in by_plan.take_due_plans(now) for x in plan]
-        assert [x if x.__class__ is tuple else (x.robot.uid, x.key) for x in got] == \
-            [x if x.__class__ is tuple else (x.robot.uid, x.key) for x in want]
+        assert [x if x.__class__ is tuple else (x.robot.uid, x.key) for x in got] == [
+            x if x.__class__ is tuple else (x.robot.uid, x.key) for x in want
+        ]
         seen_status = seen_status or any(x.__class__ is not tuple for x in got)
     assert seen_status

@@ -168,8 +168,9 @@ def test_the_shipped_rndf_and_mdf_parse():
 
 
 def test_to_world_inverts_the_gps_conversion():
-    geo = GeoReference(latitude_deg=34.585, longitude_deg=-117.365, scale_latitude_m=110940.0,
-                       scale_longitude_m=91780.0)
+    geo = GeoReference(
+        latitude_deg=34.585, longitude_deg=-117.365, scale_latitude_m=110940.0, scale_longitude_m=91780.0
+    )
     for x, y in ((0.0, 0.0), (123.4, -56.7), (-250.0, 310.0)):
         lat, lon = world_to_geographic(x, y, geo)
         assert to_world(lat, lon, geo) == pytest.approx((x, y), abs=1e-6)
@@ -198,11 +199,21 @@ def _broken_rndfs():
     t = edit(MINI, "end_lane", None, first=True)
     case("missing end_lane", t, "lane\t1.2", "'lane' is not allowed here", "end_lane")
     t = edit(MINI, "num_waypoints\t2", "num_waypoints\t3", first=True)
-    case("num_waypoints above the waypoints", t, "end_lane", "lane 1.1 has 2 points",
-         f"num_waypoints (line {line_no(t, 'num_waypoints' + chr(9) + '3')}) is 3")
+    case(
+        "num_waypoints above the waypoints",
+        t,
+        "end_lane",
+        "lane 1.1 has 2 points",
+        f"num_waypoints (line {line_no(t, 'num_waypoints' + chr(9) + '3')}) is 3",
+    )
     t = edit(MINI, "num_waypoints\t2", "num_waypoints\t1", first=True)
-    case("num_waypoints below the waypoints", t, "1.1.2\t34.001000\t-117.000000   /* a trailing comment */",
-         "one point too many in lane 1.1", "num_waypoints")
+    case(
+        "num_waypoints below the waypoints",
+        t,
+        "1.1.2\t34.001000\t-117.000000   /* a trailing comment */",
+        "one point too many in lane 1.1",
+        "num_waypoints",
+    )
     t = edit(MINI, "1.2.2\t34.000000\t-117.000100", "1.2.3\t34.000000\t-117.000100")
     case("waypoint id out of order", t, "1.2.3\t34.000000\t-117.000100", "expected waypoint 1.2.2", "1.2.3")
     t = edit(MINI, "1.2.2\t34.000000\t-117.000100", "1.2.x\t34.000000\t-117.000100")
@@ -228,8 +239,13 @@ def _broken_rndfs():
     t = edit(MINI, "stop\t1.1.2", "stop\t1.1.5")
     case("stop at a missing waypoint", t, "stop\t1.1.5", "stop 1.1.5 is not a point of lane 1.1")
     t = edit(MINI, "checkpoint\t3.1.2\t2", "checkpoint\t3.1.2\t1")
-    case("duplicate checkpoint id", t, "checkpoint\t3.1.2\t1", "checkpoint id 1 is already given to waypoint 1.1.2",
-         f"line {line_no(MINI, 'checkpoint' + chr(9) + '1.1.2' + chr(9) + '1')}")
+    case(
+        "duplicate checkpoint id",
+        t,
+        "checkpoint\t3.1.2\t1",
+        "checkpoint id 1 is already given to waypoint 1.1.2",
+        f"line {line_no(MINI, 'checkpoint' + chr(9) + '1.1.2' + chr(9) + '1')}",
+    )
     t = edit(MINI, "lane\t1.2", "lane\t1.3")
     case("lane id out of order", t, "lane\t1.3", "expected lane 1.2")
     t = edit(MINI, "segment\t2", "segment\t3")
@@ -287,8 +303,13 @@ def _broken_mdfs():
     t = MINI_MDF.replace("1\n2\n1\n", "1\n7\n1\n")
     case("checkpoint not in the RNDF", t, "7", "checkpoint 7 is not a checkpoint of the RNDF 'mini'")
     t = MINI_MDF.replace("num_checkpoints\t3", "num_checkpoints\t4")
-    case("num_checkpoints above the checkpoints", t, "end_checkpoints", "has 3 checkpoints",
-         "num_checkpoints (line 5) is 4")
+    case(
+        "num_checkpoints above the checkpoints",
+        t,
+        "end_checkpoints",
+        "has 3 checkpoints",
+        "num_checkpoints (line 5) is 4",
+    )
     t = MINI_MDF.replace("num_checkpoints\t3", "num_checkpoints\t2")
     case("num_checkpoints below the checkpoints", t, 8, "one checkpoint too many")  # the third one
     t = MINI_MDF.replace("1\t5\t25", "1\t5\tfast")
@@ -332,10 +353,15 @@ def test_validate_the_shipped_rndf_and_mdf(capsys):
     out, err = capsys.readouterr()
     assert err == ""
     rndf_line, mdf_line = out.splitlines()
-    assert re.fullmatch(r"ok: rndf DM-Road_UrbanChallenge: 8 segments, 16 lanes, 192 waypoints, 1 zones, "
-                        r"4 spots, 20 checkpoints, \d+ stops, \d+ exits", rndf_line), rndf_line
-    assert mdf_line.startswith("ok: mdf DM-Road_UrbanChallenge_tour: 12 checkpoints, 9 speed limits, checked "
-                               "against DM-Road_UrbanChallenge.rndf"), mdf_line
+    assert re.fullmatch(
+        r"ok: rndf DM-Road_UrbanChallenge: 8 segments, 16 lanes, 192 waypoints, 1 zones, "
+        r"4 spots, 20 checkpoints, \d+ stops, \d+ exits",
+        rndf_line,
+    ), rndf_line
+    assert mdf_line.startswith(
+        "ok: mdf DM-Road_UrbanChallenge_tour: 12 checkpoints, 9 speed limits, checked "
+        "against DM-Road_UrbanChallenge.rndf"
+    ), mdf_line
 
 
 def test_validate_reports_the_line_of_a_broken_rndf(tmp_path, capsys):

@@ -20,9 +20,17 @@ WATER = np.array([52.0, 99.0, 56.0])
 def camera(forward, up=(0.0, 0.0, 1.0), pos=(0.0, 0.0, -2.0), half_height=0.004):
     """An OpenGL camera as MuJoCo's scene holds it (a narrow view: its pixels look almost
     along ``forward``)."""
-    return SimpleNamespace(pos=np.array(pos, float), forward=np.array(forward, float), up=np.array(up, float),
-                           frustum_center=0.0, frustum_width=0.0, frustum_bottom=-half_height * NEAR,
-                           frustum_top=half_height * NEAR, frustum_near=NEAR, frustum_far=FAR)
+    return SimpleNamespace(
+        pos=np.array(pos, float),
+        forward=np.array(forward, float),
+        up=np.array(up, float),
+        frustum_center=0.0,
+        frustum_width=0.0,
+        frustum_bottom=-half_height * NEAR,
+        frustum_top=half_height * NEAR,
+        frustum_near=NEAR,
+        frustum_far=FAR,
+    )
 
 
 def raw_depth(glcam, distance, width=4, height=4) -> np.ndarray:

@@ -97,12 +97,15 @@ def test_a_misspelt_required_key_names_the_key_found_and_the_closest_valid_one(t
     assert "required key is missing" not in str(err)
 
 
-@pytest.mark.parametrize("old, new, key, word", [
-    ("floor: {center", "flor: {center", "flor", "floor"),  # top level
-    ("size: [0.2, 8.0, 1.0]", "sise: [0.2, 8.0, 1.0]", "objects[0].sise", "size"),
-    ("{name: Start1, location:", "{name: Start1, locaton:", "start_poses[0].locaton", "location"),
-    ("{name: doll,", "{nmae: doll,", "false_alarms[0].nmae", "name"),
-])
+@pytest.mark.parametrize(
+    "old, new, key, word",
+    [
+        ("floor: {center", "flor: {center", "flor", "floor"),  # top level
+        ("size: [0.2, 8.0, 1.0]", "sise: [0.2, 8.0, 1.0]", "objects[0].sise", "size"),
+        ("{name: Start1, location:", "{name: Start1, locaton:", "start_poses[0].locaton", "location"),
+        ("{name: doll,", "{nmae: doll,", "false_alarms[0].nmae", "name"),
+    ],
+)
 def test_every_world_section_names_a_misspelt_required_key(tmp_path, old, new, key, word):
     err = world_error(tmp_path, WORLD.replace(old, new))
     assert err.key == key
@@ -110,9 +113,14 @@ def test_every_world_section_names_a_misspelt_required_key(tmp_path, old, new, k
 
 
 def test_a_misspelt_required_key_of_a_robot_file(tmp_path):
-    p = write(tmp_path, ROBOT.replace("radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}\n  - {name: LR",
-                                      "raduis_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}\n  - {name: LR"),
-              "Checker.yaml")
+    p = write(
+        tmp_path,
+        ROBOT.replace(
+            "radius_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}\n  - {name: LR",
+            "raduis_m: 0.1, width_m: 0.04, mass_kg: 0.5, side: right}\n  - {name: LR",
+        ),
+        "Checker.yaml",
+    )
     with pytest.raises(ConfigError) as info:
         load_robot(p)
     assert info.value.key == "wheels[1].raduis_m"
@@ -135,8 +143,11 @@ def test_an_error_deep_in_the_objects_names_the_object(tmp_path):
 
 
 def test_an_error_about_an_unnamed_entry_names_its_kind(tmp_path):
-    p = write(tmp_path, ROBOT.replace("size: [0.6, 0.3, 0.02], mass_kg: 0.5}", "size: [0.6, 0.3, 0], mass_kg: 0.5}"),
-              "Checker.yaml")
+    p = write(
+        tmp_path,
+        ROBOT.replace("size: [0.6, 0.3, 0.02], mass_kg: 0.5}", "size: [0.6, 0.3, 0], mass_kg: 0.5}"),
+        "Checker.yaml",
+    )
     with pytest.raises(ConfigError) as info:
         load_robot(p)
     assert info.value.key == "chassis[1].size"
@@ -144,9 +155,14 @@ def test_an_error_about_an_unnamed_entry_names_its_kind(tmp_path):
 
 
 def test_nested_entries_are_all_named(tmp_path):
-    p = write(tmp_path, ROBOT.replace("size: [0.1, 0.01, 0.08], mass_kg: 0.1}]}\n  - {name: RightFinger",
-                                      "size: [0.1, 0.01, 0.08], mass_kg: -1}]}\n  - {name: RightFinger"),
-              "Checker.yaml")
+    p = write(
+        tmp_path,
+        ROBOT.replace(
+            "size: [0.1, 0.01, 0.08], mass_kg: 0.1}]}\n  - {name: RightFinger",
+            "size: [0.1, 0.01, 0.08], mass_kg: -1}]}\n  - {name: RightFinger",
+        ),
+        "Checker.yaml",
+    )
     with pytest.raises(ConfigError) as info:
         load_robot(p)
     assert info.value.key == "links[1].shapes[0].mass_kg"
@@ -184,8 +200,11 @@ def test_the_checker_robot_itself_validates(tmp_path, capsys):
 
 
 def test_a_gripper_finger_must_be_a_link_of_the_robot(tmp_path, capsys):
-    p = write(tmp_path, ROBOT.replace("fingers: [LeftFinger, RightFinger]", "fingers: [LeftFinger, RightFingr]"),
-              "Checker.yaml")
+    p = write(
+        tmp_path,
+        ROBOT.replace("fingers: [LeftFinger, RightFinger]", "fingers: [LeftFinger, RightFingr]"),
+        "Checker.yaml",
+    )
     load_robot(p)  # the file itself reads
     code, text = validate(p, capsys)
     assert code == 1
@@ -246,31 +265,34 @@ def world(tmp_path_factory):
     return load_world(write(tmp_path_factory.mktemp("solids"), WORLD, "Checks.yaml"))
 
 
-@pytest.mark.parametrize("point, solid", [
-    ((0.0, 0.0, -0.2), None),
-    ((5.0, 0.0, -0.5), "box 'wall_north'"),
-    ((5.08, 3.9, -0.02), "box 'wall_north'"),  # 2 cm from three faces: inside
-    ((5.095, 0.0, -0.5), None),  # 5 mm from its face: on it, not in it
-    ((5.0, 4.5, -0.5), None),  # past its end
-    ((0.0, 0.0, 0.02), "the floor"),  # below the floor's top surface
-    ((0.0, 0.0, 0.005), None),  # resting on the floor
-    ((5.0, 5.0, -0.505), None),  # resting on the platform
-    ((5.0, 5.0, -0.47), "box 'platform'"),
-    # the skewed wall runs from (-1.41, 3.59) to (1.41, 6.41): inside it only turned
-    ((1.0, 6.0, -0.5), "box 'skew'"),
-    ((1.5, 5.0, -0.5), None),  # inside its unturned extents, outside the turned wall
-    ((-5.0, 0.25, -1.9), "cylinder 'post'"),
-    ((-5.0, 0.35, -1.0), None),
-    ((-5.0, 0.0, -2.05), None),  # above its top
-    ((-5.0, 6.4, -0.2), "cylinder 'log'"),  # lying along Y (rolled a quarter turn)
-    ((-4.7, 5.0, -0.2), None),  # beside it
-    ((0.0, -5.0, -0.05), "box 'brick' (movable)"),
-    ((-3.5, -5.0, -0.275), "ramp 'r1'"),  # 2.5 cm under its top face (z = -0.3 there), in the plate
-    ((-3.5, -5.0, -0.5), None),  # above it
-    ((0.75, -8.0, -0.55), "stairs 'st' (step 3)"),
-    ((0.75, -8.0, -0.65), None),  # above the top step
-    ((8.0, -8.0, -0.2), "false alarm 'doll'"),
-])
+@pytest.mark.parametrize(
+    "point, solid",
+    [
+        ((0.0, 0.0, -0.2), None),
+        ((5.0, 0.0, -0.5), "box 'wall_north'"),
+        ((5.08, 3.9, -0.02), "box 'wall_north'"),  # 2 cm from three faces: inside
+        ((5.095, 0.0, -0.5), None),  # 5 mm from its face: on it, not in it
+        ((5.0, 4.5, -0.5), None),  # past its end
+        ((0.0, 0.0, 0.02), "the floor"),  # below the floor's top surface
+        ((0.0, 0.0, 0.005), None),  # resting on the floor
+        ((5.0, 5.0, -0.505), None),  # resting on the platform
+        ((5.0, 5.0, -0.47), "box 'platform'"),
+        # the skewed wall runs from (-1.41, 3.59) to (1.41, 6.41): inside it only turned
+        ((1.0, 6.0, -0.5), "box 'skew'"),
+        ((1.5, 5.0, -0.5), None),  # inside its unturned extents, outside the turned wall
+        ((-5.0, 0.25, -1.9), "cylinder 'post'"),
+        ((-5.0, 0.35, -1.0), None),
+        ((-5.0, 0.0, -2.05), None),  # above its top
+        ((-5.0, 6.4, -0.2), "cylinder 'log'"),  # lying along Y (rolled a quarter turn)
+        ((-4.7, 5.0, -0.2), None),  # beside it
+        ((0.0, -5.0, -0.05), "box 'brick' (movable)"),
+        ((-3.5, -5.0, -0.275), "ramp 'r1'"),  # 2.5 cm under its top face (z = -0.3 there), in the plate
+        ((-3.5, -5.0, -0.5), None),  # above it
+        ((0.75, -8.0, -0.55), "stairs 'st' (step 3)"),
+        ((0.75, -8.0, -0.65), None),  # above the top step
+        ((8.0, -8.0, -0.2), "false alarm 'doll'"),
+    ],
+)
 def test_solid_at_finds_the_solid_a_point_lies_in(world, point, solid):
     assert world.solid_at(point) == solid
 
@@ -310,28 +332,35 @@ f 4 5 8
 """
 
 
-@pytest.mark.parametrize("scale, rotation, point, inside", [
-    ((1, 1, 1), (0, 0, 0), (0.0, 0.0, -0.5), True),
-    ((1, 1, 1), (0, 0, 0), (0.45, 0.45, -0.05), True),
-    ((1, 1, 1), (0, 0, 0), (0.6, 0.0, -0.5), False),
-    ((1, 1, 1), (0, 0, 0), (0.0, 0.0, -1.005), False),  # resting on its top
-    ((2, 1, 1), (0, 0, 0), (0.9, 0.0, -0.5), True),  # scaled along X
-    ((2, 1, 1), (0, 0, math.pi / 2), (0.9, 0.0, -0.5), False),  # ... then turned to lie along Y
-    ((2, 1, 1), (0, 0, math.pi / 2), (0.0, 0.9, -0.5), True),
-])
+@pytest.mark.parametrize(
+    "scale, rotation, point, inside",
+    [
+        ((1, 1, 1), (0, 0, 0), (0.0, 0.0, -0.5), True),
+        ((1, 1, 1), (0, 0, 0), (0.45, 0.45, -0.05), True),
+        ((1, 1, 1), (0, 0, 0), (0.6, 0.0, -0.5), False),
+        ((1, 1, 1), (0, 0, 0), (0.0, 0.0, -1.005), False),  # resting on its top
+        ((2, 1, 1), (0, 0, 0), (0.9, 0.0, -0.5), True),  # scaled along X
+        ((2, 1, 1), (0, 0, math.pi / 2), (0.9, 0.0, -0.5), False),  # ... then turned to lie along Y
+        ((2, 1, 1), (0, 0, math.pi / 2), (0.0, 0.9, -0.5), True),
+    ],
+)
 def test_solid_at_finds_points_inside_a_mesh(tmp_path, scale, rotation, point, inside):
     (tmp_path / "cube.obj").write_text(CUBE_OBJ)
-    text = ("name: M\nfloor: {center: [0, 0], size: [10, 10]}\nobjects:\n"
-            f"  - {{name: m, shape: mesh, file: cube.obj, center: [0, 0, -0.5], scale: {list(scale)}, "
-            f"rotation: {list(rotation)}}}\n"
-            "start_poses:\n  - {name: S, location: [3, 0, -0.2]}\n")
+    text = (
+        "name: M\nfloor: {center: [0, 0], size: [10, 10]}\nobjects:\n"
+        f"  - {{name: m, shape: mesh, file: cube.obj, center: [0, 0, -0.5], scale: {list(scale)}, "
+        f"rotation: {list(rotation)}}}\n"
+        "start_poses:\n  - {name: S, location: [3, 0, -0.2]}\n"
+    )
     w = load_world(write(tmp_path, text, "M.yaml"))
     assert w.solid_at(point) == ("mesh 'm'" if inside else None)
 
 
 def test_validate_refuses_a_start_pose_inside_a_wall(tmp_path, capsys):
-    text = WORLD.replace("{name: Start1, location: [0.0, 0.0, -0.2]}",
-                         "{name: Start1, location: [0.0, 0.0, -0.2]}\n  - {name: InWall, location: [5.0, 1.0, -0.2]}")
+    text = WORLD.replace(
+        "{name: Start1, location: [0.0, 0.0, -0.2]}",
+        "{name: Start1, location: [0.0, 0.0, -0.2]}\n  - {name: InWall, location: [5.0, 1.0, -0.2]}",
+    )
     code, out = validate(write(tmp_path, text, "Checks.yaml"), capsys)
     assert code == 1
     assert "start_poses[1].location: start pose 'InWall' at [5, 1, -0.2] lies inside box 'wall_north'" in out

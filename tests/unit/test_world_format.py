@@ -56,11 +56,14 @@ def top_face_ends(o: W.StaticObject):
 
 @pytest.mark.parametrize("heading", [0.0, 0.6, -2.0])
 def test_a_ramp_is_one_plate_from_its_foot_to_its_top_edge(tmp_path, heading):
-    w = world(tmp_path, f"""\
+    w = world(
+        tmp_path,
+        f"""\
 objects:
   - {{name: r1, shape: ramp, foot: [1.0, 2.0, -0.1], heading: {heading}, length: 2.0, width: 1.5, rise: 0.4,
      material: wall}}
-""")
+""",
+    )
     (o,) = w.objects
     assert (o.name, o.shape, o.material, o.part_of) == ("r1", "box", "wall", "r1")
     assert o.size[1] == 1.5 and o.size[2] == 0.05  # width, default thickness
@@ -76,26 +79,32 @@ objects:
 
 
 def test_a_ramp_can_be_thick(tmp_path):
-    w = world(tmp_path, """\
+    w = world(
+        tmp_path,
+        """\
 objects:
   - {name: r1, shape: ramp, foot: [0.0, 0.0, 0.0], length: 1.0, width: 1.0, rise: 0.2, thickness: 0.2}
-""")
+""",
+    )
     (o,) = w.objects
     assert o.size[2] == 0.2
     _, high = top_face_ends(o)
     np.testing.assert_allclose(high, [1.0, 0.0, -0.2], atol=1e-12)
 
 
-@pytest.mark.parametrize("fields, key, words", [
-    ("length: 1.0, width: 1.0, rise: 2.0", "objects[0].rise", ["63.4 degrees", "below 60 degrees"]),
-    ("length: 0.0, width: 1.0, rise: 0.2", "objects[0].length", ["must be > 0.0"]),
-    ("length: 1.0, width: -1.0, rise: 0.2", "objects[0].width", ["must be > 0.0"]),
-    ("length: 1.0, width: 1.0, rise: 0.2, thickness: 0", "objects[0].thickness", ["must be > 0.0"]),
-    ("length: 1.0, width: 1.0", "objects[0].rise", ["required key is missing"]),
-    ("length: 1.0, width: 1.0, rise: 0.2, center: [0, 0, 0]", "objects[0].center", ["unknown key 'center'"]),
-    ("length: 1.0, width: 1.0, rise: 0.2, mass_kg: 3", "objects[0].mass_kg", ["unknown key 'mass_kg'"]),
-    ("length: 1.0, width: 1.0, rise: 0.2, heading: east", "objects[0].heading", ["expected a number"]),
-])
+@pytest.mark.parametrize(
+    "fields, key, words",
+    [
+        ("length: 1.0, width: 1.0, rise: 2.0", "objects[0].rise", ["63.4 degrees", "below 60 degrees"]),
+        ("length: 0.0, width: 1.0, rise: 0.2", "objects[0].length", ["must be > 0.0"]),
+        ("length: 1.0, width: -1.0, rise: 0.2", "objects[0].width", ["must be > 0.0"]),
+        ("length: 1.0, width: 1.0, rise: 0.2, thickness: 0", "objects[0].thickness", ["must be > 0.0"]),
+        ("length: 1.0, width: 1.0", "objects[0].rise", ["required key is missing"]),
+        ("length: 1.0, width: 1.0, rise: 0.2, center: [0, 0, 0]", "objects[0].center", ["unknown key 'center'"]),
+        ("length: 1.0, width: 1.0, rise: 0.2, mass_kg: 3", "objects[0].mass_kg", ["unknown key 'mass_kg'"]),
+        ("length: 1.0, width: 1.0, rise: 0.2, heading: east", "objects[0].heading", ["expected a number"]),
+    ],
+)
 def test_ramp_errors_name_the_key_and_what_is_allowed(tmp_path, fields, key, words):
     err = error(tmp_path, f"objects:\n  - {{name: r1, shape: ramp, foot: [0.0, 0.0, 0.0], {fields}}}\n")
     assert err.key == key and str(tmp_path / "w.yaml") in str(err)
@@ -107,11 +116,14 @@ def test_ramp_errors_name_the_key_and_what_is_allowed(tmp_path, fields, key, wor
 
 
 def test_stairs_are_one_solid_box_per_step(tmp_path):
-    w = world(tmp_path, """\
+    w = world(
+        tmp_path,
+        """\
 objects:
   - {name: st, shape: stairs, foot: [1.0, 0.0, 0.0], heading: 1.5707963267948966, width: 1.2, steps: 3,
      step_rise: 0.2, step_run: 0.3, material: wall}
-""")
+""",
+    )
     assert [o.name for o in w.objects] == ["st/step1", "st/step2", "st/step3"]
     for k, o in enumerate(w.objects, start=1):
         assert o.shape == "box" and o.material == "wall" and o.part_of == "st"
@@ -121,13 +133,16 @@ objects:
         assert o.center[2] + o.size[2] / 2 == pytest.approx(0.0)
 
 
-@pytest.mark.parametrize("fields, key, words", [
-    ("steps: 0, step_rise: 0.2, step_run: 0.3", "objects[0].steps", ["must be >= 1"]),
-    ("steps: 2.5, step_rise: 0.2, step_run: 0.3", "objects[0].steps", ["expected an integer"]),
-    ("steps: 3, step_rise: 0.6, step_run: 0.3", "objects[0].step_rise", ["63.4 degrees", "below 60 degrees"]),
-    ("steps: 3, step_rise: 0.2, step_run: 0", "objects[0].step_run", ["must be > 0.0"]),
-    ("steps: 3, step_rise: 0.2, step_run: 0.3, rise: 0.2", "objects[0].rise", ["did you mean 'step_rise'"]),
-])
+@pytest.mark.parametrize(
+    "fields, key, words",
+    [
+        ("steps: 0, step_rise: 0.2, step_run: 0.3", "objects[0].steps", ["must be >= 1"]),
+        ("steps: 2.5, step_rise: 0.2, step_run: 0.3", "objects[0].steps", ["expected an integer"]),
+        ("steps: 3, step_rise: 0.6, step_run: 0.3", "objects[0].step_rise", ["63.4 degrees", "below 60 degrees"]),
+        ("steps: 3, step_rise: 0.2, step_run: 0", "objects[0].step_run", ["must be > 0.0"]),
+        ("steps: 3, step_rise: 0.2, step_run: 0.3, rise: 0.2", "objects[0].rise", ["did you mean 'step_rise'"]),
+    ],
+)
 def test_stairs_errors_name_the_key_and_what_is_allowed(tmp_path, fields, key, words):
     err = error(tmp_path, f"objects:\n  - {{name: st, shape: stairs, foot: [0, 0, 0], width: 1.0, {fields}}}\n")
     assert err.key == key
@@ -136,11 +151,14 @@ def test_stairs_errors_name_the_key_and_what_is_allowed(tmp_path, fields, key, w
 
 
 def test_a_step_name_must_not_clash(tmp_path):
-    err = error(tmp_path, """\
+    err = error(
+        tmp_path,
+        """\
 objects:
   - {name: st/step2, shape: box, center: [5, 5, -0.5], size: [1, 1, 1]}
   - {name: st, shape: stairs, foot: [0, 0, 0], width: 1.0, steps: 3, step_rise: 0.2, step_run: 0.3}
-""")
+""",
+    )
     assert err.key == "objects[1].name" and "st/step2" in str(err)
 
 
@@ -158,12 +176,15 @@ def test_the_shape_error_lists_the_new_shapes(tmp_path):
 def test_a_mesh_object_reads_its_file_relative_to_the_world(tmp_path):
     (tmp_path / "parts").mkdir()
     (tmp_path / "parts" / "wedge.obj").write_bytes((DATA / "wedge.obj").read_bytes())
-    w = world(tmp_path, """\
+    w = world(
+        tmp_path,
+        """\
 objects:
   - {name: m, shape: mesh, file: parts/wedge.obj, center: [2.0, 0.0, 0.0], rotation: [0, 0, 1.0],
      scale: [2.0, 1.0, 0.5], material: wall, mass_kg: 4.0}
   - {name: n, shape: mesh, file: parts/wedge.obj, center: [4.0, 0.0, 0.0]}
-""")
+""",
+    )
     m, n = w.objects
     assert m.mesh_file == str((tmp_path / "parts" / "wedge.obj").resolve())
     assert (m.shape, m.scale, m.mass_kg, m.rotation) == ("mesh", (2.0, 1.0, 0.5), 4.0, (0.0, 0.0, 1.0))
@@ -181,10 +202,14 @@ objects:
 
 def test_a_binary_stl_mesh_loads(tmp_path):
     # the wedge's 8 triangles written as binary STL (80-byte header, count, 50 bytes each)
-    verts = [tuple(map(float, ln.split()[1:])) for ln in (DATA / "wedge.obj").read_text().splitlines()
-             if ln.startswith("v ")]
-    faces = [tuple(int(i) - 1 for i in ln.split()[1:]) for ln in (DATA / "wedge.obj").read_text().splitlines()
-             if ln.startswith("f ")]
+    verts = [
+        tuple(map(float, ln.split()[1:])) for ln in (DATA / "wedge.obj").read_text().splitlines() if ln.startswith("v ")
+    ]
+    faces = [
+        tuple(int(i) - 1 for i in ln.split()[1:])
+        for ln in (DATA / "wedge.obj").read_text().splitlines()
+        if ln.startswith("f ")
+    ]
     out = bytearray(b"wedge".ljust(80, b" ")) + len(faces).to_bytes(4, "little")
     for f in faces:
         out += np.zeros(3, "<f4").tobytes() + np.array([verts[i] for i in f], "<f4").tobytes() + b"\0\0"
@@ -194,11 +219,14 @@ def test_a_binary_stl_mesh_loads(tmp_path):
     assert model.geom("world/s").type == mujoco.mjtGeom.mjGEOM_MESH
 
 
-@pytest.mark.parametrize("file, words", [
-    ("nowhere.obj", ["mesh file 'nowhere.obj' not found", "relative to the world file"]),
-    ("wedge.ply", ["not a mesh file MuJoCo reads", ".obj, .stl"]),
-    ("ascii.stl", ["not a binary STL file"]),
-])
+@pytest.mark.parametrize(
+    "file, words",
+    [
+        ("nowhere.obj", ["mesh file 'nowhere.obj' not found", "relative to the world file"]),
+        ("wedge.ply", ["not a mesh file MuJoCo reads", ".obj, .stl"]),
+        ("ascii.stl", ["not a binary STL file"]),
+    ],
+)
 def test_mesh_file_errors(tmp_path, file, words):
     (tmp_path / "wedge.ply").write_text("ply\n")
     (tmp_path / "ascii.stl").write_text("solid x\nendsolid x\n")
@@ -210,8 +238,9 @@ def test_mesh_file_errors(tmp_path, file, words):
 
 def test_mesh_scale_must_be_positive(tmp_path):
     (tmp_path / "wedge.obj").write_bytes((DATA / "wedge.obj").read_bytes())
-    err = error(tmp_path, "objects:\n  - {name: m, shape: mesh, file: wedge.obj, center: [0, 0, 0], "
-                          "scale: [1, 0, 1]}\n")
+    err = error(
+        tmp_path, "objects:\n  - {name: m, shape: mesh, file: wedge.obj, center: [0, 0, 0], scale: [1, 0, 1]}\n"
+    )
     assert err.key == "objects[0].scale" and "> 0" in str(err)
 
 
@@ -219,12 +248,15 @@ def test_mesh_scale_must_be_positive(tmp_path):
 
 
 def test_mirror_and_porosity_materials(tmp_path):
-    w = world(tmp_path, """\
+    w = world(
+        tmp_path,
+        """\
 objects:
   - {name: m, shape: box, center: [2, 0, -0.5], size: [0.02, 1, 1], material: mirror}
   - {name: g, shape: cylinder, center: [4, 0, -0.5], radius: 0.5, length: 1, material: fence}
   - {name: st, shape: stairs, foot: [6, 0, 0], width: 1.0, steps: 2, step_rise: 0.2, step_run: 0.3, material: mirror}
-""")
+""",
+    )
     assert w.materials["mirror"].mirror and w.materials["mirror"].porosity == 0.0
     assert w.materials["fence"].porosity == 0.3 and not w.materials["fence"].mirror
     assert not w.materials["default"].mirror and w.materials["default"].porosity == 0.0
@@ -244,15 +276,21 @@ def test_a_world_without_effects_gives_the_caster_none(tmp_path):
     assert "mirror" not in ents.see_through and "porosity" not in ents.see_through
 
 
-@pytest.mark.parametrize("body, key, words", [
-    ("objects:\n  - {name: c, shape: cylinder, center: [0, 0, 0], radius: 1, length: 1, material: mirror}\n",
-     "objects[0].material", ["is a mirror", "only box objects", "cylinder"]),
-    ("materials:\n  glassy: {porosity: 1.5}\n", "materials.glassy.porosity", ["must be <= 1.0"]),
-    ("materials:\n  glassy: {porosity: -0.1}\n", "materials.glassy.porosity", ["must be >= 0.0"]),
-    ("materials:\n  glassy: {mirror: true, porosity: 0.5}\n", "materials.glassy.porosity", ["cannot be porous"]),
-    ("materials:\n  glassy: {mirror: yes please}\n", "materials.glassy.mirror", ["expected true or false"]),
-    ("materials:\n  glassy: {mirrors: true}\n", "materials.glassy.mirrors", ["did you mean 'mirror'"]),
-])
+@pytest.mark.parametrize(
+    "body, key, words",
+    [
+        (
+            "objects:\n  - {name: c, shape: cylinder, center: [0, 0, 0], radius: 1, length: 1, material: mirror}\n",
+            "objects[0].material",
+            ["is a mirror", "only box objects", "cylinder"],
+        ),
+        ("materials:\n  glassy: {porosity: 1.5}\n", "materials.glassy.porosity", ["must be <= 1.0"]),
+        ("materials:\n  glassy: {porosity: -0.1}\n", "materials.glassy.porosity", ["must be >= 0.0"]),
+        ("materials:\n  glassy: {mirror: true, porosity: 0.5}\n", "materials.glassy.porosity", ["cannot be porous"]),
+        ("materials:\n  glassy: {mirror: yes please}\n", "materials.glassy.mirror", ["expected true or false"]),
+        ("materials:\n  glassy: {mirrors: true}\n", "materials.glassy.mirrors", ["did you mean 'mirror'"]),
+    ],
+)
 def test_material_effect_errors(tmp_path, body, key, words):
     text = HEAD + body
     if body.startswith("materials:"):
@@ -278,16 +316,24 @@ def test_a_mirror_floor_is_refused(tmp_path):
 
 
 def test_lights_with_their_defaults(tmp_path):
-    w = world(tmp_path, """\
+    w = world(
+        tmp_path,
+        """\
 ambient_light: [0.2, 0.2, 0.25]
 lights:
   - {name: a}
   - {name: b, type: point, position: [1, 2, -3], color: [1, 0.5, 0], intensity: 2}
   - {name: c, type: directional, direction: [0, 3, 4], cast_shadows: false}
-""")
+""",
+    )
     a, b, c = w.lights
-    assert (a.type, a.position, a.direction, a.cast_shadows, a.cutoff_deg) == ("spot", (0.0, 0.0, -3.0),
-                                                                                 (0.0, 0.0, 1.0), True, 45.0)
+    assert (a.type, a.position, a.direction, a.cast_shadows, a.cutoff_deg) == (
+        "spot",
+        (0.0, 0.0, -3.0),
+        (0.0, 0.0, 1.0),
+        True,
+        45.0,
+    )
     assert b.type == "point" and not b.cast_shadows and b.intensity == 2.0
     assert c.direction == pytest.approx((0.0, 0.6, 0.8))  # made a unit vector
     m = builder.world_spec(w).compile()
@@ -298,15 +344,18 @@ lights:
     np.testing.assert_allclose(m.vis.headlight.ambient, [0.2, 0.2, 0.25], atol=1e-6)
 
 
-@pytest.mark.parametrize("light, key, words", [
-    ("{name: a, type: neon}", "lights[0].type", ["'neon' is not allowed", "directional, point, spot"]),
-    ("{name: a, direction: [0, 0, 0]}", "lights[0].direction", ["must not be zero"]),
-    ("{name: a, color: [1, 2, 0]}", "lights[0].color", ["within [0, 1]"]),
-    ("{name: a, cutoff_deg: 120}", "lights[0].cutoff_deg", ["must be <= 90.0"]),
-    ("{name: a, attenuation: [0, 0, 0]}", "lights[0].attenuation", ["not all 0"]),
-    ("{name: a, colour: [1, 1, 1]}", "lights[0].colour", ["did you mean 'color'"]),
-    ("{type: spot}", "lights[0].name", ["required key is missing"]),
-])
+@pytest.mark.parametrize(
+    "light, key, words",
+    [
+        ("{name: a, type: neon}", "lights[0].type", ["'neon' is not allowed", "directional, point, spot"]),
+        ("{name: a, direction: [0, 0, 0]}", "lights[0].direction", ["must not be zero"]),
+        ("{name: a, color: [1, 2, 0]}", "lights[0].color", ["within [0, 1]"]),
+        ("{name: a, cutoff_deg: 120}", "lights[0].cutoff_deg", ["must be <= 90.0"]),
+        ("{name: a, attenuation: [0, 0, 0]}", "lights[0].attenuation", ["not all 0"]),
+        ("{name: a, colour: [1, 1, 1]}", "lights[0].colour", ["did you mean 'color'"]),
+        ("{type: spot}", "lights[0].name", ["required key is missing"]),
+    ],
+)
 def test_light_errors(tmp_path, light, key, words):
     err = error(tmp_path, f"lights:\n  - {light}\n")
     assert err.key == key
@@ -354,10 +403,13 @@ def test_utm_round_trip(lat, lon):
 
 
 def test_a_world_origin_given_in_utm(tmp_path):
-    w = world(tmp_path, f"""\
+    w = world(
+        tmp_path,
+        f"""\
 geo_reference:
   utm: {{easting: {NIST_UTM[0]}, northing: {NIST_UTM[1]}, zone: 18, letter: S}}
-""")
+""",
+    )
     default = GeoReference()
     assert w.geo.latitude_deg == pytest.approx(default.latitude_deg, abs=1e-6)
     assert w.geo.longitude_deg == pytest.approx(default.longitude_deg, abs=1e-6)
@@ -372,32 +424,59 @@ geo_reference:
 
 
 def test_a_southern_utm_origin(tmp_path):
-    w = world(tmp_path, f"""\
+    w = world(
+        tmp_path,
+        f"""\
 geo_reference:
   utm: {{easting: {SYDNEY_UTM[0]}, northing: {SYDNEY_UTM[1]}, zone: 56, letter: h}}
   scale_longitude_m: 92500
-""")
+""",
+    )
     assert w.geo.latitude_deg == pytest.approx(SYDNEY[0], abs=1e-6)
     assert w.geo.longitude_deg == pytest.approx(SYDNEY[1], abs=1e-6)
     assert w.geo.scale_longitude_m == 92500.0 and w.geo.utm.letter == "H"
 
 
-@pytest.mark.parametrize("geo, key, words", [
-    ("{latitude_deg: 39.0, utm: {easting: 308410, northing: 4333963, zone: 18, letter: S}}",
-     "geo_reference.latitude_deg", ["either as latitude_deg/longitude_deg or as utm"]),
-    ("{utm: {easting: 308410, northing: 4333963, zone: 61, letter: S}}", "geo_reference.utm.zone",
-     ["zones are 1 to 60"]),
-    ("{utm: {easting: 308410, northing: 4333963, zone: 18, letter: I}}", "geo_reference.utm.letter",
-     ["not a UTM latitude band", "C D E F G H J K L M N P Q R S T U V W X"]),
-    ("{utm: {easting: 308410, northing: 4333963, zone: 18, letter: T}}", "geo_reference.utm",
-     ["outside band T", "40 to 48 degrees"]),
-    ("{utm: {easting: 50000, northing: 4333963, zone: 18, letter: S}}", "geo_reference.utm.easting",
-     ["must be >= 100000.0"]),
-    ("{utm: {easting: 308410, northing: 4333963, zone: 18}}", "geo_reference.utm.letter",
-     ["required key is missing"]),
-    ("{utm: {easting: 308410, northing: 4333963, zone: 18, letter: S, datum: NAD27}}",
-     "geo_reference.utm.datum", ["unknown key 'datum'"]),
-])
+@pytest.mark.parametrize(
+    "geo, key, words",
+    [
+        (
+            "{latitude_deg: 39.0, utm: {easting: 308410, northing: 4333963, zone: 18, letter: S}}",
+            "geo_reference.latitude_deg",
+            ["either as latitude_deg/longitude_deg or as utm"],
+        ),
+        (
+            "{utm: {easting: 308410, northing: 4333963, zone: 61, letter: S}}",
+            "geo_reference.utm.zone",
+            ["zones are 1 to 60"],
+        ),
+        (
+            "{utm: {easting: 308410, northing: 4333963, zone: 18, letter: I}}",
+            "geo_reference.utm.letter",
+            ["not a UTM latitude band", "C D E F G H J K L M N P Q R S T U V W X"],
+        ),
+        (
+            "{utm: {easting: 308410, northing: 4333963, zone: 18, letter: T}}",
+            "geo_reference.utm",
+            ["outside band T", "40 to 48 degrees"],
+        ),
+        (
+            "{utm: {easting: 50000, northing: 4333963, zone: 18, letter: S}}",
+            "geo_reference.utm.easting",
+            ["must be >= 100000.0"],
+        ),
+        (
+            "{utm: {easting: 308410, northing: 4333963, zone: 18}}",
+            "geo_reference.utm.letter",
+            ["required key is missing"],
+        ),
+        (
+            "{utm: {easting: 308410, northing: 4333963, zone: 18, letter: S, datum: NAD27}}",
+            "geo_reference.utm.datum",
+            ["unknown key 'datum'"],
+        ),
+    ],
+)
 def test_utm_errors(tmp_path, geo, key, words):
     err = error(tmp_path, f"geo_reference: {geo}\n")
     assert err.key == key

@@ -52,10 +52,12 @@ class Page:
     def open(self) -> Page:
         self.page.goto(self.url)
         # the world, the robot classes and the first ground truth have arrived
-        self.page.wait_for_function("document.querySelectorAll('#spawn-class option').length > 0"
-                                    " && document.querySelectorAll('#spawn-start option').length > 0"
-                                    " && document.getElementById('sim-time').textContent !== '–'",
-                                    timeout=DEFAULT_TIMEOUT * 1000)
+        self.page.wait_for_function(
+            "document.querySelectorAll('#spawn-class option').length > 0"
+            " && document.querySelectorAll('#spawn-start option').length > 0"
+            " && document.getElementById('sim-time').textContent !== '–'",
+            timeout=DEFAULT_TIMEOUT * 1000,
+        )
         return self
 
     def spawn(self, cls: str, start: str, name: str) -> None:

@@ -59,8 +59,12 @@ def test_the_page_and_its_files_are_served(live):
 def test_the_world_and_the_classes_as_json(live, yellow_world):
     info = get_json(live, "/api/info")
     assert info["world"] == "DM-USAR_yellow"
-    assert info["ports"] == {"control": live.port, "truth": live.app.truth.port, "image": live.app.image.port,
-                             "web": live.app.web.port}
+    assert info["ports"] == {
+        "control": live.port,
+        "truth": live.app.truth.port,
+        "image": live.app.image.port,
+        "web": live.app.web.port,
+    }
     world = get_json(live, "/api/world")
     assert len(world["objects"]) == len(yellow_world.objects)
     assert [p["name"] for p in world["start_poses"]] == [p.name for p in yellow_world.start_poses]
@@ -99,8 +103,10 @@ def test_the_video_bridge_binds_over_the_page_connection_and_relays_jpeg_picture
     async def scenario():
         base = f"http://127.0.0.1:{live.app.web.port}"
         async with aiohttp.ClientSession() as http:
-            async with http.ws_connect(f"{base}/ws/control?page=t2") as ctl, \
-                    http.ws_connect(f"{base}/ws/video?page=t2") as video:
+            async with (
+                http.ws_connect(f"{base}/ws/control?page=t2") as ctl,
+                http.ws_connect(f"{base}/ws/video?page=t2") as video,
+            ):
                 seen: list[str] = []
                 await ctl.send_str("INIT {ClassName USARBot.P2AT} {Name Seen} {Start PlayerStart1}")
                 await lines_until(ctl, lambda t: t.startswith("STA "), seen)
@@ -110,8 +116,9 @@ def test_the_video_bridge_binds_over_the_page_connection_and_relays_jpeg_picture
                     answer = await video.receive_json(timeout=DEFAULT_TIMEOUT)
                     assert answer["bound"] == "Seen" and answer["camera"] == camera
                     assert answer["via"] == "control"  # SET {Type Camera} over the page's own connection
-                    assert answer["line"].startswith(f"SET {{Type Camera}} {{Robot Seen}} {{Name {camera}}} "
-                                                     "{Client 127.0.0.1:")
+                    assert answer["line"].startswith(
+                        f"SET {{Type Camera}} {{Robot Seen}} {{Name {camera}}} {{Client 127.0.0.1:"
+                    )
                     await video.send_str("OK")
                     msg = await video.receive(timeout=30)
                     assert msg.type == aiohttp.WSMsgType.BINARY
@@ -164,9 +171,26 @@ def test_the_chase_view_looks_at_the_robot_from_behind_and_above(live):
 
 def test_serve_prints_the_console_address_and_no_web_turns_it_off(tmp_path):
     def serve(*extra):
-        proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", "--port", "0", "--truth-port", "0",
-                                 "--image-port", "0", "--no-wireless", *extra], stdout=subprocess.PIPE,
-                                stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, text=True)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "usarsim",
+                "serve",
+                "--port",
+                "0",
+                "--truth-port",
+                "0",
+                "--image-port",
+                "0",
+                "--no-wireless",
+                *extra,
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            stdin=subprocess.DEVNULL,
+            text=True,
+        )
         return proc
 
     proc = serve("--web-port", "0")

@@ -22,13 +22,16 @@ def test_the_page_loads_with_no_console_errors(console_page, console_server):
     starts = page.eval_on_selector_all("#spawn-start option", "els => els.map(e => e.value)")
     assert starts[:2] == ["PlayerStart1", "PlayerStart2"]
     # the static geometry was drawn: the world view is not a blank canvas
-    assert page.evaluate("""() => {
+    assert (
+        page.evaluate("""() => {
         const c = document.getElementById('world-view');
         const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
         const seen = new Set();
         for (let i = 0; i < d.length; i += 4 * 97) seen.add(d[i] + ',' + d[i + 1] + ',' + d[i + 2]);
         return seen.size;
-    }""") > 5
+    }""")
+        > 5
+    )
     page.wait_for_timeout(600)  # a few rounds of ground truth
     assert console_page.errors == []
 
@@ -56,16 +59,21 @@ def test_the_forward_arrow_drives_the_robot(console_page, console_server):
     page.click("#world-view")  # the page has the focus, not a form field
     page.keyboard.down("ArrowUp")
     try:
-        moved = wait_for(lambda: truth(port, "WebDriver")[0]["location"][0] - before["location"][0] > 0.15,
-                         timeout=10, interval=0.1, what="the robot to move forward")
+        moved = wait_for(
+            lambda: truth(port, "WebDriver")[0]["location"][0] - before["location"][0] > 0.15,
+            timeout=10,
+            interval=0.1,
+            what="the robot to move forward",
+        )
     finally:
         page.keyboard.up("ArrowUp")
     assert moved
     [after] = truth(port, "WebDriver")
     assert abs(after["location"][1] - before["location"][1]) < 0.1  # straight ahead (+X, its heading)
     # released: it stops
-    page.wait_for_function("[...document.querySelectorAll('#log .entry.out .txt')].pop()?.textContent"
-                           " === 'DRIVE {Left 0} {Right 0}'")
+    page.wait_for_function(
+        "[...document.querySelectorAll('#log .entry.out .txt')].pop()?.textContent === 'DRIVE {Left 0} {Right 0}'"
+    )
     sent = page.eval_on_selector_all("#log .entry.out .txt", "els => els.map(e => e.textContent)")
     assert any(t.startswith("DRIVE {Left ") and "{Left 0}" not in t for t in sent)
     assert console_page.errors == []
@@ -108,8 +116,12 @@ def test_the_command_box_sends_a_line_and_the_log_shows_sen_lines(console_page, 
     who = page.eval_on_selector_all("#log .entry.in .who", "els => els.map(e => e.textContent)")
     assert set(who) == {"WebTyped"}
     [row] = truth(console_server.app.truth.port, "WebTyped")
-    wait_for(lambda: truth(console_server.app.truth.port, "WebTyped")[0]["location"][0] > row["location"][0] + 0.05,
-             timeout=10, interval=0.1, what="the robot to drive on DRIVE {Left 1} {Right 1}")
+    wait_for(
+        lambda: truth(console_server.app.truth.port, "WebTyped")[0]["location"][0] > row["location"][0] + 0.05,
+        timeout=10,
+        interval=0.1,
+        what="the robot to drive on DRIVE {Left 1} {Right 1}",
+    )
     # a message opens in full
     page.click("#log .entry.in >> nth=-1")
     assert page.is_visible("#message-dialog")

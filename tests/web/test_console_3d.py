@@ -67,12 +67,16 @@ def red(img: np.ndarray) -> np.ndarray:
 
 def wait_for_frame_after(page, frames: int) -> dict:
     """The camera of the first 3-D view picture after ``frames`` pictures, once no other is asked for."""
-    page.wait_for_function("""(n) => { const v = window.usarsimConsole.view3d;
-        return v.frames > n && !v.busy && !v.wanted && !v.drag; }""", arg=frames)
+    page.wait_for_function(
+        """(n) => { const v = window.usarsimConsole.view3d;
+        return v.frames > n && !v.busy && !v.wanted && !v.drag; }""",
+        arg=frames,
+    )
     return page.evaluate("({ ...window.usarsimConsole.view3d.shown, frames: window.usarsimConsole.view3d.frames })")
 
 
 # the browser ---------------------------------------------------------------------------------
+
 
 @needs_gl
 def test_the_3d_view_shows_the_arena_and_a_drag_orbits_the_camera(console_page, console_server):
@@ -175,8 +179,9 @@ def test_the_3d_view_follows_the_attached_robot(console_page, console_server):
     console_page.spawn("P2AT", "PlayerStart5", "Web3D")
     page.click("#view3d-follow")
     assert page.get_attribute("#view3d-follow", "aria-pressed") == "true"
-    page.wait_for_function("window.usarsimConsole.view3d.shown && window.usarsimConsole.view3d.shown.follow === 'Web3D'",
-                           timeout=30000)
+    page.wait_for_function(
+        "window.usarsimConsole.view3d.shown && window.usarsimConsole.view3d.shown.follow === 'Web3D'", timeout=30000
+    )
     shown = wait_for_frame_after(page, 0)
     while shown["elevation"] != page.evaluate("window.usarsimConsole.view3d.camera.elevation"):
         shown = wait_for_frame_after(page, shown["frames"])  # the chase view asked for is the one shown
@@ -202,8 +207,12 @@ def test_the_3d_view_follows_the_attached_robot(console_page, console_server):
     # it drives forward: the pictures follow it, a few a second
     page.fill("#command", "DRIVE {Left 4} {Right 4}")
     page.press("#command", "Enter")
-    wait_for(lambda: truth(console_server.app.truth.port, "Web3D")[0]["location"][0] > x + 0.5,
-             timeout=20, interval=0.1, what="the robot to drive 0.5 m")
+    wait_for(
+        lambda: truth(console_server.app.truth.port, "Web3D")[0]["location"][0] > x + 0.5,
+        timeout=20,
+        interval=0.1,
+        what="the robot to drive 0.5 m",
+    )
     page.wait_for_function(f"window.usarsimConsole.view3d.shown.lookat[0] > {x + 0.4}")
     frames = page.evaluate("window.usarsimConsole.view3d.frames")
     page.wait_for_timeout(1500)
@@ -214,8 +223,10 @@ def test_the_3d_view_follows_the_attached_robot(console_page, console_server):
     page.set_viewport_size({"width": 1920, "height": 1080})
     page.click("#view3d-wide")
     page.wait_for_selector("#world-view", state="hidden")
-    page.evaluate("() => { const v = window.usarsimConsole.view3d; v.camera.azimuth = 20; v.camera.elevation = -28;"
-                  " v.camera.distance = 6; v.request(); }")
+    page.evaluate(
+        "() => { const v = window.usarsimConsole.view3d; v.camera.azimuth = 20; v.camera.elevation = -28;"
+        " v.camera.distance = 6; v.request(); }"
+    )
     page.wait_for_function("""() => { const v = window.usarsimConsole.view3d;
         return v.shown.azimuth === 20 && v.shown.distance === 6 && v.shown.width > 800 && !v.busy && !v.wanted; }""")
     shot = page.locator("#view3d-panel").screenshot()  # with its buttons and the plots
@@ -249,7 +260,8 @@ def save_docs_image(png: bytes) -> None:
     for colours in (None, 256, 128, 64):
         out = io.BytesIO()
         (img if colours is None else img.quantize(colors=colours, dither=Image.Dither.NONE)).save(
-            out, "PNG", optimize=True)
+            out, "PNG", optimize=True
+        )
         if out.tell() <= DOCS_IMAGE_MAX_BYTES:
             break
     DOCS_IMAGE.write_bytes(out.getvalue())
@@ -264,9 +276,11 @@ def test_the_plots_draw_the_attached_robots_speed_battery_and_nearest_obstacle(c
     page.press("#command", "Enter")
     page.wait_for_function("(Number(document.getElementById('plot-speed').dataset.latest) || 0) > 0.2", timeout=20000)
     # five simulated seconds of each: lines some pixels long
-    page.wait_for_function("""() => { const t = window.usarsimConsole.selected.track;
+    page.wait_for_function(
+        """() => { const t = window.usarsimConsole.selected.track;
         return [t.speed, t.battery, t.obstacle].every((s) => s.t.length > 1 && s.t[s.t.length - 1] - s.t[0] >= 5); }""",
-                           timeout=20000)
+        timeout=20000,
+    )
     page.wait_for_timeout(300)  # drawn again
     latest = page.evaluate("""() => { const p = window.usarsimConsole.plots;
         return { speed: p.speed.latest, battery: p.battery.latest, obstacle: p.obstacle.latest,
@@ -292,8 +306,11 @@ def test_the_plots_draw_the_attached_robots_speed_battery_and_nearest_obstacle(c
     assert all(n > 3 for n in drawn), drawn
     page.fill("#command", "DRIVE {Left 0} {Right 0}")
     page.press("#command", "Enter")
-    page.wait_for_function("""() => { const v = document.getElementById('plot-speed').dataset.latest;
-        return v !== '' && Number(v) < 0.05; }""", timeout=20000)
+    page.wait_for_function(
+        """() => { const v = document.getElementById('plot-speed').dataset.latest;
+        return v !== '' && Number(v) < 0.05; }""",
+        timeout=20000,
+    )
     assert console_page.errors == []
 
 
@@ -388,11 +405,13 @@ def test_the_view3d_endpoint_answers_a_jpeg_of_the_camera_asked(console_server):
     assert view["time"] >= 0 and view["follow"] is None
     img = picture(body)
     assert img.shape == (240, 320, 3) and img.std() > 5
-    for bad in ("lookat=1,2&azimuth=0&elevation=0&distance=1&width=32&height=32",
-                "lookat=0,0,0&azimuth=nan&elevation=0&distance=1&width=32&height=32",
-                "lookat=0,0,0&azimuth=0&elevation=0&distance=1&width=99999&height=32",
-                "lookat=0,0,0&azimuth=0&elevation=0&distance=1&width=32&height=32&follow=a%20b",
-                "lookat=0,0,0&elevation=0&distance=1&width=32&height=32"):
+    for bad in (
+        "lookat=1,2&azimuth=0&elevation=0&distance=1&width=32&height=32",
+        "lookat=0,0,0&azimuth=nan&elevation=0&distance=1&width=32&height=32",
+        "lookat=0,0,0&azimuth=0&elevation=0&distance=1&width=99999&height=32",
+        "lookat=0,0,0&azimuth=0&elevation=0&distance=1&width=32&height=32&follow=a%20b",
+        "lookat=0,0,0&elevation=0&distance=1&width=32&height=32",
+    ):
         status, _, body = fetch(f"{base}?{bad}")
         assert status == 400 and json.loads(body)["error"], bad
 
@@ -408,15 +427,22 @@ def test_the_view3d_endpoint_never_holds_the_clock(console_server):
 
     def ask() -> None:
         while not stop.is_set():
-            served.append(fetch(f"{base}?lookat=0,0,0&azimuth={len(served) * 7}&elevation=-45&distance=25"
-                                "&width=480&height=360")[0])
+            served.append(
+                fetch(f"{base}?lookat=0,0,0&azimuth={len(served) * 7}&elevation=-45&distance=25&width=480&height=360")[
+                    0
+                ]
+            )
 
     t0 = facade.time
     worker = threading.Thread(target=ask)
     worker.start()
     try:
-        wait_for(lambda: facade.time > t0 + 1.0, timeout=DEFAULT_TIMEOUT, interval=0.05,
-                 what="the clock to go on while pictures are made")
+        wait_for(
+            lambda: facade.time > t0 + 1.0,
+            timeout=DEFAULT_TIMEOUT,
+            interval=0.05,
+            what="the clock to go on while pictures are made",
+        )
     finally:
         stop.set()
         worker.join(DEFAULT_TIMEOUT * 3)

@@ -72,8 +72,9 @@ def test_the_watch_socket_relays_another_controllers_robot_and_nothing_back(cons
             assert first["controller"].startswith("127.0.0.1:")
             described = first["describe"]
             assert any(d.startswith("GEO {Type Sonar} {Name F1 Location ") for d in described), described
-            assert any(d.startswith("CONF {Type RangeScanner} {Name Scanner1}") and "{MaxRange " in d
-                       for d in described), described
+            assert any(
+                d.startswith("CONF {Type RangeScanner} {Name Scanner1}") and "{MaxRange " in d for d in described
+            ), described
             # what the simulation sends the robot's controller, line by line
             seen: list[str] = []
             while not {"STA", "Sonar", "RangeScanner", "GroundTruth"} <= {kind(s) for s in seen}:
@@ -83,8 +84,11 @@ def test_the_watch_socket_relays_another_controllers_robot_and_nothing_back(cons
             assert all(not s.endswith("\n") for s in seen)
             # read-only: what the page sends on this socket goes nowhere
             before = truth(srv.app.truth.port, "TcpWatched")[0]["location"]
-            for line in ("DRIVE {Left 5} {Right 5}", "INIT {ClassName USARBot.P2AT} {Name Intruder}",
-                         "SET {Type Odometry} {Opcode RESET}"):
+            for line in (
+                "DRIVE {Left 5} {Right 5}",
+                "INIT {ClassName USARBot.P2AT} {Name Intruder}",
+                "SET {Type Odometry} {Opcode RESET}",
+            ):
                 await ws.send_str(line)
             await asyncio.sleep(1.0)
             after = truth(srv.app.truth.port, "TcpWatched")[0]["location"]
@@ -160,8 +164,12 @@ def test_a_failing_output_watcher_does_not_stop_the_world(console_server):
         n = counter.n
         time.sleep(0.3)
         assert counter.n == n
-    wait_for(lambda: console_server.robot_count() == 0, timeout=DEFAULT_TIMEOUT, interval=0.05,
-             what="the robot to be removed")
+    wait_for(
+        lambda: console_server.robot_count() == 0,
+        timeout=DEFAULT_TIMEOUT,
+        interval=0.05,
+        what="the robot to be removed",
+    )
 
 
 def boxes_within(page, selectors: list[str], width: int, height: int) -> dict[str, dict]:
@@ -173,19 +181,36 @@ def boxes_within(page, selectors: list[str], width: int, height: int) -> dict[st
         assert box is not None, f"{sel} is not displayed"
         assert box["x"] >= 0 and box["y"] >= 0, (sel, box)
         assert box["x"] + box["width"] <= width and box["y"] + box["height"] <= height, (sel, box)
-        seen = page.evaluate("([sel, x, y]) => { const e = document.querySelector(sel);"
-                             " const at = document.elementFromPoint(x, y); return !!at && (at === e || e.contains(at)); }",
-                             [sel, box["x"] + box["width"] / 2, box["y"] + box["height"] / 2])
+        seen = page.evaluate(
+            "([sel, x, y]) => { const e = document.querySelector(sel);"
+            " const at = document.elementFromPoint(x, y); return !!at && (at === e || e.contains(at)); }",
+            [sel, box["x"] + box["width"] / 2, box["y"] + box["height"] / 2],
+        )
         assert seen, f"{sel} is covered or clipped at {box}"
         out[sel] = box
     return out
 
 
-KEY_CONTROLS = ["#spawn-class", "#spawn-start", "#spawn-name", "#spawn-button", "#command", "#command-send",
-                "#wheels [data-act='forward']", "#wheels [data-act='back']", "#wheels [data-act='left']",
-                "#wheels [data-act='right']", "#wheels .pad [data-act='stop']", "#wheels [data-act='faster']",
-                "#camera-group [data-act='tilt-up']", "#camera-group [data-act='zoom-out']", "#lights-button",
-                "#range-view", "#video", "#world-view"]
+KEY_CONTROLS = [
+    "#spawn-class",
+    "#spawn-start",
+    "#spawn-name",
+    "#spawn-button",
+    "#command",
+    "#command-send",
+    "#wheels [data-act='forward']",
+    "#wheels [data-act='back']",
+    "#wheels [data-act='left']",
+    "#wheels [data-act='right']",
+    "#wheels .pad [data-act='stop']",
+    "#wheels [data-act='faster']",
+    "#camera-group [data-act='tilt-up']",
+    "#camera-group [data-act='zoom-out']",
+    "#lights-button",
+    "#range-view",
+    "#video",
+    "#world-view",
+]
 
 
 def test_the_controls_fit_a_1280x720_laptop_screen(console_page, console_server):
@@ -200,8 +225,9 @@ def test_the_controls_fit_a_1280x720_laptop_screen(console_page, console_server)
     assert page.evaluate("document.scrollingElement.scrollWidth") <= LAPTOP["width"]
     # and the buttons work from there: Forward sends a DRIVE
     page.click("#wheels [data-act='forward']")
-    page.wait_for_function("[...document.querySelectorAll('#log .entry.out .txt')]"
-                           ".some(e => /^DRIVE \\{Left [1-9]/.test(e.textContent))")
+    page.wait_for_function(
+        "[...document.querySelectorAll('#log .entry.out .txt')].some(e => /^DRIVE \\{Left [1-9]/.test(e.textContent))"
+    )
     assert console_page.errors == []
 
 
@@ -218,9 +244,11 @@ def test_the_page_watches_another_controllers_robot_and_says_when_it_leaves(cons
         page.wait_for_selector("#sensor-tree details[data-key='SEN Sonar']")
         page.wait_for_selector("#sensor-tree details[data-key='SEN RangeScanner']")
         page.wait_for_selector("#sensor-tree details[data-key='STA']")
-        page.wait_for_function("[...document.querySelectorAll('#log .entry.in')]"
-                               ".filter(e => e.querySelector('.who').textContent === 'Outsider'"
-                               " && e.querySelector('.txt').textContent.startsWith('SEN {Time')).length >= 5")
+        page.wait_for_function(
+            "[...document.querySelectorAll('#log .entry.in')]"
+            ".filter(e => e.querySelector('.who').textContent === 'Outsider'"
+            " && e.querySelector('.txt').textContent.startsWith('SEN {Time')).length >= 5"
+        )
         banner = page.text_content("#robot-banner")
         assert page.is_visible("#robot-banner") and banner.startswith("Watching Outsider, driven by 127.0.0.1:")
         assert "read-only" in banner
@@ -238,7 +266,9 @@ def test_the_page_watches_another_controllers_robot_and_says_when_it_leaves(cons
         assert float(ranges["laserConf"]["MaxRange"]) > 0
         assert page.locator("#sessions button.watch").text_content().startswith("Outsider · watching")
         # read-only: no control, no key, no command box reaches it
-        assert page.evaluate("['wheels', 'camera-group', 'light-group'].every(id => document.getElementById(id).disabled)")
+        assert page.evaluate(
+            "['wheels', 'camera-group', 'light-group'].every(id => document.getElementById(id).disabled)"
+        )
         assert page.is_disabled("#wheels [data-act='forward']") and page.is_disabled("#lights-button")
         assert page.text_content("#command-target") == "a new connection"
         page.click("#world-view", position={"x": 5, "y": 5})
@@ -256,7 +286,9 @@ def test_the_page_watches_another_controllers_robot_and_says_when_it_leaves(cons
     finally:
         c.close()
     # its controller disconnected: the page says the robot left, and keeps what it last showed
-    page.wait_for_function("document.getElementById('robot-banner').textContent.includes('Robot Outsider left the world')")
+    page.wait_for_function(
+        "document.getElementById('robot-banner').textContent.includes('Robot Outsider left the world')"
+    )
     assert page.is_visible("#robot-banner")
     assert "last it sent" in page.text_content("#robot-banner")
     assert page.get_attribute("#robot-banner", "class").split() == ["banner", "gone"]
@@ -265,8 +297,10 @@ def test_the_page_watches_another_controllers_robot_and_says_when_it_leaves(cons
     assert "dead" in tab.get_attribute("class").split() and tab.text_content().startswith("Outsider · left")
     assert page.eval_on_selector_all("#sensor-tree > details", "els => els.map(e => e.dataset.key)") == readings
     assert page.text_content("#video-overlay") == "Outsider left the world."
-    page.wait_for_function("[...document.querySelectorAll('#log .entry.note .txt')]"
-                           ".some(e => e.textContent.startsWith('Outsider left the world at '))")
+    page.wait_for_function(
+        "[...document.querySelectorAll('#log .entry.note .txt')]"
+        ".some(e => e.textContent.startsWith('Outsider left the world at '))"
+    )
     wait_for(lambda: srv.robot_count() == 0, timeout=DEFAULT_TIMEOUT, interval=0.05, what="the robot to be removed")
     # Esc: the page stops showing it
     page.keyboard.press("Escape")
@@ -298,9 +332,13 @@ def test_start_poses_are_named_beside_their_markers(console_page, console_server
             dy = max(lab["y"] - my, 0, my - (lab["y"] + lab["h"]))
             assert (dx * dx + dy * dy) ** 0.5 < max(12, 0.3 * state["scale"] + 6), lab  # beside its marker
         for i, a in enumerate(state["labels"]):
-            for b in state["labels"][i + 1:]:
-                apart = (a["x"] + a["w"] <= b["x"] or b["x"] + b["w"] <= a["x"] or
-                         a["y"] + a["h"] <= b["y"] or b["y"] + b["h"] <= a["y"])
+            for b in state["labels"][i + 1 :]:
+                apart = (
+                    a["x"] + a["w"] <= b["x"]
+                    or b["x"] + b["w"] <= a["x"]
+                    or a["y"] + a["h"] <= b["y"]
+                    or b["y"] + b["h"] <= a["y"]
+                )
                 assert apart, (a, b)
 
     fitted = labels()
@@ -322,8 +360,10 @@ def test_start_poses_are_named_beside_their_markers(console_page, console_server
     }""")
     assert len(changed) == len(START_POSES) and min(changed) > 15, changed
     # zoomed in on the staging area, every name sits right of its marker
-    page.evaluate("() => { const m = window.usarsimConsole.map; m.view.cx = -12.5; m.view.cy = 0;"
-                  " m.view.scale = 22; m.dirty = true; }")
+    page.evaluate(
+        "() => { const m = window.usarsimConsole.map; m.view.cx = -12.5; m.view.cy = 0;"
+        " m.view.scale = 22; m.dirty = true; }"
+    )
     page.wait_for_timeout(50)
     close = labels()
     check(close)

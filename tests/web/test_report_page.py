@@ -22,15 +22,44 @@ def sweep_rows() -> list[dict]:
             for seed, noise in zip((1, 2, 3), (-6.0, 1.0, 5.0)):
                 area = base + gain + noise
                 victims = (seed + len(team)) % 3
-                rows.append({"run_id": f"{world}-{team}-{seed}", "experiment": "page", "world": world, "seed": seed,
-                             "team": team, "robots_n": 2 if team.startswith("2x") else 1, "wireless": "world",
-                             "duration_s": 60.0, "clock": "lockstep", "controller": "FrontierExplorer",
-                             "score": area + 50.0 * victims, "victims_found": victims, "victims_reported": 0,
-                             "false_reports": 0, "area_m2": area, "distance_m": 12.0 + noise, "collisions": seed % 2,
-                             "robots_lost": 0, "radio_contact_share": 0.5 if team.startswith("2x") else 0.0,
-                             "time_s": 60.2, "wall_s": 4.0, "error": None, "log": ""})
-    rows.append(dict(rows[0], run_id="lost", seed=4, score=None, area_m2=None,
-                     error="the controller exited with code 1: <no map>", log="usarsim: ..."))
+                rows.append(
+                    {
+                        "run_id": f"{world}-{team}-{seed}",
+                        "experiment": "page",
+                        "world": world,
+                        "seed": seed,
+                        "team": team,
+                        "robots_n": 2 if team.startswith("2x") else 1,
+                        "wireless": "world",
+                        "duration_s": 60.0,
+                        "clock": "lockstep",
+                        "controller": "FrontierExplorer",
+                        "score": area + 50.0 * victims,
+                        "victims_found": victims,
+                        "victims_reported": 0,
+                        "false_reports": 0,
+                        "area_m2": area,
+                        "distance_m": 12.0 + noise,
+                        "collisions": seed % 2,
+                        "robots_lost": 0,
+                        "radio_contact_share": 0.5 if team.startswith("2x") else 0.0,
+                        "time_s": 60.2,
+                        "wall_s": 4.0,
+                        "error": None,
+                        "log": "",
+                    }
+                )
+    rows.append(
+        dict(
+            rows[0],
+            run_id="lost",
+            seed=4,
+            score=None,
+            area_m2=None,
+            error="the controller exited with code 1: <no map>",
+            log="usarsim: ...",
+        )
+    )
     return rows
 
 
@@ -49,15 +78,19 @@ def test_the_report_page_opens_without_errors_and_shows_its_plots(browser, tmp_p
         page.goto(report.html_path.as_uri())
         page.wait_for_load_state("load")
         images = page.eval_on_selector_all(
-            "figure img", "els => els.map(e => ({w: e.naturalWidth, h: e.naturalHeight, done: e.complete,"
-                          " src: e.getAttribute('src').slice(0, 22)}))")
+            "figure img",
+            "els => els.map(e => ({w: e.naturalWidth, h: e.naturalHeight, done: e.complete,"
+            " src: e.getAttribute('src').slice(0, 22)}))",
+        )
         assert len(images) == 6
         for img in images:
             assert img["done"] and img["w"] > 0 and img["h"] > 0, img
             assert img["src"] == "data:image/png;base64,"  # embedded: the page needs no other file
         assert page.eval_on_selector_all("#summary tbody tr", "rows => rows.length") == 4
         headers = page.eval_on_selector_all("#summary thead th", "els => els.map(e => e.textContent)")
-        assert headers[:4] == ["world", "team", "runs", "failed"] and "area explored (m²)mean [95 % CI, t, ≥ 0]" in headers
+        assert (
+            headers[:4] == ["world", "team", "runs", "failed"] and "area explored (m²)mean [95 % CI, t, ≥ 0]" in headers
+        )
         assert "victims foundmean [95 % CI, Poisson]" in headers and "scoremean [95 % CI, t]" in headers
         assert "±" not in page.text_content("body")  # one notation: mean, then [low, high]
         # a count's interval never goes below 0 (victims 0, 1, 2 of team P2AT at DM-USAR_yellow)
@@ -75,9 +108,11 @@ def test_the_report_page_opens_without_errors_and_shows_its_plots(browser, tmp_p
 def fits_1280(page) -> bool:
     """The page, and its summary table, no wider than the 1280 px window (no sideways scroll)."""
     width = page.evaluate("document.documentElement.scrollWidth")
-    table = page.evaluate("(() => { const t = document.getElementById('summary');"
-                          " return [t.getBoundingClientRect().right, t.parentElement.scrollWidth,"
-                          " t.parentElement.clientWidth]; })()")
+    table = page.evaluate(
+        "(() => { const t = document.getElementById('summary');"
+        " return [t.getBoundingClientRect().right, t.parentElement.scrollWidth,"
+        " t.parentElement.clientWidth]; })()"
+    )
     assert width <= 1280, f"the page is {width} px wide"
     assert table[0] <= 1280 and table[1] <= table[2], f"the summary table overflows: {table}"
     return True
@@ -85,8 +120,10 @@ def fits_1280(page) -> bool:
 
 def test_a_report_of_three_axes_with_long_labels_fits_1280_px(browser, tmp_path):
     rows = sweep_rows()
-    rows += [dict(r, run_id=f"{r['run_id']}-tuned", controller='FrontierExplorer(bounds="auto", speed=0.4, '
-                                                               'turn_rate=0.8)') for r in rows]
+    rows += [
+        dict(r, run_id=f"{r['run_id']}-tuned", controller='FrontierExplorer(bounds="auto", speed=0.4, turn_rate=0.8)')
+        for r in rows
+    ]
     write_rows(rows, tmp_path)
     report = build_report(tmp_path)
     assert report.axes == ("world", "team", "controller")

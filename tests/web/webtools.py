@@ -31,7 +31,12 @@ def truth(port: int, name: str | None = None) -> list[dict]:
     for line in data.decode().splitlines():
         m = re.match(r"\{Name (\S+)\} \{Class (\S+)\} \{Time \S+\} \{Location (\S+)\} \{Rotation (\S+)\}", line)
         if m:
-            out.append({"name": m.group(1), "class": m.group(2),
-                        "location": tuple(float(v) for v in m.group(3).split(",")),
-                        "rotation": tuple(float(v) for v in m.group(4).split(","))})
+            out.append(
+                {
+                    "name": m.group(1),
+                    "class": m.group(2),
+                    "location": tuple(float(v) for v in m.group(3).split(",")),
+                    "rotation": tuple(float(v) for v in m.group(4).split(",")),
+                }
+            )
     return out

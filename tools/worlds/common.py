@@ -108,14 +108,29 @@ class World:
     def box(self, name, center, size, material, rotation=(0.0, 0.0, 0.0), mass=0.0):
         if min(size) <= 0:
             raise ValueError(f"{name}: size {size}")
-        o = {"name": self._name(name), "shape": "box", "center": tuple(center), "size": tuple(size),
-             "rotation": tuple(rotation), "material": material, "mass_kg": mass}
+        o = {
+            "name": self._name(name),
+            "shape": "box",
+            "center": tuple(center),
+            "size": tuple(size),
+            "rotation": tuple(rotation),
+            "material": material,
+            "mass_kg": mass,
+        }
         self.items.append(("obj", o))
         return o
 
     def cylinder(self, name, center, radius, length, material, rotation=(0.0, 0.0, 0.0), mass=0.0):
-        o = {"name": self._name(name), "shape": "cylinder", "center": tuple(center), "radius": radius,
-             "length": length, "rotation": tuple(rotation), "material": material, "mass_kg": mass}
+        o = {
+            "name": self._name(name),
+            "shape": "cylinder",
+            "center": tuple(center),
+            "radius": radius,
+            "length": length,
+            "rotation": tuple(rotation),
+            "material": material,
+            "mass_kg": mass,
+        }
         self.items.append(("obj", o))
         return o
 
@@ -124,21 +139,41 @@ class World:
         self.keep_clear.append((x, y, START_CLEAR_RADIUS, floor_height))
 
     def victim(self, name, x, y, floor_height=0.0, yaw=0.0, posture="lying", waving=False, sound=None):
-        v = {"name": self._name(name), "location": (x, y, -(floor_height + 0.1)), "rotation": (0.0, 0.0, yaw),
-             "posture": posture, "waving": waving, "sound": sound, "level": floor_height}
+        v = {
+            "name": self._name(name),
+            "location": (x, y, -(floor_height + 0.1)),
+            "rotation": (0.0, 0.0, yaw),
+            "posture": posture,
+            "waving": waving,
+            "sound": sound,
+            "level": floor_height,
+        }
         self.victims.append(v)
 
     def false_alarm(self, name, center, size, part, material="default", rotation=(0.0, 0.0, 0.0)):
-        self.alarms.append({"name": self._name(name), "center": center, "size": size, "part": part,
-                            "material": material, "rotation": rotation})
+        self.alarms.append(
+            {
+                "name": self._name(name),
+                "center": center,
+                "size": size,
+                "part": part,
+                "material": material,
+                "rotation": rotation,
+            }
+        )
 
     def rfid(self, tag_id, x, y, floor_height=0.0, memory=""):
-        self.tags.append({"id": tag_id, "location": (x, y, -(floor_height + 0.01)), "memory": memory,
-                          "level": floor_height})
+        self.tags.append(
+            {"id": tag_id, "location": (x, y, -(floor_height + 0.01)), "memory": memory, "level": floor_height}
+        )
 
     def geo_reference(self, lat, lon, scale_lat=111200.0, scale_lon=71670.0):
-        self.geo = {"latitude_deg": lat, "longitude_deg": lon, "scale_latitude_m": scale_lat,
-                    "scale_longitude_m": scale_lon}
+        self.geo = {
+            "latitude_deg": lat,
+            "longitude_deg": lon,
+            "scale_latitude_m": scale_lat,
+            "scale_longitude_m": scale_lon,
+        }
 
     # -- geometry helpers -----------------------------------------------------------------
     def wall(self, name, p0, p1, height, material, thick=0.1, base=0.0, gaps=()):
@@ -169,8 +204,7 @@ class World:
                 out.append(self.box(n, (x0, mid, zc), (thick, s1 - s0, height), material))
         return out
 
-    def facade(self, name, p0, p1, height, material, thick=0.25, base=0.0, doors=(), windows=(), sill=0.9,
-               head=2.1):
+    def facade(self, name, p0, p1, height, material, thick=0.25, base=0.0, doors=(), windows=(), sill=0.9, head=2.1):
         """A wall like :meth:`wall` with openings: ``doors`` (from, to) or (from, to, top) are
         open from the surface up to ``top`` (None or absent: the full height), ``windows``
         (from, to) are open between ``sill`` and ``head`` above the surface."""
@@ -304,40 +338,63 @@ class World:
             size = rng.choice(sizes)
             x, y = rng.uniform(zone[0], zone[1]), rng.uniform(zone[2], zone[3])
             yaw = round(rng.uniform(0.0, math.pi), 2)
-            half = (abs(size[0] * math.cos(yaw)) + abs(size[1] * math.sin(yaw))) / 2, \
-                   (abs(size[0] * math.sin(yaw)) + abs(size[1] * math.cos(yaw))) / 2
+            half = (
+                (abs(size[0] * math.cos(yaw)) + abs(size[1] * math.sin(yaw))) / 2,
+                (abs(size[0] * math.sin(yaw)) + abs(size[1] * math.cos(yaw))) / 2,
+            )
             rect = (x - half[0], x + half[0], y - half[1], y + half[1])
             if any(rect[0] < k[1] and rect[1] > k[0] and rect[2] < k[3] and rect[3] > k[2] for k in keep_out):
                 continue
             if not self.is_free(*rect, margin=0.1):
                 continue
             mass = mass_of(size) if mass_of else 0.0
-            self.box(f"{prefix}_{start + placed}", (round(x, 3), round(y, 3), -size[2] / 2), size, material,
-                     rotation=(0.0, 0.0, yaw), mass=mass)
+            self.box(
+                f"{prefix}_{start + placed}",
+                (round(x, 3), round(y, 3), -size[2] / 2),
+                size,
+                material,
+                rotation=(0.0, 0.0, yaw),
+                mass=mass,
+            )
             placed += 1
         if placed < count:
             raise SystemExit(f"{prefix}: placed only {placed} of {count}")
 
-    def pile(self, prefix, cx, cy, radius, peak, n, material, rng, sizes=((0.3, 0.8), (0.2, 0.55), (0.15, 0.4)),
-             tilt=0.5):
+    def pile(
+        self, prefix, cx, cy, radius, peak, n, material, rng, sizes=((0.3, 0.8), (0.2, 0.55), (0.15, 0.4)), tilt=0.5
+    ):
         """A static rubble pile: a low core and ``n`` tilted concrete chunks whose tops follow a
         dome of height ``peak`` over a disc of ``radius``."""
-        self.box(f"{prefix}_core_1", (cx, cy, -peak * 0.2), (radius * 1.0, radius * 1.0, peak * 0.4), material,
-                 rotation=(0.0, 0.0, round(rng.uniform(0, 1.5), 2)))
-        self.box(f"{prefix}_core_2", (cx, cy, -peak * 0.35), (radius * 0.55, radius * 0.55, peak * 0.7), material,
-                 rotation=(0.0, 0.0, round(rng.uniform(0, 1.5), 2)))
+        self.box(
+            f"{prefix}_core_1",
+            (cx, cy, -peak * 0.2),
+            (radius * 1.0, radius * 1.0, peak * 0.4),
+            material,
+            rotation=(0.0, 0.0, round(rng.uniform(0, 1.5), 2)),
+        )
+        self.box(
+            f"{prefix}_core_2",
+            (cx, cy, -peak * 0.35),
+            (radius * 0.55, radius * 0.55, peak * 0.7),
+            material,
+            rotation=(0.0, 0.0, round(rng.uniform(0, 1.5), 2)),
+        )
         for i in range(n):
             d = radius * math.sqrt(rng.random())
             th = rng.uniform(0, 2 * math.pi)
             x, y = cx + d * math.cos(th), cy + d * math.sin(th)
             size = tuple(round(rng.uniform(*r), 2) for r in sizes)
-            rot = (round(rng.uniform(-tilt, tilt), 2), round(rng.uniform(-tilt, tilt), 2),
-                   round(rng.uniform(0, math.pi), 2))
+            rot = (
+                round(rng.uniform(-tilt, tilt), 2),
+                round(rng.uniform(-tilt, tilt), 2),
+                round(rng.uniform(0, math.pi), 2),
+            )
             e = max(c[2] for c in box_corners((0.0, 0.0, 0.0), size, rot))  # vertical half extent
             top = peak * (1.0 - (d / radius) ** 1.6) + rng.uniform(-0.05, 0.08)
             top = max(top, 1.2 * e)
-            self.box(f"{prefix}_{i + 1}", (round(x, 3), round(y, 3), round(-(top - e), 3)), size, material,
-                     rotation=rot)
+            self.box(
+                f"{prefix}_{i + 1}", (round(x, 3), round(y, 3), round(-(top - e), 3)), size, material, rotation=rot
+            )
 
     def count(self) -> int:
         return sum(1 for k, _ in self.items if k == "obj")
@@ -402,7 +459,7 @@ class World:
         if self.tags:
             out.append("rfid_tags:")
             for t in self.tags:
-                out.append(f"  - {{id: {t['id']}, location: {vec(t['location'])}, memory: \"{t['memory']}\"}}")
+                out.append(f'  - {{id: {t["id"]}, location: {vec(t["location"])}, memory: "{t["memory"]}"}}')
         return "\n".join(out) + "\n"
 
     def write(self, header: str) -> Path:
@@ -411,6 +468,8 @@ class World:
             raise SystemExit("start areas not clear:\n  " + "\n  ".join(problems))
         path = WORLDS_DIR / f"{self.name}.yaml"
         path.write_text(self.yaml(header), encoding="utf-8")
-        print(f"wrote {path.relative_to(REPO)}: {self.count()} objects, {len(self.poses)} start poses, "
-              f"{len(self.victims)} victims, {len(self.tags)} RFID tags, {len(self.alarms)} false alarms")
+        print(
+            f"wrote {path.relative_to(REPO)}: {self.count()} objects, {len(self.poses)} start poses, "
+            f"{len(self.victims)} victims, {len(self.tags)} RFID tags, {len(self.alarms)} false alarms"
+        )
         return path

@@ -105,8 +105,11 @@ def chunk_mass(size) -> float:
 
 def build() -> World:
     rng = random.Random(20240613)
-    w = World("DM-CollapsedBuilding", "outdoor collapsed building - standing half with a usable ground floor, "
-                                      "pancaked and lean-to slabs, rubble field, open ground")
+    w = World(
+        "DM-CollapsedBuilding",
+        "outdoor collapsed building - standing half with a usable ground floor, "
+        "pancaked and lean-to slabs, rubble field, open ground",
+    )
     w.set_floor((0.0, 0.0), (80.0, 80.0), material="ground")
     w.geo_reference(39.0 + 8.0273 / 60.0, -(77.0 + 12.998 / 60.0))  # NIST Gaithersburg (USARSim's origin)
     w.material("ground", (0.45, 0.41, 0.34, 1.0), 0.9, "packed earth and gravel")
@@ -120,16 +123,28 @@ def build() -> World:
     # ------------------------------------------------------------------ standing half
     w.comment("standing half (y -12..0): ground-floor exterior walls")
     south_win = [(-11.0, -9.6), (-4.6, -3.2), (-2.0, -0.8)]
-    w.facade("gf_south", (-6.0, -12.125), (-6.0, 0.0), WALL, "facade", doors=[(-8.2, -6.6, 2.2)],
-             windows=south_win)
-    w.facade("gf_west", (-5.875, -12.0), (5.875, -12.0), WALL, "facade", doors=[(1.5, 4.5)],
-             windows=[(-4.8, -3.4)])
-    w.facade("gf_north", (6.0, -12.125), (6.0, 0.0), WALL, "facade", doors=[(-5.0, -3.6, 2.2)],
-             windows=[(-10.5, -9.1), (-1.8, -0.6)])
+    w.facade("gf_south", (-6.0, -12.125), (-6.0, 0.0), WALL, "facade", doors=[(-8.2, -6.6, 2.2)], windows=south_win)
+    w.facade("gf_west", (-5.875, -12.0), (5.875, -12.0), WALL, "facade", doors=[(1.5, 4.5)], windows=[(-4.8, -3.4)])
+    w.facade(
+        "gf_north",
+        (6.0, -12.125),
+        (6.0, 0.0),
+        WALL,
+        "facade",
+        doors=[(-5.0, -3.6, 2.2)],
+        windows=[(-10.5, -9.1), (-1.8, -0.6)],
+    )
     w.facade("gf_east", (-5.875, 0.0), (5.875, 0.0), WALL, "facade", doors=[(0.8, 2.6, 1.7)])  # breach
     w.comment("ground-floor interior walls and furniture")
-    w.facade("gf_int_mid", (-5.875, -6.0), (5.875, -6.0), WALL, "plaster", thick=INT,
-             doors=[(-4.4, -3.2, 2.1), (2.0, 3.4, 2.1)])
+    w.facade(
+        "gf_int_mid",
+        (-5.875, -6.0),
+        (5.875, -6.0),
+        WALL,
+        "plaster",
+        thick=INT,
+        doors=[(-4.4, -3.2, 2.1), (2.0, 3.4, 2.1)],
+    )
     w.facade("gf_int_nw", (0.5, -11.875), (0.5, -6.075), WALL, "plaster", thick=INT, doors=[(-9.6, -8.4, 2.1)])
     w.facade("gf_int_se", (-1.0, -5.925), (-1.0, -0.125), WALL, "plaster", thick=INT, doors=[(-3.6, -2.4, 2.1)])
     w.box("gf_column", (2.5, -3.0, -WALL / 2), (0.4, 0.4, WALL), "concrete")
@@ -149,8 +164,15 @@ def build() -> World:
     for k, base in enumerate((STOREY, 2 * STOREY)):
         f = k + 1
         w.facade(f"f{f}_south", (-6.0, -12.125), (-6.0, 0.0), WALL, "facade", base=base, windows=up_win)
-        w.facade(f"f{f}_west", (-5.875, -12.0), (5.875, -12.0), WALL, "facade", base=base,
-                 windows=[(-4.8, -3.4), (-1.2, 0.2), (2.4, 3.8)])
+        w.facade(
+            f"f{f}_west",
+            (-5.875, -12.0),
+            (5.875, -12.0),
+            WALL,
+            "facade",
+            base=base,
+            windows=[(-4.8, -3.4), (-1.2, 0.2), (2.4, 3.8)],
+        )
         w.facade(f"f{f}_north", (6.0, -12.125), (6.0, 0.0), WALL, "facade", base=base, windows=up_win)
         w.box(f"f{f}_east_stub_s", (-5.3, 0.0, -(base + WALL / 2)), (1.4, EXT, WALL), "facade")
         w.box(f"f{f}_east_stub_n", (5.4, 0.0, -(base + WALL / 2)), (1.2, EXT, WALL), "facade")
@@ -160,8 +182,14 @@ def build() -> World:
     w.plate("slab_leanto", (0.0, 5.2), (0.0, 0.0), 11.5, 0.0, 2.95, SLAB, "concrete")
     w.plate("slab_leaning", (0.0, 6.9), (0.0, 0.0), 11.5, 2.45, 5.95, SLAB, "concrete")
     w.comment("pancaked floors and roof (tops 0.75, 1.6, 2.4 m) on wall and column remnants")
-    for i, (c, s) in enumerate([((-3.25, 6.3), (4.5, 0.25)), ((3.25, 11.85), (4.5, 0.25)),
-                                ((-5.85, 9.5), (0.25, 3.0)), ((5.85, 7.8), (0.25, 2.6))]):
+    for i, (c, s) in enumerate(
+        [
+            ((-3.25, 6.3), (4.5, 0.25)),
+            ((3.25, 11.85), (4.5, 0.25)),
+            ((-5.85, 9.5), (0.25, 3.0)),
+            ((5.85, 7.8), (0.25, 2.6)),
+        ]
+    ):
         w.box(f"remnant_0_{i + 1}", (c[0], c[1], -0.25), (s[0], s[1], 0.5), "facade")
     w.box("pancake_1", (0.0, 9.0625, -0.625), (12.25, 6.125, SLAB), "concrete", rotation=(0.02, 0.0, 0.0))
     for i, (x, y) in enumerate([(-4.5, 7.0), (4.0, 7.5), (-3.5, 11.2), (4.5, 11.0)]):
@@ -177,8 +205,16 @@ def build() -> World:
     w.comment("broken columns and rebar")
     for i, (x, y, yaw) in enumerate([(-7.4, 1.2, 0.3), (8.0, 11.6, 1.2), (3.5, 15.8, 2.6)]):
         w.cylinder(f"column_broken_{i + 1}", (x, y, -0.2), 0.2, 2.5, "concrete", rotation=(0.0, math.pi / 2, yaw))
-    for i, (x, y, yaw, L) in enumerate([(-7.0, 5.6, 0.4, 2.0), (7.5, 5.8, 1.9, 2.4), (-4.8, 16.0, 0.9, 1.8),
-                                        (6.2, 14.8, 2.2, 2.2), (-10.5, 8.0, 1.4, 1.6), (11.2, 14.0, 0.2, 2.0)]):
+    for i, (x, y, yaw, L) in enumerate(
+        [
+            (-7.0, 5.6, 0.4, 2.0),
+            (7.5, 5.8, 1.9, 2.4),
+            (-4.8, 16.0, 0.9, 1.8),
+            (6.2, 14.8, 2.2, 2.2),
+            (-10.5, 8.0, 1.4, 1.6),
+            (11.2, 14.0, 0.2, 2.0),
+        ]
+    ):
         w.cylinder(f"rebar_{i + 1}", (x, y, -0.016), 0.016, L, "metal", rotation=(0.0, math.pi / 2, yaw))
 
     w.comment("rubble piles")
@@ -200,29 +236,59 @@ def build() -> World:
 
     building = (-6.5, 6.5, -12.5, 12.5)
     w.comment("loose concrete debris and cement blocks (movable)")
-    w.scatter("debris", 24, (-14.0, 14.0, -4.0, 24.0),
-              [(0.3, 0.2, 0.15), (0.25, 0.25, 0.12), (0.4, 0.25, 0.1), (0.2, 0.15, 0.1)], "concrete", rng,
-              mass_of=chunk_mass, keep_out=[building])
-    w.scatter("block", 10, (-14.0, 14.0, -4.0, 24.0), [CMU_SIZE], "cinder", rng, mass_of=lambda s: CMU_MASS,
-              keep_out=[building])
+    w.scatter(
+        "debris",
+        24,
+        (-14.0, 14.0, -4.0, 24.0),
+        [(0.3, 0.2, 0.15), (0.25, 0.25, 0.12), (0.4, 0.25, 0.1), (0.2, 0.15, 0.1)],
+        "concrete",
+        rng,
+        mass_of=chunk_mass,
+        keep_out=[building],
+    )
+    w.scatter(
+        "block",
+        10,
+        (-14.0, 14.0, -4.0, 24.0),
+        [CMU_SIZE],
+        "cinder",
+        rng,
+        mass_of=lambda s: CMU_MASS,
+        keep_out=[building],
+    )
     w.comment("static debris: big chunks")
-    w.scatter("boulder", 18, (-14.0, 14.0, -4.0, 24.0),
-              [(0.9, 0.7, 0.4), (0.8, 0.8, 0.35), (1.2, 0.6, 0.3), (0.6, 0.5, 0.5)], "concrete", rng,
-              keep_out=[building])
+    w.scatter(
+        "boulder",
+        18,
+        (-14.0, 14.0, -4.0, 24.0),
+        [(0.9, 0.7, 0.4), (0.8, 0.8, 0.35), (1.2, 0.6, 0.3), (0.6, 0.5, 0.5)],
+        "concrete",
+        rng,
+        keep_out=[building],
+    )
 
     # ------------------------------------------------------------------ start poses
     for i, y in enumerate((-8.0, 0.0, 8.0)):
-        w.start_pose(f"PlayerStart{i + 1}", -20.0, y, 0.0,
-                     comment="south of the building, facing north" if i == 0 else "")
+        w.start_pose(
+            f"PlayerStart{i + 1}", -20.0, y, 0.0, comment="south of the building, facing north" if i == 0 else ""
+        )
     w.start_pose("PlayerStart4", -4.0, -22.0, 1.5708, comment="west, facing east toward the loading door")
     w.start_pose("PlayerStart5", 4.0, -22.0, 1.5708)
     w.start_pose("PlayerStart6", 20.0, -4.0, 3.1416, comment="north, facing south")
     w.start_pose("PlayerStart7", 20.0, 6.0, 3.1416)
     w.start_pose("PlayerStart8", 0.0, 32.0, -1.5708, comment="east, beyond the rubble field, facing west")
 
-    for tid, x, y, h in [(4001, 2.8, 1.2, 0.0), (4002, -1.0, 9.9, 0.0), (4003, -3.8, -10.0, 0.0),
-                         (4004, 11.0, 3.6, 0.0), (4005, 2.2, 10.0, 2.4), (4006, -3.6, -3.2, 0.0),
-                         (4007, -7.0, -7.4, 0.0), (4008, 2.9, -12.6, 0.0), (4009, 7.0, -4.3, 0.0)]:
+    for tid, x, y, h in [
+        (4001, 2.8, 1.2, 0.0),
+        (4002, -1.0, 9.9, 0.0),
+        (4003, -3.8, -10.0, 0.0),
+        (4004, 11.0, 3.6, 0.0),
+        (4005, 2.2, 10.0, 2.4),
+        (4006, -3.6, -3.2, 0.0),
+        (4007, -7.0, -7.4, 0.0),
+        (4008, 2.9, -12.6, 0.0),
+        (4009, 7.0, -4.3, 0.0),
+    ]:
         w.rfid(tid, x, y, floor_height=h)
     return w
 

@@ -1,6 +1,6 @@
 """Writes src/usarsim/data/worlds/DM-USAR_orange.yaml: the NIST orange arena (two levels).
 
-    python tools/worlds/make_orange.py
+python tools/worlds/make_orange.py
 """
 
 from __future__ import annotations
@@ -111,8 +111,9 @@ HEADER = """\
 
 def build() -> World:
     rng = random.Random(20240611)
-    w = World("DM-USAR_orange", "NIST orange arena - two levels joined by a ramp and stairs, paper, pipes, "
-                                "cinder blocks")
+    w = World(
+        "DM-USAR_orange", "NIST orange arena - two levels joined by a ramp and stairs, paper, pipes, cinder blocks"
+    )
     w.set_floor((-3.75, 0.0), (29.5, 27.0))
     w.geo_reference(39.0 + 8.0273 / 60.0, -(77.0 + 12.998 / 60.0))  # NIST Gaithersburg (USARSim's origin)
     w.material("floor", (0.55, 0.55, 0.52, 1.0), 1.0, "bare concrete")
@@ -164,8 +165,7 @@ def build() -> World:
 
     # ---------------------------------------------------------------- ground maze
     w.comment("ground-level maze walls (1.2 m)")
-    w.wall("maze_x-6", (-6.0, -11.95), (-6.0, 11.95), WALL_H, "wall",
-           gaps=[(-8.5, -7.0), (-1.0, 1.0), (8.0, 9.5)])
+    w.wall("maze_x-6", (-6.0, -11.95), (-6.0, 11.95), WALL_H, "wall", gaps=[(-8.5, -7.0), (-1.0, 1.0), (8.0, 9.5)])
     w.wall("maze_sw_foyer", (-9.95, -4.0), (-6.05, -4.0), WALL_H, "wall", gaps=[(-8.2, -6.7)])
     w.wall("maze_foyer_se", (-9.95, 4.0), (-6.05, 4.0), WALL_H, "wall", gaps=[(-8.2, -6.7)])
     w.wall("maze_ramp_central", (-5.95, -6.0), (2.55, -6.0), WALL_H, "wall", gaps=[(-3.5, -2.0)])
@@ -179,10 +179,24 @@ def build() -> World:
 
     # ---------------------------------------------------------------- debris
     w.comment("paper on the floor (5 mm sheets)")
-    sheets = [(-8.9, -2.6, 0.3), (-7.6, -1.4, 1.1), (-8.4, 1.9, 2.0), (-6.9, 2.8, 0.6),  # foyer
-              (-4.9, -4.6, 0.9), (-2.9, -3.6, 2.4), (-1.2, -4.8, 0.2), (0.9, -3.4, 1.4),  # central hall
-              (-2.2, -0.6, 0.7), (-0.6, 0.9, 2.9), (1.4, 1.4, 1.8), (-4.6, 1.9, 0.4),
-              (-5.1, 5.6, 1.3), (-3.2, 7.9, 0.1), (-0.9, 4.4, 2.2), (1.2, 7.6, 0.8)]  # east rooms
+    sheets = [
+        (-8.9, -2.6, 0.3),
+        (-7.6, -1.4, 1.1),
+        (-8.4, 1.9, 2.0),
+        (-6.9, 2.8, 0.6),  # foyer
+        (-4.9, -4.6, 0.9),
+        (-2.9, -3.6, 2.4),
+        (-1.2, -4.8, 0.2),
+        (0.9, -3.4, 1.4),  # central hall
+        (-2.2, -0.6, 0.7),
+        (-0.6, 0.9, 2.9),
+        (1.4, 1.4, 1.8),
+        (-4.6, 1.9, 0.4),
+        (-5.1, 5.6, 1.3),
+        (-3.2, 7.9, 0.1),
+        (-0.9, 4.4, 2.2),
+        (1.2, 7.6, 0.8),
+    ]  # east rooms
     for i, (x, y, yaw) in enumerate(sheets):
         sx, sy = (0.9, 0.6) if i % 3 else (1.2, 0.8)  # newspaper spreads and cardboard
         w.box(f"paper_{i + 1}", (x, y, -0.0025), (sx, sy, 0.005), "paper", rotation=(0.0, 0.0, yaw))
@@ -202,38 +216,78 @@ def build() -> World:
     bx, by, bz = CMU_SIZE
     blocks = [
         # (x, y, level, yaw)
-        (-8.9, -11.3, 0, 0.0), (-8.9, -11.3, 1, 0.0), (-8.4, -11.3, 0, 0.0),  # SW room, by the blind wall
-        (-7.3, -6.0, 0, 0.4), (-9.0, -8.1, 0, 1.2),
-        (-4.4, -7.1, 0, 0.0), (-4.0, -7.1, 0, 0.0), (-4.2, -7.1, 1, 0.0),  # ramp hall
+        (-8.9, -11.3, 0, 0.0),
+        (-8.9, -11.3, 1, 0.0),
+        (-8.4, -11.3, 0, 0.0),  # SW room, by the blind wall
+        (-7.3, -6.0, 0, 0.4),
+        (-9.0, -8.1, 0, 1.2),
+        (-4.4, -7.1, 0, 0.0),
+        (-4.0, -7.1, 0, 0.0),
+        (-4.2, -7.1, 1, 0.0),  # ramp hall
         (-3.3, -11.4, 0, 1.5708),
-        (-4.8, -2.1, 0, 0.8), (-0.2, -2.8, 0, 0.0), (1.8, -5.2, 0, 1.5708), (1.8, -4.7, 0, 1.5708),  # central
-        (-8.6, 10.9, 0, 0.0), (-8.6, 10.9, 1, 0.0), (-3.2, 3.3, 0, 1.9),  # SE room, E1
-        (1.6, 3.3, 0, 0.0), (2.0, 11.3, 0, 0.6),  # E2
-        (4.0, 11.3, 0, 0.0), (4.45, 11.3, 0, 0.0), (4.2, 11.3, 1, 0.0), (8.9, 3.2, 0, 1.5708),  # NE hall
+        (-4.8, -2.1, 0, 0.8),
+        (-0.2, -2.8, 0, 0.0),
+        (1.8, -5.2, 0, 1.5708),
+        (1.8, -4.7, 0, 1.5708),  # central
+        (-8.6, 10.9, 0, 0.0),
+        (-8.6, 10.9, 1, 0.0),
+        (-3.2, 3.3, 0, 1.9),  # SE room, E1
+        (1.6, 3.3, 0, 0.0),
+        (2.0, 11.3, 0, 0.6),  # E2
+        (4.0, 11.3, 0, 0.0),
+        (4.45, 11.3, 0, 0.0),
+        (4.2, 11.3, 1, 0.0),
+        (8.9, 3.2, 0, 1.5708),  # NE hall
     ]
     for i, (x, y, lvl, yaw) in enumerate(blocks):
-        w.box(f"cinder_{i + 1}", (x, y, -(bz / 2 + lvl * bz)), CMU_SIZE, "cinder", rotation=(0.0, 0.0, yaw),
-              mass=CMU_MASS)
+        w.box(
+            f"cinder_{i + 1}", (x, y, -(bz / 2 + lvl * bz)), CMU_SIZE, "cinder", rotation=(0.0, 0.0, yaw), mass=CMU_MASS
+        )
 
     w.comment("bricks (movable, 2 kg)")
-    brick_spots = [(-7.0, -9.6), (-6.7, -9.3), (-2.6, -8.2), (-0.8, -7.0), (-5.1, -0.3), (-1.3, -0.9),
-                   (-8.0, 6.3), (-7.2, 9.8), (-4.9, 8.6), (-0.4, 10.9), (5.2, 10.9), (3.3, 3.0)]
+    brick_spots = [
+        (-7.0, -9.6),
+        (-6.7, -9.3),
+        (-2.6, -8.2),
+        (-0.8, -7.0),
+        (-5.1, -0.3),
+        (-1.3, -0.9),
+        (-8.0, 6.3),
+        (-7.2, 9.8),
+        (-4.9, 8.6),
+        (-0.4, 10.9),
+        (5.2, 10.9),
+        (3.3, 3.0),
+    ]
     for i, (x, y) in enumerate(brick_spots):
         yaw = round(rng.uniform(0.0, math.pi), 2)
-        w.box(f"brick_{i + 1}", (x, y, -BRICK_SIZE[2] / 2), BRICK_SIZE, "brick", rotation=(0.0, 0.0, yaw),
-              mass=BRICK_MASS)
+        w.box(
+            f"brick_{i + 1}", (x, y, -BRICK_SIZE[2] / 2), BRICK_SIZE, "brick", rotation=(0.0, 0.0, yaw), mass=BRICK_MASS
+        )
 
     w.comment("SE room: a low table (the victim beside it)")
     w.box("crate_se", (-7.2, 11.2, -0.2), (0.8, 0.8, 0.4), "wood")
 
     # ---------------------------------------------------------------- start poses
     for i, y in enumerate((-9.75, -3.25, 3.25, 9.75)):
-        w.start_pose(f"PlayerStart{i + 1}", -14.0, y, 0.0,
-                     comment="staging apron south of the entrance, facing north" if i == 0 else "")
-    w.start_pose("PlayerStart5", 6.3, -8.5, 1.5708, floor_height=H,
-                 comment="upper deck, west part, facing east along the deck")
-    w.start_pose("PlayerStart6", 6.3, -1.6, 1.5708, floor_height=H,
-                 comment="upper deck, east part, facing east toward the head of the stairs")
+        w.start_pose(
+            f"PlayerStart{i + 1}",
+            -14.0,
+            y,
+            0.0,
+            comment="staging apron south of the entrance, facing north" if i == 0 else "",
+        )
+    w.start_pose(
+        "PlayerStart5", 6.3, -8.5, 1.5708, floor_height=H, comment="upper deck, west part, facing east along the deck"
+    )
+    w.start_pose(
+        "PlayerStart6",
+        6.3,
+        -1.6,
+        1.5708,
+        floor_height=H,
+        comment="upper deck, east part, facing east toward the head of the stairs",
+    )
     w.start_pose("PlayerStart7", 6.3, 7.3, -1.5708, comment="north-east hall, facing the stairs (west)")
 
     # ---------------------------------------------------------------- victims, alarms, tags
@@ -246,9 +300,17 @@ def build() -> World:
     w.false_alarm("doll_head", (1.6, 9.2, -0.1), (0.2, 0.2, 0.2), "Head")
     w.false_alarm("glove", (-1.1, -9.3, -0.03), (0.18, 0.1, 0.06), "Hand")
     w.false_alarm("boot", (9.4, -5.4, -1.16), (0.28, 0.1, 0.12), "Foot")  # on the deck, north edge
-    tags = [(2001, 9.0, 0.6, H), (2002, 3.3, -6.0, H), (2003, 6.2, -1.5, 0.0), (2004, -8.0, 7.4, 0.0),
-            (2005, -4.2, 5.3, 0.0), (2006, -7.6, -8.9, 0.0), (2007, -1.2, -10.0, 0.0), (2008, 2.0, 6.8, 0.0),
-            (2009, 3.4, -11.6, H)]
+    tags = [
+        (2001, 9.0, 0.6, H),
+        (2002, 3.3, -6.0, H),
+        (2003, 6.2, -1.5, 0.0),
+        (2004, -8.0, 7.4, 0.0),
+        (2005, -4.2, 5.3, 0.0),
+        (2006, -7.6, -8.9, 0.0),
+        (2007, -1.2, -10.0, 0.0),
+        (2008, 2.0, 6.8, 0.0),
+        (2009, 3.4, -11.6, H),
+    ]
     for tid, x, y, h in tags:
         w.rfid(tid, x, y, floor_height=h)
     return w

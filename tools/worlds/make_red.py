@@ -1,6 +1,6 @@
 """Writes src/usarsim/data/worlds/DM-USAR_red.yaml: the NIST red arena (rubble, pancaked slabs).
 
-    python tools/worlds/make_red.py
+python tools/worlds/make_red.py
 """
 
 from __future__ import annotations
@@ -140,8 +140,9 @@ def build() -> World:
     w.plate("floorboard_2", (5.4, 1.9), (6.6, 1.2), 0.3, 0.0, 0.2, 0.03, "wood")
 
     w.comment("rebar and pipe (static)")
-    for i, (x, y, yaw, L) in enumerate([(-1.8, -4.0, 0.4, 2.0), (2.2, 3.2, 1.2, 1.6), (-6.0, 7.8, 2.0, 1.8),
-                                        (6.4, -8.2, 0.9, 2.2)]):
+    for i, (x, y, yaw, L) in enumerate(
+        [(-1.8, -4.0, 0.4, 2.0), (2.2, 3.2, 1.2, 1.6), (-6.0, 7.8, 2.0, 1.8), (6.4, -8.2, 0.9, 2.2)]
+    ):
         w.cylinder(f"rebar_{i + 1}", (x, y, -0.016), 0.016, L, "metal", rotation=(0.0, math.pi / 2, yaw))
     w.cylinder("pipe_1", (-2.6, 2.2, -0.1), 0.1, 1.6, "metal", rotation=(math.pi / 2, 0.0, 0.0))
 
@@ -159,30 +160,69 @@ def build() -> World:
     entrances = [(-8.0, -5.0, -1.8, 1.8), (5.0, 8.0, -1.8, 1.8)]  # kept clear just inside the doors
     w.comment("cement blocks (movable, 13 kg): two stacks, the rest strewn")
     bz = CMU_SIZE[2]
-    for i, (x, y, lvl, yaw) in enumerate([(-6.9, 4.4, 0, 0.0), (-6.9, 4.4, 1, 0.0), (-6.45, 4.4, 0, 0.0),
-                                          (6.9, -4.6, 0, 1.5708), (6.9, -4.6, 1, 1.5708), (6.9, -4.6, 2, 1.5708)]):
-        w.box(f"block_stack_{i + 1}", (x, y, -(bz / 2 + lvl * bz)), CMU_SIZE, "cinder", rotation=(0.0, 0.0, yaw),
-              mass=CMU_MASS)
-    w.scatter("block", 16, (-7.6, 7.6, -9.6, 9.6), [CMU_SIZE], "cinder", rng, mass_of=lambda s: CMU_MASS,
-              keep_out=entrances)
+    for i, (x, y, lvl, yaw) in enumerate(
+        [
+            (-6.9, 4.4, 0, 0.0),
+            (-6.9, 4.4, 1, 0.0),
+            (-6.45, 4.4, 0, 0.0),
+            (6.9, -4.6, 0, 1.5708),
+            (6.9, -4.6, 1, 1.5708),
+            (6.9, -4.6, 2, 1.5708),
+        ]
+    ):
+        w.box(
+            f"block_stack_{i + 1}",
+            (x, y, -(bz / 2 + lvl * bz)),
+            CMU_SIZE,
+            "cinder",
+            rotation=(0.0, 0.0, yaw),
+            mass=CMU_MASS,
+        )
+    w.scatter(
+        "block", 16, (-7.6, 7.6, -9.6, 9.6), [CMU_SIZE], "cinder", rng, mass_of=lambda s: CMU_MASS, keep_out=entrances
+    )
     w.comment("loose concrete debris (movable)")
-    w.scatter("debris", 22, (-7.6, 7.6, -9.6, 9.6),
-              [(0.3, 0.2, 0.15), (0.25, 0.25, 0.12), (0.4, 0.25, 0.1), (0.2, 0.15, 0.1)], "concrete", rng,
-              mass_of=chunk_mass, keep_out=entrances)
+    w.scatter(
+        "debris",
+        22,
+        (-7.6, 7.6, -9.6, 9.6),
+        [(0.3, 0.2, 0.15), (0.25, 0.25, 0.12), (0.4, 0.25, 0.1), (0.2, 0.15, 0.1)],
+        "concrete",
+        rng,
+        mass_of=chunk_mass,
+        keep_out=entrances,
+    )
     w.comment("static debris: big chunks too heavy to push")
-    w.scatter("boulder", 10, (-7.4, 7.4, -9.4, 9.4),
-              [(0.8, 0.6, 0.35), (0.7, 0.7, 0.3), (1.0, 0.5, 0.25)], "concrete", rng, keep_out=entrances)
+    w.scatter(
+        "boulder",
+        10,
+        (-7.4, 7.4, -9.4, 9.4),
+        [(0.8, 0.6, 0.35), (0.7, 0.7, 0.3), (1.0, 0.5, 0.25)],
+        "concrete",
+        rng,
+        keep_out=entrances,
+    )
 
     # start poses: staging aprons outside both entrances
     for i, y in enumerate((-6.5, 0.0, 6.5)):
-        w.start_pose(f"PlayerStart{i + 1}", -11.8, y, 0.0,
-                     comment="south apron, facing north into the arena" if i == 0 else "")
+        w.start_pose(
+            f"PlayerStart{i + 1}", -11.8, y, 0.0, comment="south apron, facing north into the arena" if i == 0 else ""
+        )
     for i, y in enumerate((-6.5, 0.0, 6.5)):
-        w.start_pose(f"PlayerStart{i + 4}", 11.8, y, 3.1416,
-                     comment="north apron, facing south into the arena" if i == 0 else "")
+        w.start_pose(
+            f"PlayerStart{i + 4}", 11.8, y, 3.1416, comment="north apron, facing south into the arena" if i == 0 else ""
+        )
 
-    for tid, x, y in [(3001, 0.6, 1.6), (3002, 0.9, 9.0), (3003, -6.3, -9.3), (3004, 1.3, -6.9), (3005, 2.4, 4.9),
-                      (3006, 6.6, 8.6), (3007, -6.6, 0.0), (3008, 6.6, 0.0)]:
+    for tid, x, y in [
+        (3001, 0.6, 1.6),
+        (3002, 0.9, 9.0),
+        (3003, -6.3, -9.3),
+        (3004, 1.3, -6.9),
+        (3005, 2.4, 4.9),
+        (3006, 6.6, 8.6),
+        (3007, -6.6, 0.0),
+        (3008, 6.6, 0.0),
+    ]:
         w.rfid(tid, x, y)
     return w
 

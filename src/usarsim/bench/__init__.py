@@ -20,5 +20,14 @@ from usarsim.bench.roundtrips import run_round_trip_bench
 from usarsim.bench.rtf import measure_rtf, raw_mujoco_rtf, raw_mujoco_rtf_over, run_bench
 from usarsim.bench.spots import Spot, free_spots, spread_spots
 
-__all__ = ["Spot", "free_spots", "measure_rtf", "raw_mujoco_rtf", "raw_mujoco_rtf_over", "run_bench",
-           "run_camera_bench", "run_round_trip_bench", "spread_spots"]
+__all__ = [
+    "Spot",
+    "free_spots",
+    "measure_rtf",
+    "raw_mujoco_rtf",
+    "raw_mujoco_rtf_over",
+    "run_bench",
+    "run_camera_bench",
+    "run_round_trip_bench",
+    "spread_spots",
+]

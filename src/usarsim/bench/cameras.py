@@ -32,15 +32,26 @@ class _ServedCamera:
         before = os.environ.get(TEXTURES_ENV)
         os.environ[TEXTURES_ENV] = "1" if textures else "0"  # read while the world is built
         try:
-            self.app = Application(world, host="127.0.0.1", port=0, seed=0, speed=1.0, lockstep=False,
-                                   truth_port=None, image_port=0,
-                                   image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0), web_port=None)
+            self.app = Application(
+                world,
+                host="127.0.0.1",
+                port=0,
+                seed=0,
+                speed=1.0,
+                lockstep=False,
+                truth_port=None,
+                image_port=0,
+                image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0),
+                web_port=None,
+            )
             self.server = ServedApp(self.app)
             try:
                 self.ctl = socket.create_connection(("127.0.0.1", self.app.control.port), timeout=30)
                 pose = world.start_poses[0]
-                self.ctl.sendall(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
-                                 "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode())
+                self.ctl.sendall(
+                    f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
+                    "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode()
+                )
                 sim = self.app.facade.sim
                 deadline = time.monotonic() + 30
                 while not sim.robots and time.monotonic() < deadline:
@@ -94,8 +105,9 @@ class _BareRenderer:
     def __init__(self, served: _ServedCamera, w: int, h: int):
         box = {}
         done = threading.Event()
-        served.app.facade.call(lambda s: s.cameras.render_snapshot(),
-                               on_done=lambda r, e: (box.update(r=r), done.set()))
+        served.app.facade.call(
+            lambda s: s.cameras.render_snapshot(), on_done=lambda r, e: (box.update(r=r), done.set())
+        )
         done.wait(30)
         self.snap = box["r"]
         self.size = (w, h)
@@ -147,10 +159,12 @@ def run_camera_bench(args) -> int:
         row = camera_result(world, size, int(args.frames))
         results.append(row)
         if not args.json:
-            print(f"camera {row['size']}: served {row['served_fps']:.1f} frames/s through the image server; bare "
-                  f"MuJoCo render + JPEG {row['bare_render_jpeg_fps']:.1f} frames/s; ratio {row['ratio']:.2f}; "
-                  f"plain colours served {row['served_plain_fps']:.1f} frames/s, textures cost "
-                  f"{row['textures_cost_percent']:.1f} %")
+            print(
+                f"camera {row['size']}: served {row['served_fps']:.1f} frames/s through the image server; bare "
+                f"MuJoCo render + JPEG {row['bare_render_jpeg_fps']:.1f} frames/s; ratio {row['ratio']:.2f}; "
+                f"plain colours served {row['served_plain_fps']:.1f} frames/s, textures cost "
+                f"{row['textures_cost_percent']:.1f} %"
+            )
     if args.json:
         print(json.dumps(results))
     return 0
@@ -182,7 +196,14 @@ def camera_result(world, size: tuple[int, int], frames: int) -> dict:
     plain_fps = statistics.median(plain_runs)
     bare_fps = statistics.median(bare_runs)
     cost = 100.0 * (1.0 - served / plain_fps)
-    return {"size": f"{w}x{h}", "served_fps": round(served, 2), "bare_render_jpeg_fps": round(bare_fps, 2),
-            "ratio": round(served / bare_fps, 3), "served_plain_fps": round(plain_fps, 2),
-            "textures_cost_percent": round(cost, 1), "frames": frames, "world": world.name,
-            "cpu_count": os.cpu_count()}
+    return {
+        "size": f"{w}x{h}",
+        "served_fps": round(served, 2),
+        "bare_render_jpeg_fps": round(bare_fps, 2),
+        "ratio": round(served / bare_fps, 3),
+        "served_plain_fps": round(plain_fps, 2),
+        "textures_cost_percent": round(cost, 1),
+        "frames": frames,
+        "world": world.name,
+        "cpu_count": os.cpu_count(),
+    }

@@ -14,8 +14,10 @@ async def drive_clients(port: int, poses: list, seconds_hint: float) -> None:
     conns = []
     for i, (x, y, z, yaw) in enumerate(poses):
         r, w = await asyncio.open_connection("127.0.0.1", port, limit=1 << 20)
-        w.write(f"INIT {{ClassName USARBot.P2AT}} {{Name Bench{i + 1}}} {{Location {x:.2f},{y:.2f},{z:.2f}}} "
-                f"{{Rotation 0,0,{yaw:.4f}}}\r\n".encode())
+        w.write(
+            f"INIT {{ClassName USARBot.P2AT}} {{Name Bench{i + 1}}} {{Location {x:.2f},{y:.2f},{z:.2f}}} "
+            f"{{Rotation 0,0,{yaw:.4f}}}\r\n".encode()
+        )
         conns.append((r, w))
 
     async def drive(i, r, w):

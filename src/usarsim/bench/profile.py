@@ -53,6 +53,7 @@ def physics_timers(d) -> dict[str, tuple[float, int]]:
 def physics_parts(before: dict, after: dict) -> list[tuple[str, float]]:
     """The physics' parts between two readings of :func:`physics_timers`, in seconds (MuJoCo
     times them in seconds of wall clock)."""
+
     def spent(names) -> float:
         return sum(after.get(n, (0.0, 0))[0] - before.get(n, (0.0, 0))[0] for n in names)
 
@@ -246,18 +247,28 @@ def breakdown(p: Profiler) -> dict:
     waiting = _cum(lp, _matching(lp, lambda k: k[2] == "select" and k[0].endswith("selectors.py")))
     loop_rows.append(("waiting for sockets (idle)", waiting))
     loop_rows.append(("the rest", max(0.0, p.loop.wall_s - fmt - writes - reads - waiting)))
-    return {"sim": rows, "sensors": sensors, "loop": loop_rows, "contacts": p.contacts,
-            "sim_wall_s": p.sim.wall_s, "sim_cpu_s": p.sim.cpu_s,
-            "sensors_wall_s": p.sensors.wall_s, "sensors_cpu_s": p.sensors.cpu_s,
-            "loop_wall_s": p.loop.wall_s, "loop_cpu_s": p.loop.cpu_s}
+    return {
+        "sim": rows,
+        "sensors": sensors,
+        "loop": loop_rows,
+        "contacts": p.contacts,
+        "sim_wall_s": p.sim.wall_s,
+        "sim_cpu_s": p.sim.cpu_s,
+        "sensors_wall_s": p.sensors.wall_s,
+        "sensors_cpu_s": p.sensors.cpu_s,
+        "loop_wall_s": p.loop.wall_s,
+        "loop_cpu_s": p.loop.cpu_s,
+    }
 
 
 def format_breakdown(b: dict, sim_seconds: float) -> str:
     """The breakdown as a table: milliseconds of wall time per simulated second and shares."""
     out = []
     sw = b["sim_wall_s"] or 1e-9
-    out.append(f"simulation thread: {sw:.2f} s wall, {b['sim_cpu_s']:.2f} s CPU "
-               f"(waiting for the interpreter lock or sleeping: {100 * (1 - b['sim_cpu_s'] / sw):.0f} %)")
+    out.append(
+        f"simulation thread: {sw:.2f} s wall, {b['sim_cpu_s']:.2f} s CPU "
+        f"(waiting for the interpreter lock or sleeping: {100 * (1 - b['sim_cpu_s'] / sw):.0f} %)"
+    )
     physics_parts_end = 1  # the physics line, then its parts (the lines right after it)
     while physics_parts_end < len(b["sim"]) and b["sim"][physics_parts_end][0].startswith("  of which"):
         physics_parts_end += 1
@@ -265,8 +276,10 @@ def format_breakdown(b: dict, sim_seconds: float) -> str:
         out.append(f"  {what:<42} {1000 * t / sim_seconds:8.1f} ms per simulated s  {100 * t / sw:5.1f} %")
         if i + 1 == physics_parts_end and b.get("contacts"):
             ncon, nefc, nisland = b["contacts"]
-            out.append(f"    (the parts by MuJoCo's own timers; at the end {ncon:,} contacts, {nefc:,} constraint "
-                       f"rows, {nisland:,} islands)")
+            out.append(
+                f"    (the parts by MuJoCo's own timers; at the end {ncon:,} contacts, {nefc:,} constraint "
+                f"rows, {nisland:,} islands)"
+            )
     if b.get("sensors"):
         mw = b["sensors_wall_s"] or 1e-9
         out.append(f"measuring thread (sensor readings): {mw:.2f} s wall, {b['sensors_cpu_s']:.2f} s CPU")

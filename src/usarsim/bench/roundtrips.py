@@ -43,8 +43,12 @@ class EchoServer(LoopThread):
 
 def round_trips(port: int, robot: bool, count: int) -> float | None:
     """Round trips a second of :func:`round_trip_client` against ``port`` (None: it failed)."""
-    out = subprocess.run([sys.executable, "-m", "usarsim.bench", "--round-trip-client", str(port),
-                          "1" if robot else "0", str(count)], capture_output=True, text=True, timeout=600)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim.bench", "--round-trip-client", str(port), "1" if robot else "0", str(count)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if out.returncode != 0:
         print(f"usarsim bench: the client failed: {out.stderr.strip()[-500:]}", file=sys.stderr)
         return None
@@ -65,9 +69,11 @@ def run_round_trip_bench(args) -> int:
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"lock-step STEP/STEPPED round trips of {ROUND_TRIP_STEP_S * 1000:g} ms, one client in another "
-              f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT; "
-              f"a bare echo server on the same event loop: {result['bare_echo']:.0f}")
+        print(
+            f"lock-step STEP/STEPPED round trips of {ROUND_TRIP_STEP_S * 1000:g} ms, one client in another "
+            f"process: {result['no_robot']:.0f} a second with no robot, {result['one_p2at']:.0f} with one P2AT; "
+            f"a bare echo server on the same event loop: {result['bare_echo']:.0f}"
+        )
     return 0
 
 
@@ -80,8 +86,9 @@ def round_trip_result(world, count: int) -> dict | None:
     count = max(100, int(count))
     result = {"world": world.name, "step_s": ROUND_TRIP_STEP_S, "count": count, "cpu_count": os.cpu_count()}
     for robot in (False, True):
-        app = Application(world, host="127.0.0.1", port=0, seed=0, lockstep=True, truth_port=None, image_port=None,
-                          web_port=None)
+        app = Application(
+            world, host="127.0.0.1", port=0, seed=0, lockstep=True, truth_port=None, image_port=None, web_port=None
+        )
         served = ServedApp(app)
         try:
             rate = round_trips(app.control.port, robot, count)

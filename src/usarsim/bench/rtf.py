@@ -26,8 +26,17 @@ from usarsim.bench.serving import ServedApp, logging_quiet, peak_rss_mb, rss_mb
 from usarsim.bench.spots import spread_spots
 
 
-def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, progress: bool = False,
-                speed: float | None = None, cameras_fps: float = 0.0, window=None) -> dict:
+def measure_rtf(
+    world,
+    n: int,
+    seconds: float,
+    *,
+    record: str | None = None,
+    progress: bool = False,
+    speed: float | None = None,
+    cameras_fps: float = 0.0,
+    window=None,
+) -> dict:
     """One run: N P2ATs driven over loopback at ``speed`` (None: as fast as it goes) for
     ``seconds`` of simulated time; with ``record``, recorded to that MCAP file, with every
     camera's picture ``cameras_fps`` times a simulated second (the time the recorder takes to
@@ -35,8 +44,9 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
     object whose ``start(app)`` and ``stop(app)`` are called as the measured stretch begins
     and ends (``usarsim bench --profile``).  The server runs in this process (its client in
     another): the memory figures are the simulator's."""
-    result = _measure_rtf(world, n, seconds, record=record, progress=progress, speed=speed,
-                          cameras_fps=cameras_fps, window=window)
+    result = _measure_rtf(
+        world, n, seconds, record=record, progress=progress, speed=speed, cameras_fps=cameras_fps, window=window
+    )
     # The stopped server is garbage in reference cycles, which only a full collection frees: the
     # next run in this process (bench --record runs six) would otherwise be built beside it
     # (three runs of 128 robots in one process peaked at 1.0 GB without this, 0.69 GB with it).
@@ -44,18 +54,42 @@ def measure_rtf(world, n: int, seconds: float, *, record: str | None = None, pro
     return result
 
 
-def _measure_rtf(world, n: int, seconds: float, *, record: str | None, progress: bool, speed: float | None,
-                 cameras_fps: float, window) -> dict:
+def _measure_rtf(
+    world,
+    n: int,
+    seconds: float,
+    *,
+    record: str | None,
+    progress: bool,
+    speed: float | None,
+    cameras_fps: float,
+    window,
+) -> dict:
     from usarsim.server.app import Application
 
     poses = spread_spots(world, n)
-    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=speed, lockstep=False, max_connections=max(64, n),
-                      truth_port=None, image_port=None, web_port=None, record=record, record_cameras_fps=cameras_fps)
+    app = Application(
+        world,
+        host="127.0.0.1",
+        port=0,
+        seed=0,
+        speed=speed,
+        lockstep=False,
+        max_connections=max(64, n),
+        truth_port=None,
+        image_port=None,
+        web_port=None,
+        record=record,
+        record_cameras_fps=cameras_fps,
+    )
     served = ServedApp(app)
     rss_before = rss_mb()  # the world built, no robot yet
     port = app.control.port
-    client = subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses),
-                               str(seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    client = subprocess.Popen(
+        [sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(poses), str(seconds)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     sim = app.facade.sim
     runner = app.facade.runner
 
@@ -87,8 +121,12 @@ def _measure_rtf(world, n: int, seconds: float, *, record: str | None, progress:
                 states.append(snapshot_state(sim, app.facade.runner))
             if progress:
                 done = sim.time - sim_start
-                print(f"\r  {done:7.1f} / {seconds:g} simulated s{' (recording)' if record else ''}", end="",
-                      file=sys.stderr, flush=True)
+                print(
+                    f"\r  {done:7.1f} / {seconds:g} simulated s{' (recording)' if record else ''}",
+                    end="",
+                    file=sys.stderr,
+                    flush=True,
+                )
         sim_end, wall_end = sim.time, time.perf_counter()
         if window is not None:
             window.stop(app)
@@ -109,10 +147,18 @@ def _measure_rtf(world, n: int, seconds: float, *, record: str | None, progress:
         served.stop()
     sim_s = sim_end - sim_start
     wall_s = wall_end - wall_start
-    result = {"sim_seconds": round(sim_s, 3), "wall_seconds": round(wall_s, 3), "rtf": round(sim_s / wall_s, 3),
-              "model": model, "state": state, "states": states, "physics_resets": sim.resets,
-              "pictures": app.recorder.pictures if app.recorder is not None else 0,
-              "peak_rss_mb": round(peak_rss_mb(), 1), "rss_per_robot_mb": round((rss_after - rss_before) / n, 2)}
+    result = {
+        "sim_seconds": round(sim_s, 3),
+        "wall_seconds": round(wall_s, 3),
+        "rtf": round(sim_s / wall_s, 3),
+        "model": model,
+        "state": state,
+        "states": states,
+        "physics_resets": sim.resets,
+        "pictures": app.recorder.pictures if app.recorder is not None else 0,
+        "peak_rss_mb": round(peak_rss_mb(), 1),
+        "rss_per_robot_mb": round((rss_after - rss_before) / n, 2),
+    }
     return result
 
 
@@ -137,10 +183,12 @@ def run_bench(args) -> int:
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"robots {n}: {result['sim_seconds']:.1f} simulated s in {result['wall_seconds']:.2f} s wall -> "
-              f"real-time factor {result['rtf']:.2f}; bare mj_step {result['raw_mujoco_rtf']:.2f}; ratio "
-              f"{result['ratio']:.2f}; memory {result['peak_rss_mb']:.0f} MB at the peak, "
-              f"{result['rss_per_robot_mb']:.1f} MB a robot")
+        print(
+            f"robots {n}: {result['sim_seconds']:.1f} simulated s in {result['wall_seconds']:.2f} s wall -> "
+            f"real-time factor {result['rtf']:.2f}; bare mj_step {result['raw_mujoco_rtf']:.2f}; ratio "
+            f"{result['ratio']:.2f}; memory {result['peak_rss_mb']:.0f} MB at the peak, "
+            f"{result['rss_per_robot_mb']:.1f} MB a robot"
+        )
     return 0
 
 
@@ -151,10 +199,20 @@ def rtf_result(world, n: int, seconds: float, progress: bool = False) -> dict:
     model = run["model"]
     rtf = run["rtf"]
     raw = raw_mujoco_rtf_over(model, min(seconds, 5.0), run["states"])
-    return {"robots": n, "sim_seconds": run["sim_seconds"], "wall_seconds": run["wall_seconds"], "rtf": rtf,
-            "raw_mujoco_rtf": round(raw, 3), "ratio": round(rtf / raw, 3), "timestep_s": model.opt.timestep,
-            "world": world.name, "cpu_count": os.cpu_count(), "physics_resets": run["physics_resets"],
-            "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}
+    return {
+        "robots": n,
+        "sim_seconds": run["sim_seconds"],
+        "wall_seconds": run["wall_seconds"],
+        "rtf": rtf,
+        "raw_mujoco_rtf": round(raw, 3),
+        "ratio": round(rtf / raw, 3),
+        "timestep_s": model.opt.timestep,
+        "world": world.name,
+        "cpu_count": os.cpu_count(),
+        "physics_resets": run["physics_resets"],
+        "peak_rss_mb": run["peak_rss_mb"],
+        "rss_per_robot_mb": run["rss_per_robot_mb"],
+    }
 
 
 def run_profile_bench(args, world, n: int, seconds: float, progress: bool) -> int:
@@ -165,19 +223,32 @@ def run_profile_bench(args, world, n: int, seconds: float, progress: bool) -> in
     run = measure_rtf(world, n, seconds, progress=progress, window=prof)
     b = breakdown(prof)
     if args.json:
-        print(json.dumps({"robots": n, "sim_seconds": run["sim_seconds"], "rtf_profiled": run["rtf"],
-                          "sim_wall_s": round(b["sim_wall_s"], 3), "sim_cpu_s": round(b["sim_cpu_s"], 3),
-                          "loop_wall_s": round(b["loop_wall_s"], 3), "loop_cpu_s": round(b["loop_cpu_s"], 3),
-                          "sensors_wall_s": round(b["sensors_wall_s"], 3),
-                          "sensors_cpu_s": round(b["sensors_cpu_s"], 3),
-                          "sim": {k: round(v, 4) for k, v in b["sim"]},
-                          "sensors": {k: round(v, 4) for k, v in b["sensors"]},
-                          "loop": {k: round(v, 4) for k, v in b["loop"]},
-                          "contacts": dict(zip(("contacts", "constraint_rows", "islands"), b["contacts"] or ())),
-                          "peak_rss_mb": run["peak_rss_mb"], "rss_per_robot_mb": run["rss_per_robot_mb"]}))
+        print(
+            json.dumps(
+                {
+                    "robots": n,
+                    "sim_seconds": run["sim_seconds"],
+                    "rtf_profiled": run["rtf"],
+                    "sim_wall_s": round(b["sim_wall_s"], 3),
+                    "sim_cpu_s": round(b["sim_cpu_s"], 3),
+                    "loop_wall_s": round(b["loop_wall_s"], 3),
+                    "loop_cpu_s": round(b["loop_cpu_s"], 3),
+                    "sensors_wall_s": round(b["sensors_wall_s"], 3),
+                    "sensors_cpu_s": round(b["sensors_cpu_s"], 3),
+                    "sim": {k: round(v, 4) for k, v in b["sim"]},
+                    "sensors": {k: round(v, 4) for k, v in b["sensors"]},
+                    "loop": {k: round(v, 4) for k, v in b["loop"]},
+                    "contacts": dict(zip(("contacts", "constraint_rows", "islands"), b["contacts"] or ())),
+                    "peak_rss_mb": run["peak_rss_mb"],
+                    "rss_per_robot_mb": run["rss_per_robot_mb"],
+                }
+            )
+        )
     else:
-        print(f"robots {n}: {run['sim_seconds']:.1f} simulated s in {run['wall_seconds']:.2f} s wall under the "
-              f"profiler (real-time factor {run['rtf']:.2f}; without it, run 'usarsim bench')")
+        print(
+            f"robots {n}: {run['sim_seconds']:.1f} simulated s in {run['wall_seconds']:.2f} s wall under the "
+            f"profiler (real-time factor {run['rtf']:.2f}; without it, run 'usarsim bench')"
+        )
         print(format_breakdown(b, run["sim_seconds"]))
     return 0
 

@@ -23,8 +23,9 @@ def spread_spots(world, n: int, clearance: float = 0.4, spacing: float = 0.7) ->
     ``n``.  Robots started on a tight grid in one corner of an arena jam into each other as they
     turn; the bench measures robots that meet now and then, not one pile-up."""
     if len(_spots(world, clearance, spacing, limit=n)) < n:
-        raise SystemExit(f"usarsim bench: the world has room for {len(_spots(world, clearance, spacing))} "
-                         f"robots, {n} asked")
+        raise SystemExit(
+            f"usarsim bench: the world has room for {len(_spots(world, clearance, spacing))} robots, {n} asked"
+        )
     lo, hi = spacing, spacing * 2
     while len(_spots(world, clearance, hi, limit=n)) >= n and hi < 1e3:
         lo, hi = hi, hi * 2

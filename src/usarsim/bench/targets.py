@@ -41,8 +41,7 @@ class Target:
     digits: int = 2
 
     def holds(self, value: float) -> bool:
-        return ((self.at_least is None or value >= self.at_least)
-                and (self.at_most is None or value <= self.at_most))
+        return (self.at_least is None or value >= self.at_least) and (self.at_most is None or value <= self.at_most)
 
     @property
     def bound(self) -> str:
@@ -83,8 +82,16 @@ def evaluate(sitting: dict) -> list[dict]:
     rows = []
     for t in TARGETS:
         values = t.figure(sitting)
-        rows.append({"target": t.label, "bound": t.bound, "at_least": t.at_least, "at_most": t.at_most,
-                     "values": values, "met": all(t.holds(v) for v in values) if values else None})
+        rows.append(
+            {
+                "target": t.label,
+                "bound": t.bound,
+                "at_least": t.at_least,
+                "at_most": t.at_most,
+                "values": values,
+                "met": all(t.holds(v) for v in values) if values else None,
+            }
+        )
     return rows
 
 
@@ -102,34 +109,63 @@ def machine() -> dict:
             memory_gib = round(kib / 2**20, 1)
     except (OSError, StopIteration, ValueError):
         pass
-    return {"cpu": cpu, "cores": os.cpu_count(), "memory_gib": memory_gib, "system": platform.platform(),
-            "python": platform.python_version(), "mujoco": mujoco.__version__,
-            "time_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "memory_gib": memory_gib,
+        "system": platform.platform(),
+        "python": platform.python_version(),
+        "mujoco": mujoco.__version__,
+        "time_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+    }
 
 
 def _bench(*args: str) -> object:
     """``usarsim bench ARGS --json`` in a process of its own (as a user runs it: each run's
     memory is its own process's), its JSON."""
-    out = subprocess.run([sys.executable, "-m", "usarsim", "bench", *args, "--json"], capture_output=True, text=True,
-                         stdin=subprocess.DEVNULL, timeout=BENCH_TIMEOUT_S)
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim", "bench", *args, "--json"],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=BENCH_TIMEOUT_S,
+    )
     if out.returncode != 0:
-        raise SystemExit(f"usarsim bench {' '.join(args)} failed (exit code {out.returncode}): "
-                         f"{out.stderr.strip()[-1000:]}")
+        raise SystemExit(
+            f"usarsim bench {' '.join(args)} failed (exit code {out.returncode}): {out.stderr.strip()[-1000:]}"
+        )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def sitting(world: str, *, counts=ROBOT_COUNTS, runs: int = RUNS, seconds: float = 10.0, count: int = 5000,
-            sizes=((320, 240), (640, 480)), frames: int = 60, progress: Callable[[str], None] | None = None) -> dict:
+def sitting(
+    world: str,
+    *,
+    counts=ROBOT_COUNTS,
+    runs: int = RUNS,
+    seconds: float = 10.0,
+    count: int = 5000,
+    sizes=((320, 240), (640, 480)),
+    frames: int = 60,
+    progress: Callable[[str], None] | None = None,
+) -> dict:
     """Every benchmark of the targets, ``runs`` times in turn, each in a process of its own;
     ``progress(what)`` is called before each one."""
-    out: dict = {"world": world, "runs": runs, "seconds": seconds, "counts": list(counts), "rtf": {},
-                 "round_trips": [], "cameras": []}
+    out: dict = {
+        "world": world,
+        "runs": runs,
+        "seconds": seconds,
+        "counts": list(counts),
+        "rtf": {},
+        "round_trips": [],
+        "cameras": [],
+    }
     for k in range(runs):
         for n in counts:
             if progress:
                 progress(f"{n} robots, run {k + 1} of {runs}")
             out["rtf"].setdefault(str(n), []).append(
-                _bench("--world", world, "--robots", str(n), "--seconds", repr(float(seconds))))
+                _bench("--world", world, "--robots", str(n), "--seconds", repr(float(seconds)))
+            )
         if count > 0:
             if progress:
                 progress(f"round trips, run {k + 1} of {runs}")
@@ -137,8 +173,11 @@ def sitting(world: str, *, counts=ROBOT_COUNTS, runs: int = RUNS, seconds: float
         if sizes:
             if progress:
                 progress(f"cameras, run {k + 1} of {runs}")
-            out["cameras"].append(_bench("--world", world, "--cameras", "--frames", str(frames), "--sizes",
-                                         *(f"{w}x{h}" for w, h in sizes)))
+            out["cameras"].append(
+                _bench(
+                    "--world", world, "--cameras", "--frames", str(frames), "--sizes", *(f"{w}x{h}" for w, h in sizes)
+                )
+            )
     return out
 
 
@@ -158,16 +197,27 @@ def run_targets_bench(args) -> int:
         print("usarsim bench: --runs and --counts must be >= 1 and --seconds > 0", file=sys.stderr)
         return 2
     show = sys.stderr.isatty() and not args.json
-    kwargs = dict(counts=counts, runs=runs, seconds=seconds, count=int(args.count), sizes=tuple(args.sizes),
-                  frames=int(args.frames))
+    kwargs = dict(
+        counts=counts,
+        runs=runs,
+        seconds=seconds,
+        count=int(args.count),
+        sizes=tuple(args.sizes),
+        frames=int(args.frames),
+    )
     info = machine()  # and the time the sitting started
     started = time.monotonic()
     if show:
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
         total = steps_of(counts, runs, kwargs["count"], kwargs["sizes"])
-        with Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                      TimeElapsedColumn(), transient=True) as bar:
+        with Progress(
+            TextColumn("{task.description:<28}"),
+            BarColumn(),
+            TextColumn("{task.completed}/{task.total}"),
+            TimeElapsedColumn(),
+            transient=True,
+        ) as bar:
             task = bar.add_task("starting", total=total)
             first = [True]
 
@@ -200,10 +250,14 @@ def print_targets(result: dict) -> None:
     rows = result["targets"]
     measured = [r for r in rows if r["met"] is not None]
     met = sum(1 for r in measured if r["met"])
-    print(f"{m['time_utc']}: {m['cpu']}, {m['cores']} cores, {m['memory_gib']} GiB, {m['system']}, Python "
-          f"{m['python']}, MuJoCo {m['mujoco']}")
-    print(f"{result['world']}, {result['seconds']:g} simulated s a bench run, {result['runs']} runs of each in turn, "
-          f"{result['wall_s']:.0f} s in all: {met} of {len(measured)} targets measured were met in every run")
+    print(
+        f"{m['time_utc']}: {m['cpu']}, {m['cores']} cores, {m['memory_gib']} GiB, {m['system']}, Python "
+        f"{m['python']}, MuJoCo {m['mujoco']}"
+    )
+    print(
+        f"{result['world']}, {result['seconds']:g} simulated s a bench run, {result['runs']} runs of each in turn, "
+        f"{result['wall_s']:.0f} s in all: {met} of {len(measured)} targets measured were met in every run"
+    )
     t = Table(box=box.SIMPLE_HEAD)
     t.add_column("target")
     t.add_column("bound", justify="right")
@@ -215,13 +269,15 @@ def print_targets(result: dict) -> None:
         per_run = len(values) // result["runs"] if values else 0
         cells = []
         for k in range(result["runs"]):
-            mine = values[k * per_run:(k + 1) * per_run] if per_run else []
+            mine = values[k * per_run : (k + 1) * per_run] if per_run else []
             cells.append(", ".join(f"{v:,.{target.digits}f}" for v in mine) or "-")
         verdict = "not measured" if r["met"] is None else ("yes" if r["met"] else "[bold red]no[/]")
         t.add_row(r["target"], r["bound"], *cells, verdict)
     Console().print(t)
-    print("ratio: real-time factor / bare single-threaded mj_step on the same model; camera ratio: frames a "
-          "second served / bare MuJoCo render + JPEG")
+    print(
+        "ratio: real-time factor / bare single-threaded mj_step on the same model; camera ratio: frames a "
+        "second served / bare MuJoCo render + JPEG"
+    )
     # what the machine allows, to read the targets against
     for n, runs in result["rtf"].items():
         rtf = " / ".join(f"{r['rtf']:.2f}" for r in runs)

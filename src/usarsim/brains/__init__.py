@@ -32,9 +32,19 @@ import importlib
 from typing import Any
 
 # Loaded on first use, so that ``python -m usarsim.brains.<brain>`` runs the module once.
-_WHERE = {"P2AT": "base", "Body": "base", "Brain": "base", "Bounds": "grid", "OccupancyGrid": "grid",
-          "FrontierExplorer": "frontier", "run": "runner", "Team": "team", "VictimApproacher": "victim",
-          "WallFollower": "wall_follower", "Wander": "wander"}
+_WHERE = {
+    "P2AT": "base",
+    "Body": "base",
+    "Brain": "base",
+    "Bounds": "grid",
+    "OccupancyGrid": "grid",
+    "FrontierExplorer": "frontier",
+    "run": "runner",
+    "Team": "team",
+    "VictimApproacher": "victim",
+    "WallFollower": "wall_follower",
+    "Wander": "wander",
+}
 
 __all__ = sorted(_WHERE)
 

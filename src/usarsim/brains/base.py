@@ -72,8 +72,16 @@ class Brain:
     odometry, ``calibrate`` sets the Odometry sensor's TrackWidth to the body's effective
     track width first, so that it counts turns right."""
 
-    def __init__(self, robot: Any, *, body: Body = P2AT, origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                 pose_source: str = "odometry", calibrate: bool = True, gyro: bool = True):
+    def __init__(
+        self,
+        robot: Any,
+        *,
+        body: Body = P2AT,
+        origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        pose_source: str = "odometry",
+        calibrate: bool = True,
+        gyro: bool = True,
+    ):
         if pose_source not in ("odometry", "ins", "truth"):
             raise ValueError(f"pose_source must be odometry, ins or truth, got {pose_source!r}")
         self.robot = robot

@@ -33,9 +33,13 @@ def _rotation(rpy: tuple[float, float, float]) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll), as world files define their rotations."""
     r, p, y = rpy
     cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                     [-sp, cp * sr, cp * cr]])
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 @dataclass
@@ -74,8 +78,12 @@ class FloorMap:
             world_corners = corners @ rot.T + np.asarray(obj.center)
             lo, hi = world_corners.min(axis=0), world_corners.max(axis=0)
             box = [min(box[0], lo[0]), min(box[1], lo[1]), max(box[2], hi[0]), max(box[3], hi[1])]
-            sel = (px >= lo[0] - resolution) & (px <= hi[0] + resolution) & \
-                  (py >= lo[1] - resolution) & (py <= hi[1] + resolution)
+            sel = (
+                (px >= lo[0] - resolution)
+                & (px <= hi[0] + resolution)
+                & (py >= lo[1] - resolution)
+                & (py <= hi[1] + resolution)
+            )
             if not sel.any():
                 continue
             qx, qy = px[sel], py[sel]
@@ -88,8 +96,9 @@ class FloorMap:
                 if obj.shape == "box":
                     hit |= np.all(np.abs(local) <= half + pad, axis=1)
                 else:
-                    hit |= (np.hypot(local[:, 0], local[:, 1]) <= obj.radius_m + pad[0]) & \
-                           (np.abs(local[:, 2]) <= half[2] + pad[2])
+                    hit |= (np.hypot(local[:, 0], local[:, 1]) <= obj.radius_m + pad[0]) & (
+                        np.abs(local[:, 2]) <= half[2] + pad[2]
+                    )
             floor[sel] &= ~hit
         if not math.isfinite(box[0]):
             box = [x0, y0, x0 + sx, y0 + sy]
@@ -124,7 +133,7 @@ class FloorMap:
         """Cells whose centres lie inside ``box`` (xmin, ymin, xmax, ymax; default: the
         bounding box of the static solids)."""
         xmin, ymin, xmax, ymax = box or self.solids_box
-        ii, jj = np.mgrid[0:self.shape[0], 0:self.shape[1]]
+        ii, jj = np.mgrid[0 : self.shape[0], 0 : self.shape[1]]
         px = self.x0 + (ii + 0.5) * self.resolution
         py = self.y0 + (jj + 0.5) * self.resolution
         return (px > xmin) & (px < xmax) & (py > ymin) & (py < ymax)
@@ -141,9 +150,15 @@ class Sweeps:
         self.seen = np.zeros(floor.shape, bool)
         self.sweeps = 0
 
-    def add(self, location: tuple[float, float], orientation: tuple[float, float, float], ranges: np.ndarray,
-            angles: np.ndarray, max_range: float | None = None,
-            scanner_offset: tuple[float, float] = (0.144, 0.0)) -> bool:
+    def add(
+        self,
+        location: tuple[float, float],
+        orientation: tuple[float, float, float],
+        ranges: np.ndarray,
+        angles: np.ndarray,
+        max_range: float | None = None,
+        scanner_offset: tuple[float, float] = (0.144, 0.0),
+    ) -> bool:
         """One sweep taken with the robot at ``location`` (x, y) and ``orientation`` (roll,
         pitch, yaw; world frame, yaw clockwise), beams at ``angles`` (the client's:
         counter-clockwise, 0 ahead) of ``ranges`` metres, from a scanner at
@@ -181,8 +196,9 @@ class Sweeps:
         total = int(np.count_nonzero(of))
         return float(np.count_nonzero(self.seen & of)) / total if total else 0.0
 
-    def to_png(self, path: str, of: np.ndarray | None = None, marks: list[tuple[float, float]] | None = None,
-               scale: int = 3) -> None:
+    def to_png(
+        self, path: str, of: np.ndarray | None = None, marks: list[tuple[float, float]] | None = None, scale: int = 3
+    ) -> None:
         """A picture (north up): solids black, floor grey, swept floor white, ``of`` outlined
         by leaving the rest darker, ``marks`` red."""
         from PIL import Image
@@ -196,9 +212,10 @@ class Sweeps:
         for x, y in marks or []:
             i, j = fl.cell(x, y)
             if 0 <= i < fl.shape[0] and 0 <= j < fl.shape[1]:
-                img[max(0, i - 1):i + 2, max(0, j - 1):j + 2] = (220, 30, 30)
-        Image.fromarray(img[::-1]).resize((fl.shape[1] * scale, fl.shape[0] * scale),
-                                          Image.Resampling.NEAREST).save(path)
+                img[max(0, i - 1) : i + 2, max(0, j - 1) : j + 2] = (220, 30, 30)
+        Image.fromarray(img[::-1]).resize((fl.shape[1] * scale, fl.shape[0] * scale), Image.Resampling.NEAREST).save(
+            path
+        )
 
 
 class Referee:
@@ -208,8 +225,7 @@ class Referee:
     the floor reachable from ``start`` (x, y).  ``sweeps`` counts the whole length of the
     beams; ``near`` only their first ``near_m`` metres."""
 
-    def __init__(self, world: WorldConfig, start: tuple[float, float], resolution: float = 0.1,
-                 near_m: float = NEAR_M):
+    def __init__(self, world: WorldConfig, start: tuple[float, float], resolution: float = 0.1, near_m: float = NEAR_M):
         self.floor = FloorMap.from_world(world, resolution)
         self.reachable = self.floor.reachable(*start)
         self.arena = self.reachable & self.floor.region()

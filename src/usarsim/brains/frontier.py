@@ -84,14 +84,28 @@ class FrontierExplorer(Brain):
     """Explore ``bounds`` (a :class:`Bounds` in the brain's frame; default a square of
     ``2 * reach`` metres around where it starts) with a grid of ``resolution`` metres."""
 
-    def __init__(self, robot: Any, *, bounds: Bounds | None = None, reach: float = 15.0, resolution: float = 0.1,
-                 speed: float = 0.5, replan_s: float = 1.0, free_limit: float = 6.0, min_frontier: int = 4,
-                 turn_weight: float = 0.4, keep_weight: float = 0.8, team_spread: float = 3.0,
-                 match_scans: bool | None = None, **kw: Any):
+    def __init__(
+        self,
+        robot: Any,
+        *,
+        bounds: Bounds | None = None,
+        reach: float = 15.0,
+        resolution: float = 0.1,
+        speed: float = 0.5,
+        replan_s: float = 1.0,
+        free_limit: float = 6.0,
+        min_frontier: int = 4,
+        turn_weight: float = 0.4,
+        keep_weight: float = 0.8,
+        team_spread: float = 3.0,
+        match_scans: bool | None = None,
+        **kw: Any,
+    ):
         super().__init__(robot, **kw)
         # odometry drifts (wheels slip in turns and over boxes): fit each sweep to the map
-        self.matcher = ScanMatcher() if (self.pose_source == "odometry" if match_scans is None else match_scans) \
-            else None
+        self.matcher = (
+            ScanMatcher() if (self.pose_source == "odometry" if match_scans is None else match_scans) else None
+        )
         self.correction = (0.0, 0.0, 0.0)  # corrected pose = correction o the pose source's
         self.matched = 0
         self._lost = False  # the pose may be far off: the next match searches wide
@@ -100,18 +114,27 @@ class FrontierExplorer(Brain):
         self.bounds = bounds or Bounds.around(ox, oy, reach)
         # the map covers the area to explore and where the robot starts, with a margin
         margin = 1.5
-        mb = Bounds(min(self.bounds.xmin, ox) - margin, min(self.bounds.ymin, oy) - margin,
-                    max(self.bounds.xmax, ox) + margin, max(self.bounds.ymax, oy) + margin)
+        mb = Bounds(
+            min(self.bounds.xmin, ox) - margin,
+            min(self.bounds.ymin, oy) - margin,
+            max(self.bounds.xmax, ox) + margin,
+            max(self.bounds.ymax, oy) + margin,
+        )
         self.own = OccupancyGrid(mb, resolution)
         self.map = self.own
-        ii, jj = np.mgrid[0:self.own.shape[0], 0:self.own.shape[1]]
+        ii, jj = np.mgrid[0 : self.own.shape[0], 0 : self.own.shape[1]]
         cx, cy = self.own.center(ii, jj)
-        self.region = (cx > self.bounds.xmin) & (cx < self.bounds.xmax) & (cy > self.bounds.ymin) & \
-                      (cy < self.bounds.ymax)
+        self.region = (
+            (cx > self.bounds.xmin) & (cx < self.bounds.xmax) & (cy > self.bounds.ymin) & (cy < self.bounds.ymax)
+        )
         self.planner = Planner()
         self.speed, self.replan_s, self.free_limit = speed, replan_s, free_limit
-        self.min_frontier, self.turn_weight, self.keep_weight, self.team_spread = \
-            min_frontier, turn_weight, keep_weight, team_spread
+        self.min_frontier, self.turn_weight, self.keep_weight, self.team_spread = (
+            min_frontier,
+            turn_weight,
+            keep_weight,
+            team_spread,
+        )
         self.path: list[tuple[float, float]] = []
         self.goal: tuple[float, float] | None = None
         self.trail: list[tuple[float, float]] = []  # where it has been (brain's frame)
@@ -192,8 +215,13 @@ class FrontierExplorer(Brain):
             self._fused = True
         return self.map
 
-    def receive(self, name: str, logodds: np.ndarray | None, position: tuple[float, float] | None,
-                goal: tuple[float, float] | None) -> None:
+    def receive(
+        self,
+        name: str,
+        logodds: np.ndarray | None,
+        position: tuple[float, float] | None,
+        goal: tuple[float, float] | None,
+    ) -> None:
         """A team-mate's latest map (None: only its position and goal), position and goal."""
         old = self.peers.get(name)
         if logodds is None:
@@ -244,8 +272,9 @@ class FrontierExplorer(Brain):
         candidates = (labels > 0) & self.region
         self._aside = [g for g in self._aside if g[2] > self.time]
         outside = 0.0
-        if not (candidates & np.isfinite(dist)).any() and \
-                np.count_nonzero(~grid.unknown & self.region) < 0.2 * np.count_nonzero(self.region):
+        if not (candidates & np.isfinite(dist)).any() and np.count_nonzero(
+            ~grid.unknown & self.region
+        ) < 0.2 * np.count_nonzero(self.region):
             # it has hardly seen the area yet (it starts far from it) and can reach none of its
             # frontiers: make for the frontiers nearest to the area
             candidates = labels > 0
@@ -265,8 +294,10 @@ class FrontierExplorer(Brain):
         score = d + self.turn_weight * np.abs(np.vectorize(wrap)(np.arctan2(cy - y, cx - x) - a))
         if outside:
             b = self.bounds
-            score += outside * np.hypot(np.maximum(0.0, np.maximum(b.xmin - cx, cx - b.xmax)),
-                                        np.maximum(0.0, np.maximum(b.ymin - cy, cy - b.ymax)))
+            score += outside * np.hypot(
+                np.maximum(0.0, np.maximum(b.xmin - cx, cx - b.xmax)),
+                np.maximum(0.0, np.maximum(b.ymin - cy, cy - b.ymax)),
+            )
         if self.goal is not None:
             score -= self.keep_weight * (np.hypot(cx - self.goal[0], cy - self.goal[1]) < 0.6)
         for gx, gy, _ in self._aside:
@@ -352,9 +383,11 @@ def make(robot: Any, origin: tuple[float, float, float], args: argparse.Namespac
 
 
 def report(brain: FrontierExplorer, png: str | None = None) -> None:
-    known = np.count_nonzero(~brain.own.unknown & brain.region) * brain.own.resolution ** 2
-    print(f"mapped {known:.1f} m2 of the area to explore; {brain.plans} plans; "
-          f"{'done' if brain.done else f'{brain.frontiers_left} frontier cells left'}")
+    known = np.count_nonzero(~brain.own.unknown & brain.region) * brain.own.resolution**2
+    print(
+        f"mapped {known:.1f} m2 of the area to explore; {brain.plans} plans; "
+        f"{'done' if brain.done else f'{brain.frontiers_left} frontier cells left'}"
+    )
     if png:
         brain.own.to_png(png, path_xy=brain.trail)
         print(f"map saved to {png}")
@@ -362,9 +395,12 @@ def report(brain: FrontierExplorer, png: str | None = None) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     p = parser("Explore: map with the laser, drive to the nearest frontier.", seconds=300.0)
-    p.add_argument("--bounds", default=None,
-                   help="the area to explore, xmin,ymin,xmax,ymax in the world frame (metres); default: 30 m "
-                        "square around the start (DM-USAR_yellow's arena: -6,-7.2,6,7.2)")
+    p.add_argument(
+        "--bounds",
+        default=None,
+        help="the area to explore, xmin,ymin,xmax,ymax in the world frame (metres); default: 30 m "
+        "square around the start (DM-USAR_yellow's arena: -6,-7.2,6,7.2)",
+    )
     p.add_argument("--speed", type=float, default=0.5, help="top forward speed, m/s (default 0.5)")
     p.add_argument("--map", default=None, help="save the map as a PNG picture here at the end")
     args = p.parse_known_args(numbers_first(argv))[0]

@@ -65,15 +65,19 @@ class OccupancyGrid:
             raise ValueError(f"resolution must be > 0, got {resolution}")
         self.bounds = bounds
         self.resolution = float(resolution)
-        self.shape = (max(1, math.ceil((bounds.xmax - bounds.xmin) / resolution)),
-                      max(1, math.ceil((bounds.ymax - bounds.ymin) / resolution)))
+        self.shape = (
+            max(1, math.ceil((bounds.xmax - bounds.xmin) / resolution)),
+            max(1, math.ceil((bounds.ymax - bounds.ymin) / resolution)),
+        )
         self.logodds = np.zeros(self.shape, np.float32)
 
     # cells and coordinates -------------------------------------------------------------
     def cell(self, x: float, y: float) -> tuple[int, int]:
         """The cell holding (x, y) (it may lie outside the grid: check :meth:`inside`)."""
-        return (int(math.floor((x - self.bounds.xmin) / self.resolution)),
-                int(math.floor((y - self.bounds.ymin) / self.resolution)))
+        return (
+            int(math.floor((x - self.bounds.xmin) / self.resolution)),
+            int(math.floor((y - self.bounds.ymin) / self.resolution)),
+        )
 
     def inside(self, i: int, j: int) -> bool:
         return 0 <= i < self.shape[0] and 0 <= j < self.shape[1]
@@ -98,8 +102,14 @@ class OccupancyGrid:
         return float(np.count_nonzero(~self.unknown)) / self.logodds.size
 
     # updates ---------------------------------------------------------------------------
-    def integrate(self, origin: tuple[float, float], directions: np.ndarray, ranges: np.ndarray,
-                  max_range: float, free_limit: float) -> None:
+    def integrate(
+        self,
+        origin: tuple[float, float],
+        directions: np.ndarray,
+        ranges: np.ndarray,
+        max_range: float,
+        free_limit: float,
+    ) -> None:
         """One sweep: beams from ``origin`` (world x, y) in ``directions`` (radians from +X
         towards +Y, i.e. clockwise seen from above), ``ranges`` metres.  A beam shorter than
         ``max_range`` (a little less: what the scanner reports when nothing was hit) ends in
@@ -177,8 +187,14 @@ class OccupancyGrid:
         return np.frombuffer(raw, np.int8).astype(np.float32).reshape(self.shape) / 10.0
 
     # pictures --------------------------------------------------------------------------
-    def to_png(self, path: str, *, path_xy: list[tuple[float, float]] | None = None,
-               marks: list[tuple[float, float]] | None = None, scale: int = 4) -> None:
+    def to_png(
+        self,
+        path: str,
+        *,
+        path_xy: list[tuple[float, float]] | None = None,
+        marks: list[tuple[float, float]] | None = None,
+        scale: int = 4,
+    ) -> None:
         """Save the map as a picture (north up, east right): white free, black occupied,
         grey unknown; ``path_xy`` in blue, ``marks`` (robots, victims) in red."""
         from PIL import Image  # the image server's dependency
@@ -190,10 +206,11 @@ class OccupancyGrid:
             for x, y in pts:
                 i, j = self.cell(x, y)
                 if self.inside(i, j):
-                    img[max(0, i - 1):i + 2, max(0, j - 1):j + 2] = colour
+                    img[max(0, i - 1) : i + 2, max(0, j - 1) : j + 2] = colour
         # rows: x decreasing downwards (north up); columns: y increasing (east right)
-        pic = Image.fromarray(img[::-1, :, :]).resize((self.shape[1] * scale, self.shape[0] * scale),
-                                                       Image.Resampling.NEAREST)
+        pic = Image.fromarray(img[::-1, :, :]).resize(
+            (self.shape[1] * scale, self.shape[0] * scale), Image.Resampling.NEAREST
+        )
         buf = io.BytesIO()
         pic.save(buf, format="PNG")
         with open(path, "wb") as f:
@@ -406,6 +423,7 @@ def warm_up() -> None:
 
 # ------------------------------------------------------------------------------ scan matching
 
+
 @njit(cache=True, nogil=True)
 def _match(field, x0, y0, res, px, py, gx, gy, ga, dxs, dys, das, prior_xy, prior_a):
     """The pose (of the candidates around (gx, gy, ga)) whose beam end points (px, py in the
@@ -461,8 +479,9 @@ class ScanMatcher:
         d = _distance_to(occ, self.reach / grid.resolution) * grid.resolution
         self.field = np.exp(-0.5 * (d / self.sigma) ** 2)
 
-    def match(self, grid: OccupancyGrid, guess: tuple[float, float, float], points: np.ndarray,
-              wide: bool = False) -> tuple[float, float, float] | None:
+    def match(
+        self, grid: OccupancyGrid, guess: tuple[float, float, float], points: np.ndarray, wide: bool = False
+    ) -> tuple[float, float, float] | None:
         """The corrected pose for end points ``points`` ((n, 2), robot frame), or None when
         the sweep or the map has too little to go by.  ``wide`` searches further (0.4 rad,
         0.4 m: after the robot has lurched over a box, when the odometry may be far off)
@@ -477,17 +496,34 @@ class ScanMatcher:
         # twentieth of the points' score, so that a corridor, where nothing fixes the
         # position along it, leaves the guess alone
         n = len(points)
-        prior_xy, prior_a = 0.05 * n / PRIOR_XY ** 2, 0.05 * n / PRIOR_A ** 2
+        prior_xy, prior_a = 0.05 * n / PRIOR_XY**2, 0.05 * n / PRIOR_A**2
         # heading first (a heading error moves the far points most), then position, twice
-        stages = [(np.linspace(-0.08, 0.08, 17), 0.0, 3), (np.linspace(-0.02, 0.02, 5), 0.05, 3),
-                  (np.linspace(-0.006, 0.006, 3), 0.02, 3)]
+        stages = [
+            (np.linspace(-0.08, 0.08, 17), 0.0, 3),
+            (np.linspace(-0.02, 0.02, 5), 0.05, 3),
+            (np.linspace(-0.006, 0.006, 3), 0.02, 3),
+        ]
         if wide:
             stages.insert(0, (np.linspace(-0.4, 0.4, 41), 0.1, 4))
         gx, gy, ga = guess
         for das, step, k in stages:
             offs = np.arange(-k, k + 1) * step if step else zero
-            score, gx, gy, ga = _match(self.field, b.xmin, b.ymin, grid.resolution, px, py, gx, gy, ga,
-                                       offs, offs, das, 0.0 if wide else prior_xy, 0.0 if wide else prior_a)
+            score, gx, gy, ga = _match(
+                self.field,
+                b.xmin,
+                b.ymin,
+                grid.resolution,
+                px,
+                py,
+                gx,
+                gy,
+                ga,
+                offs,
+                offs,
+                das,
+                0.0 if wide else prior_xy,
+                0.0 if wide else prior_a,
+            )
         if score < (0.5 if wide else 0.35) * len(points):  # most points should lie on known walls
             return None
         return gx, gy, ga

@@ -16,8 +16,15 @@ from usarsim.client import ClientError, connect
 log = logging.getLogger("usarsim.brains")
 
 
-def run(world: Any, brains: Iterable[Any], seconds: float, *, period: float = 0.1,
-        on_step: Callable[[float], bool | None] | None = None, until_done: str = "all") -> float:
+def run(
+    world: Any,
+    brains: Iterable[Any],
+    seconds: float,
+    *,
+    period: float = 0.1,
+    on_step: Callable[[float], bool | None] | None = None,
+    until_done: str = "all",
+) -> float:
     """Step ``brains`` every ``period`` seconds of simulated time for ``seconds`` (or until
     they are done: ``until_done`` ``"all"``, ``"any"`` or ``"never"``).  In lock-step the
     loop advances the world itself (``world.step``); in real time it waits while the
@@ -59,10 +66,17 @@ def parser(description: str, *, seconds: float = 60.0) -> argparse.ArgumentParse
     p.add_argument("--yaw", type=float, default=0.0, help="yaw at --location (radians, clockwise)")
     p.add_argument("--seconds", type=float, default=seconds, help=f"simulated seconds to run (default {seconds:g})")
     p.add_argument("--period", type=float, default=0.1, help="control period, simulated seconds (default 0.1)")
-    p.add_argument("--lockstep", action="store_true",
-                   help="the server runs in lock-step (usarsim serve --lockstep): step it from here")
-    p.add_argument("--pose", default="odometry", choices=("odometry", "ins", "truth"),
-                   help="where the brain's pose comes from (default odometry)")
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="the server runs in lock-step (usarsim serve --lockstep): step it from here",
+    )
+    p.add_argument(
+        "--pose",
+        default="odometry",
+        choices=("odometry", "ins", "truth"),
+        help="where the brain's pose comes from (default odometry)",
+    )
     p.add_argument("-v", "--verbose", action="store_true", help="log what the brain does")
     return p
 
@@ -92,8 +106,9 @@ def vector(text: str, n: int) -> tuple[float, ...]:
     return tuple(parts)
 
 
-def spawn(world: Any, args: argparse.Namespace, name: str | None = None,
-          start: str | None = None) -> tuple[Any, tuple[float, float, float]]:
+def spawn(
+    world: Any, args: argparse.Namespace, name: str | None = None, start: str | None = None
+) -> tuple[Any, tuple[float, float, float]]:
     """Spawn the robot the arguments ask for; returns it and the world pose it started at
     (x, y, yaw), the origin of its odometry."""
     start = start or args.start
@@ -111,13 +126,17 @@ def spawn(world: Any, args: argparse.Namespace, name: str | None = None,
     return robot, (pose.location[0], pose.location[1], pose.rotation[2])
 
 
-def main_for(make: Callable[[Any, tuple[float, float, float], argparse.Namespace], Any],
-             p: argparse.ArgumentParser, argv: list[str] | None = None,
-             report: Callable[[Any], None] | None = None) -> int:
+def main_for(
+    make: Callable[[Any, tuple[float, float, float], argparse.Namespace], Any],
+    p: argparse.ArgumentParser,
+    argv: list[str] | None = None,
+    report: Callable[[Any], None] | None = None,
+) -> int:
     """The body of every brain's ``main``: connect, spawn, run, report."""
     args = p.parse_args(numbers_first(argv))
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(asctime)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING, format="%(asctime)s %(name)s: %(message)s"
+    )
     try:
         with connect(args.host, args.port, lockstep=args.lockstep) as world:
             robot, origin = spawn(world, args)

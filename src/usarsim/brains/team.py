@@ -45,8 +45,9 @@ _HEAD = struct.Struct("<5sB d 4f")  # magic, name length, time, position x y, go
 YELLOW_ARENA = Bounds(-6.0, -7.2, 6.0, 7.2)  # DM-USAR_yellow inside its outer walls
 
 
-def encode(name: str, t: float, position: tuple[float, float] | None, goal: tuple[float, float] | None,
-           map_bytes: bytes) -> bytes:
+def encode(
+    name: str, t: float, position: tuple[float, float] | None, goal: tuple[float, float] | None, map_bytes: bytes
+) -> bytes:
     """One message: who, when, where it is, where it goes (NaN: nowhere), its map (empty:
     a message with the position and goal only)."""
     nm = name.encode("utf-8")[:255]
@@ -60,10 +61,10 @@ def decode(payload: bytes) -> tuple[str, float, tuple[float, float] | None, tupl
     if len(payload) < _HEAD.size or not payload.startswith(MAGIC):
         raise ValueError("not a map message")
     magic, n, t, px, py, gx, gy = _HEAD.unpack_from(payload)
-    name = payload[_HEAD.size:_HEAD.size + n].decode("utf-8", "replace")
+    name = payload[_HEAD.size : _HEAD.size + n].decode("utf-8", "replace")
     pos = None if math.isnan(px) else (px, py)
     goal = None if math.isnan(gx) else (gx, gy)
-    return name, t, pos, goal, payload[_HEAD.size + n:]
+    return name, t, pos, goal, payload[_HEAD.size + n :]
 
 
 class Team:
@@ -71,8 +72,15 @@ class Team:
     explorer, in the same order; None: no sharing).  Has ``step``, ``stop`` and ``done``
     like a brain, so :func:`usarsim.brains.runner.run` runs it."""
 
-    def __init__(self, explorers: list[FrontierExplorer], radios: list[Radio] | None = None, *,
-                 share_s: float = 2.0, relink_s: float = 5.0, position_s: float = 0.4):
+    def __init__(
+        self,
+        explorers: list[FrontierExplorer],
+        radios: list[Radio] | None = None,
+        *,
+        share_s: float = 2.0,
+        relink_s: float = 5.0,
+        position_s: float = 0.4,
+    ):
         if radios is not None and len(radios) != len(explorers):
             raise ValueError(f"{len(explorers)} explorers need {len(explorers)} radios, got {len(radios)}")
         self.explorers, self.radios = explorers, radios
@@ -92,7 +100,7 @@ class Team:
         self._linked = self.time
         radios = self.radios or []
         for i, a in enumerate(radios):
-            for b in radios[i + 1:]:
+            for b in radios[i + 1 :]:
                 if b.name not in a.links or a.name not in b.links:
                     a.forget(b.name)  # one end closed: close the other too
                     b.forget(a.name)
@@ -141,9 +149,19 @@ class Team:
 
 # ------------------------------------------------------------------------------ the demo
 
-def explore(world: Any, n: int, seconds: float, *, bounds: Bounds, comserver: tuple[str, int] | None,
-            referee: Any = None, period: float = 0.2, starts: list[str] | None = None,
-            robot_class: str = "P2AT") -> dict[str, Any]:
+
+def explore(
+    world: Any,
+    n: int,
+    seconds: float,
+    *,
+    bounds: Bounds,
+    comserver: tuple[str, int] | None,
+    referee: Any = None,
+    period: float = 0.2,
+    starts: list[str] | None = None,
+    robot_class: str = "P2AT",
+) -> dict[str, Any]:
     """Spawn ``n`` explorers at the world's first start poses (or ``starts``), link them
     through the ComServer at ``comserver`` (None: no sharing) and explore for ``seconds``.
     Returns the figures of the run."""
@@ -156,8 +174,9 @@ def explore(world: Any, n: int, seconds: float, *, bounds: Bounds, comserver: tu
         for k, pose in enumerate(chosen[:n]):
             robot = world.spawn(robot_class, f"R{k + 1}", start=pose.name)
             robots.append(robot)
-            explorers.append(FrontierExplorer(robot, bounds=bounds,
-                                              origin=(pose.location[0], pose.location[1], pose.rotation[2])))
+            explorers.append(
+                FrontierExplorer(robot, bounds=bounds, origin=(pose.location[0], pose.location[1], pose.rotation[2]))
+            )
             if comserver is not None:
                 radios.append(Radio(comserver[0], comserver[1], robot.name))
         team = Team(explorers, radios if comserver is not None else None)
@@ -175,8 +194,13 @@ def explore(world: Any, n: int, seconds: float, *, bounds: Bounds, comserver: tu
         t0 = world.time
         wall = time.monotonic()
         ran = run(world, [team], seconds, period=period, on_step=score)
-        out: dict[str, Any] = {"robots": n, "simulated_s": ran, "wall_s": time.monotonic() - wall,
-                               "messages": team.messages, "done": team.done}
+        out: dict[str, Any] = {
+            "robots": n,
+            "simulated_s": ran,
+            "wall_s": time.monotonic() - wall,
+            "messages": team.messages,
+            "done": team.done,
+        }
         if referee is not None:
             out["arena_share"] = referee.arena_share()
             out["arena_near_share"] = referee.arena_share(near=True)
@@ -196,28 +220,40 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seconds", type=float, default=300.0, help="simulated seconds (default 300)")
     p.add_argument("--world", default="DM-USAR_yellow", help="world to launch (default DM-USAR_yellow)")
     p.add_argument("--seed", type=int, default=1, help="the launched simulator's seed (default 1)")
-    p.add_argument("--bounds", default=None,
-                   help="the area to explore, xmin,ymin,xmax,ymax (default: DM-USAR_yellow's arena, "
-                        "-6,-7.2,6,7.2; with another world: the bounding box of its solids)")
+    p.add_argument(
+        "--bounds",
+        default=None,
+        help="the area to explore, xmin,ymin,xmax,ymax (default: DM-USAR_yellow's arena, "
+        "-6,-7.2,6,7.2; with another world: the bounding box of its solids)",
+    )
     p.add_argument("--host", default="127.0.0.1", help="a running simulator's address")
     p.add_argument("--port", type=int, default=None, help="a running simulator's control port (default: launch one)")
     p.add_argument("--wcs-port", type=int, default=5874, help="its ComServer port (default 5874)")
     p.add_argument("--lockstep", action="store_true", help="the running simulator is in lock-step: step it")
     p.add_argument("--no-radio", action="store_true", help="explore without sharing maps")
-    p.add_argument("--compare", action="store_true",
-                   help="also run one robot alone on a fresh simulator, same seed and time (launched only)")
+    p.add_argument(
+        "--compare",
+        action="store_true",
+        help="also run one robot alone on a fresh simulator, same seed and time (launched only)",
+    )
     p.add_argument("-v", "--verbose", action="store_true")
     args = p.parse_args(numbers_first(argv))
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(asctime)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING, format="%(asctime)s %(name)s: %(message)s"
+    )
     if args.robots < 1:
         p.error("--robots must be at least 1")
     try:
         if args.port is not None:
             bounds = Bounds.parse(args.bounds) if args.bounds else YELLOW_ARENA
             with connect(args.host, args.port, lockstep=args.lockstep) as world:
-                fig = explore(world, args.robots, args.seconds, bounds=bounds,
-                              comserver=None if args.no_radio else (args.host, args.wcs_port))
+                fig = explore(
+                    world,
+                    args.robots,
+                    args.seconds,
+                    bounds=bounds,
+                    comserver=None if args.no_radio else (args.host, args.wcs_port),
+                )
             print_figures(fig)
             return 0
         from usarsim.brains.coverage import Referee
@@ -251,17 +287,21 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def print_figures(fig: dict[str, Any]) -> None:
-    line = (f"{fig['robots']} robot{'s' if fig['robots'] > 1 else ''}: {fig['simulated_s']:.0f} simulated s in "
-            f"{fig['wall_s']:.1f} s wall, {fig['messages']} map messages received")
+    line = (
+        f"{fig['robots']} robot{'s' if fig['robots'] > 1 else ''}: {fig['simulated_s']:.0f} simulated s in "
+        f"{fig['wall_s']:.1f} s wall, {fig['messages']} map messages received"
+    )
     if "arena_share" in fig:
-        every = ", ".join(f"{t} s {100 * s:.0f}/{100 * n:.0f} %"
-                          for t, (s, n) in sorted(fig["arena_share_every_30s"].items()))
-        line += (f"; arena floor swept {100 * fig['arena_share']:.1f} %, within {NEAR_M:g} m "
-                 f"{100 * fig['arena_near_share']:.1f} % (all reachable floor {100 * fig['reachable_share']:.1f} %)"
-                 f" [{every}]")
+        every = ", ".join(
+            f"{t} s {100 * s:.0f}/{100 * n:.0f} %" for t, (s, n) in sorted(fig["arena_share_every_30s"].items())
+        )
+        line += (
+            f"; arena floor swept {100 * fig['arena_share']:.1f} %, within {NEAR_M:g} m "
+            f"{100 * fig['arena_near_share']:.1f} % (all reachable floor {100 * fig['reachable_share']:.1f} %)"
+            f" [{every}]"
+        )
     print(line, flush=True)
 
 
 if __name__ == "__main__":
     raise SystemExit(main())
-

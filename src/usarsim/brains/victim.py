@@ -105,8 +105,9 @@ class VictimApproacher(FrontierExplorer):
                 if s.confirmed:
                     self.target = s
                     x, y = s.position
-                    log.info("t=%.1f victim seen: estimated at %.2f, %.2f (%s)", self.time, x, y,
-                                ", ".join(sorted(s.parts)))
+                    log.info(
+                        "t=%.1f victim seen: estimated at %.2f, %.2f (%s)", self.time, x, y, ", ".join(sorted(s.parts))
+                    )
                     self.path = []
                     break
 
@@ -119,7 +120,7 @@ class VictimApproacher(FrontierExplorer):
         vx, vy = self.target.position
         grid = self.fused()
         dist, parent = self.planner.search(grid, pose[:2])
-        ii, jj = np.mgrid[0:grid.shape[0], 0:grid.shape[1]]
+        ii, jj = np.mgrid[0 : grid.shape[0], 0 : grid.shape[1]]
         cx, cy = grid.center(ii, jj)
         gap = np.hypot(cx - vx, cy - vy)
         ok = np.isfinite(dist) & (gap < self.reach - 0.15) & (gap > 0.4)
@@ -163,8 +164,11 @@ def make(robot: Any, origin: tuple[float, float, float], args: argparse.Namespac
 
 def report(brain: VictimApproacher) -> None:
     if brain.found is not None:
-        print(f"victim at {brain.found[0]:.2f}, {brain.found[1]:.2f} (world frame, metres); "
-              f"the robot stands within {brain.reach:g} m of it", flush=True)
+        print(
+            f"victim at {brain.found[0]:.2f}, {brain.found[1]:.2f} (world frame, metres); "
+            f"the robot stands within {brain.reach:g} m of it",
+            flush=True,
+        )
     elif brain.target is not None:
         x, y = brain.target.position
         print(f"victim seen at {x:.2f}, {y:.2f} but not reached in time", flush=True)
@@ -173,11 +177,13 @@ def report(brain: VictimApproacher) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = parser("Explore until the victim sensor sees a victim, then drive to it and report where it is.",
-               seconds=600.0)
-    p.add_argument("--bounds", default=None,
-                   help="the area to search, xmin,ymin,xmax,ymax in the world frame (default: 30 m square around "
-                        "the start; DM-USAR_yellow's arena: -6,-7.2,6,7.2)")
+    p = parser("Explore until the victim sensor sees a victim, then drive to it and report where it is.", seconds=600.0)
+    p.add_argument(
+        "--bounds",
+        default=None,
+        help="the area to search, xmin,ymin,xmax,ymax in the world frame (default: 30 m square around "
+        "the start; DM-USAR_yellow's arena: -6,-7.2,6,7.2)",
+    )
     p.add_argument("--reach", type=float, default=1.0, help="stop this near the victim, m (default 1.0)")
     return main_for(make, p, argv, report=report)
 

@@ -35,8 +35,16 @@ class WallFollower(Brain):
     """Follow the wall on ``side`` (``"right"`` or ``"left"``) at ``distance`` metres from
     the robot's centre, at ``speed`` m/s."""
 
-    def __init__(self, robot: Any, *, side: str = "right", distance: float = 0.7, speed: float = 0.35,
-                 gain: float = 1.6, **kw: Any):
+    def __init__(
+        self,
+        robot: Any,
+        *,
+        side: str = "right",
+        distance: float = 0.7,
+        speed: float = 0.35,
+        gain: float = 1.6,
+        **kw: Any,
+    ):
         super().__init__(robot, **kw)
         if side not in ("right", "left"):
             raise ValueError(f"side must be right or left, got {side!r}")
@@ -48,7 +56,7 @@ class WallFollower(Brain):
     def _beam(self, bearings: np.ndarray, ranges: np.ndarray, bearing: float) -> float:
         """The range of the beam nearest ``bearing`` (the median of it and its neighbours)."""
         k = int(np.argmin(np.abs(bearings - bearing)))
-        return float(np.median(ranges[max(0, k - 1):k + 2]))
+        return float(np.median(ranges[max(0, k - 1) : k + 2]))
 
     def measure(self, scan: Any) -> tuple[float, float] | None:
         """(distance from the robot's centre to the wall on its side, the wall's angle to
@@ -103,8 +111,9 @@ class WallFollower(Brain):
 
 
 def make(robot: Any, origin: tuple[float, float, float], args: argparse.Namespace) -> WallFollower:
-    return WallFollower(robot, side=args.side, distance=args.distance, speed=args.speed, origin=origin,
-                        pose_source=args.pose)
+    return WallFollower(
+        robot, side=args.side, distance=args.distance, speed=args.speed, origin=origin, pose_source=args.pose
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

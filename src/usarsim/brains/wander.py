@@ -34,8 +34,17 @@ class Wander(Brain):
     """Obstacle-avoiding wander (see the module's description).  ``speed`` m/s at most
     forward, ``turn_rate`` rad/s on the spot."""
 
-    def __init__(self, robot: Any, *, speed: float = 0.45, turn_rate: float = 0.9, near: float = 0.45,
-                 clear: float = 0.9, seed: int = 0, **kw: Any):
+    def __init__(
+        self,
+        robot: Any,
+        *,
+        speed: float = 0.45,
+        turn_rate: float = 0.9,
+        near: float = 0.45,
+        clear: float = 0.9,
+        seed: int = 0,
+        **kw: Any,
+    ):
         super().__init__(robot, **kw)
         self.speed, self.turn_rate, self.near, self.clear = speed, turn_rate, near, clear
         self.rng = np.random.default_rng(seed)

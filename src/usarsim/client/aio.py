@@ -48,8 +48,9 @@ class _Connection:
         try:
             reader, writer = await asyncio.wait_for(asyncio.open_connection(host, port), timeout)
         except (TimeoutError, OSError) as exc:
-            raise ClientError(f"cannot connect to the simulator at {host}:{port} ({exc}); is "
-                              f"'usarsim serve' running there?") from exc
+            raise ClientError(
+                f"cannot connect to the simulator at {host}:{port} ({exc}); is 'usarsim serve' running there?"
+            ) from exc
         return cls(reader, writer, timeout, what)
 
     async def _read(self) -> None:
@@ -76,8 +77,9 @@ class _Connection:
         except OSError as exc:
             raise ClientError(f"{self.what}: the server closed the connection ({exc})") from exc
 
-    async def wait_for(self, accept: Callable[[Any], bool], what: str, command: str | None,
-                       timeout: float | None = None) -> Any:
+    async def wait_for(
+        self, accept: Callable[[Any], bool], what: str, command: str | None, timeout: float | None = None
+    ) -> Any:
         limit = self.timeout if timeout is None else timeout
         loop = asyncio.get_running_loop()
         deadline = loop.time() + limit
@@ -100,8 +102,9 @@ class _Connection:
         pid = self.state.next_ping()
         await self.send(f"PING {{Id {pid}}}\r\n")
         self.sent = False
-        return await self.wait_for(lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)",
-                                   command, timeout)
+        return await self.wait_for(
+            lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", command, timeout
+        )
 
     async def close(self) -> None:
         self._task.cancel()
@@ -181,11 +184,17 @@ class Robot:
         await self._conn.send(query_line("GETCONF", type, name))
         return await self._conn.wait_for(accepts_reply("GETCONF", type), f"CONF of {type}", "GETCONF")
 
-    async def set(self, type: str, name: str | None = None, opcode: str | None = None,  # noqa: A002
-                  params: Any = None) -> M.Result | None:
+    async def set(
+        self,
+        type: str,
+        name: str | None = None,
+        opcode: str | None = None,  # noqa: A002
+        params: Any = None,
+    ) -> M.Result | None:
         await self._conn.send(set_line(type, name, opcode, params))
-        return await self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)),
-                                         f"RES of SET {type}", "SET")
+        return await self._conn.wait_for(
+            lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}", "SET"
+        )
 
     async def report_victim(self, location, name: str | None = None) -> M.Result:
         """Report a victim at ``location`` for the score (see the blocking client's)."""
@@ -222,18 +231,28 @@ class World:
     async def start_poses(self) -> list[M.StartPose]:
         if self._start_poses is None:
             await self._conn.send("GETSTARTPOSES\r\n")
-            reply = await self._conn.wait_for(lambda m: isinstance(m, M.StartPoses), "NFO {StartPoses}",
-                                              "GETSTARTPOSES")
+            reply = await self._conn.wait_for(
+                lambda m: isinstance(m, M.StartPoses), "NFO {StartPoses}", "GETSTARTPOSES"
+            )
             self._start_poses = list(reply.poses)
         return list(self._start_poses)
 
-    async def spawn(self, class_name: str, name: str | None = None, *, start: str | None = None, location=None,
-                    rotation=None, timeout: float | None = None) -> Robot:
+    async def spawn(
+        self,
+        class_name: str,
+        name: str | None = None,
+        *,
+        start: str | None = None,
+        location=None,
+        rotation=None,
+        timeout: float | None = None,
+    ) -> Robot:
         name = name or f"Robot{len(self._robots) + 1}"
         if name in self._robots:
             raise ClientError(f"this client has a robot named {name!r} already")
-        conn = await _Connection.open(self.host, self.port, self.timeout if timeout is None else timeout,
-                                      f"robot {name}")
+        conn = await _Connection.open(
+            self.host, self.port, self.timeout if timeout is None else timeout, f"robot {name}"
+        )
         try:
             await conn.wait_for(lambda m: isinstance(m, M.GameInfo), "NFO greeting", None)
             await conn.send(init_line(class_name, name, start, location, rotation))
@@ -252,8 +271,9 @@ class World:
         # the robots' commands reach the simulation before the STEP does (see the blocking client)
         await asyncio.gather(*(r._conn.ping(timeout) for r in list(self._robots.values()) if r._conn.sent))
         await self._conn.send(f"STEP {{Time {seconds!r}}}\r\n")
-        stepped = await self._conn.wait_for(lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}",
-                                            "STEP", timeout)
+        stepped = await self._conn.wait_for(
+            lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}", "STEP", timeout
+        )
         self.time = stepped.time
         await asyncio.gather(*(r._conn.ping(timeout) for r in list(self._robots.values())))
         return self.time
@@ -270,8 +290,9 @@ class World:
         try:
             reader, writer = await asyncio.wait_for(asyncio.open_connection(self.host, self.truth_port), self.timeout)
         except (TimeoutError, OSError) as exc:
-            raise ClientError(f"cannot reach the ground-truth service at {self.host}:{self.truth_port} ({exc})") \
-                from exc
+            raise ClientError(
+                f"cannot reach the ground-truth service at {self.host}:{self.truth_port} ({exc})"
+            ) from exc
         out: list[TruthObject] = []
         try:
             writer.write(format_truth_request(class_name, name).encode("ascii"))
@@ -279,8 +300,7 @@ class World:
                 try:
                     line = await asyncio.wait_for(reader.readline(), self.timeout)
                 except TimeoutError:
-                    raise ClientTimeout(f"no {{End}} from the ground-truth service within {self.timeout:g} s") \
-                        from None
+                    raise ClientTimeout(f"no {{End}} from the ground-truth service within {self.timeout:g} s") from None
                 if not line:
                     raise ClientError("the ground-truth service closed the connection before {End}")
                 obj = parse_truth_object(line.decode("ascii", "replace"))
@@ -296,8 +316,14 @@ class World:
         await self._conn.close()
 
 
-async def connect(host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False,
-                  truth_port: int | None = None, timeout: float = DEFAULT_TIMEOUT_S) -> World:
+async def connect(
+    host: str = "127.0.0.1",
+    port: int = 3000,
+    *,
+    lockstep: bool = False,
+    truth_port: int | None = None,
+    timeout: float = DEFAULT_TIMEOUT_S,
+) -> World:
     conn = await _Connection.open(host, port, timeout, "world")
     try:
         info = await conn.wait_for(lambda m: isinstance(m, M.GameInfo), "NFO greeting", None)

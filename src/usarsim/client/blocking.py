@@ -49,8 +49,9 @@ class _Connection:
         try:
             self.sock = socket.create_connection((host, port), timeout=timeout)
         except OSError as exc:
-            raise ClientError(f"cannot connect to the simulator at {host}:{port} ({exc}); is "
-                              f"'usarsim serve' running there?") from exc
+            raise ClientError(
+                f"cannot connect to the simulator at {host}:{port} ({exc}); is 'usarsim serve' running there?"
+            ) from exc
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.state = ConnectionState()
         self.sent = False  # a command went out since the last PING
@@ -82,8 +83,9 @@ class _Connection:
         self.state.feed(data)
         return True
 
-    def wait_for(self, accept: Callable[[Any], bool], what: str, command: str | None,
-                 timeout: float | None = None) -> Any:
+    def wait_for(
+        self, accept: Callable[[Any], bool], what: str, command: str | None, timeout: float | None = None
+    ) -> Any:
         """The first reply ``accept`` takes, reading until it comes; an ERROR about
         ``command`` raises :class:`ServerError`."""
         deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
@@ -93,8 +95,9 @@ class _Connection:
                 return msg
             left = deadline - time.monotonic()
             if left <= 0:
-                raise ClientTimeout(f"{self.what}: no {what} from the server within "
-                                    f"{self.timeout if timeout is None else timeout:g} s")
+                raise ClientTimeout(
+                    f"{self.what}: no {what} from the server within {self.timeout if timeout is None else timeout:g} s"
+                )
             if not self.read(left):
                 msg = self.state.claim(accept, command)
                 if msg is not None:
@@ -107,8 +110,9 @@ class _Connection:
         pid = self.state.next_ping()
         self.send(f"PING {{Id {pid}}}\r\n")
         self.sent = False
-        return self.wait_for(lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", command,
-                             timeout)
+        return self.wait_for(
+            lambda m: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", command, timeout
+        )
 
     def close(self) -> None:
         self.state.closed = True
@@ -220,13 +224,17 @@ class Robot:
         self._conn.send(query_line("GETCONF", type, name))
         return self._conn.wait_for(accepts_reply("GETCONF", type), f"CONF of {type}", "GETCONF")
 
-    def set(self, type: str, name: str | None = None, opcode: str | None = None,  # noqa: A002
-            params: Any = None) -> M.Result | None:
+    def set(
+        self,
+        type: str,
+        name: str | None = None,
+        opcode: str | None = None,  # noqa: A002
+        params: Any = None,
+    ) -> M.Result | None:
         """``SET`` on a mounted item: waits for and returns its RES (in lock-step too: the
         server carries it out at once, at the current simulated time)."""
         self._conn.send(set_line(type, name, opcode, params))
-        return self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}",
-                                   "SET")
+        return self._conn.wait_for(lambda m: isinstance(m, (M.Result, M.CameraZoomResult)), f"RES of SET {type}", "SET")
 
     def report_victim(self, location, name: str | None = None) -> M.Result:
         """Report a victim at ``location`` (world frame, USARSim axes, metres) for the score:
@@ -244,12 +252,16 @@ class Robot:
             try:
                 self._image = socket.create_connection((self.world.host, port), timeout=limit)
             except OSError as exc:
-                raise ClientError(f"cannot reach the image server at {self.world.host}:{port} ({exc}); "
-                                  f"launch(..., image=True) starts it") from exc
+                raise ClientError(
+                    f"cannot reach the image server at {self.world.host}:{port} ({exc}); "
+                    f"launch(..., image=True) starts it"
+                ) from exc
         if self._image_camera != camera:
             local_port = self._image.getsockname()[1]
-            self.send(set_line("Camera", camera, None, None).rstrip("\r\n")
-                      + f" {{Robot {self.name}}} {{Client 127.0.0.1:{local_port}}}")
+            self.send(
+                set_line("Camera", camera, None, None).rstrip("\r\n")
+                + f" {{Robot {self.name}}} {{Client 127.0.0.1:{local_port}}}"
+            )
             self._conn.ping(limit)  # the binding is in place
             self._image_camera = camera
         self._image.settimeout(limit)
@@ -279,8 +291,7 @@ class Robot:
             from .radio import Radio, RadioError
 
             try:
-                self._radio = Radio(self.world.host, self.world.comserver_port, self.name,
-                                    timeout=self._conn.timeout)
+                self._radio = Radio(self.world.host, self.world.comserver_port, self.name, timeout=self._conn.timeout)
             except RadioError as exc:
                 raise ClientError(f"robot {self.name}: {exc} (launch(..., wireless=True) starts it)") from exc
         return self._radio
@@ -325,9 +336,17 @@ class Robot:
 class World:
     """A simulator to talk to: start poses, spawning robots, lock-step STEPs, ground truth."""
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False,
-                 truth_port: int | None = None, image_port: int | None = None, comserver_port: int | None = None,
-                 timeout: float = DEFAULT_TIMEOUT_S):
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 3000,
+        *,
+        lockstep: bool = False,
+        truth_port: int | None = None,
+        image_port: int | None = None,
+        comserver_port: int | None = None,
+        timeout: float = DEFAULT_TIMEOUT_S,
+    ):
         self.host, self.port, self.lockstep, self.timeout = host, port, lockstep, timeout
         self.image_port = image_port if image_port is not None else port + 2003  # 3000 -> 5003
         self.comserver_port = comserver_port if comserver_port is not None else port + 2874  # 3000 -> 5874
@@ -361,8 +380,16 @@ class World:
             self._start_poses = list(reply.poses)
         return list(self._start_poses)
 
-    def spawn(self, class_name: str, name: str | None = None, *, start: str | None = None, location=None,
-              rotation=None, timeout: float | None = None) -> Robot:
+    def spawn(
+        self,
+        class_name: str,
+        name: str | None = None,
+        *,
+        start: str | None = None,
+        location=None,
+        rotation=None,
+        timeout: float | None = None,
+    ) -> Robot:
         """A robot of ``class_name`` (``P2AT`` or ``USARBot.P2AT``) at start pose ``start``, or
         at ``location``/``rotation``, or at the world's first start pose.  Returns once it
         stands in the world; raises :class:`ServerError` with the server's reason if not."""
@@ -386,14 +413,17 @@ class World:
         """Lock-step: advance ``seconds`` of simulated time.  Returns the new simulated time
         once every robot of this client has read every message up to it."""
         if not self.lockstep:
-            raise ClientError("step() needs a lock-step server (usarsim serve --lockstep, or launch(lockstep=True)); "
-                              "use wait(seconds) in real time")
+            raise ClientError(
+                "step() needs a lock-step server (usarsim serve --lockstep, or launch(lockstep=True)); "
+                "use wait(seconds) in real time"
+            )
         # the robots' commands (DRIVE, SET...) reach the simulation before the STEP does: each
         # robot connection is a socket of its own, and the server reads them in no fixed order
         self._sync(timeout, only_sent=True)
         self._conn.send(f"STEP {{Time {seconds!r}}}\r\n")
-        stepped = self._conn.wait_for(lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}", "STEP",
-                                      timeout)
+        stepped = self._conn.wait_for(
+            lambda m: isinstance(m, M.Stepped), f"STEPPED after STEP {seconds:g}", "STEP", timeout
+        )
         self.time = stepped.time
         self._sync(timeout)
         return self.time
@@ -411,8 +441,9 @@ class World:
             conn.sent = False
             pending.append((conn, pid))
         for conn, pid in pending:
-            conn.wait_for(lambda m, pid=pid: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)",
-                          None, timeout)
+            conn.wait_for(
+                lambda m, pid=pid: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", None, timeout
+            )
 
     def wait(self, seconds: float) -> None:
         """Real time: read every robot's messages for ``seconds`` of wall time."""
@@ -446,8 +477,9 @@ class World:
         try:
             s = socket.create_connection((self.host, self.truth_port), timeout=self.timeout)
         except OSError as exc:
-            raise ClientError(f"cannot reach the ground-truth service at {self.host}:{self.truth_port} ({exc})") \
-                from exc
+            raise ClientError(
+                f"cannot reach the ground-truth service at {self.host}:{self.truth_port} ({exc})"
+            ) from exc
         out: list[TruthObject] = []
         with s:
             s.sendall(format_truth_request(class_name, name).encode("ascii"))
@@ -478,10 +510,24 @@ class World:
         self._conn.close()
 
 
-def connect(host: str = "127.0.0.1", port: int = 3000, *, lockstep: bool = False, truth_port: int | None = None,
-            image_port: int | None = None, comserver_port: int | None = None,
-            timeout: float = DEFAULT_TIMEOUT_S) -> World:
+def connect(
+    host: str = "127.0.0.1",
+    port: int = 3000,
+    *,
+    lockstep: bool = False,
+    truth_port: int | None = None,
+    image_port: int | None = None,
+    comserver_port: int | None = None,
+    timeout: float = DEFAULT_TIMEOUT_S,
+) -> World:
     """Connect to a running simulator (``lockstep=True`` if it was started with
     ``--lockstep``: then :meth:`World.step` drives its clock)."""
-    return World(host, port, lockstep=lockstep, truth_port=truth_port, image_port=image_port,
-                 comserver_port=comserver_port, timeout=timeout)
+    return World(
+        host,
+        port,
+        lockstep=lockstep,
+        truth_port=truth_port,
+        image_port=image_port,
+        comserver_port=comserver_port,
+        timeout=timeout,
+    )

@@ -88,10 +88,26 @@ def reading_key(reading: Any) -> str:
 
 
 # Messages a client waits for (the rest stream: STA, SEN, MISSTA, ASTA)
-REPLIES = (M.GameInfo, M.StartPoses, M.RobotGeometry, M.RobotConfiguration, M.ItemGeometry, M.EmptyGeometry,
-           M.ItemConfiguration, M.EmptyConfiguration, M.MisPkgGeometry, M.MisPkgConfiguration,
-           M.ActuatorConfiguration, M.ActuatorGeometry, M.Result, M.CameraZoomResult, M.ViewportsResult,
-           M.Stepped, M.Pong, M.ErrorReply)
+REPLIES = (
+    M.GameInfo,
+    M.StartPoses,
+    M.RobotGeometry,
+    M.RobotConfiguration,
+    M.ItemGeometry,
+    M.EmptyGeometry,
+    M.ItemConfiguration,
+    M.EmptyConfiguration,
+    M.MisPkgGeometry,
+    M.MisPkgConfiguration,
+    M.ActuatorConfiguration,
+    M.ActuatorGeometry,
+    M.Result,
+    M.CameraZoomResult,
+    M.ViewportsResult,
+    M.Stepped,
+    M.Pong,
+    M.ErrorReply,
+)
 
 
 class ConnectionState:
@@ -163,16 +179,37 @@ class ConnectionState:
 
 # Command lines ---------------------------------------------------------------------------
 
+
 def init_line(class_name: str, name: str | None, start: str | None, location, rotation) -> str:
     cls = class_name if "." in class_name else f"USARBot.{class_name}"
-    return C.format_command(C.Init(class_name=cls, name=name, start=start,
-                                   location=None if location is None else tuple(map(float, location)),
-                                   rotation=None if rotation is None else tuple(map(float, rotation))))
+    return C.format_command(
+        C.Init(
+            class_name=cls,
+            name=name,
+            start=start,
+            location=None if location is None else tuple(map(float, location)),
+            rotation=None if rotation is None else tuple(map(float, rotation)),
+        )
+    )
 
 
-DRIVE_KEYS = ("left", "right", "normalized", "light", "flip", "speed", "front_steer", "rear_steer",
-              "altitude_velocity", "linear_velocity", "lateral_velocity", "rotational_velocity", "propeller",
-              "rudder", "stern_plane")
+DRIVE_KEYS = (
+    "left",
+    "right",
+    "normalized",
+    "light",
+    "flip",
+    "speed",
+    "front_steer",
+    "rear_steer",
+    "altitude_velocity",
+    "linear_velocity",
+    "lateral_velocity",
+    "rotational_velocity",
+    "propeller",
+    "rudder",
+    "stern_plane",
+)
 
 
 def drive_line(**kwargs: Any) -> str:
@@ -232,14 +269,18 @@ def accepts_reply(word: str, item_type: str) -> Callable[[Any], bool]:
     def ok(msg: Any) -> bool:
         if t == "robot":
             return isinstance(msg, M.RobotGeometry if geo else M.RobotConfiguration)
-        kinds = (M.ItemGeometry, M.EmptyGeometry, M.MisPkgGeometry, M.ActuatorGeometry) if geo else \
-            (M.ItemConfiguration, M.EmptyConfiguration, M.MisPkgConfiguration, M.ActuatorConfiguration)
+        kinds = (
+            (M.ItemGeometry, M.EmptyGeometry, M.MisPkgGeometry, M.ActuatorGeometry)
+            if geo
+            else (M.ItemConfiguration, M.EmptyConfiguration, M.MisPkgConfiguration, M.ActuatorConfiguration)
+        )
         return isinstance(msg, kinds)
 
     return ok
 
 
 # Readings as a controller wants them --------------------------------------------------------
+
 
 def odometry_of(readings: dict[str, Any]) -> tuple[float, float, float] | None:
     for r in readings.values():

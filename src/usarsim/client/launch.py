@@ -25,8 +25,14 @@ class Server:
     port in ``ports`` (``control``, ``truth``, and ``image``, ``web``, ``comserver``, ``wss``,
     ``cominterface`` when started)."""
 
-    def __init__(self, args: list[str], lockstep: bool, timeout: float,
-                 expected: frozenset[str] = frozenset({"control", "truth"}), more: bool = True):
+    def __init__(
+        self,
+        args: list[str],
+        lockstep: bool,
+        timeout: float,
+        expected: frozenset[str] = frozenset({"control", "truth"}),
+        more: bool = True,
+    ):
         """Start ``usarsim serve`` with ``args`` and wait until every listener in ``expected``
         has said where it listens; ``more``: others may follow in the same burst (options
         this class did not choose), which are given a tenth of a second."""
@@ -35,8 +41,14 @@ class Server:
         self._stderr = tempfile.TemporaryFile(mode="w+")
         env = dict(os.environ)
         env.setdefault("MUJOCO_GL", "egl")
-        self.proc = subprocess.Popen([sys.executable, "-m", "usarsim", "serve", *args], stdout=subprocess.PIPE,
-                                     stderr=self._stderr, stdin=subprocess.DEVNULL, text=True, env=env)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "usarsim", "serve", *args],
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            stdin=subprocess.DEVNULL,
+            text=True,
+            env=env,
+        )
         self.ports: dict[str, int] = {}
         self.host = "127.0.0.1"
 
@@ -70,9 +82,15 @@ class Server:
 
     def connect(self, timeout: float | None = None) -> World:
         """A :class:`World` on this server (lock-step if the server is)."""
-        return World(self.host, self.port, lockstep=self.lockstep, truth_port=self.ports.get("truth"),
-                     image_port=self.ports.get("image"), comserver_port=self.ports.get("comserver"),
-                     timeout=self.timeout if timeout is None else timeout)
+        return World(
+            self.host,
+            self.port,
+            lockstep=self.lockstep,
+            truth_port=self.ports.get("truth"),
+            image_port=self.ports.get("image"),
+            comserver_port=self.ports.get("comserver"),
+            timeout=self.timeout if timeout is None else timeout,
+        )
 
     def stderr_tail(self, n: int = 2000) -> str:
         try:
@@ -103,10 +121,21 @@ class Server:
         self.close()
 
 
-def launch(world: str = "DM-USAR_yellow", *, seed: int = 0, lockstep: bool = True, speed: float | None = 1.0,
-           wireless: bool = False, image: bool = False, web: bool = False, robot_dirs: tuple[str, ...] = (),
-           record: str | os.PathLike | None = None, foxglove: bool = False,
-           extra_args: tuple[str, ...] = (), timeout: float = DEFAULT_TIMEOUT_S) -> Server:
+def launch(
+    world: str = "DM-USAR_yellow",
+    *,
+    seed: int = 0,
+    lockstep: bool = True,
+    speed: float | None = 1.0,
+    wireless: bool = False,
+    image: bool = False,
+    web: bool = False,
+    robot_dirs: tuple[str, ...] = (),
+    record: str | os.PathLike | None = None,
+    foxglove: bool = False,
+    extra_args: tuple[str, ...] = (),
+    timeout: float = DEFAULT_TIMEOUT_S,
+) -> Server:
     """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file),
     ``seed``, lock-step (default) or real time at ``speed`` (None: as fast as it can).
     ``wireless``, ``image`` and ``web`` start those services too; ``record`` records the run

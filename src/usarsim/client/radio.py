@@ -62,8 +62,9 @@ class Radio:
         try:
             self._ctl = socket.create_connection((host, port), timeout=timeout)
         except OSError as exc:
-            raise RadioError(f"cannot reach the ComServer at {host}:{port} ({exc}); is the server's wireless on?") \
-                from exc
+            raise RadioError(
+                f"cannot reach the ComServer at {host}:{port} ({exc}); is the server's wireless on?"
+            ) from exc
         self._splitter = CommandSplitter()
         self._replies: list[str] = []
         self._server = socket.create_server((address, 0))
@@ -163,8 +164,8 @@ class Radio:
                     (n,) = _LENGTH.unpack_from(buf)
                     if len(buf) < _LENGTH.size + n:
                         break
-                    out.append((link.peer, bytes(buf[_LENGTH.size:_LENGTH.size + n])))
-                    del buf[:_LENGTH.size + n]
+                    out.append((link.peer, bytes(buf[_LENGTH.size : _LENGTH.size + n])))
+                    del buf[: _LENGTH.size + n]
         self.received += len(out)
         return out
 

@@ -35,20 +35,35 @@ def _print_lines(sock: socket.socket, hide: frozenset[str], done: threading.Even
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m usarsim.client.talk", description=__doc__.split("\n\n")[1],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        prog="python -m usarsim.client.talk",
+        description=__doc__.split("\n\n")[1],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     ap.add_argument("--host", default="127.0.0.1", help="the simulator's address (default: %(default)s)")
     ap.add_argument("--port", type=int, default=3000, help="its control port (default: %(default)s)")
-    ap.add_argument("--hide", default="", metavar="WORDS",
-                    help="message types not to print, comma-separated, e.g. STA,SEN (default: none)")
-    ap.add_argument("--linger", type=float, default=1.0, metavar="S",
-                    help="seconds to wait for answers after the end of the input (default: %(default)s)")
+    ap.add_argument(
+        "--hide",
+        default="",
+        metavar="WORDS",
+        help="message types not to print, comma-separated, e.g. STA,SEN (default: none)",
+    )
+    ap.add_argument(
+        "--linger",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="seconds to wait for answers after the end of the input (default: %(default)s)",
+    )
     args = ap.parse_args(argv)
     try:
         sock = socket.create_connection((args.host, args.port), timeout=5.0)
     except OSError as exc:
-        print(f"talk: no simulator on {args.host}:{args.port} ({exc.strerror or exc}): start one with "
-              "'usarsim serve' (or bash scripts/serve.sh)", file=sys.stderr)
+        print(
+            f"talk: no simulator on {args.host}:{args.port} ({exc.strerror or exc}): start one with "
+            "'usarsim serve' (or bash scripts/serve.sh)",
+            file=sys.stderr,
+        )
         return 1
     sock.settimeout(None)
     done = threading.Event()

@@ -44,8 +44,10 @@ def resolve_world(name_or_path: str) -> WorldConfig:
     for stem, path in files.items():
         if stem.lower() == name_or_path.lower():
             return load_world(path)
-    raise ConfigError(f"unknown world '{name_or_path}'{did_you_mean(name_or_path, files)}; "
-                      "or give the path of a world file", key="--world")
+    raise ConfigError(
+        f"unknown world '{name_or_path}'{did_you_mean(name_or_path, files)}; or give the path of a world file",
+        key="--world",
+    )
 
 
 @cache
@@ -88,5 +90,8 @@ def file_kind(path: str | Path) -> str:
         return "robot"
     if "start_poses" in data or "floor" in data:
         return "world"
-    raise ConfigError("cannot tell whether this is a robot file (it would have 'class_name') "
-                      "or a world file (it would have 'floor' and 'start_poses')", path=str(path))
+    raise ConfigError(
+        "cannot tell whether this is a robot file (it would have 'class_name') "
+        "or a world file (it would have 'floor' and 'start_poses')",
+        path=str(path),
+    )

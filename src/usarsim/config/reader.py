@@ -130,8 +130,15 @@ class Section:
                 raise self.error(name, f"'{v}' is not allowed{did_you_mean(v, choices)}")
         return v
 
-    def float(self, name: str, default: Any = ..., *, min: float | None = None, max: float | None = None,
-              min_exclusive: bool = False) -> float:
+    def float(
+        self,
+        name: str,
+        default: Any = ...,
+        *,
+        min: float | None = None,
+        max: float | None = None,
+        min_exclusive: bool = False,
+    ) -> float:
         v = self.raw(name, default)
         if v is default and default is not ...:
             return v
@@ -188,8 +195,9 @@ class Section:
                 raise self.error(str(k), f"unknown key '{k}'{did_you_mean(str(k), known)}")
 
 
-def check_float(v: Any, path: str, key: str, *, min: float | None = None, max: float | None = None,
-                min_exclusive: bool = False) -> float:
+def check_float(
+    v: Any, path: str, key: str, *, min: float | None = None, max: float | None = None, min_exclusive: bool = False
+) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ConfigError(f"expected a number, got {v!r}", path=path, key=key)
     f = float(v)
@@ -214,11 +222,23 @@ def check_vec(v: Any, n: int, path: str, key: str, *, positive: bool = False) ->
 
 # What an entry of a list of a world or robot file is called in an error: the key that gives
 # its kind (a box, a RangeScanner) and the word used when that key is absent.
-ENTRY_KINDS = {"objects": ("shape", "object"), "sensors": ("type", "item"), "chassis": ("shape", "box"),
-               "shapes": ("shape", "box"), "wheels": (None, "wheel"), "links": (None, "link"),
-               "start_poses": (None, "start pose"), "path_nodes": (None, "path node"), "victims": (None, "victim"),
-               "false_alarms": (None, "false alarm"), "rfid_tags": (None, "RFID tag"), "water": (None, "water volume"),
-               "lights": (None, "light"), "mission_packages": (None, "mission package"), "legs": (None, "leg")}
+ENTRY_KINDS = {
+    "objects": ("shape", "object"),
+    "sensors": ("type", "item"),
+    "chassis": ("shape", "box"),
+    "shapes": ("shape", "box"),
+    "wheels": (None, "wheel"),
+    "links": (None, "link"),
+    "start_poses": (None, "start pose"),
+    "path_nodes": (None, "path node"),
+    "victims": (None, "victim"),
+    "false_alarms": (None, "false alarm"),
+    "rfid_tags": (None, "RFID tag"),
+    "water": (None, "water volume"),
+    "lights": (None, "light"),
+    "mission_packages": (None, "mission package"),
+    "legs": (None, "leg"),
+}
 _KEY_TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 
 
@@ -256,7 +276,7 @@ def name_entries(err: ConfigError, data: Any) -> ConfigError:
                 break
             node, path = node[int(index)], f"{path}[{index}]"
             desc = describe_entry(node, list_key)
-            if desc is not None and not (desc.endswith("'") and desc[desc.index("'"):] in err.message):
+            if desc is not None and not (desc.endswith("'") and desc[desc.index("'") :] in err.message):
                 named.append((path, desc))  # (unless the message names it already)
     if not named:
         return err

@@ -76,12 +76,45 @@ FEET_TO_M = 0.3048  # international foot
 BOUNDARIES = ("double_yellow", "solid_yellow", "solid_white", "broken_white")
 
 _LANE_OPTIONS = ("lane_width", "left_boundary", "right_boundary", "checkpoint", "stop", "exit")
-RNDF_KEYWORDS = ("RNDF_name", "num_segments", "num_zones", "format_version", "creation_date", "segment",
-                 "num_lanes", "segment_name", "lane", "num_waypoints", *_LANE_OPTIONS, "end_lane", "end_segment",
-                 "zone", "num_spots", "zone_name", "perimeter", "num_perimeterpoints", "end_perimeter", "spot",
-                 "spot_width", "end_spot", "end_zone", "end_file")
-MDF_KEYWORDS = ("MDF_name", "RNDF", "format_version", "creation_date", "checkpoints", "num_checkpoints",
-                "end_checkpoints", "speed_limits", "num_speed_limits", "end_speed_limits", "end_file")
+RNDF_KEYWORDS = (
+    "RNDF_name",
+    "num_segments",
+    "num_zones",
+    "format_version",
+    "creation_date",
+    "segment",
+    "num_lanes",
+    "segment_name",
+    "lane",
+    "num_waypoints",
+    *_LANE_OPTIONS,
+    "end_lane",
+    "end_segment",
+    "zone",
+    "num_spots",
+    "zone_name",
+    "perimeter",
+    "num_perimeterpoints",
+    "end_perimeter",
+    "spot",
+    "spot_width",
+    "end_spot",
+    "end_zone",
+    "end_file",
+)
+MDF_KEYWORDS = (
+    "MDF_name",
+    "RNDF",
+    "format_version",
+    "creation_date",
+    "checkpoints",
+    "num_checkpoints",
+    "end_checkpoints",
+    "speed_limits",
+    "num_speed_limits",
+    "end_speed_limits",
+    "end_file",
+)
 
 
 # --------------------------------------------------------------------------- data
@@ -191,16 +224,19 @@ class Rndf:
 
     def exits(self) -> tuple[Exit, ...]:
         return tuple(e for lane in self.lanes() for e in lane.exits) + tuple(
-            e for z in self.zones for e in z.perimeter.exits)
+            e for z in self.zones for e in z.perimeter.exits
+        )
 
     def stops(self) -> tuple[str, ...]:
         return tuple(s for lane in self.lanes() for s in lane.stops)
 
     def summary(self) -> str:
         lanes = self.lanes()
-        return (f"{len(self.segments)} segments, {len(lanes)} lanes, {sum(len(ln.waypoints) for ln in lanes)} "
-                f"waypoints, {len(self.zones)} zones, {sum(len(z.spots) for z in self.zones)} spots, "
-                f"{len(self.checkpoints())} checkpoints, {len(self.stops())} stops, {len(self.exits())} exits")
+        return (
+            f"{len(self.segments)} segments, {len(lanes)} lanes, {sum(len(ln.waypoints) for ln in lanes)} "
+            f"waypoints, {len(self.zones)} zones, {sum(len(z.spots) for z in self.zones)} spots, "
+            f"{len(self.checkpoints())} checkpoints, {len(self.stops())} stops, {len(self.exits())} exits"
+        )
 
 
 @dataclass(frozen=True)
@@ -236,8 +272,7 @@ def to_world(lat_deg: float, lon_deg: float, geo: GeoReference) -> tuple[float, 
     and east positive) for the world's geographic reference: the inverse of the GPS sensor's
     conversion (:func:`usarsim.sensors.gps.world_to_geographic`, protocol.md 7.6), with the
     same origin and the same metres per degree."""
-    return ((lat_deg - geo.latitude_deg) * geo.scale_latitude_m,
-            (lon_deg - geo.longitude_deg) * geo.scale_longitude_m)
+    return ((lat_deg - geo.latitude_deg) * geo.scale_latitude_m, (lon_deg - geo.longitude_deg) * geo.scale_longitude_m)
 
 
 def waypoint_to_world(point: Waypoint, geo: GeoReference) -> tuple[float, float]:
@@ -340,8 +375,9 @@ class _Reader:
             raise self.error(line, f"{what} must be >= {min}, got {v}")
         return v
 
-    def number(self, line: _Line, token: str, what: str, *, low: float | None = None,
-               high: float | None = None) -> float:
+    def number(
+        self, line: _Line, token: str, what: str, *, low: float | None = None, high: float | None = None
+    ) -> float:
         try:
             v = float(token)
         except ValueError:
@@ -414,23 +450,29 @@ class _RndfParser:
                 if zones:
                     raise r.error(line, "segments must come before the zones")
                 if len(segments) >= num_segments:
-                    raise r.error(line, f"one segment too many: num_segments (line {ns_line.number}) "
-                                        f"is {num_segments}")
+                    raise r.error(line, f"one segment too many: num_segments (line {ns_line.number}) is {num_segments}")
                 segments.append(self.segment(len(segments) + 1))
             elif word == "zone":
                 if len(segments) < num_segments:
-                    raise r.error(line, f"num_segments (line {ns_line.number}) is {num_segments} but only "
-                                        f"{len(segments)} segments come before the first zone")
+                    raise r.error(
+                        line,
+                        f"num_segments (line {ns_line.number}) is {num_segments} but only "
+                        f"{len(segments)} segments come before the first zone",
+                    )
                 if len(zones) >= num_zones:
                     raise r.error(line, f"one zone too many: num_zones (line {nz_line.number}) is {num_zones}")
                 zones.append(self.zone(num_segments + len(zones) + 1))
             elif word == "end_file":
                 if len(segments) < num_segments:
-                    raise r.error(line, f"num_segments (line {ns_line.number}) is {num_segments} but the file "
-                                        f"has {len(segments)} segments")
+                    raise r.error(
+                        line,
+                        f"num_segments (line {ns_line.number}) is {num_segments} but the file "
+                        f"has {len(segments)} segments",
+                    )
                 if len(zones) < num_zones:
-                    raise r.error(line, f"num_zones (line {nz_line.number}) is {num_zones} but the file has "
-                                        f"{len(zones)} zones")
+                    raise r.error(
+                        line, f"num_zones (line {nz_line.number}) is {num_zones} but the file has {len(zones)} zones"
+                    )
                 r.check_values(r.take(), 0)
                 break
             else:
@@ -440,8 +482,14 @@ class _RndfParser:
         if extra is not None:
             raise r.error(extra, f"nothing may follow 'end_file', got '{' '.join(extra.tokens)}'")
 
-        rndf = Rndf(name=name, path=r.path, segments=tuple(segments), zones=tuple(zones),
-                    format_version=info.get("format_version"), creation_date=info.get("creation_date"))
+        rndf = Rndf(
+            name=name,
+            path=r.path,
+            segments=tuple(segments),
+            zones=tuple(zones),
+            format_version=info.get("format_version"),
+            creation_date=info.get("creation_date"),
+        )
         self.resolve_exits(rndf)
         return rndf
 
@@ -471,13 +519,19 @@ class _RndfParser:
             word = None if line is None else line.word
             if word == child:
                 if len(out) >= count:
-                    raise r.error(line, f"one {child} too many: {count_line.word} of {kind} {pid} (line "
-                                        f"{count_line.number}) is {count}")
+                    raise r.error(
+                        line,
+                        f"one {child} too many: {count_line.word} of {kind} {pid} (line "
+                        f"{count_line.number}) is {count}",
+                    )
                 out.append(read(pid, len(out) + 1))
             elif word == end:
                 if len(out) < count:
-                    raise r.error(line, f"{kind} {pid} has {len(out)} {child}s but {count_line.word} (line "
-                                        f"{count_line.number}) is {count}")
+                    raise r.error(
+                        line,
+                        f"{kind} {pid} has {len(out)} {child}s but {count_line.word} (line "
+                        f"{count_line.number}) is {count}",
+                    )
                 r.check_values(r.take(), 0)
                 return out
             else:
@@ -488,8 +542,11 @@ class _RndfParser:
         head = r.expect("lane")
         got = r.ident(head, head.tokens[1], 2, "a lane")
         if got != (sid, lid):
-            raise r.error(head, f"expected lane {sid}.{lid} (lanes of segment {sid} are numbered {sid}.1, "
-                                f"{sid}.2, ... in order), got {head.tokens[1]}")
+            raise r.error(
+                head,
+                f"expected lane {sid}.{lid} (lanes of segment {sid} are numbered {sid}.1, "
+                f"{sid}.2, ... in order), got {head.tokens[1]}",
+            )
         lane_id = f"{sid}.{lid}"
         nw_line = r.expect("num_waypoints")
         count = r.integer(nw_line, nw_line.tokens[1], "num_waypoints", min=1)
@@ -526,10 +583,16 @@ class _RndfParser:
         for e, line in exits:
             self.member(e.exit, names, line, "exit", where)
         self.pending_exits += exits
-        return Lane(id=lane_id, waypoints=points, width_ft=opts.get("width_ft"),
-                    left_boundary=opts.get("left_boundary"), right_boundary=opts.get("right_boundary"),
-                    checkpoints=tuple(c for c, _ in checkpoints), stops=tuple(s for s, _ in stops),
-                    exits=tuple(e for e, _ in exits))
+        return Lane(
+            id=lane_id,
+            waypoints=points,
+            width_ft=opts.get("width_ft"),
+            left_boundary=opts.get("left_boundary"),
+            right_boundary=opts.get("right_boundary"),
+            checkpoints=tuple(c for c, _ in checkpoints),
+            stops=tuple(s for s, _ in stops),
+            exits=tuple(e for e, _ in exits),
+        )
 
     # ---- zones
 
@@ -538,8 +601,9 @@ class _RndfParser:
         head = r.expect("zone")
         got = r.integer(head, head.tokens[1], "the zone id", min=1)
         if got != zid:
-            raise r.error(head, f"expected zone {zid} (zones are numbered on from the last segment, in order), "
-                                f"got {got}")
+            raise r.error(
+                head, f"expected zone {zid} (zones are numbered on from the last segment, in order), got {got}"
+            )
         ns_line = r.expect("num_spots")
         num_spots = r.integer(ns_line, ns_line.tokens[1], "num_spots", min=0)
         name = None
@@ -571,8 +635,11 @@ class _RndfParser:
         r = self.r
         head = r.expect("spot")
         if r.ident(head, head.tokens[1], 2, "a spot") != (zid, sid):
-            raise r.error(head, f"expected spot {zid}.{sid} (spots of zone {zid} are numbered {zid}.1, {zid}.2, ... "
-                                f"in order), got {head.tokens[1]}")
+            raise r.error(
+                head,
+                f"expected spot {zid}.{sid} (spots of zone {zid} are numbered {zid}.1, {zid}.2, ... "
+                f"in order), got {head.tokens[1]}",
+            )
         opts: dict[str, object] = {}
         checkpoints: list[tuple[Checkpoint, _Line]] = []
         while r.peek_word() in ("spot_width", "checkpoint"):
@@ -587,8 +654,12 @@ class _RndfParser:
         names = {w.id for w in points}
         for c, line in checkpoints:
             self.member(c.waypoint, names, line, "checkpoint", f"spot {zid}.{sid} (2 waypoints)")
-        return Spot(id=f"{zid}.{sid}", waypoints=points, width_ft=opts.get("width_ft"),
-                    checkpoints=tuple(c for c, _ in checkpoints))
+        return Spot(
+            id=f"{zid}.{sid}",
+            waypoints=points,
+            width_ft=opts.get("width_ft"),
+            checkpoints=tuple(c for c, _ in checkpoints),
+        )
 
     # ---- pieces
 
@@ -615,8 +686,9 @@ class _RndfParser:
         b = _dotted(r.ident(line, line.tokens[2], 3, "an entry waypoint"))
         return Exit(exit=a, entry=b)
 
-    def points(self, ident, count: int, count_line: _Line, owner: str, end: str,
-               fixed: bool = False) -> tuple[Waypoint, ...]:
+    def points(
+        self, ident, count: int, count_line: _Line, owner: str, end: str, fixed: bool = False
+    ) -> tuple[Waypoint, ...]:
         """The ``count`` point lines of ``owner``, then its ``end`` keyword."""
         r = self.r
         out: list[Waypoint] = []
@@ -627,14 +699,21 @@ class _RndfParser:
                 n = len(out) + 1
                 want = _dotted(ident(n))
                 if n > count:
-                    told = ("a spot has exactly 2 waypoints" if fixed else
-                            f"num_waypoints (line {count_line.number}) is {count}" if end == "end_lane" else
-                            f"num_perimeterpoints (line {count_line.number}) is {count}")
+                    told = (
+                        "a spot has exactly 2 waypoints"
+                        if fixed
+                        else f"num_waypoints (line {count_line.number}) is {count}"
+                        if end == "end_lane"
+                        else f"num_perimeterpoints (line {count_line.number}) is {count}"
+                    )
                     raise r.error(line, f"one point too many in {owner}: {told}; expected '{end}'")
                 got = r.ident(line, line.word, 3, "a waypoint")
                 if _dotted(got) != want:
-                    raise r.error(line, f"expected waypoint {want} ({owner} numbers its points "
-                                        f"{_dotted(ident(1))}, {_dotted(ident(2))}, ... in order), got {line.word}")
+                    raise r.error(
+                        line,
+                        f"expected waypoint {want} ({owner} numbers its points "
+                        f"{_dotted(ident(1))}, {_dotted(ident(2))}, ... in order), got {line.word}",
+                    )
                 if len(line.tokens) != 3:
                     raise r.error(line, f"expected '{want} <latitude> <longitude>', got '{' '.join(line.tokens)}'")
                 lat = r.number(line, line.tokens[1], f"the latitude of {want}", low=-90.0, high=90.0)
@@ -642,16 +721,19 @@ class _RndfParser:
                 out.append(Waypoint(want, lat, lon))
             elif line is not None and line.word == end:
                 if len(out) < count:
-                    told = ("a spot has exactly 2 waypoints" if fixed else
-                            f"num_waypoints (line {count_line.number}) is {count}" if end == "end_lane" else
-                            f"num_perimeterpoints (line {count_line.number}) is {count}")
+                    told = (
+                        "a spot has exactly 2 waypoints"
+                        if fixed
+                        else f"num_waypoints (line {count_line.number}) is {count}"
+                        if end == "end_lane"
+                        else f"num_perimeterpoints (line {count_line.number}) is {count}"
+                    )
                     raise r.error(line, f"{owner} has {len(out)} points but {told}")
                 r.check_values(r.take(), 0)
                 return tuple(out)
             else:
                 nxt = _dotted(ident(len(out) + 1))
-                expected = (f"waypoint '{nxt} <latitude> <longitude>' or '{end}'" if len(out) < count
-                            else f"'{end}'")
+                expected = f"waypoint '{nxt} <latitude> <longitude>' or '{end}'" if len(out) < count else f"'{end}'"
                 raise r.unexpected(line, expected)
 
     def member(self, point: str, names: set[str], line: _Line, what: str, where: str) -> None:
@@ -716,8 +798,11 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     while r.peek() is not None and _looks_like_id(r.peek_word()):
         line = r.take()
         if len(checkpoints) >= count:
-            raise r.error(line, f"one checkpoint too many: num_checkpoints (line {nc_line.number}) is {count}; "
-                                "expected 'end_checkpoints'")
+            raise r.error(
+                line,
+                f"one checkpoint too many: num_checkpoints (line {nc_line.number}) is {count}; "
+                "expected 'end_checkpoints'",
+            )
         r.check_values(line, 0)
         checkpoints.append(r.integer(line, line.word, "a checkpoint id", min=1))
         cp_lines.append(line.number)
@@ -725,8 +810,10 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     if line is None or line.word != "end_checkpoints":
         raise r.unexpected(line, "a checkpoint id or 'end_checkpoints'")
     if len(checkpoints) < count:
-        raise r.error(line, f"the mission has {len(checkpoints)} checkpoints but num_checkpoints (line "
-                            f"{nc_line.number}) is {count}")
+        raise r.error(
+            line,
+            f"the mission has {len(checkpoints)} checkpoints but num_checkpoints (line {nc_line.number}) is {count}",
+        )
     r.check_values(r.take(), 0)
 
     r.expect("speed_limits", 0)
@@ -738,8 +825,11 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     while r.peek() is not None and _looks_like_id(r.peek_word()):
         line = r.take()
         if len(limits) >= count:
-            raise r.error(line, f"one speed limit too many: num_speed_limits (line {nl_line.number}) is {count}; "
-                                "expected 'end_speed_limits'")
+            raise r.error(
+                line,
+                f"one speed limit too many: num_speed_limits (line {nl_line.number}) is {count}; "
+                "expected 'end_speed_limits'",
+            )
         if len(line.tokens) != 3:
             raise r.error(line, f"expected '<segment or zone id> <min mph> <max mph>', got '{' '.join(line.tokens)}'")
         sid = r.integer(line, line.tokens[0], "the segment or zone id", min=1)
@@ -756,8 +846,9 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     if line is None or line.word != "end_speed_limits":
         raise r.unexpected(line, "'<segment or zone id> <min mph> <max mph>' or 'end_speed_limits'")
     if len(limits) < count:
-        raise r.error(line, f"the file has {len(limits)} speed limits but num_speed_limits (line "
-                            f"{nl_line.number}) is {count}")
+        raise r.error(
+            line, f"the file has {len(limits)} speed limits but num_speed_limits (line {nl_line.number}) is {count}"
+        )
     r.check_values(r.take(), 0)
     line = r.peek()
     if line is None or line.word != "end_file":
@@ -767,10 +858,18 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     if extra is not None:
         raise r.error(extra, f"nothing may follow 'end_file', got '{' '.join(extra.tokens)}'")
 
-    mdf = Mdf(name=name, rndf_name=r.text(rndf_line), path=path, checkpoints=tuple(checkpoints),
-              speed_limits=tuple(limits), format_version=info.get("format_version"),
-              creation_date=info.get("creation_date"), rndf_line=rndf_line.number,
-              checkpoint_lines=tuple(cp_lines), speed_limit_lines=tuple(sl_lines))
+    mdf = Mdf(
+        name=name,
+        rndf_name=r.text(rndf_line),
+        path=path,
+        checkpoints=tuple(checkpoints),
+        speed_limits=tuple(limits),
+        format_version=info.get("format_version"),
+        creation_date=info.get("creation_date"),
+        rndf_line=rndf_line.number,
+        checkpoint_lines=tuple(cp_lines),
+        speed_limit_lines=tuple(sl_lines),
+    )
     if rndf is not None:
         check_mdf(mdf, rndf)
     return mdf
@@ -788,19 +887,25 @@ def check_mdf(mdf: Mdf, rndf: Rndf) -> None:
         return ConfigError(message, path=mdf.path, key=f"line {line}")
 
     if mdf.rndf_name != rndf.name:
-        raise error(mdf.rndf_line, f"the mission is for the RNDF '{mdf.rndf_name}' but is checked against "
-                                   f"'{rndf.name}' ({rndf.path})")
+        raise error(
+            mdf.rndf_line,
+            f"the mission is for the RNDF '{mdf.rndf_name}' but is checked against '{rndf.name}' ({rndf.path})",
+        )
     known = rndf.checkpoints()
     for cid, line in zip(mdf.checkpoints, mdf.checkpoint_lines):
         if cid not in known:
             span = f"1..{max(known)}" if known else "none"
-            raise error(line, f"checkpoint {cid} is not a checkpoint of the RNDF '{rndf.name}' "
-                              f"({len(known)} checkpoints, ids {span})")
+            raise error(
+                line,
+                f"checkpoint {cid} is not a checkpoint of the RNDF '{rndf.name}' "
+                f"({len(known)} checkpoints, ids {span})",
+            )
     ids = {s.id for s in rndf.segments} | {z.id for z in rndf.zones}
     for limit, line in zip(mdf.speed_limits, mdf.speed_limit_lines):
         if limit.id not in ids:
-            raise error(line, f"{limit.id} is neither a segment nor a zone of the RNDF '{rndf.name}' "
-                              f"(ids 1..{max(ids)})")
+            raise error(
+                line, f"{limit.id} is neither a segment nor a zone of the RNDF '{rndf.name}' (ids 1..{max(ids)})"
+            )
 
 
 # --------------------------------------------------------------------------- files

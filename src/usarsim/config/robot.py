@@ -143,8 +143,11 @@ class Leg:
 
     @property
     def joints(self) -> tuple[str, ...]:
-        return tuple(j for j in (self.hip_yaw, self.hip_roll, self.hip_pitch, self.knee, self.ankle_pitch,
-                                 self.ankle_roll) if j is not None)
+        return tuple(
+            j
+            for j in (self.hip_yaw, self.hip_roll, self.hip_pitch, self.knee, self.ankle_pitch, self.ankle_roll)
+            if j is not None
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -241,8 +244,11 @@ class RobotConfig:
 
     @property
     def total_mass_kg(self) -> float:
-        return (sum(c.mass_kg for c in self.chassis) + sum(w.mass_kg for w in self.wheels)
-                + sum(sh.mass_kg for ln in self.links for sh in ln.shapes))
+        return (
+            sum(c.mass_kg for c in self.chassis)
+            + sum(w.mass_kg for w in self.wheels)
+            + sum(sh.mass_kg for ln in self.links for sh in ln.shapes)
+        )
 
     @property
     def lowest_point_m(self) -> float:
@@ -259,7 +265,7 @@ class RobotConfig:
 
                 r, pch, _ = p.rotation
                 axis_z = abs(math.cos(r) * math.cos(pch))  # how vertical the axis is
-                lean = math.sqrt(max(0.0, 1.0 - axis_z ** 2))
+                lean = math.sqrt(max(0.0, 1.0 - axis_z**2))
                 extra = p.radius_m if p.shape == "capsule" else p.radius_m * lean
                 low.append(p.center[2] + p.length_m / 2.0 * axis_z + extra)
         if self.gait is not None:  # standing on its legs: hip, leg, foot (a ball or a sole)
@@ -269,8 +275,7 @@ class RobotConfig:
                     foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
                 else:
                     sole = self.link(leg.ankle_roll or leg.ankle_pitch)
-                    foot = max((p.center[2] + p.size[2] / 2.0 for p in sole.shapes if p.shape == "box"),
-                               default=0.0)
+                    foot = max((p.center[2] + p.size[2] / 2.0 for p in sole.shapes if p.shape == "box"), default=0.0)
                 low.append(self.link_origin(leg.hip_pitch)[2] + self.gait.stand_height_m + foot)
         return max(low) if low else 0.0
 
@@ -308,37 +313,49 @@ def _shape(s: Section) -> ChassisBox:
     rotation = s.vec("rotation", 3, d.rotation)
     friction = s.float("friction", d.friction, min=0.0, max=10.0)
     if shape == "box":
-        return ChassisBox(center=center, size=s.vec("size", positive=True), mass_kg=mass, rotation=rotation,
-                          friction=friction)
+        return ChassisBox(
+            center=center, size=s.vec("size", positive=True), mass_kg=mass, rotation=rotation, friction=friction
+        )
     if shape == "sphere":
-        return ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001), mass_kg=mass,
-                          friction=friction)
-    return ChassisBox(shape=shape, center=center, radius_m=s.float("radius", min=0.001),
-                      length_m=s.float("length", min=0.0), mass_kg=mass, rotation=rotation, friction=friction)
+        return ChassisBox(
+            shape=shape, center=center, radius_m=s.float("radius", min=0.001), mass_kg=mass, friction=friction
+        )
+    return ChassisBox(
+        shape=shape,
+        center=center,
+        radius_m=s.float("radius", min=0.001),
+        length_m=s.float("length", min=0.0),
+        mass_kg=mass,
+        rotation=rotation,
+        friction=friction,
+    )
 
 
 def _aerial(a: Section) -> AerialLimits:
     d = FieldDefaults(AerialLimits)
-    out = AerialLimits(max_linear_m_s=a.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
-                       max_lateral_m_s=a.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
-                       max_vertical_m_s=a.float("max_vertical_m_s", d.max_vertical_m_s, min=0.0, min_exclusive=True),
-                       max_yaw_rate_rad_s=a.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0,
-                                                  min_exclusive=True),
-                       max_accel_m_s2=a.float("max_accel_m_s2", d.max_accel_m_s2, min=0.0, min_exclusive=True))
+    out = AerialLimits(
+        max_linear_m_s=a.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
+        max_lateral_m_s=a.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
+        max_vertical_m_s=a.float("max_vertical_m_s", d.max_vertical_m_s, min=0.0, min_exclusive=True),
+        max_yaw_rate_rad_s=a.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0, min_exclusive=True),
+        max_accel_m_s2=a.float("max_accel_m_s2", d.max_accel_m_s2, min=0.0, min_exclusive=True),
+    )
     a.finish()
     return out
 
 
 def _nautical(n: Section) -> NauticalSpec:
     d = FieldDefaults(NauticalSpec)
-    out = NauticalSpec(volume_m3=n.float("volume_m3", min=0.0, min_exclusive=True),  # required in a file
-                       max_thrust_n=n.float("max_thrust_n", d.max_thrust_n, min=0.0, min_exclusive=True),
-                       max_rudder_rad=n.float("max_rudder_rad", d.max_rudder_rad, min=0.0, max=1.6),
-                       max_stern_plane_rad=n.float("max_stern_plane_rad", d.max_stern_plane_rad, min=0.0, max=1.6),
-                       rudder_gain=n.float("rudder_gain", d.rudder_gain, min=0.0),
-                       stern_plane_gain=n.float("stern_plane_gain", d.stern_plane_gain, min=0.0),
-                       drag_n_per_m_s=n.float("drag_n_per_m_s", d.drag_n_per_m_s, min=0.0),
-                       angular_drag=n.float("angular_drag", d.angular_drag, min=0.0))
+    out = NauticalSpec(
+        volume_m3=n.float("volume_m3", min=0.0, min_exclusive=True),  # required in a file
+        max_thrust_n=n.float("max_thrust_n", d.max_thrust_n, min=0.0, min_exclusive=True),
+        max_rudder_rad=n.float("max_rudder_rad", d.max_rudder_rad, min=0.0, max=1.6),
+        max_stern_plane_rad=n.float("max_stern_plane_rad", d.max_stern_plane_rad, min=0.0, max=1.6),
+        rudder_gain=n.float("rudder_gain", d.rudder_gain, min=0.0),
+        stern_plane_gain=n.float("stern_plane_gain", d.stern_plane_gain, min=0.0),
+        drag_n_per_m_s=n.float("drag_n_per_m_s", d.drag_n_per_m_s, min=0.0),
+        angular_drag=n.float("angular_drag", d.angular_drag, min=0.0),
+    )
     n.finish()
     return out
 
@@ -347,20 +364,32 @@ def _gait(gs: Section) -> Gait:
     ld = FieldDefaults(Leg)
     legs = []
     for ls in gs.entries("legs", required=True):
-        legs.append(Leg(hip_pitch=ls.str("hip_pitch"), hip_roll=ls.str("hip_roll"), knee=ls.str("knee"),
-                        upper_m=ls.float("upper_m", min=0.001), lower_m=ls.float("lower_m", min=0.001),
-                        phase=ls.float("phase", ld.phase, min=0.0, max=1.0),
-                        hip_yaw=ls.str("hip_yaw", ld.hip_yaw), ankle_pitch=ls.str("ankle_pitch", ld.ankle_pitch),
-                        ankle_roll=ls.str("ankle_roll", ld.ankle_roll),
-                        knee_forward=ls.bool("knee_forward", ld.knee_forward)))
+        legs.append(
+            Leg(
+                hip_pitch=ls.str("hip_pitch"),
+                hip_roll=ls.str("hip_roll"),
+                knee=ls.str("knee"),
+                upper_m=ls.float("upper_m", min=0.001),
+                lower_m=ls.float("lower_m", min=0.001),
+                phase=ls.float("phase", ld.phase, min=0.0, max=1.0),
+                hip_yaw=ls.str("hip_yaw", ld.hip_yaw),
+                ankle_pitch=ls.str("ankle_pitch", ld.ankle_pitch),
+                ankle_roll=ls.str("ankle_roll", ld.ankle_roll),
+                knee_forward=ls.bool("knee_forward", ld.knee_forward),
+            )
+        )
     d = FieldDefaults(Gait)
-    out = Gait(legs=tuple(legs), stand_height_m=gs.float("stand_height_m", min=0.001),
-               step_height_m=gs.float("step_height_m", d.step_height_m, min=0.0),
-               period_s=gs.float("period_s", d.period_s, min=0.05),
-               max_linear_m_s=gs.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
-               max_lateral_m_s=gs.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
-               max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0, min_exclusive=True),
-               duty=gs.float("duty", d.duty, min=0.5, max=0.95), sway_m=gs.float("sway_m", d.sway_m, min=0.0))
+    out = Gait(
+        legs=tuple(legs),
+        stand_height_m=gs.float("stand_height_m", min=0.001),
+        step_height_m=gs.float("step_height_m", d.step_height_m, min=0.0),
+        period_s=gs.float("period_s", d.period_s, min=0.05),
+        max_linear_m_s=gs.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
+        max_lateral_m_s=gs.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
+        max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0, min_exclusive=True),
+        duty=gs.float("duty", d.duty, min=0.5, max=0.95),
+        sway_m=gs.float("sway_m", d.sway_m, min=0.0),
+    )
     gs.finish()
     return out
 
@@ -368,10 +397,13 @@ def _gait(gs: Section) -> Gait:
 def _geometry(g: Section) -> RobotGeometryConfig:
     """The ``geometry`` section; its wheel keys lack the ``_m`` of the fields they fill."""
     d = FieldDefaults(RobotGeometryConfig)
-    out = RobotGeometryConfig(dimensions=g.vec("dimensions", positive=True), cog=g.vec("cog", 3, d.cog),
-                              wheel_radius_m=g.float("wheel_radius", d.wheel_radius_m, min=0.0),
-                              wheel_separation_m=g.float("wheel_separation", d.wheel_separation_m, min=0.0),
-                              wheel_base_m=g.float("wheel_base", d.wheel_base_m, min=0.0))
+    out = RobotGeometryConfig(
+        dimensions=g.vec("dimensions", positive=True),
+        cog=g.vec("cog", 3, d.cog),
+        wheel_radius_m=g.float("wheel_radius", d.wheel_radius_m, min=0.0),
+        wheel_separation_m=g.float("wheel_separation", d.wheel_separation_m, min=0.0),
+        wheel_base_m=g.float("wheel_base", d.wheel_base_m, min=0.0),
+    )
     g.finish()
     return out
 
@@ -380,11 +412,18 @@ def _wheels(top: Section) -> list[Wheel]:
     d = FieldDefaults(Wheel)
     wheels: list[Wheel] = []
     for s in top.entries("wheels"):
-        w = Wheel(name=s.str("name"), position=s.vec("position"), radius_m=s.float("radius_m", min=0.001),
-                  width_m=s.float("width_m", min=0.001), mass_kg=s.float("mass_kg", min=0.001),
-                  side=s.str("side", choices=("left", "right")), driven=s.bool("driven", d.driven),
-                  parent=s.str("parent", d.parent), steer=s.str("steer", d.steer, choices=STEER_GROUPS),
-                  number=s.int("number", d.number, min=-1))
+        w = Wheel(
+            name=s.str("name"),
+            position=s.vec("position"),
+            radius_m=s.float("radius_m", min=0.001),
+            width_m=s.float("width_m", min=0.001),
+            mass_kg=s.float("mass_kg", min=0.001),
+            side=s.str("side", choices=("left", "right")),
+            driven=s.bool("driven", d.driven),
+            parent=s.str("parent", d.parent),
+            steer=s.str("steer", d.steer, choices=STEER_GROUPS),
+            number=s.int("number", d.number, min=-1),
+        )
         if any(w.name == other.name for other in wheels):
             raise s.error("name", f"duplicate wheel name '{w.name}'")
         wheels.append(w)
@@ -402,20 +441,33 @@ def _links(top: Section, wnames: set[str]) -> list[Link]:
             raise s.error("name", f"link names must be unique, without spaces, braces or '/', got {lname!r}")
         parent = s.str("parent", d.parent)
         if parent != "chassis" and parent not in lnames:
-            raise s.error("parent", f"unknown parent '{parent}' (links must come after their parent)"
-                                    f"{did_you_mean(parent, ['chassis', *lnames])}")
+            raise s.error(
+                "parent",
+                f"unknown parent '{parent}' (links must come after their parent)"
+                f"{did_you_mean(parent, ['chassis', *lnames])}",
+            )
         axis = s.vec("axis", 3, d.axis)
         if sum(a * a for a in axis) < 1e-12:
             raise s.error("axis", "the joint axis must not be zero")
         shapes = tuple(_shape(sh) for sh in s.entries("shapes"))
-        links.append(Link(name=lname, parent=parent, location=s.vec("location", 3, d.location),
-                          orientation=s.vec("orientation", 3, d.orientation),
-                          joint=s.str("joint", d.joint, choices=JOINT_TYPES), axis=axis,
-                          min_range=s.float("min_range", d.min_range), max_range=s.float("max_range", d.max_range),
-                          max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
-                          max_torque=s.float("max_torque", min=0.0, min_exclusive=True), shapes=shapes,
-                          armature=s.float("armature", d.armature, min=0.0), collide=s.bool("collide", d.collide),
-                          geo_orientation=s.vec("geo_orientation", 3, d.geo_orientation)))
+        links.append(
+            Link(
+                name=lname,
+                parent=parent,
+                location=s.vec("location", 3, d.location),
+                orientation=s.vec("orientation", 3, d.orientation),
+                joint=s.str("joint", d.joint, choices=JOINT_TYPES),
+                axis=axis,
+                min_range=s.float("min_range", d.min_range),
+                max_range=s.float("max_range", d.max_range),
+                max_speed=s.float("max_speed", min=0.0, min_exclusive=True),
+                max_torque=s.float("max_torque", min=0.0, min_exclusive=True),
+                shapes=shapes,
+                armature=s.float("armature", d.armature, min=0.0),
+                collide=s.bool("collide", d.collide),
+                geo_orientation=s.vec("geo_orientation", 3, d.geo_orientation),
+            )
+        )
         lnames.add(lname)
     return links
 
@@ -442,8 +494,11 @@ def _items(top: Section, mounts: list[str]) -> list[MountedItem]:
         if mount != "HARD" and mount not in mounts:
             raise s.error("mount", f"unknown mount '{mount}'{did_you_mean(mount, ['HARD', *mounts])}")
         params = {k: v for k, v in s.data.items() if k not in ("type", "name", "location", "orientation", "mount")}
-        items.append(MountedItem(item_type=itype, name=iname, location=loc, orientation=ori, mount=mount,
-                                 params=params, key_path=key))
+        items.append(
+            MountedItem(
+                item_type=itype, name=iname, location=loc, orientation=ori, mount=mount, params=params, key_path=key
+            )
+        )
     return items
 
 
@@ -513,8 +568,11 @@ def _robot(data: dict, path: str) -> RobotConfig:
 
     for i, w in enumerate(wheels):
         if w.parent != "chassis" and w.parent not in lnames:
-            raise ConfigError(f"unknown parent '{w.parent}'{did_you_mean(w.parent, ['chassis', *lnames])}",
-                              path=path, key=f"wheels[{i}].parent")
+            raise ConfigError(
+                f"unknown parent '{w.parent}'{did_you_mean(w.parent, ['chassis', *lnames])}",
+                path=path,
+                key=f"wheels[{i}].parent",
+            )
         if w.steer != "none" and w.parent != "chassis":
             raise ConfigError("a steered wheel must sit on the chassis", path=path, key=f"wheels[{i}].steer")
     # what a kind of drive needs of the wheels (sides, steered axles, numbers) is checked by
@@ -546,21 +604,49 @@ def _robot(data: dict, path: str) -> RobotConfig:
     items = _items(top, [*wnames, *lnames])
     top.finish()
 
-    total = (sum(c.mass_kg for c in chassis) + sum(w.mass_kg for w in wheels)
-             + sum(sh.mass_kg for ln in links for sh in ln.shapes))
+    total = (
+        sum(c.mass_kg for c in chassis)
+        + sum(w.mass_kg for w in wheels)
+        + sum(sh.mass_kg for ln in links for sh in ln.shapes)
+    )
     if abs(total - mass) > 0.01 * mass + 1e-6:
-        raise ConfigError(f"chassis, wheel and link masses add up to {total:.3f} kg but mass_kg is {mass}; "
-                          "make them agree", path=path, key="mass_kg")
-    return RobotConfig(class_name=class_name, description=desc, path=path, vehicle_type=vehicle_type,
-                       steering_type=steering, drive=drive, mass_kg=mass, max_speed_rad_s=max_speed,
-                       max_torque_nm=max_torque, max_front_steer_rad=mfs, max_rear_steer_rad=mrs,
-                       battery_s=battery, status_interval_s=status_interval, spawn_clearance_m=spawn_clearance,
-                       geometry=geometry,
-                       chassis=tuple(chassis), wheels=tuple(wheels), items=tuple(items),
-                       wheel_friction=wheel_friction, chained=chained, wheel_gain=wheel_gain,
-                       wheel_torque_nm=wheel_torque, steer_torque_nm=steer_torque, links=tuple(links),
-                       mission_packages=tuple(packages), aerial=aerial, status_joints=status_joints,
-                       nautical=nautical, gait=gait, color=tuple(float(c) for c in color))
+        raise ConfigError(
+            f"chassis, wheel and link masses add up to {total:.3f} kg but mass_kg is {mass}; make them agree",
+            path=path,
+            key="mass_kg",
+        )
+    return RobotConfig(
+        class_name=class_name,
+        description=desc,
+        path=path,
+        vehicle_type=vehicle_type,
+        steering_type=steering,
+        drive=drive,
+        mass_kg=mass,
+        max_speed_rad_s=max_speed,
+        max_torque_nm=max_torque,
+        max_front_steer_rad=mfs,
+        max_rear_steer_rad=mrs,
+        battery_s=battery,
+        status_interval_s=status_interval,
+        spawn_clearance_m=spawn_clearance,
+        geometry=geometry,
+        chassis=tuple(chassis),
+        wheels=tuple(wheels),
+        items=tuple(items),
+        wheel_friction=wheel_friction,
+        chained=chained,
+        wheel_gain=wheel_gain,
+        wheel_torque_nm=wheel_torque,
+        steer_torque_nm=steer_torque,
+        links=tuple(links),
+        mission_packages=tuple(packages),
+        aerial=aerial,
+        status_joints=status_joints,
+        nautical=nautical,
+        gait=gait,
+        color=tuple(float(c) for c in color),
+    )
 
 
 def class_name_problem(cfg: RobotConfig) -> str | None:
@@ -570,6 +656,8 @@ def class_name_problem(cfg: RobotConfig) -> str | None:
     p = Path(cfg.path)
     if cfg.class_name == p.stem:
         return None
-    return (f"class_name is '{cfg.class_name}' but the file is {p.name}: INIT finds a robot class by its file's "
-            f"name, so the two must agree; rename the file {cfg.class_name}{p.suffix} or write "
-            f"class_name: {p.stem}")
+    return (
+        f"class_name is '{cfg.class_name}' but the file is {p.name}: INIT finds a robot class by its file's "
+        f"name, so the two must agree; rename the file {cfg.class_name}{p.suffix} or write "
+        f"class_name: {p.stem}"
+    )

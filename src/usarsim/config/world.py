@@ -26,8 +26,22 @@ MESH_SUFFIXES = (".obj", ".stl")
 SEE_THROUGH_KINDS = ("ir", "camera", "laser", "sonar")
 # Textures a material can name (usarsim.sim.textures.TEXTURES, which draws them; listed here
 # so that reading a world file loads no NumPy).
-TEXTURE_NAMES = ("osb", "plywood", "painted_panel", "concrete", "tile", "cinder", "brick", "paper", "pipe",
-                 "rubble", "gravel", "asphalt", "road", "grass")
+TEXTURE_NAMES = (
+    "osb",
+    "plywood",
+    "painted_panel",
+    "concrete",
+    "tile",
+    "cinder",
+    "brick",
+    "paper",
+    "pipe",
+    "rubble",
+    "gravel",
+    "asphalt",
+    "road",
+    "grass",
+)
 # Light types of the world's ``lights`` (MuJoCo's mjtLightType without image lights).
 LIGHT_TYPES = ("point", "spot", "directional")
 # The steepest ramp or flight of stairs a world may hold (degrees): steeper than this is a
@@ -48,8 +62,14 @@ WIRELESS_MODELS = ("waf", "waf2009", "distance", "perfect")
 SOLID_MARGIN_M = 0.01
 # The ComConnection keys of USARSim's USARComServer.ini (manual 3.2.4.2), as the world's
 # ``wireless`` section and ``--wireless-config`` take them, and the setting each gives.
-WIRELESS_KEYS = {"ePdo": "pd0_dbm", "eDo": "d0_m", "eN": "path_loss_exponent", "eCutoff": "cutoff_dbm",
-                 "eMaxObs": "max_walls", "eAttenFac": "wall_db"}
+WIRELESS_KEYS = {
+    "ePdo": "pd0_dbm",
+    "eDo": "d0_m",
+    "eN": "path_loss_exponent",
+    "eCutoff": "cutoff_dbm",
+    "eMaxObs": "max_walls",
+    "eAttenFac": "wall_db",
+}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -261,8 +281,10 @@ class WorldConfig:
             if obj.shape == "box":
                 inside = _in_box(local, obj.size, margin_m)
             elif obj.shape == "cylinder":
-                inside = (math.hypot(local[0], local[1]) < obj.radius_m - margin_m
-                          and abs(local[2]) < obj.length_m / 2.0 - margin_m)
+                inside = (
+                    math.hypot(local[0], local[1]) < obj.radius_m - margin_m
+                    and abs(local[2]) < obj.length_m / 2.0 - margin_m
+                )
             else:
                 inside = _mesh_depth(obj.mesh_file, obj.scale, local) > margin_m
             if inside:
@@ -308,11 +330,13 @@ def utm_band_limits_deg(letter: str) -> tuple[float, float]:
 
 def _meridian_arc_m(phi: float) -> float:
     """Distance along the meridian from the equator to latitude ``phi`` (Snyder 3-21)."""
-    e2, e4, e6 = _E2, _E2 * _E2, _E2 ** 3
-    return WGS84_A_M * ((1 - e2 / 4 - 3 * e4 / 64 - 5 * e6 / 256) * phi
-                        - (3 * e2 / 8 + 3 * e4 / 32 + 45 * e6 / 1024) * math.sin(2 * phi)
-                        + (15 * e4 / 256 + 45 * e6 / 1024) * math.sin(4 * phi)
-                        - (35 * e6 / 3072) * math.sin(6 * phi))
+    e2, e4, e6 = _E2, _E2 * _E2, _E2**3
+    return WGS84_A_M * (
+        (1 - e2 / 4 - 3 * e4 / 64 - 5 * e6 / 256) * phi
+        - (3 * e2 / 8 + 3 * e4 / 32 + 45 * e6 / 1024) * math.sin(2 * phi)
+        + (15 * e4 / 256 + 45 * e6 / 1024) * math.sin(4 * phi)
+        - (35 * e6 / 3072) * math.sin(6 * phi)
+    )
 
 
 def latlon_to_utm(latitude_deg: float, longitude_deg: float, zone: int | None = None) -> UtmCoordinate:
@@ -327,13 +351,24 @@ def latlon_to_utm(latitude_deg: float, longitude_deg: float, zone: int | None = 
     t = tan_p * tan_p
     c = _EP2 * cos_p * cos_p
     a = dlam * cos_p
-    x = UTM_K0 * n * (a + (1 - t + c) * a ** 3 / 6 + (5 - 18 * t + t * t + 72 * c - 58 * _EP2) * a ** 5 / 120)
-    y = UTM_K0 * (_meridian_arc_m(phi) + n * tan_p * (a * a / 2 + (5 - t + 9 * c + 4 * c * c) * a ** 4 / 24
-                                                      + (61 - 58 * t + t * t + 600 * c - 330 * _EP2) * a ** 6 / 720))
+    x = UTM_K0 * n * (a + (1 - t + c) * a**3 / 6 + (5 - 18 * t + t * t + 72 * c - 58 * _EP2) * a**5 / 120)
+    y = UTM_K0 * (
+        _meridian_arc_m(phi)
+        + n
+        * tan_p
+        * (
+            a * a / 2
+            + (5 - t + 9 * c + 4 * c * c) * a**4 / 24
+            + (61 - 58 * t + t * t + 600 * c - 330 * _EP2) * a**6 / 720
+        )
+    )
     band = min(max(int((latitude_deg + 80.0) // 8.0), 0), len(UTM_LETTERS) - 1)
-    return UtmCoordinate(easting_m=x + UTM_FALSE_EASTING_M,
-                         northing_m=y + (UTM_FALSE_NORTHING_SOUTH_M if latitude_deg < 0 else 0.0),
-                         zone=zone, letter=UTM_LETTERS[band])
+    return UtmCoordinate(
+        easting_m=x + UTM_FALSE_EASTING_M,
+        northing_m=y + (UTM_FALSE_NORTHING_SOUTH_M if latitude_deg < 0 else 0.0),
+        zone=zone,
+        letter=UTM_LETTERS[band],
+    )
 
 
 def utm_to_latlon(utm: UtmCoordinate) -> tuple[float, float]:
@@ -342,26 +377,31 @@ def utm_to_latlon(utm: UtmCoordinate) -> tuple[float, float]:
     x = utm.easting_m - UTM_FALSE_EASTING_M
     y = utm.northing_m - (UTM_FALSE_NORTHING_SOUTH_M if utm.letter < "N" else 0.0)
     e2 = _E2
-    mu = (y / UTM_K0) / (WGS84_A_M * (1 - e2 / 4 - 3 * e2 * e2 / 64 - 5 * e2 ** 3 / 256))
+    mu = (y / UTM_K0) / (WGS84_A_M * (1 - e2 / 4 - 3 * e2 * e2 / 64 - 5 * e2**3 / 256))
     r = math.sqrt(1.0 - e2)
     e1 = (1.0 - r) / (1.0 + r)
-    phi1 = (mu + (3 * e1 / 2 - 27 * e1 ** 3 / 32) * math.sin(2 * mu)
-            + (21 * e1 ** 2 / 16 - 55 * e1 ** 4 / 32) * math.sin(4 * mu)
-            + (151 * e1 ** 3 / 96) * math.sin(6 * mu)
-            + (1097 * e1 ** 4 / 512) * math.sin(8 * mu))
+    phi1 = (
+        mu
+        + (3 * e1 / 2 - 27 * e1**3 / 32) * math.sin(2 * mu)
+        + (21 * e1**2 / 16 - 55 * e1**4 / 32) * math.sin(4 * mu)
+        + (151 * e1**3 / 96) * math.sin(6 * mu)
+        + (1097 * e1**4 / 512) * math.sin(8 * mu)
+    )
     sin1, cos1, tan1 = math.sin(phi1), math.cos(phi1), math.tan(phi1)
     c1 = _EP2 * cos1 * cos1
     t1 = tan1 * tan1
     w = 1.0 - e2 * sin1 * sin1
     n1 = WGS84_A_M / math.sqrt(w)
-    r1 = WGS84_A_M * (1.0 - e2) / w ** 1.5
+    r1 = WGS84_A_M * (1.0 - e2) / w**1.5
     d = x / (n1 * UTM_K0)
-    phi = phi1 - (n1 * tan1 / r1) * (d * d / 2
-                                      - (5 + 3 * t1 + 10 * c1 - 4 * c1 * c1 - 9 * _EP2) * d ** 4 / 24
-                                      + (61 + 90 * t1 + 298 * c1 + 45 * t1 * t1 - 252 * _EP2 - 3 * c1 * c1)
-                                      * d ** 6 / 720)
-    lam = (d - (1 + 2 * t1 + c1) * d ** 3 / 6
-           + (5 - 2 * c1 + 28 * t1 - 3 * c1 * c1 + 8 * _EP2 + 24 * t1 * t1) * d ** 5 / 120) / cos1
+    phi = phi1 - (n1 * tan1 / r1) * (
+        d * d / 2
+        - (5 + 3 * t1 + 10 * c1 - 4 * c1 * c1 - 9 * _EP2) * d**4 / 24
+        + (61 + 90 * t1 + 298 * c1 + 45 * t1 * t1 - 252 * _EP2 - 3 * c1 * c1) * d**6 / 720
+    )
+    lam = (
+        d - (1 + 2 * t1 + c1) * d**3 / 6 + (5 - 2 * c1 + 28 * t1 - 3 * c1 * c1 + 8 * _EP2 + 24 * t1 * t1) * d**5 / 120
+    ) / cos1
     lon = utm_central_meridian_deg(utm.zone) + math.degrees(lam)
     return math.degrees(phi), (lon + 180.0) % 360.0 - 180.0
 
@@ -373,18 +413,22 @@ def _rotation(rpy) -> tuple[tuple[float, float, float], ...]:
     cr, sr = math.cos(rpy[0]), math.sin(rpy[0])
     cp, sp = math.cos(rpy[1]), math.sin(rpy[1])
     cy, sy = math.cos(rpy[2]), math.sin(rpy[2])
-    return ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
-            (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
-            (-sp, cp * sr, cp * cr))
+    return (
+        (cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
+        (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
+        (-sp, cp * sr, cp * cr),
+    )
 
 
 def _to_local(point, center, rotation) -> Vec3:
     """``point`` (world) in the frame of an object at ``center`` turned by ``rotation``."""
     d = (point[0] - center[0], point[1] - center[1], point[2] - center[2])
     m = _rotation(rotation)
-    return (m[0][0] * d[0] + m[1][0] * d[1] + m[2][0] * d[2],
-            m[0][1] * d[0] + m[1][1] * d[1] + m[2][1] * d[2],
-            m[0][2] * d[0] + m[1][2] * d[1] + m[2][2] * d[2])
+    return (
+        m[0][0] * d[0] + m[1][0] * d[1] + m[2][0] * d[2],
+        m[0][1] * d[0] + m[1][1] * d[1] + m[2][1] * d[2],
+        m[0][2] * d[0] + m[1][2] * d[1] + m[2][2] * d[2],
+    )
 
 
 def _in_box(local, size, margin: float) -> bool:
@@ -551,8 +595,11 @@ def _world(data: dict, path: str) -> WorldConfig:
         see = ms.list("see_through", [])
         for k in see:
             if k not in SEE_THROUGH_KINDS:
-                raise ms.error("see_through", f"unknown sensor kind {k!r}{did_you_mean(str(k), SEE_THROUGH_KINDS)}; "
-                                              f"allowed: {', '.join(SEE_THROUGH_KINDS)}")
+                raise ms.error(
+                    "see_through",
+                    f"unknown sensor kind {k!r}{did_you_mean(str(k), SEE_THROUGH_KINDS)}; "
+                    f"allowed: {', '.join(SEE_THROUGH_KINDS)}",
+                )
         mirror = ms.bool("mirror", md.mirror)
         porosity = ms.float("porosity", md.porosity, min=0.0, max=1.0)
         if mirror and porosity > 0:
@@ -565,14 +612,19 @@ def _world(data: dict, path: str) -> WorldConfig:
             if not texture:
                 raise ms.error("texture_scale", "a texture_scale needs a texture")
             raw = ms.raw("texture_scale")
-            scale = (ms.vec("texture_scale", 2) if isinstance(raw, list)
-                     else (ms.float("texture_scale"),) * 2)
+            scale = ms.vec("texture_scale", 2) if isinstance(raw, list) else (ms.float("texture_scale"),) * 2
             if not all(0.001 <= c <= 1000.0 for c in scale):
                 raise ms.error("texture_scale", f"tiles per metre must be within [0.001, 1000], got {raw!r}")
-        materials[str(mname)] = Material(name=str(mname), rgba=rgba,
-                                         friction=ms.float("friction", md.friction, min=0.0, max=10.0),
-                                         see_through=tuple(see), mirror=mirror, porosity=porosity,
-                                         texture=texture, texture_scale=scale)
+        materials[str(mname)] = Material(
+            name=str(mname),
+            rgba=rgba,
+            friction=ms.float("friction", md.friction, min=0.0, max=10.0),
+            see_through=tuple(see),
+            mirror=mirror,
+            porosity=porosity,
+            texture=texture,
+            texture_scale=scale,
+        )
         ms.finish()
 
     def check_material(sec: Section, key: str, value: str) -> None:
@@ -582,12 +634,18 @@ def _world(data: dict, path: str) -> WorldConfig:
     def check_flat(sec: Section, key: str, value: str, shape: str) -> None:
         # a mirror reflects about the face it is hit on: only boxes have flat faces here
         if materials[value].mirror and shape != "box":
-            raise sec.error(key, f"material '{value}' is a mirror, which only box objects (and ramps and "
-                                 f"stairs) may use; this object is a {shape}")
+            raise sec.error(
+                key,
+                f"material '{value}' is a mirror, which only box objects (and ramps and "
+                f"stairs) may use; this object is a {shape}",
+            )
 
     fl = top.section("floor")
-    floor = Floor(center=fl.vec("center", 2), size=fl.vec("size", 2, positive=True),
-                  material=fl.str("material", FieldDefaults(Floor).material))
+    floor = Floor(
+        center=fl.vec("center", 2),
+        size=fl.vec("size", 2, positive=True),
+        material=fl.str("material", FieldDefaults(Floor).material),
+    )
     if floor.material not in materials:
         materials[floor.material] = Material(name=floor.material)
     check_flat(fl, "material", floor.material, "plane")
@@ -615,16 +673,37 @@ def _world(data: dict, path: str) -> WorldConfig:
         rotation = s.vec("rotation", 3, od.rotation)
         mass = s.float("mass_kg", od.mass_kg, min=0.0)
         if shape == "box":
-            obj = StaticObject(name=oname, shape=shape, center=center, size=s.vec("size", 3, positive=True),
-                               rotation=rotation, material=material, mass_kg=mass)
+            obj = StaticObject(
+                name=oname,
+                shape=shape,
+                center=center,
+                size=s.vec("size", 3, positive=True),
+                rotation=rotation,
+                material=material,
+                mass_kg=mass,
+            )
         elif shape == "cylinder":
-            obj = StaticObject(name=oname, shape=shape, center=center, radius_m=s.float("radius", min=0.001),
-                               length_m=s.float("length", min=0.001), rotation=rotation, material=material,
-                               mass_kg=mass)
+            obj = StaticObject(
+                name=oname,
+                shape=shape,
+                center=center,
+                radius_m=s.float("radius", min=0.001),
+                length_m=s.float("length", min=0.001),
+                rotation=rotation,
+                material=material,
+                mass_kg=mass,
+            )
         else:
-            obj = StaticObject(name=oname, shape=shape, center=center, rotation=rotation, material=material,
-                               mass_kg=mass, mesh_file=_mesh_file(s, world_dir),
-                               scale=s.vec("scale", 3, od.scale, positive=True))
+            obj = StaticObject(
+                name=oname,
+                shape=shape,
+                center=center,
+                rotation=rotation,
+                material=material,
+                mass_kg=mass,
+                mesh_file=_mesh_file(s, world_dir),
+                scale=s.vec("scale", 3, od.scale, positive=True),
+            )
         objects.append(obj)
 
     poses = _named_poses(top, "start_poses", "start pose")
@@ -641,17 +720,24 @@ def _world(data: dict, path: str) -> WorldConfig:
         lat, lon = utm_to_latlon(utm)
         south, north = utm_band_limits_deg(utm.letter)
         if not south - 1e-6 <= lat <= north + 1e-6:
-            raise g.error("utm", f"northing {utm.northing_m:g} m in zone {utm.zone}{utm.letter} is latitude "
-                                 f"{lat:.4f} degrees, outside band {utm.letter} ({south:g} to {north:g} degrees); "
-                                 f"check the northing and the letter")
+            raise g.error(
+                "utm",
+                f"northing {utm.northing_m:g} m in zone {utm.zone}{utm.letter} is latitude "
+                f"{lat:.4f} degrees, outside band {utm.letter} ({south:g} to {north:g} degrees); "
+                f"check the northing and the letter",
+            )
         if not -89.0 <= lat <= 89.0:
             raise g.error("utm", f"the origin must lie within 89 degrees of the equator, got latitude {lat:.4f}")
     else:
         lat = g.float("latitude_deg", gd.latitude_deg, min=-89.0, max=89.0)
         lon = g.float("longitude_deg", gd.longitude_deg, min=-180.0, max=180.0)
-    geo = GeoReference(latitude_deg=lat, longitude_deg=lon,
-                       scale_latitude_m=g.float("scale_latitude_m", gd.scale_latitude_m, min=1.0),
-                       scale_longitude_m=g.float("scale_longitude_m", gd.scale_longitude_m, min=1.0), utm=utm)
+    geo = GeoReference(
+        latitude_deg=lat,
+        longitude_deg=lon,
+        scale_latitude_m=g.float("scale_latitude_m", gd.scale_latitude_m, min=1.0),
+        scale_longitude_m=g.float("scale_longitude_m", gd.scale_longitude_m, min=1.0),
+        utm=utm,
+    )
     g.finish()
 
     victims: list[Victim] = []
@@ -659,12 +745,18 @@ def _world(data: dict, path: str) -> WorldConfig:
     for s in top.entries("victims"):
         vname = _unique_name(s, names)
         sound = s.section("sound", {})  # sound.X fills sound_X
-        victims.append(Victim(name=vname, location=s.vec("location"), rotation=s.vec("rotation", 3, vd.rotation),
-                              posture=s.str("posture", vd.posture, choices=VICTIM_POSTURES),
-                              waving=s.bool("waving", vd.waving),
-                              sound_loudness_db=sound.float("loudness_db", vd.sound_loudness_db, min=0.0, max=200.0),
-                              sound_period_s=sound.float("period_s", vd.sound_period_s, min=0.1),
-                              sound_duration_s=sound.float("duration_s", vd.sound_duration_s, min=0.01)))
+        victims.append(
+            Victim(
+                name=vname,
+                location=s.vec("location"),
+                rotation=s.vec("rotation", 3, vd.rotation),
+                posture=s.str("posture", vd.posture, choices=VICTIM_POSTURES),
+                waving=s.bool("waving", vd.waving),
+                sound_loudness_db=sound.float("loudness_db", vd.sound_loudness_db, min=0.0, max=200.0),
+                sound_period_s=sound.float("period_s", vd.sound_period_s, min=0.1),
+                sound_duration_s=sound.float("duration_s", vd.sound_duration_s, min=0.01),
+            )
+        )
         sound.finish()
 
     alarms: list[FalseAlarm] = []
@@ -673,9 +765,16 @@ def _world(data: dict, path: str) -> WorldConfig:
         aname = _unique_name(s, names)
         material = s.str("material", fd.material)
         check_material(s, "material", material)
-        alarms.append(FalseAlarm(name=aname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
-                                 rotation=s.vec("rotation", 3, fd.rotation),
-                                 part=s.str("part", fd.part, choices=VICTIM_PARTS), material=material))
+        alarms.append(
+            FalseAlarm(
+                name=aname,
+                center=s.vec("center"),
+                size=s.vec("size", 3, positive=True),
+                rotation=s.vec("rotation", 3, fd.rotation),
+                part=s.str("part", fd.part, choices=VICTIM_PARTS),
+                material=material,
+            )
+        )
 
     tags: list[RfidTagConfig] = []
     ids: set[int] = set()
@@ -693,8 +792,14 @@ def _world(data: dict, path: str) -> WorldConfig:
     wd = FieldDefaults(WaterVolume)
     for s in top.entries("water"):
         wname = _unique_name(s, names)
-        water.append(WaterVolume(name=wname, center=s.vec("center"), size=s.vec("size", 3, positive=True),
-                                 density_kg_m3=s.float("density_kg_m3", wd.density_kg_m3, min=1.0, max=20000.0)))
+        water.append(
+            WaterVolume(
+                name=wname,
+                center=s.vec("center"),
+                size=s.vec("size", 3, positive=True),
+                density_kg_m3=s.float("density_kg_m3", wd.density_kg_m3, min=1.0, max=20000.0),
+            )
+        )
 
     lights: list[Light] = []
     lnames: set[str] = set()
@@ -707,11 +812,27 @@ def _world(data: dict, path: str) -> WorldConfig:
     wireless = _wireless(top.section("wireless")) if top.has("wireless") else d.wireless
 
     top.finish()
-    return WorldConfig(name=name, description=description, path=path, floor=floor, materials=materials,
-                       objects=tuple(objects), start_poses=poses, path_nodes=path_nodes, time_limit_min=time_limit,
-                       timestep_s=timestep, gravity_m_s2=gravity, geo=geo, victims=tuple(victims),
-                       false_alarms=tuple(alarms), rfid_tags=tuple(tags), water=tuple(water), lights=tuple(lights),
-                       ambient_light=ambient, wireless=wireless)
+    return WorldConfig(
+        name=name,
+        description=description,
+        path=path,
+        floor=floor,
+        materials=materials,
+        objects=tuple(objects),
+        start_poses=poses,
+        path_nodes=path_nodes,
+        time_limit_min=time_limit,
+        timestep_s=timestep,
+        gravity_m_s2=gravity,
+        geo=geo,
+        victims=tuple(victims),
+        false_alarms=tuple(alarms),
+        rfid_tags=tuple(tags),
+        water=tuple(water),
+        lights=tuple(lights),
+        ambient_light=ambient,
+        wireless=wireless,
+    )
 
 
 def _named_poses(top: Section, key: str, what: str) -> tuple[StartPose, ...]:
@@ -743,9 +864,16 @@ def _wireless(s: Section) -> WirelessConfig:
     if max_obs is None and s.data.get("eMaxObs", 0) is None:
         max_obs = -1  # eMaxObs: null, no cap
     cache = s.float("cache_distance_m", d.cache_distance_m, min=0.0)
-    cfg = WirelessConfig(model=model, pd0_dbm=s.float("ePdo", d.pd0_dbm, min=-300.0, max=100.0), d0_m=d0,
-                         path_loss_exponent=n, cutoff_dbm=s.float("eCutoff", d.cutoff_dbm, min=-300.0, max=100.0),
-                         max_walls=max_obs, wall_db=waf, cache_distance_m=cache)
+    cfg = WirelessConfig(
+        model=model,
+        pd0_dbm=s.float("ePdo", d.pd0_dbm, min=-300.0, max=100.0),
+        d0_m=d0,
+        path_loss_exponent=n,
+        cutoff_dbm=s.float("eCutoff", d.cutoff_dbm, min=-300.0, max=100.0),
+        max_walls=max_obs,
+        wall_db=waf,
+        cache_distance_m=cache,
+    )
     s.finish()
     return cfg
 
@@ -753,8 +881,11 @@ def _wireless(s: Section) -> WirelessConfig:
 def _slope_check(s: Section, key: str, rise: float, run: float, what: str) -> None:
     slope = math.degrees(math.atan2(rise, run))
     if slope >= MAX_SLOPE_DEG:
-        raise s.error(key, f"{what} is {slope:.1f} degrees steep; allowed: below {MAX_SLOPE_DEG:g} degrees "
-                           f"(rise < {math.tan(math.radians(MAX_SLOPE_DEG)):.3f} x run)")
+        raise s.error(
+            key,
+            f"{what} is {slope:.1f} degrees steep; allowed: below {MAX_SLOPE_DEG:g} degrees "
+            f"(rise < {math.tan(math.radians(MAX_SLOPE_DEG)):.3f} x run)",
+        )
 
 
 def _ramp(s: Section, name: str, material: str) -> list[StaticObject]:
@@ -777,12 +908,23 @@ def _ramp(s: Section, name: str, material: str) -> list[StaticObject]:
     top_mid = (math.hypot(length, rise) - ext) / 2.0  # the top face's middle, from the foot along the slope
     # the plate's centre is half its thickness below the top face (normal up: (-sin u, -cos))
     nu, nz = -math.sin(theta), -math.cos(theta)
-    center = (foot[0] + ux * (top_mid * su - thickness / 2.0 * nu),
-              foot[1] + uy * (top_mid * su - thickness / 2.0 * nu),
-              foot[2] + top_mid * sz - thickness / 2.0 * nz)
+    center = (
+        foot[0] + ux * (top_mid * su - thickness / 2.0 * nu),
+        foot[1] + uy * (top_mid * su - thickness / 2.0 * nu),
+        foot[2] + top_mid * sz - thickness / 2.0 * nz,
+    )
     # the box's own X along the slope: pitch up by theta (positive pitch raises X), then yaw
-    return [StaticObject(name=name, shape="box", center=center, size=(slope_len, width, thickness),
-                         rotation=(0.0, theta, heading), material=material, part_of=name)]
+    return [
+        StaticObject(
+            name=name,
+            shape="box",
+            center=center,
+            size=(slope_len, width, thickness),
+            rotation=(0.0, theta, heading),
+            material=material,
+            part_of=name,
+        )
+    ]
 
 
 def _stairs(s: Section, name: str, material: str) -> list[StaticObject]:
@@ -802,10 +944,17 @@ def _stairs(s: Section, name: str, material: str) -> list[StaticObject]:
     out = []
     for k in range(1, steps + 1):
         along = (k - 0.5) * run
-        out.append(StaticObject(name=f"{name}/step{k}", shape="box",
-                                center=(foot[0] + ux * along, foot[1] + uy * along, foot[2] - k * rise / 2.0),
-                                size=(run, width, k * rise), rotation=(0.0, 0.0, heading), material=material,
-                                part_of=name))
+        out.append(
+            StaticObject(
+                name=f"{name}/step{k}",
+                shape="box",
+                center=(foot[0] + ux * along, foot[1] + uy * along, foot[2] - k * rise / 2.0),
+                size=(run, width, k * rise),
+                rotation=(0.0, 0.0, heading),
+                material=material,
+                part_of=name,
+            )
+        )
     return out
 
 
@@ -823,8 +972,10 @@ def _mesh_file(s: Section, world_dir: Path) -> str:
             head = f.read(84)
         count = int.from_bytes(head[80:84], "little") if len(head) == 84 else -1
         if count < 0 or size != 84 + 50 * count:
-            raise s.error("file", f"'{rel}' is not a binary STL file (MuJoCo reads binary STL only); "
-                                  f"convert it or use an OBJ file")
+            raise s.error(
+                "file",
+                f"'{rel}' is not a binary STL file (MuJoCo reads binary STL only); convert it or use an OBJ file",
+            )
     return str(p.resolve())
 
 
@@ -845,16 +996,24 @@ def _light(s: Section, name: str) -> Light:
     position = s.vec("position", 3, d.position)
     attenuation = s.vec("attenuation", 3, d.attenuation)
     if any(c < 0 for c in attenuation) or not any(c > 0 for c in attenuation):
-        raise s.error("attenuation", f"[constant, linear, quadratic] must be >= 0 and not all 0, "
-                                     f"got {list(attenuation)}")
-    return Light(name=name, type=ltype, position=position, direction=tuple(c / norm for c in direction),
-                 color=rgb("color", d.color), intensity=s.float("intensity", d.intensity, min=0.0, max=100.0),
-                 ambient=rgb("ambient", d.ambient), specular=rgb("specular", d.specular),
-                 attenuation=attenuation, cutoff_deg=s.float("cutoff_deg", d.cutoff_deg, min=0.0, max=90.0,
-                                                             min_exclusive=True),
-                 exponent=s.float("exponent", d.exponent, min=0.0, max=128.0),
-                 # a point light casts none unless asked (docs/world-files.md)
-                 cast_shadows=s.bool("cast_shadows", d.cast_shadows and ltype != "point"))
+        raise s.error(
+            "attenuation", f"[constant, linear, quadratic] must be >= 0 and not all 0, got {list(attenuation)}"
+        )
+    return Light(
+        name=name,
+        type=ltype,
+        position=position,
+        direction=tuple(c / norm for c in direction),
+        color=rgb("color", d.color),
+        intensity=s.float("intensity", d.intensity, min=0.0, max=100.0),
+        ambient=rgb("ambient", d.ambient),
+        specular=rgb("specular", d.specular),
+        attenuation=attenuation,
+        cutoff_deg=s.float("cutoff_deg", d.cutoff_deg, min=0.0, max=90.0, min_exclusive=True),
+        exponent=s.float("exponent", d.exponent, min=0.0, max=128.0),
+        # a point light casts none unless asked (docs/world-files.md)
+        cast_shadows=s.bool("cast_shadows", d.cast_shadows and ltype != "point"),
+    )
 
 
 def _utm(u: Section) -> UtmCoordinate:
@@ -863,10 +1022,17 @@ def _utm(u: Section) -> UtmCoordinate:
         raise u.error("zone", f"UTM zones are 1 to 60, got {zone}")
     letter = u.str("letter")
     if len(letter) != 1 or letter.upper() not in UTM_LETTERS:
-        raise u.error("letter", f"'{letter}' is not a UTM latitude band; allowed: one of {' '.join(UTM_LETTERS)} "
-                                f"(N and after: northern hemisphere)")
-    out = UtmCoordinate(easting_m=u.float("easting", min=100000.0, max=900000.0),
-                        northing_m=u.float("northing", min=0.0, max=10000000.0), zone=zone, letter=letter.upper())
+        raise u.error(
+            "letter",
+            f"'{letter}' is not a UTM latitude band; allowed: one of {' '.join(UTM_LETTERS)} "
+            f"(N and after: northern hemisphere)",
+        )
+    out = UtmCoordinate(
+        easting_m=u.float("easting", min=100000.0, max=900000.0),
+        northing_m=u.float("northing", min=0.0, max=10000000.0),
+        zone=zone,
+        letter=letter.upper(),
+    )
     u.finish()
     return out
 
@@ -881,9 +1047,12 @@ def check_world_file(path: str | Path) -> WorldConfig:
         solid = cfg.solid_at(pose.location)
         if solid is not None:
             where = ", ".join(f"{c:g}" for c in pose.location)
-            err = ConfigError(f"start pose '{pose.name}' at [{where}] lies inside {solid} (more than "
-                              f"{SOLID_MARGIN_M * 100:g} cm deep): move it into free space or onto a surface (z is "
-                              f"down; the floor is z = 0)",
-                              path=str(path), key=f"start_poses[{i}].location")
+            err = ConfigError(
+                f"start pose '{pose.name}' at [{where}] lies inside {solid} (more than "
+                f"{SOLID_MARGIN_M * 100:g} cm deep): move it into free space or onto a surface (z is "
+                f"down; the floor is z = 0)",
+                path=str(path),
+                key=f"start_poses[{i}].location",
+            )
             raise name_entries(err, load_yaml(path))
     return cfg

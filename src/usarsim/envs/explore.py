@@ -36,8 +36,10 @@ def check_common(control_period_s: float, time_limit_s: float, laser_beams: int,
     if not time_limit_s > 0:
         raise ValueError(f"time_limit_s must be > 0 (simulated seconds per episode), got {time_limit_s!r}")
     if spec.laser is not None and not 1 <= laser_beams <= spec.laser.beams:
-        raise ValueError(f"laser_beams must be 1..{spec.laser.beams} (the beams of {spec.class_name}'s "
-                         f"{spec.laser.name}), got {laser_beams!r}")
+        raise ValueError(
+            f"laser_beams must be 1..{spec.laser.beams} (the beams of {spec.class_name}'s "
+            f"{spec.laser.name}), got {laser_beams!r}"
+        )
 
 
 class ExploreEnv(gym.Env):
@@ -63,19 +65,34 @@ class ExploreEnv(gym.Env):
 
     metadata = {"render_modes": []}
 
-    def __init__(self, *, world: str = "DM-USAR_yellow", robot: str = "P2AT", start: Pose = "PlayerStart1",
-                 control_period_s: float = 0.1, time_limit_s: float = 120.0,
-                 observations: tuple[str, ...] | list[str] | None = None, laser_beams: int = 30,
-                 discrete: bool = False, rewards: Rewards | dict | None = None, robot_name: str = "Explorer",
-                 host: str = "127.0.0.1", port: int | None = None, truth_port: int | None = None,
-                 robot_dirs: tuple[str, ...] | list[str] = (), timeout_s: float = 10.0, prelaunch: bool = True,
-                 render_mode: str | None = None):
+    def __init__(
+        self,
+        *,
+        world: str = "DM-USAR_yellow",
+        robot: str = "P2AT",
+        start: Pose = "PlayerStart1",
+        control_period_s: float = 0.1,
+        time_limit_s: float = 120.0,
+        observations: tuple[str, ...] | list[str] | None = None,
+        laser_beams: int = 30,
+        discrete: bool = False,
+        rewards: Rewards | dict | None = None,
+        robot_name: str = "Explorer",
+        host: str = "127.0.0.1",
+        port: int | None = None,
+        truth_port: int | None = None,
+        robot_dirs: tuple[str, ...] | list[str] = (),
+        timeout_s: float = 10.0,
+        prelaunch: bool = True,
+        render_mode: str | None = None,
+    ):
         if render_mode is not None:
             raise ValueError(f"ExploreEnv renders nothing (render_modes: []), got render_mode={render_mode!r}")
         self.world_config = resolve_world(world)
         cfg = robot_config(robot, tuple(robot_dirs))
-        self.sim = Simulator(world=world, host=host, port=port, truth_port=truth_port, robot_dirs=tuple(robot_dirs),
-                             timeout=timeout_s)
+        self.sim = Simulator(
+            world=world, host=host, port=port, truth_port=truth_port, robot_dirs=tuple(robot_dirs), timeout=timeout_s
+        )
         self._finalizer = weakref.finalize(self, self.sim.stop)
         self.spec_robot = self.sim.describe(cfg, start)
         self.keys = check_robot(self.spec_robot, None if observations is None else tuple(observations))
@@ -110,8 +127,17 @@ class ExploreEnv(gym.Env):
         victims = {o.name: (o.location[0], o.location[1]) for o in world.truth(class_name="Victim")}
         robot = spawn_at(world, self.spec_robot.class_name, self.robot_name, start)
         self.coverage.clear()
-        self.explorer = Explorer(robot, self.spec_robot, self.keys, self.laser_beams, self.rewards, self.bounds,
-                                 self.coverage, victims, set())
+        self.explorer = Explorer(
+            robot,
+            self.spec_robot,
+            self.keys,
+            self.laser_beams,
+            self.rewards,
+            self.bounds,
+            self.coverage,
+            victims,
+            set(),
+        )
         self.sim.step(self.control_period_s)
         self._t0 = world.time
         out = self.explorer.update()  # the first sweep's floor is where the robot starts: no reward
@@ -153,4 +179,3 @@ class ExploreEnv(gym.Env):
             "flipped": out.flipped,
             "battery_empty": out.battery_empty,
         }
-

@@ -83,9 +83,18 @@ class Explorer:
     class's :class:`RobotSpec`, the observation keys and the reward settings; the coverage
     grid and the set of victims found may be shared with other robots (a team)."""
 
-    def __init__(self, robot: Robot, spec: RobotSpec, keys: tuple[str, ...], laser_beams: int, rewards: Rewards,
-                 bounds: tuple[float, float, float, float], coverage: CoverageGrid,
-                 victims: dict[str, tuple[float, float]], found: set[str]):
+    def __init__(
+        self,
+        robot: Robot,
+        spec: RobotSpec,
+        keys: tuple[str, ...],
+        laser_beams: int,
+        rewards: Rewards,
+        bounds: tuple[float, float, float, float],
+        coverage: CoverageGrid,
+        victims: dict[str, tuple[float, float]],
+        found: set[str],
+    ):
         self.robot = robot
         self.spec = spec
         self.keys = keys
@@ -208,8 +217,11 @@ class Explorer:
     def reward(self, out: Outcome) -> float:
         """The reward of one step's outcome."""
         rw = self.rewards
-        return (rw.area * len(out.new_cells) * self.coverage.cell_area_m2 + rw.victim * len(out.new_victims)
-                - (rw.collision if out.collision else 0.0))
+        return (
+            rw.area * len(out.new_cells) * self.coverage.cell_area_m2
+            + rw.victim * len(out.new_victims)
+            - (rw.collision if out.collision else 0.0)
+        )
 
     # what it observes -----------------------------------------------------------------------
     def observation(self) -> dict[str, np.ndarray]:
@@ -234,8 +246,9 @@ class Explorer:
             elif key == "odometry":
                 odo = self.robot.odometry() or (0.0, 0.0, 0.0)
                 v = np.array([odo[0], odo[1], wrap_angle(odo[2])], dtype=float)
-                obs[key] = np.clip(v, [-self.extent, -self.extent, -math.pi],
-                                   [self.extent, self.extent, math.pi]).astype(np.float32)
+                obs[key] = np.clip(
+                    v, [-self.extent, -self.extent, -math.pi], [self.extent, self.extent, math.pi]
+                ).astype(np.float32)
             elif key == "battery":
                 st = self.robot.status
                 frac = 1.0 if st is None else st.battery_s / spec.battery_s

@@ -42,8 +42,10 @@ class SignalMeter:
         try:
             self.sock = socket.create_connection((host, port), timeout=timeout)
         except OSError as exc:
-            raise ClientError(f"cannot connect to the ComServer at {host}:{port} ({exc}); was the simulator "
-                              "started with its wireless servers?") from exc
+            raise ClientError(
+                f"cannot connect to the ComServer at {host}:{port} ({exc}); was the simulator "
+                "started with its wireless servers?"
+            ) from exc
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._split = CommandSplitter()
         self._replies: list[str] = []
@@ -64,8 +66,9 @@ class SignalMeter:
         while len(self._replies) < n:
             left = deadline - time.monotonic()
             if left <= 0:
-                raise ClientTimeout(f"ComServer: {n - len(self._replies)} of {n} replies did not arrive within "
-                                    f"{self.timeout:g} s")
+                raise ClientTimeout(
+                    f"ComServer: {n - len(self._replies)} of {n} replies did not arrive within {self.timeout:g} s"
+                )
             self.sock.settimeout(left)
             try:
                 data = self.sock.recv(1 << 16)

@@ -68,9 +68,20 @@ class Simulator:
     servers when ``wireless``), and stops the previous one; otherwise every episode runs in
     the lock-step simulator at ``host``:``port``, whose seed is its own."""
 
-    def __init__(self, *, world: str, host: str = "127.0.0.1", port: int | None = None, truth_port: int | None = None,
-                 comserver_port: int | None = None, wireless: bool = False, wireless_model: str | None = None,
-                 wireless_config: str | None = None, robot_dirs: tuple[str, ...] = (), timeout: float = 10.0):
+    def __init__(
+        self,
+        *,
+        world: str,
+        host: str = "127.0.0.1",
+        port: int | None = None,
+        truth_port: int | None = None,
+        comserver_port: int | None = None,
+        wireless: bool = False,
+        wireless_model: str | None = None,
+        wireless_config: str | None = None,
+        robot_dirs: tuple[str, ...] = (),
+        timeout: float = 10.0,
+    ):
         self.world_name = world
         self.host, self.port, self.truth_port = host, port, truth_port
         self._comserver_port = comserver_port
@@ -118,8 +129,9 @@ class Simulator:
                 self._background(server.close)
         else:
             if self.world is None:
-                self.world = connect(self.host, self.port, lockstep=True, truth_port=self.truth_port,
-                                     timeout=self.timeout)
+                self.world = connect(
+                    self.host, self.port, lockstep=True, truth_port=self.truth_port, timeout=self.timeout
+                )
             spec = describe_robot(cfg, spawn_at(self.world, cfg.class_name, PROBE_NAME, start))
             self._remove_robots()
         _DESCRIBED[key] = spec
@@ -153,8 +165,9 @@ class Simulator:
             left = {o.name for o in self.world.truth()}
             names = [n for n in names if n in left]
             if names and time.monotonic() > deadline:
-                raise ClientTimeout(f"robots {', '.join(names)} did not leave the simulator within "
-                                    f"{REMOVAL_TIMEOUT_S:g} s")
+                raise ClientTimeout(
+                    f"robots {', '.join(names)} did not leave the simulator within {REMOVAL_TIMEOUT_S:g} s"
+                )
 
     def prelaunch(self, seeds) -> None:
         """Launch simulators for the seeds the next episodes may ask for, in the background,
@@ -175,8 +188,15 @@ class Simulator:
         self._spares.clear()
 
     def _launch(self, seed: int) -> Server:
-        return launch(self.world_name, seed=seed, lockstep=True, wireless=self.wireless, robot_dirs=self.robot_dirs,
-                      extra_args=tuple(self.extra_args), timeout=self.timeout)
+        return launch(
+            self.world_name,
+            seed=seed,
+            lockstep=True,
+            wireless=self.wireless,
+            robot_dirs=self.robot_dirs,
+            extra_args=tuple(self.extra_args),
+            timeout=self.timeout,
+        )
 
     def _retire(self) -> None:
         """The current episode's connections closed (in a shared simulator, once its robots

@@ -74,8 +74,13 @@ class RobotSpec:
 
     def available(self) -> tuple[str, ...]:
         """The observation keys this robot can fill."""
-        have = {"laser": self.laser is not None, "sonar": bool(self.sonars), "odometry": self.odometry,
-                "battery": True, "victims": self.victim_sensor is not None}
+        have = {
+            "laser": self.laser is not None,
+            "sonar": bool(self.sonars),
+            "odometry": self.odometry,
+            "battery": True,
+            "victims": self.victim_sensor is not None,
+        }
         return tuple(k for k in OBSERVATIONS if have[k])
 
 
@@ -84,8 +89,10 @@ def robot_config(class_name: str, robot_dirs: tuple[str, ...] = ()) -> RobotConf
     when an environment cannot drive it."""
     cfg = resolve_robot(class_name, extra_dirs=robot_dirs)
     if cfg.drive not in DRIVES:
-        raise ValueError(f"robot class {cfg.class_name} has the {cfg.drive!r} drive; the environments drive "
-                         f"robots by a left and a right side speed ({', '.join(DRIVES)} drives)")
+        raise ValueError(
+            f"robot class {cfg.class_name} has the {cfg.drive!r} drive; the environments drive "
+            f"robots by a left and a right side speed ({', '.join(DRIVES)} drives)"
+        )
     return cfg
 
 
@@ -127,12 +134,20 @@ def describe_robot(cfg: RobotConfig, robot: Robot) -> RobotSpec:
     scanners = _items(robot, "RangeScanner")
     if scanners:
         name, f, pose = scanners[0]
-        laser = LaserSpec(name, f.get("maxrange", 20.0), f.get("resolution", 0.0174), f.get("fov", math.pi),
-                          (*_mount_xy(cfg, pose.location, pose.mount), float(pose.orientation[2])))
+        laser = LaserSpec(
+            name,
+            f.get("maxrange", 20.0),
+            f.get("resolution", 0.0174),
+            f.get("fov", math.pi),
+            (*_mount_xy(cfg, pose.location, pose.mount), float(pose.orientation[2])),
+        )
     sonars = _items(robot, "Sonar")
     victims = _items(robot, "VictSensor")
     return RobotSpec(
-        class_name=cfg.class_name, drive=cfg.drive, battery_s=float(cfg.battery_s), laser=laser,
+        class_name=cfg.class_name,
+        drive=cfg.drive,
+        battery_s=float(cfg.battery_s),
+        laser=laser,
         sonars=tuple(name for name, _, _ in sonars),
         sonar_max_range_m=max((f.get("maxrange", 5.0) for _, f, _ in sonars), default=0.0),
         victim_sensor=victims[0][0] if victims else None,
@@ -149,8 +164,10 @@ def check_robot(spec: RobotSpec, observations: tuple[str, ...] | None) -> tuple[
     one the robot has no sensor for, or a robot without the GroundTruth sensor the reward
     needs raises ValueError."""
     if not spec.ground_truth:
-        raise ValueError(f"robot class {spec.class_name} has no GroundTruth sensor, which the exploration reward "
-                         "and the termination need")
+        raise ValueError(
+            f"robot class {spec.class_name} has no GroundTruth sensor, which the exploration reward "
+            "and the termination need"
+        )
     if observations is None:
         return spec.available()
     out = []
@@ -158,8 +175,10 @@ def check_robot(spec: RobotSpec, observations: tuple[str, ...] | None) -> tuple[
         if key not in OBSERVATIONS:
             raise ValueError(f"unknown observation {key!r}; known: {', '.join(OBSERVATIONS)}")
         if key not in spec.available():
-            raise ValueError(f"robot class {spec.class_name} has no sensor for the observation {key!r}; it can "
-                             f"fill {', '.join(spec.available())}")
+            raise ValueError(
+                f"robot class {spec.class_name} has no sensor for the observation {key!r}; it can "
+                f"fill {', '.join(spec.available())}"
+            )
         if key not in out:
             out.append(key)
     if not out:
@@ -173,8 +192,7 @@ def world_bounds(world: WorldConfig, margin_m: float = 1.0) -> tuple[float, floa
     return (cx - sx / 2 - margin_m, cy - sy / 2 - margin_m, cx + sx / 2 + margin_m, cy + sy / 2 + margin_m)
 
 
-def observation_space(spec: RobotSpec, keys: tuple[str, ...], laser_beams: int,
-                      world: WorldConfig) -> spaces.Dict:
+def observation_space(spec: RobotSpec, keys: tuple[str, ...], laser_beams: int, world: WorldConfig) -> spaces.Dict:
     """The Dict of float32 Boxes for ``keys``: ``laser`` (``laser_beams`` ranges, metres,
     right to left), ``sonar`` (one range per sonar, metres, in the robot file's order),
     ``odometry`` (x, y metres from the start, yaw radians in [-pi, pi], clockwise),
@@ -190,14 +208,21 @@ def observation_space(spec: RobotSpec, keys: tuple[str, ...], laser_beams: int,
         elif key == "sonar":
             out[key] = spaces.Box(0.0, spec.sonar_max_range_m, (len(spec.sonars),), np.float32)
         elif key == "odometry":
-            out[key] = spaces.Box(np.array([-extent, -extent, -math.pi], np.float32),
-                                  np.array([extent, extent, math.pi], np.float32), (3,), np.float32)
+            out[key] = spaces.Box(
+                np.array([-extent, -extent, -math.pi], np.float32),
+                np.array([extent, extent, math.pi], np.float32),
+                (3,),
+                np.float32,
+            )
         elif key == "battery":
             out[key] = spaces.Box(0.0, 1.0, (1,), np.float32)
         elif key == "victims":
-            out[key] = spaces.Box(np.array([0.0, -math.pi, 0.0], np.float32),
-                                  np.array([MAX_VICTIM_PARTS, math.pi, spec.victim_max_range_m], np.float32),
-                                  (3,), np.float32)
+            out[key] = spaces.Box(
+                np.array([0.0, -math.pi, 0.0], np.float32),
+                np.array([MAX_VICTIM_PARTS, math.pi, spec.victim_max_range_m], np.float32),
+                (3,),
+                np.float32,
+            )
     return spaces.Dict(out)
 
 
@@ -214,8 +239,10 @@ def side_speeds(action, discrete: bool) -> tuple[float, float]:
     if discrete:
         a = int(np.asarray(action).item())
         if not 0 <= a < len(DISCRETE_ACTIONS):
-            raise ValueError(f"a discrete action is 0..{len(DISCRETE_ACTIONS) - 1} "
-                             f"({', '.join(n for n, _ in DISCRETE_ACTIONS)}), got {action!r}")
+            raise ValueError(
+                f"a discrete action is 0..{len(DISCRETE_ACTIONS) - 1} "
+                f"({', '.join(n for n, _ in DISCRETE_ACTIONS)}), got {action!r}"
+            )
         return DISCRETE_ACTIONS[a][1]
     a = np.asarray(action, dtype=float).reshape(-1)
     if a.shape != (2,) or not np.all(np.isfinite(a)):

@@ -57,15 +57,33 @@ class TeamExplore(ParallelEnv):
 
     metadata = {"name": "usarsim_team_explore_v0", "render_modes": [], "is_parallelizable": True}
 
-    def __init__(self, *, robots: int = 2, world: str = "DM-USAR_yellow", robot: str = "P2AT",
-                 starts: Sequence[Pose] | None = None, control_period_s: float = 0.1, time_limit_s: float = 120.0,
-                 observations: tuple[str, ...] | list[str] | None = None, laser_beams: int = 30,
-                 discrete: bool = False, rewards: Rewards | dict | None = None, shared_reward: bool = True,
-                 message_size: int = 0, wireless_model: str | None = None, wireless_config: str | None = None,
-                 cutoff_dbm: float | None = None, host: str = "127.0.0.1", port: int | None = None,
-                 truth_port: int | None = None, comserver_port: int | None = None,
-                 robot_dirs: tuple[str, ...] | list[str] = (), timeout_s: float = 10.0, prelaunch: bool = True,
-                 render_mode: str | None = None):
+    def __init__(
+        self,
+        *,
+        robots: int = 2,
+        world: str = "DM-USAR_yellow",
+        robot: str = "P2AT",
+        starts: Sequence[Pose] | None = None,
+        control_period_s: float = 0.1,
+        time_limit_s: float = 120.0,
+        observations: tuple[str, ...] | list[str] | None = None,
+        laser_beams: int = 30,
+        discrete: bool = False,
+        rewards: Rewards | dict | None = None,
+        shared_reward: bool = True,
+        message_size: int = 0,
+        wireless_model: str | None = None,
+        wireless_config: str | None = None,
+        cutoff_dbm: float | None = None,
+        host: str = "127.0.0.1",
+        port: int | None = None,
+        truth_port: int | None = None,
+        comserver_port: int | None = None,
+        robot_dirs: tuple[str, ...] | list[str] = (),
+        timeout_s: float = 10.0,
+        prelaunch: bool = True,
+        render_mode: str | None = None,
+    ):
         if render_mode is not None:
             raise ValueError(f"TeamExplore renders nothing (render_modes: []), got render_mode={render_mode!r}")
         if int(robots) < 1:
@@ -78,16 +96,27 @@ class TeamExplore(ParallelEnv):
         if starts is None:
             poses = self.world_config.start_poses
             if n > len(poses):
-                raise ValueError(f"{world} has {len(poses)} start poses for {n} robots: give starts (start pose "
-                                 "names or (location, rotation) pairs)")
+                raise ValueError(
+                    f"{world} has {len(poses)} start poses for {n} robots: give starts (start pose "
+                    "names or (location, rotation) pairs)"
+                )
             starts = [p.name for p in poses[:n]]
         if len(starts) != n:
             raise ValueError(f"starts has {len(starts)} poses for {n} robots")
         self.starts = list(starts)
         self.message_size = int(message_size)
-        self.sim = Simulator(world=world, host=host, port=port, truth_port=truth_port, comserver_port=comserver_port,
-                             wireless=self.message_size > 0, wireless_model=wireless_model,
-                             wireless_config=wireless_config, robot_dirs=tuple(robot_dirs), timeout=timeout_s)
+        self.sim = Simulator(
+            world=world,
+            host=host,
+            port=port,
+            truth_port=truth_port,
+            comserver_port=comserver_port,
+            wireless=self.message_size > 0,
+            wireless_model=wireless_model,
+            wireless_config=wireless_config,
+            robot_dirs=tuple(robot_dirs),
+            timeout=timeout_s,
+        )
         self._finalizer = weakref.finalize(self, self.sim.stop)
         self.spec_robot = self.sim.describe(cfg, self.starts[0])
         self.keys = check_robot(self.spec_robot, None if observations is None else tuple(observations))
@@ -110,17 +139,24 @@ class TeamExplore(ParallelEnv):
         base = observation_space(self.spec_robot, self.keys, self.laser_beams, self.world_config)
         move = action_space(self.discrete)
         if self.message_size:
-            obs_space = spaces.Dict({**base.spaces,
-                                     "inbox": spaces.Box(-1.0, 1.0, (n, self.message_size), np.float32),
-                                     "inbox_mask": spaces.Box(0.0, 1.0, (n,), np.float32)})
-            act_space: spaces.Space = spaces.Dict({"move": move,
-                                                   "message": spaces.Box(-1.0, 1.0, (self.message_size,), np.float32)})
+            obs_space = spaces.Dict(
+                {
+                    **base.spaces,
+                    "inbox": spaces.Box(-1.0, 1.0, (n, self.message_size), np.float32),
+                    "inbox_mask": spaces.Box(0.0, 1.0, (n,), np.float32),
+                }
+            )
+            act_space: spaces.Space = spaces.Dict(
+                {"move": move, "message": spaces.Box(-1.0, 1.0, (self.message_size,), np.float32)}
+            )
         else:
             obs_space, act_space = base, move
-        self.observation_spaces = {a: obs_space if i == 0 else _copy_space(obs_space)
-                                   for i, a in enumerate(self.possible_agents)}
-        self.action_spaces = {a: act_space if i == 0 else _copy_space(act_space)
-                              for i, a in enumerate(self.possible_agents)}
+        self.observation_spaces = {
+            a: obs_space if i == 0 else _copy_space(obs_space) for i, a in enumerate(self.possible_agents)
+        }
+        self.action_spaces = {
+            a: act_space if i == 0 else _copy_space(act_space) for i, a in enumerate(self.possible_agents)
+        }
         self.coverage = CoverageGrid(self.bounds, self.rewards.cell_m)
         self.explorers: dict[str, Explorer] = {}
         self.meter: SignalMeter | None = None
@@ -153,11 +189,19 @@ class TeamExplore(ParallelEnv):
         self.explorers = {}
         for agent, start in zip(self.possible_agents, self.starts):
             robot = spawn_at(world, self.spec_robot.class_name, agent, start)
-            self.explorers[agent] = Explorer(robot, self.spec_robot, self.keys, self.laser_beams, self.rewards,
-                                             self.bounds, self.coverage, victims, found)
+            self.explorers[agent] = Explorer(
+                robot,
+                self.spec_robot,
+                self.keys,
+                self.laser_beams,
+                self.rewards,
+                self.bounds,
+                self.coverage,
+                victims,
+                found,
+            )
         if self.message_size:
-            self.meter = SignalMeter(self.sim.address, self.sim.comserver_port, self.possible_agents,
-                                     self.sim.timeout)
+            self.meter = SignalMeter(self.sim.address, self.sim.comserver_port, self.possible_agents, self.sim.timeout)
         self.sim.step(self.control_period_s)
         self._t0 = world.time
         self.agents = list(self.possible_agents)
@@ -178,8 +222,10 @@ class TeamExplore(ParallelEnv):
                 if action is not None:
                     msg = np.asarray(action["message"], dtype=np.float32).reshape(-1)
                     if msg.shape != (self.message_size,) or not np.all(np.isfinite(msg)):
-                        raise ValueError(f"{agent}: a message is {self.message_size} finite numbers in [-1, 1], "
-                                         f"got {action['message']!r}")
+                        raise ValueError(
+                            f"{agent}: a message is {self.message_size} finite numbers in [-1, 1], "
+                            f"got {action['message']!r}"
+                        )
                     sent[agent] = np.clip(msg, -1.0, 1.0)
             else:
                 move = action
@@ -265,8 +311,9 @@ class TeamExplore(ParallelEnv):
         if self.message_size:
             j = self._index[agent]
             info["received_from"] = [a for a in self.possible_agents if self._mask[j, self._index[a]]]
-            info["signal_dbm"] = {(b if a == agent else a): dbm for (a, b), dbm in self._signals.items()
-                                  if agent in (a, b)}
+            info["signal_dbm"] = {
+                (b if a == agent else a): dbm for (a, b), dbm in self._signals.items() if agent in (a, b)
+            }
         return info
 
 

@@ -186,16 +186,24 @@ class Drive:
             parts.append(K.AckermannDrive(self.speed, self.front_steer, self.rear_steer))
         if self.wheels:
             parts.append(K.SteeredWheels(tuple(K.SteeredWheel(w.number, w.speed, w.steer) for w in self.wheels)))
-        if any(v is not None for v in (self.altitude_velocity, self.linear_velocity, self.lateral_velocity,
-                                       self.rotational_velocity)):
-            parts.append(K.Velocities(self.altitude_velocity, self.linear_velocity, self.lateral_velocity,
-                                      self.rotational_velocity))
+        if any(
+            v is not None
+            for v in (self.altitude_velocity, self.linear_velocity, self.lateral_velocity, self.rotational_velocity)
+        ):
+            parts.append(
+                K.Velocities(
+                    self.altitude_velocity, self.linear_velocity, self.lateral_velocity, self.rotational_velocity
+                )
+            )
         if self.propeller is not None or self.rudder is not None or self.stern_plane is not None:
             parts.append(K.NauticalDrive(self.propeller, self.rudder, self.stern_plane))
-        return K.DriveCommand(parts=tuple(parts),
-                              joints=tuple(K.JointOrder(j.name, j.value, j.order) for j in self.joints
-                                           if j.value is not None),
-                              normalized=bool(self.normalized), light=self.light, flip=bool(self.flip))
+        return K.DriveCommand(
+            parts=tuple(parts),
+            joints=tuple(K.JointOrder(j.name, j.value, j.order) for j in self.joints if j.value is not None),
+            normalized=bool(self.normalized),
+            light=self.light,
+            flip=bool(self.flip),
+        )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -654,9 +662,7 @@ def _parse_multidrive(raw: RawMessage) -> MultiDrive:
     joints = []
     for seg in raw.segments:
         if not seg.value:
-            raise ProtocolError(
-                f"{cmd}: segment {{{seg.key}}} has no value: expected {{JointName angle}}"
-            )
+            raise ProtocolError(f"{cmd}: segment {{{seg.key}}} has no value: expected {{JointName angle}}")
         joints.append((seg.key, _float(cmd, seg)))
     return MultiDrive(joints=tuple(joints))
 
@@ -836,9 +842,7 @@ _STEP_KEYS: _Table = {"time": ("time_s", _positive_float)}
 def _parse_step(raw: RawMessage) -> Step:
     values = _read_fields(raw.type, raw.segments, _STEP_KEYS)
     if "time_s" not in values:
-        raise ProtocolError(
-            f"{raw.type}: missing {{Time seconds}}: expected for example STEP {{Time 0.2}}"
-        )
+        raise ProtocolError(f"{raw.type}: missing {{Time seconds}}: expected for example STEP {{Time 0.2}}")
     return Step(**values)
 
 
@@ -851,11 +855,14 @@ def _parse_report(raw: RawMessage) -> Report:
         raise ProtocolError(f"{raw.type}: missing {{Type Victim}}")
     kind = next((t for t in REPORT_TYPES if t.lower() == values["type"].lower()), None)
     if kind is None:
-        raise ProtocolError(f"{raw.type}: {{Type {values.get('type', '')}}} is not a kind of report: expected "
-                            f"{{Type Victim}}")
+        raise ProtocolError(
+            f"{raw.type}: {{Type {values.get('type', '')}}} is not a kind of report: expected {{Type Victim}}"
+        )
     if "location" not in values:
-        raise ProtocolError(f"{raw.type}: missing {{Location x,y,z}}: expected for example "
-                            f"REPORT {{Type Victim}} {{Location 3.1,6.0,0.1}}")
+        raise ProtocolError(
+            f"{raw.type}: missing {{Location x,y,z}}: expected for example "
+            f"REPORT {{Type Victim}} {{Location 3.1,6.0,0.1}}"
+        )
     return Report(type=kind, location=values["location"], name=values.get("name"))
 
 

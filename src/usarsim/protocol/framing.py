@@ -62,11 +62,25 @@ class LineBuffer:
     ``feed`` never raises.
     """
 
-    __slots__ = ("max_line_bytes", "dropped_lines", "drop_repeated_drives", "repeated_drives", "_buf",
-                 "_discarding", "_last", "empty_lines", "_half")
+    __slots__ = (
+        "max_line_bytes",
+        "dropped_lines",
+        "drop_repeated_drives",
+        "repeated_drives",
+        "_buf",
+        "_discarding",
+        "_last",
+        "empty_lines",
+        "_half",
+    )
 
-    def __init__(self, max_line_bytes: int = DEFAULT_MAX_LINE_BYTES, *, drop_repeated_drives: bool = False,
-                 empty_lines: bool = False):
+    def __init__(
+        self,
+        max_line_bytes: int = DEFAULT_MAX_LINE_BYTES,
+        *,
+        drop_repeated_drives: bool = False,
+        empty_lines: bool = False,
+    ):
         if max_line_bytes < 1:
             raise ValueError(f"max_line_bytes must be at least 1, got {max_line_bytes}")
         self.max_line_bytes = max_line_bytes
@@ -114,7 +128,7 @@ class LineBuffer:
             ends = [i for i in (data.find(b"\r"), data.find(b"\n")) if i >= 0]
             if not ends:
                 return data
-            head, data = data[:min(ends)], data[min(ends):]
+            head, data = data[: min(ends)], data[min(ends) :]
 
         def one(m: re.Match[bytes]) -> bytes:
             line: bytes = m.group(1)
@@ -154,7 +168,7 @@ class LineBuffer:
                 lines.append("")
             start = match.end()
         if empty and match is not None and match.end() == len(buf) and match.end() - match.start() == 1:
-            self._half = _OTHER_HALF[bytes(buf[match.start():match.end()])]
+            self._half = _OTHER_HALF[bytes(buf[match.start() : match.end()])]
         if start:
             del buf[:start]
         if len(buf) > limit:

@@ -97,8 +97,7 @@ def parse_line(line: str) -> RawMessage:
         if not line or line.isspace():
             raise ProtocolError("empty line: expected 'TYPE {Key Value} ...'")
         raise ProtocolError(
-            f"line {_shorten(line)} has no message type: expected a word such as INIT or "
-            "DRIVE before the first '{'"
+            f"line {_shorten(line)} has no message type: expected a word such as INIT or DRIVE before the first '{{'"
         )
     msg_type = m.group(1).upper()
     pos = m.end()
@@ -110,9 +109,7 @@ def parse_line(line: str) -> RawMessage:
             break
         content = sm.group(1).strip()
         if not content:
-            raise ProtocolError(
-                f"{msg_type}: empty segment '{{}}' in {_shorten(line)}: expected '{{Key Value}}'"
-            )
+            raise ProtocolError(f"{msg_type}: empty segment '{{}}' in {_shorten(line)}: expected '{{Key Value}}'")
         parts = content.split(None, 1)
         segments.append(Segment(parts[0], parts[1] if len(parts) == 2 else ""))
         pos = sm.end()
@@ -186,9 +183,7 @@ def parse_vector(text: str, n: int | None = 3) -> tuple[float, ...]:
     t = text.strip()
     parts = _VECTOR_SEPARATOR_RE.split(t) if t else []
     if n is not None and len(parts) != n:
-        raise ProtocolError(
-            f"expected {n} numbers separated by commas (x,y,z), got {_shorten(text)}"
-        )
+        raise ProtocolError(f"expected {n} numbers separated by commas (x,y,z), got {_shorten(text)}")
     if not parts:
         raise ProtocolError("expected numbers separated by commas, got an empty value")
     try:

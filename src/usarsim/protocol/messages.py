@@ -600,9 +600,7 @@ LINE_LIMIT = 4096
 
 
 def _poses(poses: tuple[StartPose, ...]) -> str:
-    return " ".join(
-        "%s %s %s" % (p.name, vec2(p.location), vec2(p.rotation)) for p in poses
-    )
+    return " ".join("%s %s %s" % (p.name, vec2(p.location), vec2(p.rotation)) for p in poses)
 
 
 def _fmt_game_info(m: GameInfo) -> str:
@@ -645,10 +643,12 @@ def _fmt_ground_status(m: GroundVehicleStatus) -> str:
 
 
 def _fmt_aerial_status(m: AerialVehicleStatus) -> str:
-    return (
-        "STA {Type AerialVehicle} {Time %s} {LightToggle %s} {LightIntensity %d} "
-        "{Battery %d} {View %d}\r\n"
-        % (f2(m.time), bool_str(m.light_toggle), m.light_intensity, m.battery_s, m.view)
+    return "STA {Type AerialVehicle} {Time %s} {LightToggle %s} {LightIntensity %d} {Battery %d} {View %d}\r\n" % (
+        f2(m.time),
+        bool_str(m.light_toggle),
+        m.light_intensity,
+        m.battery_s,
+        m.view,
     )
 
 
@@ -695,8 +695,19 @@ def _scan3d_rows(r: RangeScan3DReading) -> list[RangeScan3DReading] | None:
     if not r.split or r.frame is not None or not rows or len(r.ranges_m) % rows:
         return None
     n = len(r.ranges_m) // rows
-    return [RangeScan3DReading(r.name, r.resolution_rad, r.fov_rad, r.ranges_m[k * n:(k + 1) * n],
-                               sensor_type=r.sensor_type, frames=rows, frame=k, split=True) for k in range(rows)]
+    return [
+        RangeScan3DReading(
+            r.name,
+            r.resolution_rad,
+            r.fov_rad,
+            r.ranges_m[k * n : (k + 1) * n],
+            sensor_type=r.sensor_type,
+            frames=rows,
+            frame=k,
+            split=True,
+        )
+        for k in range(rows)
+    ]
 
 
 def _sen_odometry(r: OdometryReading) -> str:
@@ -766,25 +777,19 @@ def _sen_tachometer(r: TachometerReading) -> str:
 
 def _sen_imu(r: ImuReading) -> str:
     # UDK layout; the rotation is printed as measured (not normalised).
-    return (
-        "{Type IMU} {Name %s} {XYZAcceleration %s} {AngularVel %s} {AngularAccel %s} "
-        "{Rotation %s}"
-        % (
-            r.name,
-            vec4(r.acceleration),
-            vec4(r.angular_velocity),
-            vec4(r.angular_acceleration),
-            vec4(r.orientation),
-        )
+    return "{Type IMU} {Name %s} {XYZAcceleration %s} {AngularVel %s} {AngularAccel %s} {Rotation %s}" % (
+        r.name,
+        vec4(r.acceleration),
+        vec4(r.angular_velocity),
+        vec4(r.angular_acceleration),
+        vec4(r.orientation),
     )
 
 
 def _sen_victim(r: VictimReading) -> str:
     if not r.parts:
         return "{Type VictSensor} {Status NoVictims}"
-    parts = " ".join(
-        ["{PartName %s} {Location %s}" % (p.part_name, vec4(p.location)) for p in r.parts]
-    )
+    parts = " ".join(["{PartName %s} {Location %s}" % (p.part_name, vec4(p.location)) for p in r.parts])
     return "{Type VictSensor} {Name %s} %s" % (r.name, parts)
 
 
@@ -885,8 +890,7 @@ def _fmt_robot_configuration(m: RobotConfiguration) -> str:
 
 def _fmt_item_geometry(m: ItemGeometry) -> str:
     items = "".join(
-        " {Name %s Location %s Orientation %s Mount %s}"
-        % (i.name, vec4(i.location), vec4(i.orientation), i.mount)
+        " {Name %s Location %s Orientation %s Mount %s}" % (i.name, vec4(i.location), vec4(i.orientation), i.mount)
         for i in m.items
     )
     return "GEO {Type %s}%s\r\n" % (m.item_type, items)
@@ -909,8 +913,10 @@ def format_value(v: FieldValue) -> str:
     if isinstance(v, float):
         return f4(v)
     if isinstance(v, (tuple, list)):
-        return ",".join(format_value(float(x)) if isinstance(x, (int, float)) and not isinstance(x, bool)
-                        else format_value(x) for x in v)
+        return ",".join(
+            format_value(float(x)) if isinstance(x, (int, float)) and not isinstance(x, bool) else format_value(x)
+            for x in v
+        )
     return str(v)
 
 
@@ -958,9 +964,7 @@ def _fmt_mispkg_configuration(m: MisPkgConfiguration) -> str:
 
 
 def _fmt_mispkg_status(m: MisPkgStatus) -> str:
-    links = "".join(
-        " {Link %d} {Value %s} {Torque %s}" % (k.link, f4(k.value), f4(k.torque)) for k in m.links
-    )
+    links = "".join(" {Link %d} {Value %s} {Torque %s}" % (k.link, f4(k.value), f4(k.torque)) for k in m.links)
     return "MISSTA {Time %s} {Name %s}%s\r\n" % (f2(m.time), m.name, links)
 
 
@@ -979,8 +983,10 @@ def _fmt_actuator_configuration(m: ActuatorConfiguration) -> str:
 def _fmt_actuator_geometry(m: ActuatorGeometry) -> str:
     parts = ["GEO {Type Actuator}"]
     for act in m.actuators:
-        parts.append("{Name %s} {Location %s} {Orientation %s} {Mount %s}"
-                     % (act.name, vec4(act.location), vec4(act.orientation), act.mount))
+        parts.append(
+            "{Name %s} {Location %s} {Orientation %s} {Mount %s}"
+            % (act.name, vec4(act.location), vec4(act.orientation), act.mount)
+        )
         parts.extend(
             "{Link %d} {Parent %d} {Location %s} {Orientation %s}"
             % (k.link, k.parent, vec4(k.location), vec4(k.orientation))
@@ -990,9 +996,7 @@ def _fmt_actuator_geometry(m: ActuatorGeometry) -> str:
 
 
 def _fmt_actuator_status(m: ActuatorStatus) -> str:
-    links = "".join(
-        " {Link %d} {Value %s} {Torque %s}" % (k.link, f4(k.value), f4(k.torque)) for k in m.links
-    )
+    links = "".join(" {Link %d} {Value %s} {Torque %s}" % (k.link, f4(k.value), f4(k.torque)) for k in m.links)
     gripper = "" if m.gripper is None else " {Gripper %d}" % m.gripper
     return "ASTA {Time %s} {Name %s}%s%s\r\n" % (f4(m.time), m.name, links, gripper)
 
@@ -1009,16 +1013,12 @@ def _fmt_result(m: Result) -> str:
 
 
 def _fmt_camera_zoom(m: CameraZoomResult) -> str:
-    cams = "".join(
-        " {Name %s} {FOV %s} {Status %s}" % (c.name, f4(c.fov), c.status) for c in m.cameras
-    )
+    cams = "".join(" {Name %s} {FOV %s} {Status %s}" % (c.name, f4(c.fov), c.status) for c in m.cameras)
     return "RES {Time %s} {Type %s}%s\r\n" % (f2(m.time), m.camera_type, cams)
 
 
 def _fmt_viewports(m: ViewportsResult) -> str:
-    views = "".join(
-        " {Viewport%d %s} {Status %s}" % (v.index, v.camera, v.status) for v in m.viewports
-    )
+    views = "".join(" {Viewport%d %s} {Status %s}" % (v.index, v.camera, v.status) for v in m.viewports)
     return "RES {Time %s} {Type Viewports} {Config %s} {Status %s}%s\r\n" % (
         f2(m.time),
         m.config,
@@ -1068,8 +1068,10 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     EffecterStatus: _fmt_effecter,
     Die: lambda m: "DIE {Killer %s} {DamageType %s}\r\n" % (m.killer, m.damage_type),
     Stepped: lambda m: "STEPPED {Time %s}\r\n" % f4(m.time),
-    Pong: lambda m: "PONG%s%s\r\n" % ("" if m.id is None else " {Id %s}" % m.id,
-                                      "" if m.time is None else " {Time %s}" % f4(m.time)),
+    Pong: lambda m: (
+        "PONG%s%s\r\n"
+        % ("" if m.id is None else " {Id %s}" % m.id, "" if m.time is None else " {Time %s}" % f4(m.time))
+    ),
     ErrorReply: lambda m: "ERROR {Command %s} {Reason %s}\r\n" % (m.command, m.reason),
     UnknownMessage: _fmt_unknown,
 }
@@ -1190,14 +1192,10 @@ def _parse_nfo(r: _Reader) -> Message:
         return StartPoses(poses=poses) if key == "StartPoses" else PathNodes(nodes=poses)
     if raw.has("Pathnode"):
         return ClosestPathNode(name=r.text("Pathnode"), location=r.req_vec3("Location"))
-    return GameInfo(
-        gametype=r.text("Gametype"), level=r.text("Level"), time_limit=r.req_int("TimeLimit")
-    )
+    return GameInfo(gametype=r.text("Gametype"), level=r.text("Level"), time_limit=r.req_int("TimeLimit"))
 
 
-_STA_KEYS = frozenset(
-    {"type", "time", "frontsteer", "rearsteer", "lighttoggle", "lightintensity", "battery", "view"}
-)
+_STA_KEYS = frozenset({"type", "time", "frontsteer", "rearsteer", "lighttoggle", "lightintensity", "battery", "view"})
 
 
 def _parse_sta(r: _Reader) -> Message:
@@ -1212,9 +1210,7 @@ def _parse_sta(r: _Reader) -> Message:
         return AerialVehicleStatus(
             time=time, light_toggle=light, light_intensity=intensity, battery_s=battery, view=view
         )
-    joints = tuple(
-        (s.key, r.number(s)) for s in r.raw.segments if s.key.lower() not in _STA_KEYS
-    )
+    joints = tuple((s.key, r.number(s)) for s in r.raw.segments if s.key.lower() not in _STA_KEYS)
     return GroundVehicleStatus(
         vehicle_type=vehicle_type,
         time=time,
@@ -1294,9 +1290,7 @@ def _sen_parse_odometry(r: _Reader, t: str) -> Reading:
 
 
 def _sen_parse_encoder(r: _Reader, t: str) -> Reading:
-    return EncoderReading(
-        items=tuple(EncoderItem(name=n, tick=r.integer(s)) for n, s in _named_values(r, "Tick"))
-    )
+    return EncoderReading(items=tuple(EncoderItem(name=n, tick=r.integer(s)) for n, s in _named_values(r, "Tick")))
 
 
 def _sen_parse_pose(r: _Reader, t: str) -> Reading:
@@ -1309,15 +1303,11 @@ def _sen_parse_pose(r: _Reader, t: str) -> Reading:
 
 
 def _sen_parse_orientation(r: _Reader, t: str) -> Reading:
-    return OrientationReading(
-        sensor_type=t, name=r.text("Name"), orientation=r.req_vec3("Orientation")
-    )
+    return OrientationReading(sensor_type=t, name=r.text("Name"), orientation=r.req_vec3("Orientation"))
 
 
 def _sen_parse_touch(r: _Reader, t: str) -> Reading:
-    return TouchReading(
-        items=tuple(TouchItem(name=n, touching=r.bool(s)) for n, s in _named_values(r, "Touch"))
-    )
+    return TouchReading(items=tuple(TouchItem(name=n, touching=r.bool(s)) for n, s in _named_values(r, "Touch")))
 
 
 def _gps_parse(r: _Reader, key: str) -> tuple[int, float, str] | None:
@@ -1558,8 +1548,7 @@ def _parse_conf(r: _Reader) -> Message:
             packages.append(PackageConfiguration(name=group[0].value, links=tuple(links)))
         return MisPkgConfiguration(packages=tuple(packages))
     items = tuple(
-        ItemConf(name=g[0].value, fields=tuple((s.key, s.value) for s in g[1:]))
-        for g in _groups(raw.segments, "Name")
+        ItemConf(name=g[0].value, fields=tuple((s.key, s.value) for s in g[1:])) for g in _groups(raw.segments, "Name")
     )
     return ItemConfiguration(item_type=item_type, items=items)
 
@@ -1569,16 +1558,27 @@ def _parse_actuator_geometry(r: _Reader) -> ActuatorGeometry:
     actuators = []
     for group in _groups(raw.segments, "Name"):
         links = _groups(tuple(group[1:]), "Link")
-        head = _Reader(RawMessage(raw.type, tuple(group[1:len(group) - sum(len(g) for g in links)])), r.what)
+        head = _Reader(RawMessage(raw.type, tuple(group[1 : len(group) - sum(len(g) for g in links)])), r.what)
         parsed = []
         for link in links:
             lr = _Reader(RawMessage(raw.type, tuple(link)), r.what)
-            parsed.append(ActuatorLinkGeometry(link=lr.req_int("Link"), parent=lr.req_int("Parent"),
-                                               location=lr.req_vec3("Location"),
-                                               orientation=lr.req_vec3("Orientation")))
-        actuators.append(ActuatorPose(name=group[0].value, location=head.req_vec3("Location"),
-                                      orientation=head.req_vec3("Orientation"), mount=head.text("Mount"),
-                                      links=tuple(parsed)))
+            parsed.append(
+                ActuatorLinkGeometry(
+                    link=lr.req_int("Link"),
+                    parent=lr.req_int("Parent"),
+                    location=lr.req_vec3("Location"),
+                    orientation=lr.req_vec3("Orientation"),
+                )
+            )
+        actuators.append(
+            ActuatorPose(
+                name=group[0].value,
+                location=head.req_vec3("Location"),
+                orientation=head.req_vec3("Orientation"),
+                mount=head.text("Mount"),
+                links=tuple(parsed),
+            )
+        )
     return ActuatorGeometry(actuators=tuple(actuators))
 
 
@@ -1588,10 +1588,15 @@ def _parse_actuator_configuration(r: _Reader) -> ActuatorConfiguration:
         links = []
         for link in _groups(tuple(group[1:]), "Link"):
             lr = _Reader(RawMessage(r.raw.type, tuple(link)), r.what)
-            links.append(ActuatorLinkConfiguration(link=lr.req_int("Link"), joint_type=lr.text("JointType"),
-                                                   max_torque=lr.req_float("MaxTorque"),
-                                                   min_value=lr.req_float("MinValue"),
-                                                   max_value=lr.req_float("MaxValue")))
+            links.append(
+                ActuatorLinkConfiguration(
+                    link=lr.req_int("Link"),
+                    joint_type=lr.text("JointType"),
+                    max_torque=lr.req_float("MaxTorque"),
+                    min_value=lr.req_float("MinValue"),
+                    max_value=lr.req_float("MaxValue"),
+                )
+            )
         actuators.append(ActuatorConfig(name=group[0].value, links=tuple(links)))
     return ActuatorConfiguration(actuators=tuple(actuators))
 
@@ -1600,11 +1605,16 @@ def _parse_asta(r: _Reader) -> Message:
     links = []
     for group in _groups(r.raw.segments, "Link"):
         lr = _Reader(RawMessage(r.raw.type, tuple(s for s in group if s.key.lower() != "gripper")), r.what)
-        links.append(LinkState(link=lr.req_int("Link"), value=lr.req_float("Value"),
-                               torque=lr.opt_float("Torque") or 0.0))
+        links.append(
+            LinkState(link=lr.req_int("Link"), value=lr.req_float("Value"), torque=lr.opt_float("Torque") or 0.0)
+        )
     gripper = r.raw.get("Gripper")
-    return ActuatorStatus(time=r.req_float("Time"), name=r.text("Name"), links=tuple(links),
-                          gripper=None if gripper is None else r.req_int("Gripper"))
+    return ActuatorStatus(
+        time=r.req_float("Time"),
+        name=r.text("Name"),
+        links=tuple(links),
+        gripper=None if gripper is None else r.req_int("Gripper"),
+    )
 
 
 def _parse_missta(r: _Reader) -> Message:
@@ -1632,9 +1642,7 @@ def _parse_res(r: _Reader) -> Message:
         cams = []
         for g in _groups(raw.segments, "Name"):
             gr = _Reader(RawMessage(raw.type, tuple(g)), r.what)
-            cams.append(
-                CameraZoom(name=g[0].value, fov=gr.req_float("FOV"), status=gr.text("Status"))
-            )
+            cams.append(CameraZoom(name=g[0].value, fov=gr.req_float("FOV"), status=gr.text("Status")))
         return CameraZoomResult(time=time, cameras=tuple(cams), camera_type=item_type)
     if item_type == "Viewports":
         views = []
@@ -1722,4 +1730,3 @@ def parse_message(line: str) -> Message:
     :class:`~usarsim.errors.ProtocolError` when a known message lacks a key or has a bad value.
     """
     return message_from_raw(parse_line(line.rstrip("\r\n")))
-

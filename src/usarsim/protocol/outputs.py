@@ -43,23 +43,42 @@ def message_for(value: Any, time: float | None) -> M.Message:
     if isinstance(v, RobotStatus):
         time = _stamped(time)
         if v.vehicle_type == "AerialVehicle":
-            return M.AerialVehicleStatus(time=time, light_toggle=v.light_toggle, light_intensity=v.light_intensity,
-                                         battery_s=v.battery_s, view=v.view)
-        return M.GroundVehicleStatus(time=time, front_steer=v.front_steer, rear_steer=v.rear_steer, joints=v.joints,
-                                     light_toggle=v.light_toggle, light_intensity=v.light_intensity,
-                                     battery_s=v.battery_s, view=v.view, vehicle_type=v.vehicle_type)
+            return M.AerialVehicleStatus(
+                time=time,
+                light_toggle=v.light_toggle,
+                light_intensity=v.light_intensity,
+                battery_s=v.battery_s,
+                view=v.view,
+            )
+        return M.GroundVehicleStatus(
+            time=time,
+            front_steer=v.front_steer,
+            rear_steer=v.rear_steer,
+            joints=v.joints,
+            light_toggle=v.light_toggle,
+            light_intensity=v.light_intensity,
+            battery_s=v.battery_s,
+            view=v.view,
+            vehicle_type=v.vehicle_type,
+        )
     if isinstance(v, EffecterState):
-        return M.EffecterStatus(time=_stamped(time), effecter_type=v.effecter_type, name=v.name,
-                                status=effecter_status(v.closed))
+        return M.EffecterStatus(
+            time=_stamped(time), effecter_type=v.effecter_type, name=v.name, status=effecter_status(v.closed)
+        )
     if isinstance(v, PackageState):
-        return M.MisPkgStatus(time=_stamped(time), name=v.name,
-                              links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))
+        return M.MisPkgStatus(
+            time=_stamped(time), name=v.name, links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links)
+        )
     if isinstance(v, ZoomResult):
-        return M.CameraZoomResult(time=_stamped(time), cameras=tuple(M.CameraZoom(n, f, status_word(ok))
-                                                           for n, f, ok in v.cameras), camera_type=v.camera_type)
+        return M.CameraZoomResult(
+            time=_stamped(time),
+            cameras=tuple(M.CameraZoom(n, f, status_word(ok)) for n, f, ok in v.cameras),
+            camera_type=v.camera_type,
+        )
     if isinstance(v, CommandResult):
-        return M.Result(time=_stamped(time), item_type=v.item_type, name=v.name, status=status_word(v.ok),
-                        extra=v.extra)
+        return M.Result(
+            time=_stamped(time), item_type=v.item_type, name=v.name, status=status_word(v.ok), extra=v.extra
+        )
     if isinstance(v, Refusal):
         return M.error_reply(v.command, v.reason)
     return M.SensorMessage(time=time, reading=v)

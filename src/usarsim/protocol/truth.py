@@ -23,8 +23,9 @@ class TruthRequest:
     name: str | None = None
 
     def matches(self, class_name: str, name: str) -> bool:
-        return ((self.class_name is None or self.class_name.lower() == class_name.lower())
-                and (self.name is None or self.name.lower() == name.lower()))
+        return (self.class_name is None or self.class_name.lower() == class_name.lower()) and (
+            self.name is None or self.name.lower() == name.lower()
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +56,12 @@ def parse_truth_request(line: str) -> TruthRequest:
 
 def format_truth_object(o: TruthObject) -> str:
     return "{Name %s} {Class %s} {Time %s} {Location %s} {Rotation %s}\r\n" % (
-        o.name, o.class_name, f4(o.time), vec4(o.location), vec4(o.rotation))
+        o.name,
+        o.class_name,
+        f4(o.time),
+        vec4(o.location),
+        vec4(o.rotation),
+    )
 
 
 def format_truth_request(class_name: str | None = None, name: str | None = None) -> str:
@@ -77,8 +83,12 @@ def parse_truth_object(line: str) -> TruthObject | None:
     raw = parse_line("TRUTH " + text)
     fields = {seg.key.lower(): seg.value for seg in raw.segments}
     try:
-        return TruthObject(name=fields["name"], class_name=fields["class"], time=parse_float(fields["time"]),
-                           location=parse_vector(fields["location"], 3),  # type: ignore[arg-type]
-                           rotation=parse_vector(fields["rotation"], 3))  # type: ignore[arg-type]
+        return TruthObject(
+            name=fields["name"],
+            class_name=fields["class"],
+            time=parse_float(fields["time"]),
+            location=parse_vector(fields["location"], 3),  # type: ignore[arg-type]
+            rotation=parse_vector(fields["rotation"], 3),  # type: ignore[arg-type]
+        )
     except KeyError as exc:
         raise ProtocolError(f"a ground-truth object line lacks {{{exc.args[0].title()} ...}}: {text[:120]!r}") from None

@@ -32,11 +32,17 @@ class Ackermann(DriveModel):
     def check(cls, robot: RobotConfig) -> None:
         wheels = robot.wheels
         if not any(w.steer in ("front", "rear") for w in wheels) or not any(w.driven for w in wheels):
-            raise ConfigError("an Ackermann-steered robot needs steered (steer: front or rear) and driven wheels",
-                              path=robot.path, key="wheels")
+            raise ConfigError(
+                "an Ackermann-steered robot needs steered (steer: front or rear) and driven wheels",
+                path=robot.path,
+                key="wheels",
+            )
         if robot.max_front_steer_rad <= 0 and robot.max_rear_steer_rad <= 0:
-            raise ConfigError("an Ackermann-steered robot needs max_front_steer_rad > 0 (or max_rear_steer_rad)",
-                              path=robot.path, key="max_front_steer_rad")
+            raise ConfigError(
+                "an Ackermann-steered robot needs max_front_steer_rad > 0 (or max_rear_steer_rad)",
+                path=robot.path,
+                key="max_front_steer_rad",
+            )
 
     def command(self, part: AckermannDrive, normalized: bool) -> None:
         c = self.robot

@@ -66,15 +66,19 @@ class Aerial(DriveModel):
 
     def own_actuators(self) -> list[tuple[int, float]]:
         lim, mass = self.robot.aerial, self.robot.mass_kg
-        return [(a, lim.max_accel_m_s2 * mass * lim.max_linear_m_s if axis in ("linear", "lateral", "vertical")
-                 else 0.0) for axis, a in self.rotor.items()]
+        return [
+            (a, lim.max_accel_m_s2 * mass * lim.max_linear_m_s if axis in ("linear", "lateral", "vertical") else 0.0)
+            for axis, a in self.rotor.items()
+        ]
 
     def command(self, part: Velocities, normalized: bool) -> None:
         lim = self.robot.aerial
-        for key, value, top in (("altitude", part.altitude, lim.max_vertical_m_s),
-                                ("linear", part.linear, lim.max_linear_m_s),
-                                ("lateral", part.lateral, lim.max_lateral_m_s),
-                                ("rotational", part.rotational, lim.max_yaw_rate_rad_s)):
+        for key, value, top in (
+            ("altitude", part.altitude, lim.max_vertical_m_s),
+            ("linear", part.linear, lim.max_linear_m_s),
+            ("lateral", part.lateral, lim.max_lateral_m_s),
+            ("rotational", part.rotational, lim.max_yaw_rate_rad_s),
+        ):
             if value is not None and math.isfinite(value):
                 self.fly[key] = clamp(value * top / 100.0 if normalized else value, top)
 

@@ -145,12 +145,21 @@ class DriveModel:
         """GEO and CONF of the robot (protocol.md 6.7, 6.8): its file's figures (a kind may
         report others, or leave the wheel keys out with None)."""
         g = robot.geometry
-        return RobotNumbers(vehicle_type=robot.vehicle_type, class_name=robot.class_name,
-                            steering_type=robot.steering_type, mass_kg=robot.mass_kg,
-                            max_speed=robot.max_speed_rad_s, max_torque=robot.max_torque_nm,
-                            max_front_steer=robot.max_front_steer_rad, max_rear_steer=robot.max_rear_steer_rad,
-                            dimensions=g.dimensions, cog=g.cog, wheel_radius=g.wheel_radius_m,
-                            wheel_separation=g.wheel_separation_m, wheel_base=g.wheel_base_m)
+        return RobotNumbers(
+            vehicle_type=robot.vehicle_type,
+            class_name=robot.class_name,
+            steering_type=robot.steering_type,
+            mass_kg=robot.mass_kg,
+            max_speed=robot.max_speed_rad_s,
+            max_torque=robot.max_torque_nm,
+            max_front_steer=robot.max_front_steer_rad,
+            max_rear_steer=robot.max_rear_steer_rad,
+            dimensions=g.dimensions,
+            cog=g.cog,
+            wheel_radius=g.wheel_radius_m,
+            wheel_separation=g.wheel_separation_m,
+            wheel_base=g.wheel_base_m,
+        )
 
     def steer_angles(self, data: mujoco.MjData, handle: RobotHandle) -> tuple[float, float]:
         """STA ``FrontSteer`` and ``RearSteer``: the axles' current angles (rad)."""

@@ -28,8 +28,12 @@ class Holonomic(DriveModel):
     def check(cls, robot: RobotConfig) -> None:
         numbers = [w.number for w in robot.wheels if w.steer == "free"]
         if not numbers or -1 in numbers or len(set(numbers)) != len(numbers):
-            raise ConfigError("a holonomic robot's steered wheels (steer: free) need distinct numbers (number: 0, "
-                              "1, ...), the WheelNumber of its DRIVE", path=robot.path, key="wheels")
+            raise ConfigError(
+                "a holonomic robot's steered wheels (steer: free) need distinct numbers (number: 0, "
+                "1, ...), the WheelNumber of its DRIVE",
+                path=robot.path,
+                key="wheels",
+            )
 
     def command(self, part: SteeredWheels, normalized: bool) -> None:
         vmax = self.robot.max_speed_rad_s

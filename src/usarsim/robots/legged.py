@@ -28,8 +28,9 @@ if TYPE_CHECKING:
 GAIT_STEPS = 5  # a walking robot's joint targets are renewed every 5 physics steps (20 ms)
 
 
-def leg_ik(fx: float, fy: float, fz: float, upper: float, lower: float,
-           knee_forward: bool = False) -> tuple[float, float, float]:
+def leg_ik(
+    fx: float, fy: float, fz: float, upper: float, lower: float, knee_forward: bool = False
+) -> tuple[float, float, float]:
     """Hip pitch, hip roll and knee angles that put a foot at (fx, fy, fz) from its hip
     (USARSim frame: forward, right, down), for a leg of two segments whose knee bends
     backwards (or forwards, as a person's, with ``knee_forward``).  Positive pitch swings
@@ -38,8 +39,8 @@ def leg_ik(fx: float, fy: float, fz: float, upper: float, lower: float,
     roll = -math.atan2(fy, fz)
     down = math.hypot(fy, fz)
     d = min(max(math.hypot(fx, down), abs(upper - lower) + 1e-6), (upper + lower) * 0.999)
-    inner = math.acos(max(-1.0, min(1.0, (upper ** 2 + lower ** 2 - d ** 2) / (2 * upper * lower))))
-    beta = math.acos(max(-1.0, min(1.0, (upper ** 2 + d ** 2 - lower ** 2) / (2 * upper * d))))
+    inner = math.acos(max(-1.0, min(1.0, (upper**2 + lower**2 - d**2) / (2 * upper * lower))))
+    beta = math.acos(max(-1.0, min(1.0, (upper**2 + d**2 - lower**2) / (2 * upper * d))))
     if knee_forward:
         return math.atan2(fx, down) + beta, roll, inner - math.pi
     return math.atan2(fx, down) - beta, roll, math.pi - inner
@@ -96,8 +97,11 @@ class Legged(DriveModel):
             self.walk["linear"] = clamp(fwd * g.max_linear_m_s, g.max_linear_m_s)
             self.walk["rotational"] = clamp(turn * g.max_yaw_rate_rad_s, g.max_yaw_rate_rad_s)
             return
-        for key, value, top in (("linear", part.linear, g.max_linear_m_s), ("lateral", part.lateral, g.max_lateral_m_s),
-                                ("rotational", part.rotational, g.max_yaw_rate_rad_s)):
+        for key, value, top in (
+            ("linear", part.linear, g.max_linear_m_s),
+            ("lateral", part.lateral, g.max_lateral_m_s),
+            ("rotational", part.rotational, g.max_yaw_rate_rad_s),
+        ):
             if value is not None and math.isfinite(value):
                 self.walk[key] = clamp(value * top / 100.0 if normalized else value, top)
 
@@ -143,8 +147,10 @@ class Legged(DriveModel):
             self.gait_clock += dt
         tops = (g.max_linear_m_s, g.max_lateral_m_s, g.max_yaw_rate_rad_s)
         if self.gait_amp >= 1.0 or self.gait_walks_at_once:  # the speed follows the command
-            self.gait_vel = tuple(cur + max(-top * dt / half, min(top * dt / half, c - cur))
-                                  for cur, c, top in zip(self.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops))
+            self.gait_vel = tuple(
+                cur + max(-top * dt / half, min(top * dt / half, c - cur))
+                for cur, c, top in zip(self.gait_vel, cmd if moving else (0.0, 0.0, 0.0), tops)
+            )
         at_rest = not any(self.gait_vel) and all(abs(x) < 1e-4 for f in self.feet for x in f)
         if moving or not at_rest:  # (stopped while setting off, it still steps its feet back under it)
             self.gait_amp = min(1.0, self.gait_amp + dt / self.gait_rise)
@@ -200,7 +206,8 @@ class Legged(DriveModel):
         if amp > 0.0 and g.sway_m > 0.0:
             side = self.robot.link_origin(g.legs[0].hip_pitch)[1]
             shift = -math.copysign(g.sway_m * min(1.0, 2.0 * amp), side) * math.cos(
-                2.0 * math.pi * (phases[0] - (g.duty + 1.0) / 2.0))
+                2.0 * math.pi * (phases[0] - (g.duty + 1.0) / 2.0)
+            )
         targets = []
         for i, (leg, p) in enumerate(zip(g.legs, phases)):
             fx, fy, yaw = self.feet[i] if amp > 0.0 and self.feet else (0.0, 0.0, 0.0)

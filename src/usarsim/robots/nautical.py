@@ -32,8 +32,7 @@ class Nautical(DriveModel):
     @classmethod
     def check(cls, robot: RobotConfig) -> None:
         if robot.nautical is None:
-            raise ConfigError("a vessel (drive: nautical) needs its nautical settings", path=robot.path,
-                              key="nautical")
+            raise ConfigError("a vessel (drive: nautical) needs its nautical settings", path=robot.path, key="nautical")
 
     @property
     def vessel(self) -> NauticalSpec:
@@ -41,10 +40,11 @@ class Nautical(DriveModel):
 
     def command(self, part: NauticalDrive, normalized: bool) -> None:
         n = self.robot.nautical
-        for key, value, top, scale in (("propeller", part.propeller, 1.0, 0.01),
-                                       ("rudder", part.rudder, n.max_rudder_rad, n.max_rudder_rad / 100.0),
-                                       ("stern_plane", part.stern_plane, n.max_stern_plane_rad,
-                                        n.max_stern_plane_rad / 100.0)):
+        for key, value, top, scale in (
+            ("propeller", part.propeller, 1.0, 0.01),
+            ("rudder", part.rudder, n.max_rudder_rad, n.max_rudder_rad / 100.0),
+            ("stern_plane", part.stern_plane, n.max_stern_plane_rad, n.max_stern_plane_rad / 100.0),
+        ):
             if value is not None and math.isfinite(value):
                 self.sail[key] = clamp(value * scale if normalized else value, top)
 
@@ -56,5 +56,7 @@ class Nautical(DriveModel):
         forward = rot[:, 0]
         speed = float(forward @ lin)
         thrust = forward * (self.sail["propeller"] * n.max_thrust_n * frac)
-        return thrust, (DOWN * (n.rudder_gain * self.sail["rudder"] * speed),
-                        rot[:, 1] * (-n.stern_plane_gain * self.sail["stern_plane"] * speed))
+        return thrust, (
+            DOWN * (n.rudder_gain * self.sail["rudder"] * speed),
+            rot[:, 1] * (-n.stern_plane_gain * self.sail["stern_plane"] * speed),
+        )

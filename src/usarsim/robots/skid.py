@@ -135,8 +135,9 @@ class Skid(DriveModel):
     @classmethod
     def check(cls, robot: RobotConfig) -> None:
         if not (any(w.side == "left" for w in robot.wheels) and any(w.side == "right" for w in robot.wheels)):
-            raise ConfigError("a skid-steered robot needs at least one left and one right wheel", path=robot.path,
-                              key="wheels")
+            raise ConfigError(
+                "a skid-steered robot needs at least one left and one right wheel", path=robot.path, key="wheels"
+            )
 
     @classmethod
     def treads(cls, robot: RobotConfig) -> Treads:
@@ -145,8 +146,11 @@ class Skid(DriveModel):
         # 1e-5 kg m^2 rotor through 50:1 gearing: 0.025 kg m^2, 1.5 kg at a 0.13 m rim, for
         # the 3.5 kg a P2AT wheel carries)
         driven = sum(1 for w in robot.wheels if w.driven)
-        return Treads(lateral_ratio=lateral_friction_ratio(robot),
-                      drive_inertia_kg=robot.mass_kg / max(1, driven), solref=TREAD_SOLREF)
+        return Treads(
+            lateral_ratio=lateral_friction_ratio(robot),
+            drive_inertia_kg=robot.mass_kg / max(1, driven),
+            solref=TREAD_SOLREF,
+        )
 
     @classmethod
     def build(cls, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, robot: RobotConfig, prefix: str) -> None:

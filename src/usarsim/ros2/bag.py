@@ -36,8 +36,7 @@ class BagWriter:
 
         self.path = Path(path)
         if self.path.exists():
-            raise BagError(f"{self.path} exists already: rosbag2 writes a new folder (give another name, or "
-                           f"remove it)")
+            raise BagError(f"{self.path} exists already: rosbag2 writes a new folder (give another name, or remove it)")
         self.typestore = get_typestore(Stores.ROS2_JAZZY)
         self.writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
         self.writer.open()
@@ -56,17 +55,29 @@ class BagWriter:
 
             durability = QosDurability.TRANSIENT_LOCAL if topic == "/tf_static" else QosDurability.VOLATILE
             never = QosTime(sec=0x7FFFFFFF, nsec=0xFFFFFFFF)
-            qos = Qos(history=QosHistory.KEEP_LAST, depth=1 if topic == "/tf_static" else 10,
-                      reliability=QosReliability.RELIABLE, durability=durability, deadline=never, lifespan=never,
-                      liveliness=QosLiveliness.AUTOMATIC, liveliness_lease_duration=never,
-                      avoid_ros_namespace_conventions=False)
+            qos = Qos(
+                history=QosHistory.KEEP_LAST,
+                depth=1 if topic == "/tf_static" else 10,
+                reliability=QosReliability.RELIABLE,
+                durability=durability,
+                deadline=never,
+                lifespan=never,
+                liveliness=QosLiveliness.AUTOMATIC,
+                liveliness_lease_duration=never,
+                avoid_ros_namespace_conventions=False,
+            )
             conn = self.connections[topic] = self.writer.add_connection(
-                topic, type_name(msg), typestore=self.typestore, serialization_format="cdr",
-                offered_qos_profiles=[qos])
+                topic, type_name(msg), typestore=self.typestore, serialization_format="cdr", offered_qos_profiles=[qos]
+            )
         self.writer.write(conn, int(round(max(0.0, stamp) * 1e9)), self._serialize(msg))
         self.count += 1
 
     def close(self) -> None:
         self.writer.close()
-        log.warning("rosbag2 recording %s: %d messages on %d topics (ros2 bag play %s)", self.path, self.count,
-                    len(self.connections), self.path)
+        log.warning(
+            "rosbag2 recording %s: %d messages on %d topics (ros2 bag play %s)",
+            self.path,
+            self.count,
+            len(self.connections),
+            self.path,
+        )

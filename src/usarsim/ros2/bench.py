@@ -94,6 +94,7 @@ def subscriber_main(n: int, seconds: float, out: str) -> int:
                 got.append((topic, -1.0 if s is None else s.sec + s.nanosec * 1e-9, wall))
             else:
                 got.append((topic, -1.0, wall))
+
         return keep
 
     def discover() -> None:
@@ -165,8 +166,18 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
     from usarsim.server.app import Application
 
     n = len(spots)
-    app = Application(world, host="127.0.0.1", port=0, seed=0, speed=1.0, lockstep=False,
-                      max_connections=max(64, 2 * n), truth_port=None, image_port=None, web_port=None)
+    app = Application(
+        world,
+        host="127.0.0.1",
+        port=0,
+        seed=0,
+        speed=1.0,
+        lockstep=False,
+        max_connections=max(64, 2 * n),
+        truth_port=None,
+        image_port=None,
+        web_port=None,
+    )
     served = ServedApp(app)
     sim = app.facade.sim
     port = app.control.port
@@ -177,20 +188,33 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
     try:
         if with_bridge:
             robots = Path(tmp.name) / "robots.yaml"
-            robots.write_text("".join(f"- {{class: P2AT, name: robot{i + 1}, location: [{x:.3f}, {y:.3f}, {z:.3f}], "
-                                      f"yaw: {yaw:.4f}}}\n" for i, (x, y, z, yaw) in enumerate(spots)))
-            bridge = subprocess.Popen([sys.executable, "-m", "usarsim", "ros2", "--port", str(port), "--robots",
-                                       str(robots)], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                      stderr=subprocess.PIPE, text=True)
+            robots.write_text(
+                "".join(
+                    f"- {{class: P2AT, name: robot{i + 1}, location: [{x:.3f}, {y:.3f}, {z:.3f}], yaw: {yaw:.4f}}}\n"
+                    for i, (x, y, z, yaw) in enumerate(spots)
+                )
+            )
+            bridge = subprocess.Popen(
+                [sys.executable, "-m", "usarsim", "ros2", "--port", str(port), "--robots", str(robots)],
+                env=env,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
             procs.append(bridge)
             line = bridge.stdout.readline()
             if not line.startswith("usarsim ros2:"):
                 why = bridge.communicate(timeout=30)[1][-2000:]
                 raise SystemExit(f"usarsim bench: the bridge did not start: {why}")
         else:
-            procs.append(subprocess.Popen([sys.executable, "-m", "usarsim.bench", "--client", str(port),
-                                           json.dumps(spots), str(seconds)], stdout=subprocess.DEVNULL,
-                                          stderr=subprocess.DEVNULL))
+            procs.append(
+                subprocess.Popen(
+                    [sys.executable, "-m", "usarsim.bench", "--client", str(port), json.dumps(spots), str(seconds)],
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                )
+            )
         deadline = time.monotonic() + 120
         while len(sim.robots) < n:
             if time.monotonic() > deadline or any(p.poll() is not None for p in procs):
@@ -198,9 +222,21 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
             time.sleep(0.01)
         sampler = _ClockSampler(sim)
         if with_bridge:
-            sub = subprocess.Popen([sys.executable, "-m", "usarsim.ros2.bench", "--subscribe", str(n),
-                                    str(SETTLE_S + seconds + 1.0), str(out)], env=env, stdin=subprocess.DEVNULL,
-                                   stdout=subprocess.PIPE, text=True)
+            sub = subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "usarsim.ros2.bench",
+                    "--subscribe",
+                    str(n),
+                    str(SETTLE_S + seconds + 1.0),
+                    str(out),
+                ],
+                env=env,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.PIPE,
+                text=True,
+            )
             procs.append(sub)
             sub.stdout.readline()  # up
         time.sleep(SETTLE_S)
@@ -219,8 +255,11 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
                 except subprocess.TimeoutExpired:
                     p.kill()
         served.stop()
-    result: dict[str, Any] = {"bridge": with_bridge, "rtf": (sim1 - sim0) / (wall1 - wall0),
-                              "cpu_per_sim_s": (cpu1 - cpu0) / max(1e-9, sim1 - sim0)}
+    result: dict[str, Any] = {
+        "bridge": with_bridge,
+        "rtf": (sim1 - sim0) / (wall1 - wall0),
+        "cpu_per_sim_s": (cpu1 - cpu0) / max(1e-9, sim1 - sim0),
+    }
     if with_bridge:
         data = json.loads(out.read_text())
         result["kinds"] = _topic_figures(data["messages"], sampler, sim0, sim1, n)
@@ -251,11 +290,14 @@ def _topic_figures(messages: list, sampler: _ClockSampler, sim0: float, sim1: fl
     out = {}
     for kind, k in sorted(kinds.items()):
         d = sorted(k["delays"])
-        out[kind] = {"topics": len(k["rates"]), "hz_per_topic": statistics.mean(k["rates"]),
-                     "missed": max(k["missed"]) if k["missed"] else None,
-                     "delay_ms_p50": d[len(d) // 2] if d else None,
-                     "delay_ms_p95": d[min(len(d) - 1, int(0.95 * len(d)))] if d else None,
-                     "delay_ms_max": d[-1] if d else None}
+        out[kind] = {
+            "topics": len(k["rates"]),
+            "hz_per_topic": statistics.mean(k["rates"]),
+            "missed": max(k["missed"]) if k["missed"] else None,
+            "delay_ms_p50": d[len(d) // 2] if d else None,
+            "delay_ms_p95": d[min(len(d) - 1, int(0.95 * len(d)))] if d else None,
+            "delay_ms_max": d[-1] if d else None,
+        }
     return out
 
 
@@ -284,17 +326,26 @@ def run_ros2_bench(args: Any) -> int:
     runs = []
     for i, with_bridge in enumerate((False, True) * max(1, args.runs)):
         if not args.json:
-            print(f"  run {i + 1}: {n} P2ATs in real time for {seconds:g} s, "
-                  f"{'with' if with_bridge else 'without'} the ROS 2 bridge", file=sys.stderr, flush=True)
+            print(
+                f"  run {i + 1}: {n} P2ATs in real time for {seconds:g} s, "
+                f"{'with' if with_bridge else 'without'} the ROS 2 bridge",
+                file=sys.stderr,
+                flush=True,
+            )
         runs.append(_one_run(world, spots, seconds, with_bridge, domain))
     plain = [r for r in runs if not r["bridge"]]
     bridged = [r for r in runs if r["bridge"]]
     summary = {
-        "robots": n, "seconds": seconds, "world": world.name, "runs": len(runs),
-        "rtf_without": [round(r["rtf"], 4) for r in plain], "rtf_with": [round(r["rtf"], 4) for r in bridged],
+        "robots": n,
+        "seconds": seconds,
+        "world": world.name,
+        "runs": len(runs),
+        "rtf_without": [round(r["rtf"], 4) for r in plain],
+        "rtf_with": [round(r["rtf"], 4) for r in bridged],
         "cpu_per_sim_s_without": [round(r["cpu_per_sim_s"], 4) for r in plain],
         "cpu_per_sim_s_with": [round(r["cpu_per_sim_s"], 4) for r in bridged],
-        "kinds": bridged[-1]["kinds"], "cpu_count": os.cpu_count(),
+        "kinds": bridged[-1]["kinds"],
+        "cpu_count": os.cpu_count(),
     }
     worst: dict[str, dict] = {}
     for r in bridged:
@@ -308,19 +359,29 @@ def run_ros2_bench(args: Any) -> int:
         print(json.dumps(summary))
         return 0
     drop = 1 - statistics.mean(summary["rtf_with"]) / statistics.mean(summary["rtf_without"])
-    print(f"{n} P2ATs in real time ({world.name}), {len(runs)} runs of {seconds:g} s alternately without and with "
-          f"the ROS 2 bridge:")
-    print(f"  real-time factor reached: without {_range(summary['rtf_without'], 3)}, with "
-          f"{_range(summary['rtf_with'], 3)} ({drop * 100:+.1f} % drop)")
-    print(f"  simulator CPU per simulated second: without {_range(summary['cpu_per_sim_s_without'], 3)} s, with "
-          f"{_range(summary['cpu_per_sim_s_with'], 3)} s")
+    print(
+        f"{n} P2ATs in real time ({world.name}), {len(runs)} runs of {seconds:g} s alternately without and with "
+        f"the ROS 2 bridge:"
+    )
+    print(
+        f"  real-time factor reached: without {_range(summary['rtf_without'], 3)}, with "
+        f"{_range(summary['rtf_with'], 3)} ({drop * 100:+.1f} % drop)"
+    )
+    print(
+        f"  simulator CPU per simulated second: without {_range(summary['cpu_per_sim_s_without'], 3)} s, with "
+        f"{_range(summary['cpu_per_sim_s_with'], 3)} s"
+    )
     print(f"  {'topic':14s} {'topics':>6s} {'Hz each':>8s} {'missed':>7s} {'delay p50':>10s} {'p95':>8s} {'max':>8s}")
     for kind, f in sorted(summary["kinds"].items()):
         missed = "-" if f["missed"] is None else f"{f['missed'] * 100:.1f}%"
-        print(f"  {kind:14s} {f['topics']:6d} {f['hz_per_topic']:8.2f} {missed:>7s} "
-              f"{_ms(f['delay_ms_p50']):>10s} {_ms(f['delay_ms_p95']):>8s} {_ms(f['delay_ms_max']):>8s}")
-    print("  (delay: from the simulator's clock reaching a reading's stamp to a subscriber in another process "
-          "getting it; worst of the runs)")
+        print(
+            f"  {kind:14s} {f['topics']:6d} {f['hz_per_topic']:8.2f} {missed:>7s} "
+            f"{_ms(f['delay_ms_p50']):>10s} {_ms(f['delay_ms_p95']):>8s} {_ms(f['delay_ms_max']):>8s}"
+        )
+    print(
+        "  (delay: from the simulator's clock reaching a reading's stamp to a subscriber in another process "
+        "getting it; worst of the runs)"
+    )
     return 0
 
 

@@ -35,8 +35,18 @@ REAL_TIME_REFUSAL = "the simulator runs in real time: start it with --lockstep"
 class Bridge:
     """Robots of one simulator on one ROS 2 domain (see the module's docstring)."""
 
-    def __init__(self, world: World, *, period: float = 0.1, rtf: float = 1.0, frame_prefix: bool = True,
-                 stamped: bool = False, bag: str | None = None, camera_hz: float = 5.0, map_tf: bool = False):
+    def __init__(
+        self,
+        world: World,
+        *,
+        period: float = 0.1,
+        rtf: float = 1.0,
+        frame_prefix: bool = True,
+        stamped: bool = False,
+        bag: str | None = None,
+        camera_hz: float = 5.0,
+        map_tf: bool = False,
+    ):
         import rclpy
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
@@ -66,8 +76,12 @@ class Bridge:
         self.qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
         tf_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST)
         # as tf2_ros's static broadcaster: the latest message kept for subscribers that come later
-        static_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                                durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST)
+        static_qos = QoSProfile(
+            depth=1,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+            history=HistoryPolicy.KEEP_LAST,
+        )
         from rosgraph_msgs.msg import Clock
         from std_srvs.srv import Trigger
         from tf2_msgs.msg import TFMessage
@@ -76,8 +90,11 @@ class Bridge:
         self._tf_pub = self.node.create_publisher(TFMessage, "/tf", tf_qos)
         self._tf_static_pub = self.node.create_publisher(TFMessage, "/tf_static", static_qos)
         self._static: list[Any] = []
-        for name, handler in (("pause", self._switch("pause")), ("resume", self._switch("resume")),
-                              ("step", self._srv_step)):
+        for name, handler in (
+            ("pause", self._switch("pause")),
+            ("resume", self._switch("resume")),
+            ("step", self._srv_step),
+        ):
             self.node.create_service(Trigger, f"/usarsim/{name}", handler)
         self.recorder = None
         if bag:
@@ -128,14 +145,24 @@ class Bridge:
     # building -----------------------------------------------------------------------------------
     def add_robot(self, spec: RobotSpec) -> RobotBridge:
         name = spec.name or f"robot{len(self.robots) + 1}"
-        robot = self.world.spawn(spec.class_name, name, start=spec.start, location=spec.location,
-                                 rotation=None if spec.location is None else (0.0, 0.0, spec.yaw))
+        robot = self.world.spawn(
+            spec.class_name,
+            name,
+            start=spec.start,
+            location=spec.location,
+            rotation=None if spec.location is None else (0.0, 0.0, spec.yaw),
+        )
         rb = RobotBridge(self, robot, f"{name}/" if self.frame_prefix else "")
         self.robots[name] = rb
         self._subscribe(rb)
         self._static.extend(rb.static_transforms())
-        log.info("robot %s (%s) on the ROS 2 graph as /%s/..., cmd_vel: %s", name, spec.class_name, name,
-                 rb.kinematics.kind if rb.kinematics.kind != "none" else "not taken")
+        log.info(
+            "robot %s (%s) on the ROS 2 graph as /%s/..., cmd_vel: %s",
+            name,
+            spec.class_name,
+            name,
+            rb.kinematics.kind if rb.kinematics.kind != "none" else "not taken",
+        )
         return rb
 
     def _subscribe(self, rb: RobotBridge) -> None:
@@ -153,11 +180,15 @@ class Bridge:
         from geometry_msgs.msg import PointStamped
         from sensor_msgs.msg import JointState
 
-        self.node.create_subscription(JointState, f"{rb.ns}/joint_commands",
-                                      lambda m: rb.on_joints(list(m.name), list(m.position)), self.qos)
-        self.node.create_subscription(PointStamped, f"{rb.ns}/report_victim",
-                                      lambda m: rb.on_report(m.point.x, m.point.y, m.point.z, m.header.frame_id),
-                                      self.qos)
+        self.node.create_subscription(
+            JointState, f"{rb.ns}/joint_commands", lambda m: rb.on_joints(list(m.name), list(m.position)), self.qos
+        )
+        self.node.create_subscription(
+            PointStamped,
+            f"{rb.ns}/report_victim",
+            lambda m: rb.on_report(m.point.x, m.point.y, m.point.z, m.header.frame_id),
+            self.qos,
+        )
 
     def publish_static(self) -> None:
         from tf2_msgs.msg import TFMessage

@@ -44,10 +44,12 @@ def quaternion(roll: float, pitch: float, yaw: float) -> tuple[float, float, flo
     cr, sr = math.cos(roll / 2), math.sin(roll / 2)
     cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
     cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-            cr * cp * cy + sr * sp * sy)
+    return (
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    )
 
 
 def yaw_of(q: tuple[float, float, float, float]) -> float:
@@ -93,10 +95,19 @@ class Kinematics:
         if steering == "HolonomSteered" and r > 0:
             return cls("holonomic", r, float(geo.wheel_separation or 0.0), max_speed=float(conf.max_speed))
         if steering == "AckermanSteered" and r > 0:
-            return cls("ackermann", r, float(geo.wheel_separation or 0.0), float(geo.wheel_base or 0.0),
-                       float(conf.max_speed), float(conf.max_front_steer))
-        return cls("none", reason=f"a {vehicle or 'robot'} with steering {steering or 'none'} takes no cmd_vel "
-                                  f"(drive it with its own DRIVE)")
+            return cls(
+                "ackermann",
+                r,
+                float(geo.wheel_separation or 0.0),
+                float(geo.wheel_base or 0.0),
+                float(conf.max_speed),
+                float(conf.max_front_steer),
+            )
+        return cls(
+            "none",
+            reason=f"a {vehicle or 'robot'} with steering {steering or 'none'} takes no cmd_vel "
+            f"(drive it with its own DRIVE)",
+        )
 
 
 class BadTwist(ValueError):
@@ -121,8 +132,11 @@ def drive_of(k: Kinematics, vx: float, vy: float, vz: float, wz: float, clip: bo
         if abs(vx) > 1e-6 and k.wheel_base > 0:
             steer = -math.atan(k.wheel_base * wz / vx)  # USARSim: positive to the right
         lim = k.max_steer if k.max_steer > 0 and clip else math.pi / 2
-        return {"speed": _clip(speed, k.max_speed if k.max_speed > 0 and clip else math.inf),
-                "front_steer": _clip(steer, lim), "rear_steer": 0.0}
+        return {
+            "speed": _clip(speed, k.max_speed if k.max_speed > 0 and clip else math.inf),
+            "front_steer": _clip(steer, lim),
+            "rear_steer": 0.0,
+        }
     if k.kind == "holonomic":
         # two steered drive wheels on the axle, numbered 0 (left) and 1 (right) (protocol.md 5.3c):
         # each turned along its own velocity (vx - w y, vy) and spun at its speed, a turn past

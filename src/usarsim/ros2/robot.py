@@ -35,8 +35,23 @@ if TYPE_CHECKING:
 log = logging.getLogger("usarsim.ros2")
 
 # GETGEO types asked of every robot for /tf_static (an EmptyGeometry answer: the robot has none)
-SENSOR_TYPES = ("RangeScanner", "RangeScanner3D", "Sonar", "IR", "Odometry", "INS", "IMU", "GroundTruth", "GPS",
-                "Camera", "VictSensor", "Touch", "RFID", "Acoustic", "HumanMotion")
+SENSOR_TYPES = (
+    "RangeScanner",
+    "RangeScanner3D",
+    "Sonar",
+    "IR",
+    "Odometry",
+    "INS",
+    "IMU",
+    "GroundTruth",
+    "GPS",
+    "Camera",
+    "VictSensor",
+    "Touch",
+    "RFID",
+    "Acoustic",
+    "HumanMotion",
+)
 WORLD_FRAME = "map"  # the simulator's world, in REP 103 axes (ground truth, victims, map -> odom)
 NODE_NAME = "usarsim_bridge"  # the bridge's node
 
@@ -68,8 +83,9 @@ class RobotSpec:
                 values = []
             if len(values) not in (3, 4):
                 raise ValueError(f"{whole!r}: a place is x,y,z or x,y,z,yaw (metres, radians)")
-            return cls(cls_name, None, name or None, (values[0], values[1], values[2]),
-                       values[3] if len(values) == 4 else 0.0)
+            return cls(
+                cls_name, None, name or None, (values[0], values[1], values[2]), values[3] if len(values) == 4 else 0.0
+            )
         return cls(cls_name, start or None, name or None)
 
 
@@ -121,8 +137,11 @@ class RobotBridge:
             pass
         self.joints: dict[str, float] = {}  # STA joints (flippers...) and package links, by ROS joint name
         self.wheels: dict[str, tuple[float, float]] = {}  # tachometer: position, velocity
-        self.cameras = [name for name, item in self.mounts.items() if self.confs.get(name, _Conf()).fields.get(
-            "CameraFov") is not None]
+        self.cameras = [
+            name
+            for name, item in self.mounts.items()
+            if self.confs.get(name, _Conf()).fields.get("CameraFov") is not None
+        ]
         self.next_picture = 0.0
         self.pubs: dict[str, Any] = {}
         self.kept: dict[str, Any] = {}  # topic -> its message, reused (rclpy serialises on publish)
@@ -142,8 +161,7 @@ class RobotBridge:
     def publisher(self, topic: str, msg_type: Any) -> Any:
         pub = self.pubs.get(topic)
         if pub is None:
-            pub = self.pubs[topic] = self.bridge.node.create_publisher(msg_type, f"{self.ns}/{topic}",
-                                                                       self.bridge.qos)
+            pub = self.pubs[topic] = self.bridge.node.create_publisher(msg_type, f"{self.ns}/{topic}", self.bridge.qos)
         return pub
 
     def emit(self, topic: str, msg_type: Any, msg: Any, stamp: float) -> None:
@@ -160,11 +178,13 @@ class RobotBridge:
         package's link at the package's rest pose)."""
         out = []
         for name, item in self.mounts.items():
-            out.append(self.bridge.transform(0.0, self.frame("base_link"), self.frame(name), item.location,
-                                             item.orientation))
+            out.append(
+                self.bridge.transform(0.0, self.frame("base_link"), self.frame(name), item.location, item.orientation)
+            )
         for name in self.cameras:  # REP 103's optical frame: z forward, x right, y down
-            ts = self.bridge.transform(0.0, self.frame(name), self.frame(f"{name}_optical"), (0.0, 0.0, 0.0),
-                                       (0.0, 0.0, 0.0))
+            ts = self.bridge.transform(
+                0.0, self.frame(name), self.frame(f"{name}_optical"), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            )
             r = ts.transform.rotation
             r.x, r.y, r.z, r.w = quaternion(-math.pi / 2, 0.0, -math.pi / 2)
             out.append(ts)
@@ -185,8 +205,12 @@ class RobotBridge:
                 self.bridge.commands.put((self, drive_line_joint(name, value)))
             else:
                 known = sorted(self.joints) + [f"{p}_link{k}" for p, ks in self.packages.items() for k in ks]
-                log.warning("robot %s: a joint command names no joint of it: %r (its joints: %s)", self.name, name,
-                            ", ".join(dict.fromkeys(known)) or "none")
+                log.warning(
+                    "robot %s: a joint command names no joint of it: %r (its joints: %s)",
+                    self.name,
+                    name,
+                    ", ".join(dict.fromkeys(known)) or "none",
+                )
         for pkg, values in by_package.items():
             from usarsim.client.core import mispkg_line
 
@@ -216,11 +240,19 @@ class RobotBridge:
             return
         limited = drive_of(self.kinematics, vx, vy, vz, wz, clip=False) != keys
         if limited:
-            self.warn_once("limit", f"cmd_vel ({vx:g}, {vy:g}, {vz:g} m/s, {wz:g} rad/s) is beyond what the robot "
-                                    f"can do: limited to its MaxSpeed and MaxFrontSteer (said once)")
+            self.warn_once(
+                "limit",
+                f"cmd_vel ({vx:g}, {vy:g}, {vz:g} m/s, {wz:g} rad/s) is beyond what the robot "
+                f"can do: limited to its MaxSpeed and MaxFrontSteer (said once)",
+            )
         if "wheels" in keys:
-            line = "DRIVE " + " ".join(f"{{WheelNumber {n}}} {{WheelSpeed {v:.4f}}} {{WheelSteer {a:.4f}}}"
-                                       for n, v, a in keys["wheels"]) + "\r\n"
+            line = (
+                "DRIVE "
+                + " ".join(
+                    f"{{WheelNumber {n}}} {{WheelSpeed {v:.4f}}} {{WheelSteer {a:.4f}}}" for n, v, a in keys["wheels"]
+                )
+                + "\r\n"
+            )
         else:
             line = drive_line(**keys)
         self.bridge.commands.put((self, line))
@@ -312,8 +344,10 @@ class RobotBridge:
         else:
             ranges = np.asarray(r.ranges_m, dtype=np.float64)
         if rows_total <= 0 or len(ranges) % rows_total:
-            self.warn_once(f"points-{r.name}", f"a 3D sweep of {len(ranges)} beams does not split into "
-                                               f"{rows_total} rows: not published")
+            self.warn_once(
+                f"points-{r.name}",
+                f"a 3D sweep of {len(ranges)} beams does not split into {rows_total} rows: not published",
+            )
             return
         cols = len(ranges) // rows_total
         elevation = vfov / 2.0 - np.arange(rows_total) * vres  # up positive
@@ -328,8 +362,7 @@ class RobotBridge:
         m.header.stamp = b_time(stamp)
         m.header.frame_id = self.frame(r.name)
         m.height, m.width = 1, len(pts)
-        m.fields = [PointField(name=n, offset=4 * i, datatype=PointField.FLOAT32, count=1)
-                    for i, n in enumerate("xyz")]
+        m.fields = [PointField(name=n, offset=4 * i, datatype=PointField.FLOAT32, count=1) for i, n in enumerate("xyz")]
         m.is_bigendian, m.point_step, m.row_step, m.is_dense = False, 12, 12 * len(pts), True
         m.data = pts.tobytes()
         self.emit("points" if not self.points_named else f"points/{r.name}", PointCloud2, m, stamp)
@@ -356,8 +389,14 @@ class RobotBridge:
         self.last_odom = (stamp, x, y, yaw)
         self.send_map_tf()
         self.emit("odom", Odometry, m, stamp)
-        self.bridge.send_tf([self.bridge.transform(stamp, self.frame("odom"), self.frame("base_link"),
-                                                   (r.x_m, r.y_m, 0.0), (0.0, 0.0, r.theta_rad))], stamp)
+        self.bridge.send_tf(
+            [
+                self.bridge.transform(
+                    stamp, self.frame("odom"), self.frame("base_link"), (r.x_m, r.y_m, 0.0), (0.0, 0.0, r.theta_rad)
+                )
+            ],
+            stamp,
+        )
 
     def publish_ground_truth(self, stamp: float, r: PoseReading) -> None:
         from nav_msgs.msg import Odometry
@@ -389,8 +428,9 @@ class RobotBridge:
         c, s_ = math.cos(yaw), math.sin(yaw)
         x, y = gx - (c * ox - s_ * oy), gy - (s_ * ox + c * oy)
         # the transform in ROS axes; Bridge.transform takes USARSim's, so turn them back
-        self.bridge.send_tf([self.bridge.transform(t, WORLD_FRAME, self.frame("odom"), (x, -y, -gz),
-                                                   (0.0, 0.0, -yaw))], t)
+        self.bridge.send_tf(
+            [self.bridge.transform(t, WORLD_FRAME, self.frame("odom"), (x, -y, -gz), (0.0, 0.0, -yaw))], t
+        )
 
     def publish_imu(self, stamp: float, name: str, orientation: Any, gyro: Any, accel: Any) -> None:
         from sensor_msgs.msg import Imu
@@ -447,11 +487,26 @@ class RobotBridge:
 
     def publish_victims(self, stamp: float, r: VictimReading) -> None:
         # one red sphere per part seen, its text the part's name (Head, Chest, ...)
-        self.publish_markers(stamp, "victims", r.name, "SPHERE", 0.1, (1.0, 0.2, 0.2),
-                             [(i, part.part_name, part.location) for i, part in enumerate(r.parts)])
+        self.publish_markers(
+            stamp,
+            "victims",
+            r.name,
+            "SPHERE",
+            0.1,
+            (1.0, 0.2, 0.2),
+            [(i, part.part_name, part.location) for i, part in enumerate(r.parts)],
+        )
 
-    def publish_markers(self, stamp: float, topic: str, sensor: str, shape: str, size: float,
-                        rgb: tuple[float, float, float], items: list[tuple[int, str, Any]]) -> None:
+    def publish_markers(
+        self,
+        stamp: float,
+        topic: str,
+        sensor: str,
+        shape: str,
+        size: float,
+        rgb: tuple[float, float, float],
+        items: list[tuple[int, str, Any]],
+    ) -> None:
         """A MarkerArray: a DELETEALL, then a marker per (id, text, USARSim location) in the
         sensor's frame (namespace ``topic``)."""
         from visualization_msgs.msg import Marker, MarkerArray
@@ -486,9 +541,18 @@ class RobotBridge:
 
     def publish_rfid(self, stamp: float, r: RfidReading) -> None:
         # one green cube per tag in range, its id the tag's ID, its text the ID and the memory
-        self.publish_markers(stamp, "rfid", r.name, "CUBE", 0.05, (0.0, 1.0, 0.0),
-                             [(int(t.tag_id), str(t.tag_id) if t.memory is None else f"{t.tag_id} {t.memory}",
-                               t.location) for t in r.tags])
+        self.publish_markers(
+            stamp,
+            "rfid",
+            r.name,
+            "CUBE",
+            0.05,
+            (0.0, 1.0, 0.0),
+            [
+                (int(t.tag_id), str(t.tag_id) if t.memory is None else f"{t.tag_id} {t.memory}", t.location)
+                for t in r.tags
+            ],
+        )
 
     def publish_joint_states(self, stamp: float) -> None:
         from sensor_msgs.msg import JointState
@@ -551,8 +615,10 @@ class RobotBridge:
         recording = self.bridge.recorder is not None
         for cam in self.cameras:
             base = f"{self.ns}/{'camera' if cam == self.cameras[0] else f'camera/{cam}'}"
-            counts = [recording or self.bridge.node.count_subscribers(f"{base}/{t}") > 0
-                      for t in ("image_raw/compressed", "image_raw", "camera_info")]
+            counts = [
+                recording or self.bridge.node.count_subscribers(f"{base}/{t}") > 0
+                for t in ("image_raw/compressed", "image_raw", "camera_info")
+            ]
             if any(counts):
                 out.append((cam, *counts))
         return out
@@ -607,5 +673,3 @@ def b_time(t: float) -> Any:
 def set_time(stamp: Any, t: float) -> None:
     """Set a ``builtin_interfaces/Time`` to simulated seconds."""
     stamp.sec, stamp.nanosec = _sec_nsec(t)
-
-

@@ -37,6 +37,7 @@ def prepare(domain_id: int | None = None, what: str = "usarsim ros2") -> int:
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
     rmw = os.environ.get("RMW_IMPLEMENTATION", "")
     if rmw and rmw != "rmw_fastrtps_cpp":
-        raise Ros2SetupError(f"RMW_IMPLEMENTATION={rmw}: the ROS 2 wheels carry Fast DDS only (rmw_fastrtps_cpp); "
-                             f"unset it")
+        raise Ros2SetupError(
+            f"RMW_IMPLEMENTATION={rmw}: the ROS 2 wheels carry Fast DDS only (rmw_fastrtps_cpp); unset it"
+        )
     return domain_id

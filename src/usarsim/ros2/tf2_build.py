@@ -63,13 +63,18 @@ def ensure_tf2_msgs() -> None:
         if lock is not None:
             lock.close()
     if not have_tf2_msgs():
-        raise Tf2BuildError(f"tf2_msgs was built into {sys.prefix} but does not import; run "
-                            f"'python -m usarsim.ros2.tf2_build' to see the build's output")
+        raise Tf2BuildError(
+            f"tf2_msgs was built into {sys.prefix} but does not import; run "
+            f"'python -m usarsim.ros2.tf2_build' to see the build's output"
+        )
 
 
 def _missing_tools() -> list[str]:
-    need = {"cmake": "cmake", "a C compiler": os.environ.get("CC", "cc"),
-            "a C++ compiler": os.environ.get("CXX", "c++")}
+    need = {
+        "cmake": "cmake",
+        "a C compiler": os.environ.get("CC", "cc"),
+        "a C++ compiler": os.environ.get("CXX", "c++"),
+    }
     return [what for what, exe in need.items() if shutil.which(exe) is None]
 
 
@@ -77,24 +82,43 @@ def build_tf2_msgs(verbose: bool = False) -> None:
     """Build the tf2_msgs package into ``sys.prefix`` (cmake configure, build, install)."""
     missing = _missing_tools()
     if missing:
-        raise Tf2BuildError(f"/tf needs tf2_msgs, which is built on first use with cmake and a C/C++ compiler: "
-                            f"{' and '.join(missing)} not found (Debian: apt-get install cmake g++)")
+        raise Tf2BuildError(
+            f"/tf needs tf2_msgs, which is built on first use with cmake and a C/C++ compiler: "
+            f"{' and '.join(missing)} not found (Debian: apt-get install cmake g++)"
+        )
     prefix = sys.prefix
     if not os.access(prefix, os.W_OK):
-        raise Tf2BuildError(f"/tf needs tf2_msgs, built on first use into the Python environment {prefix}, "
-                            f"which is not writable: run 'python -m usarsim.ros2.tf2_build' as its owner")
+        raise Tf2BuildError(
+            f"/tf needs tf2_msgs, built on first use into the Python environment {prefix}, "
+            f"which is not writable: run 'python -m usarsim.ros2.tf2_build' as its owner"
+        )
     share = Path(prefix) / "share"
     if not (share / "rosidl_default_generators").is_dir():
-        raise Tf2BuildError("/tf needs tf2_msgs, built on first use with ROS 2's build tools, which are missing: "
-                            "pip install 'usarsim[ros2]'")
+        raise Tf2BuildError(
+            "/tf needs tf2_msgs, built on first use with ROS 2's build tools, which are missing: "
+            "pip install 'usarsim[ros2]'"
+        )
     log.warning("building tf2_msgs (TFMessage, for /tf) into %s: once, about 10 s", prefix)
     t0 = time.monotonic()
-    env = dict(os.environ, AMENT_PREFIX_PATH=prefix, CMAKE_PREFIX_PATH=prefix,
-               PATH=f"{Path(sysconfig.get_path('scripts'))}{os.pathsep}{os.environ.get('PATH', '')}")
+    env = dict(
+        os.environ,
+        AMENT_PREFIX_PATH=prefix,
+        CMAKE_PREFIX_PATH=prefix,
+        PATH=f"{Path(sysconfig.get_path('scripts'))}{os.pathsep}{os.environ.get('PATH', '')}",
+    )
     with tempfile.TemporaryDirectory(prefix="usarsim-tf2-msgs-") as build:
         steps = [
-            ["cmake", "-S", str(PACKAGE), "-B", build, f"-DCMAKE_INSTALL_PREFIX={prefix}",
-             "-DCMAKE_BUILD_TYPE=Release", f"-DPython3_EXECUTABLE={sys.executable}", "-DBUILD_TESTING=OFF"],
+            [
+                "cmake",
+                "-S",
+                str(PACKAGE),
+                "-B",
+                build,
+                f"-DCMAKE_INSTALL_PREFIX={prefix}",
+                "-DCMAKE_BUILD_TYPE=Release",
+                f"-DPython3_EXECUTABLE={sys.executable}",
+                "-DBUILD_TESTING=OFF",
+            ],
             ["cmake", "--build", build, "-j", str(min(4, os.cpu_count() or 1))],
             ["cmake", "--install", build],
         ]

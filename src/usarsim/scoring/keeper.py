@@ -26,8 +26,16 @@ class ScoreKeeper:
     """``print_every_s``: simulated seconds between two live score lines handed to ``on_line``
     (0: none); ``path``: where the final score is written as JSON when the server stops."""
 
-    def __init__(self, world: WorldConfig, *, seed: int = 0, path: str | None = None, print_every_s: float = 0.0,
-                 on_line: Callable[[str], None] | None = None, weights: Weights | None = None):
+    def __init__(
+        self,
+        world: WorldConfig,
+        *,
+        seed: int = 0,
+        path: str | None = None,
+        print_every_s: float = 0.0,
+        on_line: Callable[[str], None] | None = None,
+        weights: Weights | None = None,
+    ):
         self.world = world
         self.path = path
         self.print_every_s = print_every_s

@@ -76,14 +76,24 @@ class RobotScore:
 
 
 class Scorer:
-    def __init__(self, world: WorldConfig, *, seed: int = 0, weights: Weights | None = None,
-                 mounts: dict[str, dict[str, tuple]] | None = None):
+    def __init__(
+        self,
+        world: WorldConfig,
+        *,
+        seed: int = 0,
+        weights: Weights | None = None,
+        mounts: dict[str, dict[str, tuple]] | None = None,
+    ):
         self.world = world
         self.seed = seed
         self.weights = weights or Weights()
         fl = world.floor
-        bounds = (fl.center[0] - fl.size[0] / 2, fl.center[1] - fl.size[1] / 2,
-                  fl.center[0] + fl.size[0] / 2, fl.center[1] + fl.size[1] / 2)
+        bounds = (
+            fl.center[0] - fl.size[0] / 2,
+            fl.center[1] - fl.size[1] / 2,
+            fl.center[0] + fl.size[0] / 2,
+            fl.center[1] + fl.size[1] / 2,
+        )
         self.grid = CoverageGrid(bounds, CELL_M)
         self.robots: dict[str, RobotScore] = {}
         self._names: dict[int, str] = {}
@@ -217,9 +227,15 @@ class Scorer:
         for name, s in self.robots.items():
             why = self._lost(s)
             share = s.contact_samples / s.samples if s.samples else 0.0
-            robots[name] = {"class": s.class_name, "victims_found": sorted(s.victims_found),
-                            "area_m2": round(len(s.area_cells) * cell_area, 3), "distance_m": round(s.distance_m, 3),
-                            "collisions": s.collisions, "lost": why, "radio_contact_share": round(share, 4)}
+            robots[name] = {
+                "class": s.class_name,
+                "victims_found": sorted(s.victims_found),
+                "area_m2": round(len(s.area_cells) * cell_area, 3),
+                "distance_m": round(s.distance_m, 3),
+                "collisions": s.collisions,
+                "lost": why,
+                "radio_contact_share": round(share, 4),
+            }
             found |= s.victims_found
             distance += s.distance_m
             collisions += s.collisions
@@ -228,13 +244,30 @@ class Scorer:
         area = self.grid.seen_m2
         team_share = float(np.mean(shares)) if shares else 0.0
         counted = len(self._reported) if self.reports else len(found)
-        score = (w.victim * counted + w.area_m2 * area + w.collision * collisions + w.robot_lost * lost
-                 + w.false_report * self.false_reports + w.radio_contact * team_share)
+        score = (
+            w.victim * counted
+            + w.area_m2 * area
+            + w.collision * collisions
+            + w.robot_lost * lost
+            + w.false_report * self.false_reports
+            + w.radio_contact * team_share
+        )
         return {
-            "world": self.world.name, "seed": self.seed, "time_s": round(self.time, 3), "weights": asdict(w),
-            "team": {"score": round(score, 3), "victims_found": len(found), "victims_reported": len(self._reported),
-                     "false_reports": self.false_reports, "area_m2": round(area, 3), "distance_m": round(distance, 3),
-                     "collisions": collisions, "robots_lost": lost, "radio_contact_share": round(team_share, 4)},
+            "world": self.world.name,
+            "seed": self.seed,
+            "time_s": round(self.time, 3),
+            "weights": asdict(w),
+            "team": {
+                "score": round(score, 3),
+                "victims_found": len(found),
+                "victims_reported": len(self._reported),
+                "false_reports": self.false_reports,
+                "area_m2": round(area, 3),
+                "distance_m": round(distance, 3),
+                "collisions": collisions,
+                "robots_lost": lost,
+                "radio_contact_share": round(team_share, 4),
+            },
             "robots": robots,
         }
 
@@ -242,10 +275,12 @@ class Scorer:
         """One line of the score now (``usarsim serve --score``)."""
         r = self.result()
         t = r["team"]
-        return (f"score t={r['time_s']:.1f} s: {t['score']:.1f} (victims {t['victims_found']} found, "
-                f"{t['victims_reported']} reported, {t['false_reports']} false; area {t['area_m2']:.1f} m2; "
-                f"distance {t['distance_m']:.1f} m; collisions {t['collisions']}; robots lost {t['robots_lost']}; "
-                f"radio contact {100 * t['radio_contact_share']:.0f} %)")
+        return (
+            f"score t={r['time_s']:.1f} s: {t['score']:.1f} (victims {t['victims_found']} found, "
+            f"{t['victims_reported']} reported, {t['false_reports']} false; area {t['area_m2']:.1f} m2; "
+            f"distance {t['distance_m']:.1f} m; collisions {t['collisions']}; robots lost {t['robots_lost']}; "
+            f"radio contact {100 * t['radio_contact_share']:.0f} %)"
+        )
 
 
 def _pose_at(poses: deque, t: float) -> tuple | None:

@@ -218,7 +218,7 @@ class Sensor(Item[SC]):
             buf = self.rng.uniform(-1.0, 1.0, size=max(NOISE_BLOCK, k))
             self._ubuf, i = buf, 0
         self._upos = i + k
-        return buf[i:i + k]
+        return buf[i : i + k]
 
 
 class ItemRegistry(Registry):
@@ -238,8 +238,10 @@ class ItemRegistry(Registry):
             for n in (name, *aliases):
                 other = self.family.kind_of(n)
                 if other is not None and other is not self:
-                    raise ValueError(f"item type name '{n}' is registered already as a {other.kind}; choose another "
-                                     f"name for the {self.kind} {cls.__qualname__}")
+                    raise ValueError(
+                        f"item type name '{n}' is registered already as a {other.kind}; choose another "
+                        f"name for the {self.kind} {cls.__qualname__}"
+                    )
             return deco(cls)
 
         return checked
@@ -263,8 +265,9 @@ class ItemKinds:
         """The registry that has ``name`` (None: none has it); an error if several have it."""
         found = [r for r in self.registries if name in r]
         if len(found) > 1:
-            raise PluginNotFoundError(f"item type '{name}' is registered as a "
-                                      f"{' and a '.join(r.kind for r in found)}: rename one of them")
+            raise PluginNotFoundError(
+                f"item type '{name}' is registered as a {' and a '.join(r.kind for r in found)}: rename one of them"
+            )
         return found[0] if found else None
 
     def names(self) -> list[str]:
@@ -302,8 +305,11 @@ def build_config(cls: type[Item[Any]], item: MountedItem, robot_path: str) -> It
     if preset is not None:
         presets = {k.lower(): (k, v) for k, v in cls.PRESETS.items()}
         if not isinstance(preset, str) or preset.lower() not in presets:
-            raise ConfigError(f"unknown preset {preset!r}{did_you_mean(str(preset), cls.PRESETS)}",
-                              path=robot_path, key=f"{key_base}.preset")
+            raise ConfigError(
+                f"unknown preset {preset!r}{did_you_mean(str(preset), cls.PRESETS)}",
+                path=robot_path,
+                key=f"{key_base}.preset",
+            )
         values.update(presets[preset.lower()][1])
     fields = {f.name: f for f in dataclasses.fields(cls.Config)}
     aliases = {**COMMON_ALIASES, **cls.ALIASES}
@@ -313,8 +319,11 @@ def build_config(cls: type[Item[Any]], item: MountedItem, robot_path: str) -> It
         field_name = lookup.get(str(raw_key).lower())
         if field_name is None:
             allowed = sorted(set(fields) | set(aliases))
-            raise ConfigError(f"unknown {cls.TYPE} setting '{raw_key}'{did_you_mean(str(raw_key), allowed)}",
-                              path=robot_path, key=f"{key_base}.{raw_key}")
+            raise ConfigError(
+                f"unknown {cls.TYPE} setting '{raw_key}'{did_you_mean(str(raw_key), allowed)}",
+                path=robot_path,
+                key=f"{key_base}.{raw_key}",
+            )
         values[field_name] = _coerce(fields[field_name], raw_value, robot_path, f"{key_base}.{raw_key}")
     try:
         return cls.Config(**values)

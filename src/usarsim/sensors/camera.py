@@ -44,8 +44,10 @@ class CameraConfig(ItemConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         if not (0.0 < self.min_fov_rad <= self.def_fov_rad <= self.max_fov_rad < math.pi * 2):
-            raise ValueError(f"need 0 < min_fov <= def_fov <= max_fov, got {self.min_fov_rad}, {self.def_fov_rad}, "
-                             f"{self.max_fov_rad}")
+            raise ValueError(
+                f"need 0 < min_fov <= def_fov <= max_fov, got {self.min_fov_rad}, {self.def_fov_rad}, "
+                f"{self.max_fov_rad}"
+            )
         if self.width_px < 1 or self.height_px < 1:
             raise ValueError("width_px and height_px must be >= 1")
 
@@ -56,8 +58,14 @@ class Camera(CameraItem[CC]):
 
     LIVE_CONF = True  # CameraFov follows the zoom
     Config = CameraConfig
-    ALIASES = {"CameraDefFov": "def_fov_rad", "CameraMinFov": "min_fov_rad", "CameraMaxFov": "max_fov_rad",
-               "FOV": "def_fov_rad", "Width": "width_px", "Height": "height_px"}
+    ALIASES = {
+        "CameraDefFov": "def_fov_rad",
+        "CameraMinFov": "min_fov_rad",
+        "CameraMaxFov": "max_fov_rad",
+        "FOV": "def_fov_rad",
+        "Width": "width_px",
+        "Height": "height_px",
+    }
 
     def reset(self, view: WorldView) -> None:
         self.fov_rad = self.config.def_fov_rad
@@ -85,8 +93,12 @@ class Camera(CameraItem[CC]):
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
-        return (("CameraDefFov", c.def_fov_rad), ("CameraMinFov", c.min_fov_rad), ("CameraMaxFov", c.max_fov_rad),
-                ("CameraFov", getattr(self, "fov_rad", c.def_fov_rad)))
+        return (
+            ("CameraDefFov", c.def_fov_rad),
+            ("CameraMinFov", c.min_fov_rad),
+            ("CameraMaxFov", c.max_fov_rad),
+            ("CameraFov", getattr(self, "fov_rad", c.def_fov_rad)),
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -100,4 +112,3 @@ class OmniCamConfig(CameraConfig):
 @CAMERAS.register("OmniCam", "OmniCamera")
 class OmniCam(Camera[OmniCamConfig]):
     """The omnidirectional camera of the OmniP2AT/OmniP2DX (protocol.md 9): no zoom."""
-

@@ -82,8 +82,7 @@ _DEFAULT_GEO = GeoReference()
 def world_to_geographic(x_m: float, y_m: float, geo: GeoReference) -> tuple[float, float]:
     """Latitude and longitude (degrees, north and east positive) of the world point
     (x north, y east, metres) for the reference ``geo`` (protocol.md 7.6)."""
-    return (geo.latitude_deg + x_m / geo.scale_latitude_m,
-            geo.longitude_deg + y_m / geo.scale_longitude_m)
+    return (geo.latitude_deg + x_m / geo.scale_latitude_m, geo.longitude_deg + y_m / geo.scale_longitude_m)
 
 
 def degrees_minutes(value_deg: float, positive: str, negative: str) -> tuple[int, float, str]:
@@ -139,8 +138,9 @@ class Constellation:
     rotation from ``seed``, and then turning about the celestial pole with ``period_s``.
     """
 
-    def __init__(self, n: int = NUM_SATELLITES, seed: int = CONSTELLATION_SEED,
-                 period_s: float = ORBIT_PERIOD_S) -> None:
+    def __init__(
+        self, n: int = NUM_SATELLITES, seed: int = CONSTELLATION_SEED, period_s: float = ORBIT_PERIOD_S
+    ) -> None:
         k = np.arange(n) + 0.5
         up = 1.0 - 2.0 * k / n
         ring = np.sqrt(1.0 - up * up)
@@ -148,11 +148,13 @@ class Constellation:
         lattice = np.stack([ring * np.cos(azimuth), ring * np.sin(azimuth), up], axis=-1)
         # a uniformly random rotation: a normalised 4-d Gaussian is a uniform unit quaternion
         w, x, y, z = (q := np.random.default_rng(seed).normal(size=4)) / np.linalg.norm(q)
-        rot = np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ])
+        rot = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            ]
+        )
         self.directions0 = lattice @ rot.T
         self.period_s = float(period_s)
         self._cache_key: tuple[float, float] | None = None
@@ -197,8 +199,11 @@ class GpsConfig(SensorConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not (math.isfinite(self.max_noise_m) and math.isfinite(self.min_noise_m)
-                and 0.0 <= self.min_noise_m <= self.max_noise_m):
+        if not (
+            math.isfinite(self.max_noise_m)
+            and math.isfinite(self.min_noise_m)
+            and 0.0 <= self.min_noise_m <= self.max_noise_m
+        ):
             raise ValueError(f"need 0 <= min_noise_m <= max_noise_m, got {self.min_noise_m} and {self.max_noise_m}")
 
 

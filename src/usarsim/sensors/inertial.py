@@ -104,8 +104,12 @@ class ImuConfig(SensorConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in ("acceleration_sigma_m_s2", "angular_velocity_sigma_rad_s",
-                     "angular_acceleration_sigma_rad_s2", "orientation_sigma_rad"):
+        for name in (
+            "acceleration_sigma_m_s2",
+            "angular_velocity_sigma_rad_s",
+            "angular_acceleration_sigma_rad_s2",
+            "orientation_sigma_rad",
+        ):
             v = getattr(self, name)
             if not (v >= 0 and math.isfinite(v)):
                 raise ValueError(f"{name} must be a finite number >= 0, got {v}")
@@ -150,11 +154,11 @@ class IMU(Sensor[ImuConfig]):
         """(world velocity of the sensor point, body rotation, body angular velocity in
         body axes), all in MuJoCo's frame, from the current qpos/qvel."""
         h, d = self.handle, view.data
-        quat = d.qpos[h.root_qpos + 3:h.root_qpos + 7]
+        quat = d.qpos[h.root_qpos + 3 : h.root_qpos + 7]
         flat = np.empty(9)
         mujoco.mju_quat2Mat(flat, quat)
         rot = flat.reshape(3, 3)
-        v = d.qvel[h.root_qvel:h.root_qvel + 6]
+        v = d.qvel[h.root_qvel : h.root_qvel + 6]
         # free joint: linear velocity of the body origin in the world frame, angular
         # velocity in the body frame (MuJoCo's convention)
         w_body = np.array(v[3:6], dtype=float)

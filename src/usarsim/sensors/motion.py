@@ -84,8 +84,12 @@ class Odometry(Sensor[OdometryConfig]):
 
     RESETTABLE = True
     LIVE_CONF = True  # CONF's TrackWidth follows a SET
-    ALIASES = {"EncoderResolution": "encoder_resolution_rad", "LeftWheel": "left_wheel", "RightWheel": "right_wheel",
-               "TrackWidth": "track_width_m"}
+    ALIASES = {
+        "EncoderResolution": "encoder_resolution_rad",
+        "LeftWheel": "left_wheel",
+        "RightWheel": "right_wheel",
+        "TrackWidth": "track_width_m",
+    }
 
     def __init__(self, item: MountedItem, config: OdometryConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
@@ -101,8 +105,10 @@ class Odometry(Sensor[OdometryConfig]):
     def configure(self, view: WorldView) -> None:
         names = {w.name for w in self.robot.wheels}
         if self._left not in names or self._right not in names:
-            raise ValueError(f"odometry {self.name}: needs a left and a right wheel (LeftWheel, RightWheel), "
-                             f"got {self._left!r} and {self._right!r}")
+            raise ValueError(
+                f"odometry {self.name}: needs a left and a right wheel (LeftWheel, RightWheel), "
+                f"got {self._left!r} and {self._right!r}"
+            )
 
     @property
     def _sep(self) -> float:
@@ -116,8 +122,10 @@ class Odometry(Sensor[OdometryConfig]):
     def _angles(self, view: WorldView) -> tuple[float, float]:
         q = view.data.qpos
         res = self.config.encoder_resolution_rad
-        return (_quantise(float(q[self.handle.joint_qpos[self._left]]), res),
-                _quantise(float(q[self.handle.joint_qpos[self._right]]), res))
+        return (
+            _quantise(float(q[self.handle.joint_qpos[self._left]]), res),
+            _quantise(float(q[self.handle.joint_qpos[self._right]]), res),
+        )
 
     def reset(self, view: WorldView) -> None:
         self.x = self.y = self.theta = 0.0
@@ -149,8 +157,11 @@ class Odometry(Sensor[OdometryConfig]):
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
-        return (("ScanInterval", c.scan_interval_s), ("EncoderResolution", c.encoder_resolution_rad),
-                ("TrackWidth", self.track_width_m))
+        return (
+            ("ScanInterval", c.scan_interval_s),
+            ("EncoderResolution", c.encoder_resolution_rad),
+            ("TrackWidth", self.track_width_m),
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -222,7 +233,6 @@ class GroundTruthConfig(SensorConfig):
 class GroundTruth(Sensor[GroundTruthConfig]):
     """The exact pose of the robot's origin in the world frame, no noise."""
 
-
     def measure(self, view: WorldView) -> PoseReading:
         d = view.data
         r, p, y = self.handle.orientation(d)
@@ -269,7 +279,7 @@ class INS(Sensor[InsConfig]):
     def _draw_biases(self) -> None:
         c = self.config
         if c.drifting:
-            self._mean_rot = self.rng.uniform(-0.5, 0.5, 3) / c.precision ** 2
+            self._mean_rot = self.rng.uniform(-0.5, 0.5, 3) / c.precision**2
             self._mean_pos = self.rng.uniform(-0.5, 0.5, 3) / c.precision
         else:
             self._mean_rot = np.full(3, c.mean)
@@ -285,7 +295,7 @@ class INS(Sensor[InsConfig]):
         if not self._started:
             # wait until the robot has settled (e.g. after dropping onto the floor):
             # a tick after spawn with the chassis at rest
-            qv = view.data.qvel[self.handle.root_qvel:self.handle.root_qvel + 6]
+            qv = view.data.qvel[self.handle.root_qvel : self.handle.root_qvel + 6]
             if view.time > self._reset_time and float(np.abs(qv).max()) < 0.02:
                 self._started = True
             self.est_loc, self.est_ori = loc.copy(), ori.copy()

@@ -101,9 +101,14 @@ class Sonar(RangeSensor[SonarConfig]):
     they hit is below the maximum (specular surfaces at grazing angles are not seen)."""
 
     RAY_KIND = "sonar"
-    ALIASES = {**RangeSensor.ALIASES, "BeamAngle": "beam_angle_rad", "beamAngle": "beam_angle_rad",
-               "maxAngleOfIncidence": "max_angle_of_incidence_rad", "numberOfCones": "number_of_cones",
-               "tracesPerCone": "traces_per_cone"}
+    ALIASES = {
+        **RangeSensor.ALIASES,
+        "BeamAngle": "beam_angle_rad",
+        "beamAngle": "beam_angle_rad",
+        "maxAngleOfIncidence": "max_angle_of_incidence_rad",
+        "numberOfCones": "number_of_cones",
+        "tracesPerCone": "traces_per_cone",
+    }
 
     def __init__(self, item: MountedItem, config: SonarConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
@@ -126,8 +131,9 @@ class Sonar(RangeSensor[SonarConfig]):
     def _true_range(self, view: WorldView) -> float:
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dirs = self._dirs @ rot.T
-        dist, nrm, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True,
-                                        kind=self.RAY_KIND)
+        dist, nrm, _ = view.caster.cast(
+            pos, dirs, self.config.max_range_m, self.handle.body_id, normals=True, kind=self.RAY_KIND
+        )
         hit = np.isfinite(dist)
         assert nrm is not None  # asked for
         if not hit.any():
@@ -139,8 +145,11 @@ class Sonar(RangeSensor[SonarConfig]):
         return float(dist[ok].min())
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
-        return (("MaxRange", self.config.max_range_m), ("MinRange", self.config.min_range_m),
-                ("BeamAngle", self.config.beam_angle_rad))
+        return (
+            ("MaxRange", self.config.max_range_m),
+            ("MinRange", self.config.min_range_m),
+            ("BeamAngle", self.config.beam_angle_rad),
+        )
 
     @classmethod
     def measure_group(cls, sensors: list[Self], view: WorldView) -> list[RangeItem]:
@@ -153,13 +162,20 @@ class Sonar(RangeSensor[SonarConfig]):
         key = tuple(id(s) for s in sensors)
         stack = first._stack
         if stack is None or stack[0] != key:
-            locs = np.concatenate([np.repeat(frames.to_mj_vec(s.item.location)[None, :], len(s._dirs), axis=0)
-                                   for s in sensors])
+            locs = np.concatenate(
+                [np.repeat(frames.to_mj_vec(s.item.location)[None, :], len(s._dirs), axis=0) for s in sensors]
+            )
             dirs = np.concatenate([s._dirs @ frames.usar_euler_to_mj_mat(s.item.orientation).T for s in sensors])
             counts = np.array([len(s._dirs) for s in sensors])
-            stack = (key, locs, dirs, np.repeat(np.arange(len(sensors)), counts), np.cumsum(counts) - counts,
-                     np.array([math.cos(s.config.max_angle_of_incidence_rad) for s in sensors]),
-                     max(s.config.max_range_m for s in sensors))
+            stack = (
+                key,
+                locs,
+                dirs,
+                np.repeat(np.arange(len(sensors)), counts),
+                np.cumsum(counts) - counts,
+                np.array([math.cos(s.config.max_angle_of_incidence_rad) for s in sensors]),
+                max(s.config.max_range_m for s in sensors),
+            )
             first._stack = stack
         _, locs, local_dirs, owner, starts, cos_max, reach = stack
         rot = h.rotation_mj(d)

@@ -62,8 +62,9 @@ class RfidConfig(SensorConfig):
             names = {n.lower(): i for i, n in enumerate(SENSING_MODES)}
             mode = names.get(mode.strip().lower(), mode)
         if isinstance(mode, bool) or not isinstance(mode, int) or mode not in (0, 1, 2):
-            raise ValueError(f"sensing_mode must be 0 (Radius), 1 (Obstacle) or 2 (Attenuation), "
-                             f"got {self.sensing_mode!r}")
+            raise ValueError(
+                f"sensing_mode must be 0 (Radius), 1 (Obstacle) or 2 (Attenuation), got {self.sensing_mode!r}"
+            )
         object.__setattr__(self, "sensing_mode", mode)
 
 
@@ -81,8 +82,12 @@ def _tag_and_data(text: str | None) -> tuple[int | None, str]:
 @SENSORS.register("RFID", "RFIDSensor")
 class RFID(Sensor[RfidConfig]):
     RAY_KIND = "laser"  # radio does not pass walls any better than light here; glass counts as a wall
-    ALIASES = {"MaxRange": "max_range_m", "SensingMode": "sensing_mode", "ObstacleLoss": "obstacle_loss_db",
-               "Threshold": "threshold_dbm"}
+    ALIASES = {
+        "MaxRange": "max_range_m",
+        "SensingMode": "sensing_mode",
+        "ObstacleLoss": "obstacle_loss_db",
+        "Threshold": "threshold_dbm",
+    }
 
     def _detected(self, view: WorldView) -> list[tuple[int, tuple[float, float, float]]]:
         """(tag id, tag position in the sensor frame) of every tag the reader senses now."""
@@ -100,8 +105,13 @@ class RFID(Sensor[RfidConfig]):
         mode = int(c.sensing_mode)  # a number once the config is made
         if len(near) and mode > 0:
             # walls on each line to a tag (a tag lying on a surface is not behind it)
-            walls = view.caster.count_walls(np.broadcast_to(pos, (len(near), 3)), world[near], kind=self.RAY_KIND,
-                                            end_margin=0.01, stop_at_first=mode == 1)
+            walls = view.caster.count_walls(
+                np.broadcast_to(pos, (len(near), 3)),
+                world[near],
+                kind=self.RAY_KIND,
+                end_margin=0.01,
+                stop_at_first=mode == 1,
+            )
         for k, i in enumerate(near.tolist()):
             if mode == 1 and walls[k] > 0:
                 continue
@@ -150,5 +160,8 @@ class RFID(Sensor[RfidConfig]):
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
-        return (("ScanInterval", c.scan_interval_s), ("MaxRange", c.max_range_m),
-                ("SensingMode", SENSING_MODES[int(c.sensing_mode)]))
+        return (
+            ("ScanInterval", c.scan_interval_s),
+            ("MaxRange", c.max_range_m),
+            ("SensingMode", SENSING_MODES[int(c.sensing_mode)]),
+        )

@@ -61,19 +61,38 @@ class RangeScanner(Sensor[RSC]):
     SCANNABLE = True
     Config = RangeScannerConfig
     RAY_KIND = "laser"  # which materials the beams pass through (world materials' see_through)
-    ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m", "Resolution": "resolution_rad",
-               "ScanFov": "fov_rad", "Fov": "fov_rad", "bYaw": "panning", "bPitch": "tilting",
-               "Paning": "panning", "Panning": "panning", "Tilting": "tilting"}
+    ALIASES = {
+        "MaxRange": "max_range_m",
+        "MinRange": "min_range_m",
+        "Resolution": "resolution_rad",
+        "ScanFov": "fov_rad",
+        "Fov": "fov_rad",
+        "bYaw": "panning",
+        "bPitch": "tilting",
+        "Paning": "panning",
+        "Panning": "panning",
+        "Tilting": "tilting",
+    }
     PRESETS = {
         # SICK LMS200 as USARSim configured it (protocol.md 7.3): 180 degrees, 1 degree,
         # 20 m.  The data sheet (SICK LMS200 Technical Description, 2003) gives 0.25/0.5/1
         # degree angular resolution over 180 degrees and a 10 mm range resolution.
-        "SICK": {"max_range_m": 20.0, "min_range_m": 0.1, "resolution_rad": math.pi / 180.0,
-                 "fov_rad": math.pi, "scan_interval_s": 0.2},
+        "SICK": {
+            "max_range_m": 20.0,
+            "min_range_m": 0.1,
+            "resolution_rad": math.pi / 180.0,
+            "fov_rad": math.pi,
+            "scan_interval_s": 0.2,
+        },
         # Hokuyo URG-04LX (protocol.md 7.3; Hokuyo URG-04LX specification: 240 degrees,
         # 0.36 degree steps, 4 m, 100 ms scan).  USARSim used 0.0184 rad steps and 0.3 s.
-        "HokuyoURG04LX": {"max_range_m": 4.0, "min_range_m": 0.02, "resolution_rad": 0.0184,
-                          "fov_rad": 4.189, "scan_interval_s": 0.3},
+        "HokuyoURG04LX": {
+            "max_range_m": 4.0,
+            "min_range_m": 0.02,
+            "resolution_rad": 0.0184,
+            "fov_rad": 4.189,
+            "scan_interval_s": 0.3,
+        },
     }
 
     def __init__(self, item: MountedItem, config: RSC, robot: RobotConfig, seed: int) -> None:
@@ -89,20 +108,26 @@ class RangeScanner(Sensor[RSC]):
     def measure(self, view: WorldView) -> RangeScanReading:
         cfg = self.config
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
-        dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id,
-                                      kind=self.RAY_KIND)
+        dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
         hit = np.isfinite(dist)
         values = np.full(len(dist), cfg.max_range_m)
         if hit.any():
             values[hit] = self.relative_noise(dist[hit])
         np.clip(values, cfg.min_range_m, cfg.max_range_m, out=values)
-        return RangeScanReading(self.TYPE, self.name, trunc4(cfg.resolution_rad), trunc4(cfg.fov_rad),
-                                tuple(values.tolist()))
+        return RangeScanReading(
+            self.TYPE, self.name, trunc4(cfg.resolution_rad), trunc4(cfg.fov_rad), tuple(values.tolist())
+        )
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
-        return (("MaxRange", c.max_range_m), ("MinRange", c.min_range_m), ("Resolution", trunc4(c.resolution_rad)),
-                ("Fov", trunc4(c.fov_rad)), ("Paning", c.panning), ("Tilting", c.tilting))
+        return (
+            ("MaxRange", c.max_range_m),
+            ("MinRange", c.min_range_m),
+            ("Resolution", trunc4(c.resolution_rad)),
+            ("Fov", trunc4(c.fov_rad)),
+            ("Paning", c.panning),
+            ("Tilting", c.tilting),
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -166,8 +191,10 @@ class RangeScanner3DConfig(SensorConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         check_range(self.min_range_m, self.max_range_m)
-        for res, fov, what in ((self.horizontal_resolution_rad, self.horizontal_fov_rad, "horizontal"),
-                               (self.vertical_resolution_rad, self.vertical_fov_rad, "vertical")):
+        for res, fov, what in (
+            (self.horizontal_resolution_rad, self.horizontal_fov_rad, "horizontal"),
+            (self.vertical_resolution_rad, self.vertical_fov_rad, "vertical"),
+        ):
             if not (0.0 < res <= fov <= 2 * math.pi):
                 raise ValueError(f"need 0 < {what} resolution <= {what} fov <= 2 pi, got {res}, {fov}")
         rows, cols = self.counts
@@ -177,8 +204,10 @@ class RangeScanner3DConfig(SensorConfig):
     @property
     def counts(self) -> tuple[int, int]:
         """(rows, columns): vertical steps, horizontal steps."""
-        return (int(math.floor(self.vertical_fov_rad / self.vertical_resolution_rad + 1e-6)) + 1,
-                int(math.floor(self.horizontal_fov_rad / self.horizontal_resolution_rad + 1e-6)) + 1)
+        return (
+            int(math.floor(self.vertical_fov_rad / self.vertical_resolution_rad + 1e-6)) + 1,
+            int(math.floor(self.horizontal_fov_rad / self.horizontal_resolution_rad + 1e-6)) + 1,
+        )
 
     def _line_parts(self, name: str, split: bool) -> tuple[int, int, int]:
         """(bytes of the line but its ranges, CR LF included; ranges in it; bytes of a range
@@ -187,9 +216,14 @@ class RangeScanner3DConfig(SensorConfig):
         widest it prints."""
         rows, cols = self.counts
         head = "SEN {Time %s} {Type RangeScanner3D} {Name %s} %s{Resolution %.4f,%.4f} {FOV %.4f,%.4f} {Range }\r\n" % (
-            _LONGEST_TIME, name, "{Frames %d} {Frame %d} " % (rows, rows - 1) if split else "",
-            trunc4(self.vertical_resolution_rad), trunc4(self.horizontal_resolution_rad),
-            trunc4(self.vertical_fov_rad), trunc4(self.horizontal_fov_rad))
+            _LONGEST_TIME,
+            name,
+            "{Frames %d} {Frame %d} " % (rows, rows - 1) if split else "",
+            trunc4(self.vertical_resolution_rad),
+            trunc4(self.horizontal_resolution_rad),
+            trunc4(self.vertical_fov_rad),
+            trunc4(self.horizontal_fov_rad),
+        )
         return len(head.encode()), cols if split else rows * cols, len("%.4f" % self.max_range_m) + 1
 
     def longest_line(self, name: str, split: bool) -> int:
@@ -209,14 +243,18 @@ class RangeScanner3DConfig(SensorConfig):
         head, _, value = self._line_parts(name, split)
         fit = (LINE_LIMIT - head) // value  # head + fit * value - 1 < LINE_LIMIT
         if split:
-            return (f"a row of {cols} beams up to {self.max_range_m:g} m makes SEN lines of up to {longest} bytes, "
-                    f"more than the {LINE_LIMIT - 1} old clients read in one line, even in the split form (at most "
-                    f"{fit} beams a row at this MaxRange): choose a coarser horizontal_resolution_rad, a narrower "
-                    f"horizontal_fov_rad or a shorter max_range_m")
-        return (f"a sweep of {rows} x {cols} beams up to {self.max_range_m:g} m makes SEN lines of up to {longest} "
-                f"bytes, more than the {LINE_LIMIT - 1} old clients read in one line (at most {fit} beams a sweep at "
-                f"this MaxRange): choose a coarser vertical_resolution_rad or horizontal_resolution_rad, a narrower "
-                f"field of view or a shorter max_range_m, or set split_rows: true to send one line per row")
+            return (
+                f"a row of {cols} beams up to {self.max_range_m:g} m makes SEN lines of up to {longest} bytes, "
+                f"more than the {LINE_LIMIT - 1} old clients read in one line, even in the split form (at most "
+                f"{fit} beams a row at this MaxRange): choose a coarser horizontal_resolution_rad, a narrower "
+                f"horizontal_fov_rad or a shorter max_range_m"
+            )
+        return (
+            f"a sweep of {rows} x {cols} beams up to {self.max_range_m:g} m makes SEN lines of up to {longest} "
+            f"bytes, more than the {LINE_LIMIT - 1} old clients read in one line (at most {fit} beams a sweep at "
+            f"this MaxRange): choose a coarser vertical_resolution_rad or horizontal_resolution_rad, a narrower "
+            f"field of view or a shorter max_range_m, or set split_rows: true to send one line per row"
+        )
 
 
 @SENSORS.register("RangeScanner3D", "3DRangeScanner")
@@ -251,19 +289,28 @@ class RangeScanner3D(Sensor[RangeScanner3DConfig]):
 
     SCANNABLE = True
     RAY_KIND = "laser"
-    ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m",
-               "HorizontalFOV": "horizontal_fov_rad", "HorizontalResolution": "horizontal_resolution_rad",
-               "VerticalFOV": "vertical_fov_rad", "VerticalResolution": "vertical_resolution_rad",
-               "bYaw": "panning", "bPitch": "tilting", "Paning": "panning", "Panning": "panning",
-               "Tilting": "tilting"}
+    ALIASES = {
+        "MaxRange": "max_range_m",
+        "MinRange": "min_range_m",
+        "HorizontalFOV": "horizontal_fov_rad",
+        "HorizontalResolution": "horizontal_resolution_rad",
+        "VerticalFOV": "vertical_fov_rad",
+        "VerticalResolution": "vertical_resolution_rad",
+        "bYaw": "panning",
+        "bPitch": "tilting",
+        "Paning": "panning",
+        "Panning": "panning",
+        "Tilting": "tilting",
+    }
 
     def __init__(self, item: MountedItem, config: RangeScanner3DConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         c = self.config
         problem = c.line_problem(self.name, c.split_rows)
         if problem is not None:
-            raise ConfigError(f"invalid {self.TYPE} settings: {problem}", path=robot.path,
-                              key=item.key_path or item.name)
+            raise ConfigError(
+                f"invalid {self.TYPE} settings: {problem}", path=robot.path, key=item.key_path or item.name
+            )
         self.split = c.split_rows  # the form sweeps go out in; SET {Opcode Split} changes it
         rows, cols = c.counts
         pitches = c.vertical_fov_rad / 2.0 - c.vertical_resolution_rad * np.arange(rows)  # top row first
@@ -280,9 +327,15 @@ class RangeScanner3D(Sensor[RangeScanner3DConfig]):
         if hit.any():
             values[hit] = self.relative_noise(dist[hit])
         np.clip(values, c.min_range_m, c.max_range_m, out=values)
-        return RangeScan3DReading(self.name, (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
-                                  (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)), tuple(values.tolist()),
-                                  sensor_type=self.TYPE, frames=c.counts[0], split=self.split)
+        return RangeScan3DReading(
+            self.name,
+            (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
+            (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad)),
+            tuple(values.tolist()),
+            sensor_type=self.TYPE,
+            frames=c.counts[0],
+            split=self.split,
+        )
 
     def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         """``{Opcode SCAN}`` (a sweep at once, in the form chosen) and ``{Opcode Split}
@@ -304,7 +357,11 @@ class RangeScanner3D(Sensor[RangeScanner3DConfig]):
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
-        return (("MaxRange", c.max_range_m), ("MinRange", c.min_range_m),
-                ("Resolution", (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad))),
-                ("Fov", (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad))),
-                ("Paning", c.panning), ("Tilting", c.tilting))
+        return (
+            ("MaxRange", c.max_range_m),
+            ("MinRange", c.min_range_m),
+            ("Resolution", (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad))),
+            ("Fov", (trunc4(c.vertical_fov_rad), trunc4(c.horizontal_fov_rad))),
+            ("Paning", c.panning),
+            ("Tilting", c.tilting),
+        )

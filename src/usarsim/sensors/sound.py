@@ -31,11 +31,15 @@ if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
 
 
-def _walls_between(view: WorldView, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str,
-                   stop_at_first: bool = False) -> int:
+def _walls_between(
+    view: WorldView, pos_mj: np.ndarray, target_mj: np.ndarray, kind: str, stop_at_first: bool = False
+) -> int:
     """Walls on the segment (``RayCaster.count_walls``); the target's own surface does not count."""
-    return int(view.caster.count_walls(pos_mj[None, :], target_mj[None, :], kind=kind, end_margin=0.05,
-                                       stop_at_first=stop_at_first)[0])
+    return int(
+        view.caster.count_walls(
+            pos_mj[None, :], target_mj[None, :], kind=kind, end_margin=0.05, stop_at_first=stop_at_first
+        )[0]
+    )
 
 
 def _victim_point(victim: Victim, local: tuple[float, float, float]) -> np.ndarray:

@@ -48,8 +48,10 @@ class VictSensorConfig(SensorConfig):
         super().__post_init__()
         if self.max_range_m <= 0 or self.sigma < 0:
             raise ValueError("max_range_m must be > 0 and sigma >= 0")
-        for step, fov in ((self.horizontal_step_rad, self.horizontal_fov_rad),
-                          (self.vertical_step_rad, self.vertical_fov_rad)):
+        for step, fov in (
+            (self.horizontal_step_rad, self.horizontal_fov_rad),
+            (self.vertical_step_rad, self.vertical_fov_rad),
+        ):
             if not (0.0 < step <= fov < math.pi):
                 raise ValueError(f"need 0 < step <= fov < pi, got step {step} and fov {fov}")
 
@@ -57,9 +59,16 @@ class VictSensorConfig(SensorConfig):
 @SENSORS.register("VictSensor", "VictimSensor")
 class VictSensor(Sensor[VictSensorConfig]):
     RAY_KIND = "camera"
-    ALIASES = {"MaxRange": "max_range_m", "Distance": "max_range_m", "HorizontalFOV": "horizontal_fov_rad",
-               "VerticalFOV": "vertical_fov_rad", "HorizontalStep": "horizontal_step_rad",
-               "VerticalStep": "vertical_step_rad", "Sigma": "sigma", "Mean": "mean"}
+    ALIASES = {
+        "MaxRange": "max_range_m",
+        "Distance": "max_range_m",
+        "HorizontalFOV": "horizontal_fov_rad",
+        "VerticalFOV": "vertical_fov_rad",
+        "HorizontalStep": "horizontal_step_rad",
+        "VerticalStep": "vertical_step_rad",
+        "Sigma": "sigma",
+        "Mean": "mean",
+    }
 
     def __init__(self, item: MountedItem, config: VictSensorConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
@@ -91,8 +100,9 @@ class VictSensor(Sensor[VictSensorConfig]):
         # the grid's corners are the widest its rays go from the sensor's axis
         half = math.atan(math.hypot(math.tan(c.horizontal_fov_rad / 2.0), math.tan(c.vertical_fov_rad / 2.0)))
         if ents is not None and ents.parts and ents.parts_within(view.data, pos, c.max_range_m, rot[:, 0], half):
-            dist, _, gid = view.caster.cast(pos, dirs_local @ rot.T, c.max_range_m, self.handle.body_id,
-                                            kind=self.RAY_KIND)
+            dist, _, gid = view.caster.cast(
+                pos, dirs_local @ rot.T, c.max_range_m, self.handle.body_id, kind=self.RAY_KIND
+            )
         else:  # no victim or false alarm within reach: nothing to trace
             dist = np.empty(0)
         if ents is not None:
@@ -109,9 +119,13 @@ class VictSensor(Sensor[VictSensorConfig]):
                 local_mj = dirs_local[i] * d
                 x, y, z = frames.from_mj_vec(local_mj)
                 noise = self.rng.normal(0.0, c.sigma * d, 3) if c.sigma > 0 else np.zeros(3)
-                self._found.append(VictimPart(hit.part, (x + float(noise[0]), y + float(noise[1]),
-                                                         z + float(noise[2])),
-                                              None if hit.false_alarm else hit.owner))
+                self._found.append(
+                    VictimPart(
+                        hit.part,
+                        (x + float(noise[0]), y + float(noise[1]), z + float(noise[2])),
+                        None if hit.false_alarm else hit.owner,
+                    )
+                )
         self._tick += 1
         if self._tick % SUBGRIDS:
             return None
@@ -120,5 +134,8 @@ class VictSensor(Sensor[VictSensorConfig]):
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
-        return (("MaxRange", c.max_range_m), ("HorizontalFOV", c.horizontal_fov_rad),
-                ("VerticalFOV", c.vertical_fov_rad))
+        return (
+            ("MaxRange", c.max_range_m),
+            ("HorizontalFOV", c.horizontal_fov_rad),
+            ("VerticalFOV", c.vertical_fov_rad),
+        )

@@ -17,37 +17,73 @@ log = logging.getLogger("usarsim")
 
 
 class Application:
-    def __init__(self, world: WorldConfig, *, host: str = "127.0.0.1", port: int = 3000, seed: int = 0,
-                 speed: float | None = 1.0, lockstep: bool = False, max_connections: int = 64,
-                 robot_dirs: tuple[str, ...] = (), truth_port: int | None = 3989, image_port: int | None = 5003,
-                 image: ImageSettings | None = None, wireless: WirelessOptions | None = None,
-                 web_port: int | None = 8080, max_robots: int | None = None, max_line_bytes: int = 8192,
-                 max_pending_bytes: int = 256 * 1024, max_viewers: int = 16,
-                 max_web_connections: int = 64, record: str | None = None, foxglove_port: int | None = None,
-                 run_options: dict | None = None, record_cameras_fps: float = 0.0,
-                 record_camera_size: tuple[int, int] = (320, 240), score: bool = False,
-                 score_file: str | None = None, score_every_s: float = 10.0, on_score_line=None,
-                 step_grace_s: float = STEP_GRACE_S):
+    def __init__(
+        self,
+        world: WorldConfig,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 3000,
+        seed: int = 0,
+        speed: float | None = 1.0,
+        lockstep: bool = False,
+        max_connections: int = 64,
+        robot_dirs: tuple[str, ...] = (),
+        truth_port: int | None = 3989,
+        image_port: int | None = 5003,
+        image: ImageSettings | None = None,
+        wireless: WirelessOptions | None = None,
+        web_port: int | None = 8080,
+        max_robots: int | None = None,
+        max_line_bytes: int = 8192,
+        max_pending_bytes: int = 256 * 1024,
+        max_viewers: int = 16,
+        max_web_connections: int = 64,
+        record: str | None = None,
+        foxglove_port: int | None = None,
+        run_options: dict | None = None,
+        record_cameras_fps: float = 0.0,
+        record_camera_size: tuple[int, int] = (320, 240),
+        score: bool = False,
+        score_file: str | None = None,
+        score_every_s: float = 10.0,
+        on_score_line=None,
+        step_grace_s: float = STEP_GRACE_S,
+    ):
         self.world = world
         self.host = host
         self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
         self.camera_bindings = CameraBindings()
-        self.control = ControlServer(self.facade, host=host, port=port, max_connections=max_connections,
-                                     robot_dirs=tuple(robot_dirs), max_line_bytes=max_line_bytes,
-                                     max_pending_bytes=max_pending_bytes,
-                                     max_robots=max_connections if max_robots is None else max_robots,
-                                     step_grace_s=step_grace_s)
+        self.control = ControlServer(
+            self.facade,
+            host=host,
+            port=port,
+            max_connections=max_connections,
+            robot_dirs=tuple(robot_dirs),
+            max_line_bytes=max_line_bytes,
+            max_pending_bytes=max_pending_bytes,
+            max_robots=max_connections if max_robots is None else max_robots,
+            step_grace_s=step_grace_s,
+        )
         self.control.camera_bindings = self.camera_bindings
         # the ground-truth service (protocol.md 12.4); None: not served
-        self.truth = (TruthServer(self.facade, host=host, port=truth_port, max_connections=max_viewers)
-                      if truth_port is not None else None)
+        self.truth = (
+            TruthServer(self.facade, host=host, port=truth_port, max_connections=max_viewers)
+            if truth_port is not None
+            else None
+        )
         # the image server (protocol.md 10) and its render thread; None: not served
         self.image_settings = image or ImageSettings()
         self.image = None
         if image_port is not None:
             renderer = self.facade.render_service(self.image_settings.max_fps)
-            self.image = ImageServer(renderer, self.camera_bindings, self.image_settings, host=host, port=image_port,
-                                     max_connections=max_viewers)
+            self.image = ImageServer(
+                renderer,
+                self.camera_bindings,
+                self.image_settings,
+                host=host,
+                port=image_port,
+                max_connections=max_viewers,
+            )
         self.facade.set_multiview_cameras(self.image_settings.camera_num)  # before its thread starts
         # the wireless simulation (protocol.md 12): ComServer, WSS, ComServerInterface; None: not served
         self.wireless = WirelessServers(self.facade, wireless, host=host) if wireless is not None else None
@@ -64,10 +100,24 @@ class Application:
             from usarsim import __version__
             from usarsim.server.recording import Recorder, run_info
 
-            info = run_info(version=__version__, world=world.name, world_path=world.path, seed=seed,
-                            lockstep=lockstep, speed=speed, options=dict(run_options or {}))
-            self.recorder = Recorder(world, info, path=record, foxglove_port=foxglove_port, host=host,
-                                     camera_fps=record_cameras_fps, camera_size=record_camera_size)
+            info = run_info(
+                version=__version__,
+                world=world.name,
+                world_path=world.path,
+                seed=seed,
+                lockstep=lockstep,
+                speed=speed,
+                options=dict(run_options or {}),
+            )
+            self.recorder = Recorder(
+                world,
+                info,
+                path=record,
+                foxglove_port=foxglove_port,
+                host=host,
+                camera_fps=record_cameras_fps,
+                camera_size=record_camera_size,
+            )
             self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
             self.control.tap = self.recorder
             self.control.tap_name = "control"
@@ -82,10 +132,12 @@ class Application:
             from usarsim.scoring import ScoreKeeper
             from usarsim.sim.types import resolve_model
 
-            self.score = ScoreKeeper(world, seed=seed, path=score_file, print_every_s=score_every_s if score else 0.0,
-                                     on_line=on_score_line)
-            self.score.attach(self.facade, self.wireless.service.model if self.wireless is not None
-                              else resolve_model(world.wireless))
+            self.score = ScoreKeeper(
+                world, seed=seed, path=score_file, print_every_s=score_every_s if score else 0.0, on_line=on_score_line
+            )
+            self.score.attach(
+                self.facade, self.wireless.service.model if self.wireless is not None else resolve_model(world.wireless)
+            )
 
     def _extras(self) -> list[tuple[object, str, str]]:
         """(server, listener name, what names its port in an error) of every listener
@@ -133,8 +185,9 @@ class Application:
         self.facade.start()
 
     def listeners(self) -> list[tuple[str, str, int]]:
-        out = [("control", self.host, self.control.port)] + [(name, self.host, srv.port)
-                                                             for srv, name, _ in self._extras()]
+        out = [("control", self.host, self.control.port)] + [
+            (name, self.host, srv.port) for srv, name, _ in self._extras()
+        ]
         if self.recorder is not None and self.recorder.server is not None:
             out.append(("foxglove", self.host, self.recorder.foxglove_port))
         return out

@@ -33,8 +33,9 @@ class Articulation:
             return
         pkg = self.robot.package(cmd.name or "") if self.robot is not None else None
         if pkg is None:
-            self.log_once(f"mispkg:{cmd.name}", "MISPKG for an unknown mission package %r; ignored", cmd.name,
-                          level=logging.INFO)
+            self.log_once(
+                f"mispkg:{cmd.name}", "MISPKG for an unknown mission package %r; ignored", cmd.name, level=logging.INFO
+            )
             return
         commands = []
         for lc in cmd.links:
@@ -61,8 +62,9 @@ class Articulation:
             _, tilt, pan = cmd.rotation
             self.facade.drive_joints(self.uid, [JointOrder(pkg.links[0], pan, 0), JointOrder(pkg.links[1], tilt, 0)])
         if cmd.zoom is not None:
-            self.facade.operate(self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)),
-                                on_done=self._answered("CAMERA"))
+            self.facade.operate(
+                self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)), on_done=self._answered("CAMERA")
+            )
 
     def on_act(self, cmd: C.Act) -> None:
         """``ACT {Name arm} {Link k} {Value v} [{Order o}] ...`` and ``ACT {Name arm} {Gripper 1|0}``
@@ -77,16 +79,26 @@ class Articulation:
         pkg = self.robot.package(cmd.name) if cmd.name else (packages[0] if len(packages) == 1 else None)
         if pkg is None:
             known = ", ".join(p.name for p in packages) or "none"
-            self.log_once(f"act:{cmd.name}", "ACT for an unknown actuator %r (this robot's: %s); ignored",
-                          cmd.name, known, level=logging.INFO)
+            self.log_once(
+                f"act:{cmd.name}",
+                "ACT for an unknown actuator %r (this robot's: %s); ignored",
+                cmd.name,
+                known,
+                level=logging.INFO,
+            )
             return
         orders = []
         for lc in cmd.links:
             # ACT counts links from 0, as the UDK server did (it passed k straight to the
             # actuator's link array): {Link 0} is the link CONF, GEO and ASTA call Link 1
             if not 0 <= lc.link < len(pkg.links):
-                self.log_once(f"act-link:{lc.link}", "ACT %s has no link %d (ACT counts links from 0: 0..%d); "
-                              "ignored", pkg.name, lc.link, len(pkg.links) - 1)
+                self.log_once(
+                    f"act-link:{lc.link}",
+                    "ACT %s has no link %d (ACT counts links from 0: 0..%d); ignored",
+                    pkg.name,
+                    lc.link,
+                    len(pkg.links) - 1,
+                )
                 continue
             orders.append(JointOrder(pkg.links[lc.link], lc.value, lc.order))
         if orders:
@@ -95,13 +107,24 @@ class Articulation:
             gripper = self._gripper_of(pkg)
             if gripper is None:
                 # answered as SET {Type Gripper} on a gripper the robot does not have: RES Failed
-                self.log_once("act-gripper", "ACT {Gripper}: actuator %s has no gripper; answered Failed",
-                              pkg.name, level=logging.INFO)
-            self.facade.operate(self.uid, "Gripper", gripper or pkg.name, "Close" if cmd.gripper else "Open",
-                                ItemParams(), on_done=self._answered("ACT"))
+                self.log_once(
+                    "act-gripper",
+                    "ACT {Gripper}: actuator %s has no gripper; answered Failed",
+                    pkg.name,
+                    level=logging.INFO,
+                )
+            self.facade.operate(
+                self.uid,
+                "Gripper",
+                gripper or pkg.name,
+                "Close" if cmd.gripper else "Open",
+                ItemParams(),
+                on_done=self._answered("ACT"),
+            )
         if cmd.sequence is not None:
-            self.log_once("act-sequence", "ACT {Sequence %d}: no stored sequences; ignored", cmd.sequence,
-                          level=logging.INFO)
+            self.log_once(
+                "act-sequence", "ACT {Sequence %d}: no stored sequences; ignored", cmd.sequence, level=logging.INFO
+            )
 
     def _gripper_of(self, pkg) -> str | None:
         """The gripper whose fingers are links of ``pkg``, else the robot's only gripper."""
@@ -121,9 +144,15 @@ class Articulation:
             links = []
             for i, ln in enumerate(self.robot.link(n) for n in p.links):
                 lo, hi = (ln.min_range, ln.max_range) if ln.limited else (-math.pi, math.pi)
-                links.append(M.ActuatorLinkConfiguration(
-                    link=i + 1, joint_type="Revolute" if ln.joint == "revolute" else "Prismatic",
-                    max_torque=ln.max_torque, min_value=lo, max_value=hi))
+                links.append(
+                    M.ActuatorLinkConfiguration(
+                        link=i + 1,
+                        joint_type="Revolute" if ln.joint == "revolute" else "Prismatic",
+                        max_torque=ln.max_torque,
+                        min_value=lo,
+                        max_value=hi,
+                    )
+                )
             out.append(M.ActuatorConfig(name=p.name, links=tuple(links)))
         return M.ActuatorConfiguration(actuators=tuple(out))
 
@@ -133,11 +162,21 @@ class Articulation:
         ``Parent`` as the UDK printed it, the parent's index plus one (0: the base)."""
         out = []
         for p in pkgs:
-            links = [M.ActuatorLinkGeometry(link=f.link, parent=max(f.parent, 0), location=f.location,
-                                            orientation=f.orientation)
-                     for f in self.facade.package_frames(self.robot, p)]
-            out.append(M.ActuatorPose(name=p.name, location=(0.0, 0.0, 0.0), orientation=(0.0, 0.0, 0.0),
-                                      mount=self.robot.class_name, links=tuple(links)))
+            links = [
+                M.ActuatorLinkGeometry(
+                    link=f.link, parent=max(f.parent, 0), location=f.location, orientation=f.orientation
+                )
+                for f in self.facade.package_frames(self.robot, p)
+            ]
+            out.append(
+                M.ActuatorPose(
+                    name=p.name,
+                    location=(0.0, 0.0, 0.0),
+                    orientation=(0.0, 0.0, 0.0),
+                    mount=self.robot.class_name,
+                    links=tuple(links),
+                )
+            )
         return M.ActuatorGeometry(actuators=tuple(out))
 
     def _packages(self, name: str | None):
@@ -153,9 +192,20 @@ class Articulation:
             return M.EmptyGeometry(item_type=item_type, name=name)
         if actuator:
             return self._actuator_geometry(pkgs)
-        return M.MisPkgGeometry(packages=tuple(M.PackageGeometry(name=p.name, links=tuple(
-            M.LinkGeometry(link=f.link, parent_link=f.parent, location=f.location, orientation=f.orientation)
-            for f in self.facade.package_frames(self.robot, p))) for p in pkgs))
+        return M.MisPkgGeometry(
+            packages=tuple(
+                M.PackageGeometry(
+                    name=p.name,
+                    links=tuple(
+                        M.LinkGeometry(
+                            link=f.link, parent_link=f.parent, location=f.location, orientation=f.orientation
+                        )
+                        for f in self.facade.package_frames(self.robot, p)
+                    ),
+                )
+                for p in pkgs
+            )
+        )
 
     def package_configuration(self, item_type: str, name: str | None):
         """CONF {Type MisPkg} or {Type Actuator} (the latter turns the actuator API on)."""
@@ -166,8 +216,22 @@ class Articulation:
             return M.EmptyConfiguration(item_type=item_type, name=name)
         if item_type.lower() == "actuator":
             return self._actuator_configuration(pkgs)
-        return M.MisPkgConfiguration(packages=tuple(M.PackageConfiguration(name=p.name, links=tuple(
-            M.LinkConfiguration(link=i + 1, joint_type="Revolute" if ln.joint == "revolute" else "Prismatic",
-                                max_speed=ln.max_speed, max_torque=ln.max_torque, min_range=ln.min_range,
-                                max_range=ln.max_range)
-            for i, ln in enumerate(self.robot.link(n) for n in p.links))) for p in pkgs))
+        return M.MisPkgConfiguration(
+            packages=tuple(
+                M.PackageConfiguration(
+                    name=p.name,
+                    links=tuple(
+                        M.LinkConfiguration(
+                            link=i + 1,
+                            joint_type="Revolute" if ln.joint == "revolute" else "Prismatic",
+                            max_speed=ln.max_speed,
+                            max_torque=ln.max_torque,
+                            min_range=ln.min_range,
+                            max_range=ln.max_range,
+                        )
+                        for i, ln in enumerate(self.robot.link(n) for n in p.links)
+                    ),
+                )
+                for p in pkgs
+            )
+        )

@@ -43,12 +43,14 @@ def transport_peer(transport) -> tuple[str, int, str]:
     return "", 0, str(peer) if peer else "?"
 
 
-def refuse(logger: logging.Logger, label: str, count: int, limit: int, option: str, *, what: str = "",
-           state: str = "already") -> None:
+def refuse(
+    logger: logging.Logger, label: str, count: int, limit: int, option: str, *, what: str = "", state: str = "already"
+) -> None:
     """Log that a connection (or a request, ``what``) of ``label`` is refused: ``count``
     connections are open, ``limit`` is the most, set by the command-line ``option``."""
-    logger.warning("%s: refused%s: %d connections %s (limit %s %d)", label, f" {what}" if what else "", count,
-                   state, option, limit)
+    logger.warning(
+        "%s: refused%s: %d connections %s (limit %s %d)", label, f" {what}" if what else "", count, state, option, limit
+    )
 
 
 def write_open(transport, data: bytes) -> bool:
@@ -85,8 +87,11 @@ class LogOnce:
                 return
             if not self._full:
                 self._full = True
-                self.logger.warning("%s: more than %d kinds of problem on this connection; further ones are "
-                                    "logged at debug level", self.label, MAX_LOGGED_KINDS)
+                self.logger.warning(
+                    "%s: more than %d kinds of problem on this connection; further ones are logged at debug level",
+                    self.label,
+                    MAX_LOGGED_KINDS,
+                )
         self.logger.debug("%s: " + msg, self.label, *args)
 
 

@@ -53,8 +53,9 @@ def actuator_status(o: Output) -> M.ActuatorStatus:
     """The ASTA line of a mission package's state (UDK actuator API), sent after its MISSTA to
     clients that use that API."""
     v: PackageState = o.value
-    return M.ActuatorStatus(time=o.time, name=v.name,
-                            links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links))
+    return M.ActuatorStatus(
+        time=o.time, name=v.name, links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links)
+    )
 
 
 class Connection(ServerConnection):
@@ -105,10 +106,22 @@ class Connection(ServerConnection):
     def register(self) -> None:
         srv = self.server
         uid = srv.next_uid()
-        self.session = Session(SessionContext(facade=srv.facade, peer=self.peer, emit=self.send_reply,
-                                              threadsafe=srv.threadsafe, admit=srv.admit, robot_dirs=srv.robot_dirs,
-                                              camera_bindings=srv.camera_bindings, log_once=self.log_once,
-                                              resume=self._drain, step_order=srv.step_order, reader=self), uid)
+        self.session = Session(
+            SessionContext(
+                facade=srv.facade,
+                peer=self.peer,
+                emit=self.send_reply,
+                threadsafe=srv.threadsafe,
+                admit=srv.admit,
+                robot_dirs=srv.robot_dirs,
+                camera_bindings=srv.camera_bindings,
+                log_once=self.log_once,
+                resume=self._drain,
+                step_order=srv.step_order,
+                reader=self,
+            ),
+            uid,
+        )
         srv.connections[uid] = self
 
     def release(self) -> None:
@@ -170,13 +183,19 @@ class Connection(ServerConnection):
                 # resume drains them)
                 self.gate.close(self.transport)
                 return
-            if not self.writable and self.transport is not None and \
-                    self.transport.get_write_buffer_size() > REPLY_CAP_FACTOR * self.server.max_pending_bytes:
+            if (
+                not self.writable
+                and self.transport is not None
+                and self.transport.get_write_buffer_size() > REPLY_CAP_FACTOR * self.server.max_pending_bytes
+            ):
                 # the client asks and asks but does not read the replies: its further lines
                 # wait, its socket unread, until it reads (writing_resumed drains them)
                 if self.gate.close(self.transport):
-                    self.log_once("unread-replies", "more than %d kB of replies unread; the next lines wait until "
-                                  "the client reads", REPLY_CAP_FACTOR * self.server.max_pending_bytes // 1024)
+                    self.log_once(
+                        "unread-replies",
+                        "more than %d kB of replies unread; the next lines wait until the client reads",
+                        REPLY_CAP_FACTOR * self.server.max_pending_bytes // 1024,
+                    )
                 return
             line = backlog.popleft()
             try:
@@ -218,10 +237,19 @@ class Connection(ServerConnection):
 
 
 class ControlServer(TcpListener):
-    def __init__(self, facade: Facade, *, host: str = "127.0.0.1", port: int = 3000,
-                 max_connections: int = 64, max_line_bytes: int = 8192, robot_dirs: tuple[str, ...] = (),
-                 max_pending_bytes: int = HIGH_WATER, max_robots: int | None = None,
-                 step_grace_s: float = STEP_GRACE_S):
+    def __init__(
+        self,
+        facade: Facade,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 3000,
+        max_connections: int = 64,
+        max_line_bytes: int = 8192,
+        robot_dirs: tuple[str, ...] = (),
+        max_pending_bytes: int = HIGH_WATER,
+        max_robots: int | None = None,
+        step_grace_s: float = STEP_GRACE_S,
+    ):
         super().__init__(host, port)
         self.facade = facade
         self.robot_dirs = robot_dirs  # extra folders of robot files (serve --robot-dir)
@@ -247,8 +275,9 @@ class ControlServer(TcpListener):
 
     def admit(self) -> str | None:
         """Why one more robot is refused (None: it is admitted)."""
-        robots = sum(1 for c in self.connections.values() if c.session is not None
-                     and c.session.state in (SPAWNING, ALIVE))
+        robots = sum(
+            1 for c in self.connections.values() if c.session is not None and c.session.state in (SPAWNING, ALIVE)
+        )
         if robots >= self.max_robots:
             return f"the world has {robots} robots already (limit --max-robots {self.max_robots})"
         return None

@@ -180,13 +180,21 @@ class ImageConnection(ServerConnection):
             x, y, w, h = rect
             ph, pw = picture.shape[:2]
             x0, y0 = min(x, pw), min(y, ph)
-            picture = picture[y0:min(y0 + h, ph), x0:min(x0 + w, pw)]
+            picture = picture[y0 : min(y0 + h, ph), x0 : min(x0 + w, pw)]
         self.write(encode_picture(picture, self.server.settings.image_type))
 
 
 class ImageServer(TcpListener):
-    def __init__(self, renderer, bindings: CameraBindings, settings: ImageSettings | None = None, *,
-                 host: str = "127.0.0.1", port: int = 5003, max_connections: int = 16):
+    def __init__(
+        self,
+        renderer,
+        bindings: CameraBindings,
+        settings: ImageSettings | None = None,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 5003,
+        max_connections: int = 16,
+    ):
         super().__init__(host, port)
         self.renderer = renderer
         self.bindings = bindings

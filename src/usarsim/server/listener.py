@@ -45,6 +45,7 @@ class TcpListener:
     def threadsafe(self, fn):
         """``fn`` to be called from another thread (the simulation's, the renderer's): it runs
         on the event loop; dropped once the loop is closed."""
+
         def call(*args) -> None:
             call_on_loop(self.loop, fn, *args)
 

@@ -114,8 +114,11 @@ class StepOrder:
                 return
             if wait is not None and not self._late_logged:
                 self._late_logged = True
-                log.warning("a STEP waited %.0f ms for the control connections to fall quiet and was carried out "
-                            "while they still sent (logged once)", MAX_SETTLE_S * 1000)
+                log.warning(
+                    "a STEP waited %.0f ms for the control connections to fall quiet and was carried out "
+                    "while they still sent (logged once)",
+                    MAX_SETTLE_S * 1000,
+                )
             self._waiting.popleft()
             try:
                 w.carry_out()

@@ -30,8 +30,7 @@ NEW, SPAWNING, ALIVE, CLOSED = "new", "spawning", "alive", "closed"
 
 NO_ROBOT = "no robot on this connection: send INIT first"
 # Commands a client waits for an answer to: a malformed one is answered with an ERROR.
-ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES", "GETPATHNODES", "GETCLOSESTPATHNODE",
-            "REPORT")
+ANSWERED = ("INIT", "STEP", "SET", "GETGEO", "GETCONF", "GETSTARTPOSES", "GETPATHNODES", "GETCLOSESTPATHNODE", "REPORT")
 
 
 def _copied(sent, exact) -> bool:
@@ -41,8 +40,22 @@ def _copied(sent, exact) -> bool:
 
 
 # SET {Type Joint} opcodes (protocol.md 5.4) -> joint orders (5.3f)
-JOINT_OPCODES = {"angle": 0, "0": 0, "velocity": 1, "1": 1, "torque": 2, "2": 2, "brake": 3, "3": 3,
-                 "relangle": 10, "10": 10, "relvelocity": 11, "11": 11, "reltorque": 12, "12": 12}
+JOINT_OPCODES = {
+    "angle": 0,
+    "0": 0,
+    "velocity": 1,
+    "1": 1,
+    "torque": 2,
+    "2": 2,
+    "brake": 3,
+    "3": 3,
+    "relangle": 10,
+    "10": 10,
+    "relvelocity": 11,
+    "11": 11,
+    "reltorque": 12,
+    "12": 12,
+}
 
 
 @dataclass
@@ -124,8 +137,12 @@ class Session(Articulation):
         next STEP."""
         return self.awaiting > 0 or self.steps_waiting > 0 or self.step_held or self.state == SPAWNING
 
-    def _answered(self, command: str, then: Callable[[Any], None] | None = None,
-                  refused: Callable[[BaseException], None] | None = None) -> Callable:
+    def _answered(
+        self,
+        command: str,
+        then: Callable[[Any], None] | None = None,
+        refused: Callable[[BaseException], None] | None = None,
+    ) -> Callable:
         """A request's ``on_done(result, error)`` (called from the simulation thread) that
         holds this connection's next lines until it is answered: ``then(result)`` sends the
         answer (a RES the simulation outputs itself needs none: its outputs are written
@@ -173,8 +190,12 @@ class Session(Articulation):
             if isinstance(cmd, C.UnknownCommand):
                 self.log_once(f"unknown:{cmd.type}", "ignored unknown command %s", cmd.type, level=logging.INFO)
             else:
-                self.log_once(f"unsupported:{type(cmd).__name__}", "command %s is not supported by this robot; ignored",
-                              type(cmd).__name__.upper(), level=logging.INFO)
+                self.log_once(
+                    f"unsupported:{type(cmd).__name__}",
+                    "command %s is not supported by this robot; ignored",
+                    type(cmd).__name__.upper(),
+                    level=logging.INFO,
+                )
             return
         handler(cmd)
 
@@ -189,15 +210,22 @@ class Session(Articulation):
 
     # Handlers ------------------------------------------------------------------------
     def on_get_start_poses(self, cmd: C.GetStartPoses) -> None:
-        poses = tuple(M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
-                      for p in self.facade.start_poses)
+        poses = tuple(
+            M.StartPose(name=p.name, location=p.location, rotation=p.rotation) for p in self.facade.start_poses
+        )
         self.send(M.StartPoses(poses=poses))
 
     def on_get_path_nodes(self, cmd: C.GetPathNodes) -> None:
         """``GETPATHNODES`` (UDK, protocol.md 5.8): the world's path nodes, laid out as start
         poses are (``NFO {PathNodes 0}`` for a world that has none)."""
-        self.send(M.PathNodes(nodes=tuple(M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
-                                          for p in self.facade.world.path_nodes)))
+        self.send(
+            M.PathNodes(
+                nodes=tuple(
+                    M.StartPose(name=p.name, location=p.location, rotation=p.rotation)
+                    for p in self.facade.world.path_nodes
+                )
+            )
+        )
 
     def on_get_closest_path_node(self, cmd: C.GetClosestPathNode) -> None:
         """``GETCLOSESTPATHNODE {Location x,y,z}`` (UDK): ``NFO {Pathnode name} {Location x,y,z}``
@@ -207,8 +235,12 @@ class Session(Articulation):
             self.refuse("GETCLOSESTPATHNODE", "malformed", "GETCLOSESTPATHNODE needs a {Location x,y,z}")
             return
         if not nodes:
-            self.refuse("GETCLOSESTPATHNODE", "no-path-nodes", f"world {self.facade.world_name} has no path nodes "
-                        f"(a world file lists them under path_nodes)", level=logging.INFO)
+            self.refuse(
+                "GETCLOSESTPATHNODE",
+                "no-path-nodes",
+                f"world {self.facade.world_name} has no path nodes (a world file lists them under path_nodes)",
+                level=logging.INFO,
+            )
             return
         nearest = min(nodes, key=lambda p: math.dist(p.location, cmd.location))
         self.send(M.ClosestPathNode(name=nearest.name, location=nearest.location))
@@ -218,17 +250,30 @@ class Session(Articulation):
         the one request of it with a reply, is answered with an ERROR saying so; the others
         have no reply and are logged once."""
         if (cmd.type or "").lower() == "getsta":
-            self.refuse("CONTROL", "control", "this simulator has no world controller (the UDK's CONTROL Create, "
-                        "Kill, Move and GetSTA are not simulated): the ground-truth port lists every robot, victim "
-                        "and movable object", level=logging.INFO)
+            self.refuse(
+                "CONTROL",
+                "control",
+                "this simulator has no world controller (the UDK's CONTROL Create, "
+                "Kill, Move and GetSTA are not simulated): the ground-truth port lists every robot, victim "
+                "and movable object",
+                level=logging.INFO,
+            )
             return
-        self.log_once("control", "CONTROL {Type %s}: this simulator has no world controller; ignored", cmd.type,
-                      level=logging.INFO)
+        self.log_once(
+            "control",
+            "CONTROL {Type %s}: this simulator has no world controller; ignored",
+            cmd.type,
+            level=logging.INFO,
+        )
 
     def on_init(self, cmd: C.Init) -> None:
         if self.state != NEW:
-            self.refuse("INIT", "init-twice", "this connection has its robot already (one robot per connection: "
-                        "open another connection for another robot)")
+            self.refuse(
+                "INIT",
+                "init-twice",
+                "this connection has its robot already (one robot per connection: "
+                "open another connection for another robot)",
+            )
             return
         if not cmd.class_name:
             self.refuse("INIT", "init", "INIT needs {ClassName USARBot.<class>}")
@@ -273,9 +318,13 @@ class Session(Articulation):
             solid = self._solid_at(robot, location, rotation)
             if solid is not None:
                 x, y, z = location
-                self.refuse("INIT", "init", f"location {x:.2f},{y:.2f},{z:.2f} is inside {solid} of "
-                            f"{self.facade.world_name}: choose a free place (GETSTARTPOSES lists where "
-                            f"robots may start)")
+                self.refuse(
+                    "INIT",
+                    "init",
+                    f"location {x:.2f},{y:.2f},{z:.2f} is inside {solid} of "
+                    f"{self.facade.world_name}: choose a free place (GETSTARTPOSES lists where "
+                    f"robots may start)",
+                )
                 return
         refused = self.ctx.admit()
         if refused is not None:
@@ -284,8 +333,7 @@ class Session(Articulation):
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
         self.state = SPAWNING
-        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self._spawn_done,
-                          set_down=set_down)
+        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self._spawn_done, set_down=set_down)
 
     def _solid_at(self, robot: RobotConfig, location, rotation) -> str | None:
         """The solid of the world (not a movable object, which may have been pushed away) that
@@ -313,8 +361,13 @@ class Session(Articulation):
         """``PING [{Id x}]`` -> ``PONG [{Id x}] {Time t}`` (an extension) once the simulation has
         carried out every request sent before it (an INIT's spawn, or its ERROR) and every
         message it produced so far is written to this connection."""
-        self.facade.barrier(self._answered("PING", then=lambda t: self.send(M.Pong(id=cmd.id, time=t)),
-                                           refused=lambda error: self.send(M.Pong(id=cmd.id, time=None))))
+        self.facade.barrier(
+            self._answered(
+                "PING",
+                then=lambda t: self.send(M.Pong(id=cmd.id, time=t)),
+                refused=lambda error: self.send(M.Pong(id=cmd.id, time=None)),
+            )
+        )
 
     def on_report(self, cmd: C.Report) -> None:
         """``REPORT {Type Victim} {Location x,y,z} [{Name label}]`` (an extension): a victim the
@@ -324,8 +377,9 @@ class Session(Articulation):
             self.refuse("REPORT", "before-init-query", NO_ROBOT, level=logging.INFO)
             return
         self.reports += 1
-        self.facade.report_victim(self.uid, cmd.name or f"Victim{self.reports}", cmd.location,
-                                  on_done=self._answered("REPORT"))
+        self.facade.report_victim(
+            self.uid, cmd.name or f"Victim{self.reports}", cmd.location, on_done=self._answered("REPORT")
+        )
 
     def on_drive(self, cmd: C.Drive) -> None:
         # SPAWNING too: the spawn request is ahead of this one in the simulation's queue
@@ -338,8 +392,14 @@ class Session(Articulation):
             for part in command.parts:
                 if type(part) not in accepts:
                     kind = type(part).__name__
-                    self.log_once(f"drive-part:{kind}", "DRIVE: a %s robot (drive %s) ignores %s keys",
-                                  self.robot.class_name, self.robot.drive, kind, level=logging.INFO)
+                    self.log_once(
+                        f"drive-part:{kind}",
+                        "DRIVE: a %s robot (drive %s) ignores %s keys",
+                        self.robot.class_name,
+                        self.robot.drive,
+                        kind,
+                        level=logging.INFO,
+                    )
         self.facade.drive(self.uid, command)
 
     def _alive(self) -> bool:
@@ -352,8 +412,11 @@ class Session(Articulation):
         assert self.robot is not None
         t = item_type.lower()
         canonical = self.facade.canonical_item_type(item_type)
-        found = [d for d in self.facade.describe(self.robot) if d.item_type.lower() in (t, canonical.lower())
-                 and (not name or d.name.lower() == name.lower())]
+        found = [
+            d
+            for d in self.facade.describe(self.robot)
+            if d.item_type.lower() in (t, canonical.lower()) and (not name or d.name.lower() == name.lower())
+        ]
         return found
 
     def on_get_geo(self, cmd: C.GetGeo) -> None:
@@ -365,9 +428,17 @@ class Session(Articulation):
             return
         if cmd.type.lower() == "robot":
             n = self.facade.robot_numbers(self.robot)
-            self.send(M.RobotGeometry(vehicle_type=n.vehicle_type, class_name=n.class_name, dimensions=n.dimensions,
-                                      cog=n.cog, wheel_radius=n.wheel_radius, wheel_separation=n.wheel_separation,
-                                      wheel_base=n.wheel_base))
+            self.send(
+                M.RobotGeometry(
+                    vehicle_type=n.vehicle_type,
+                    class_name=n.class_name,
+                    dimensions=n.dimensions,
+                    cog=n.cog,
+                    wheel_radius=n.wheel_radius,
+                    wheel_separation=n.wheel_separation,
+                    wheel_base=n.wheel_base,
+                )
+            )
             return
         if cmd.type.lower() in ("actuator", "mispkg"):
             self.send(self.package_geometry(cmd.type, cmd.name))
@@ -376,8 +447,15 @@ class Session(Articulation):
         if not items:
             self.send(M.EmptyGeometry(item_type=cmd.type, name=cmd.name))
             return
-        self.send(M.ItemGeometry(item_type=items[0].item_type, items=tuple(
-            M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount) for d in items)))
+        self.send(
+            M.ItemGeometry(
+                item_type=items[0].item_type,
+                items=tuple(
+                    M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount)
+                    for d in items
+                ),
+            )
+        )
 
     def on_get_conf(self, cmd: C.GetConf) -> None:
         if self.robot is None:
@@ -388,10 +466,18 @@ class Session(Articulation):
             return
         if cmd.type.lower() == "robot":
             n = self.facade.robot_numbers(self.robot)
-            self.send(M.RobotConfiguration(vehicle_type=n.vehicle_type, class_name=n.class_name,
-                                           steering_type=n.steering_type, mass_kg=n.mass_kg, max_speed=n.max_speed,
-                                           max_torque=n.max_torque, max_front_steer=n.max_front_steer,
-                                           max_rear_steer=n.max_rear_steer))
+            self.send(
+                M.RobotConfiguration(
+                    vehicle_type=n.vehicle_type,
+                    class_name=n.class_name,
+                    steering_type=n.steering_type,
+                    mass_kg=n.mass_kg,
+                    max_speed=n.max_speed,
+                    max_torque=n.max_torque,
+                    max_front_steer=n.max_front_steer,
+                    max_rear_steer=n.max_rear_steer,
+                )
+            )
             return
         if cmd.type.lower() in ("actuator", "mispkg"):
             self.send(self.package_configuration(cmd.type, cmd.name))
@@ -418,8 +504,11 @@ class Session(Articulation):
             order = JOINT_OPCODES.get((cmd.opcode or "0").lower())
             values = cmd.values
             if order is None or not values or not cmd.name:
-                self.log_once("set-joint", "SET {Type Joint} needs a Name, an Opcode (Angle, Velocity, Torque, "
-                                           "RelAngle, RelVelocity, RelTorque or 0/1/2/10/11/12) and a Params value")
+                self.log_once(
+                    "set-joint",
+                    "SET {Type Joint} needs a Name, an Opcode (Angle, Velocity, Torque, "
+                    "RelAngle, RelVelocity, RelTorque or 0/1/2/10/11/12) and a Params value",
+                )
                 return
             self.facade.drive_joints(self.uid, [JointOrder(cmd.name, values[0], order)])
             return
@@ -429,8 +518,14 @@ class Session(Articulation):
         if t == "viewports":
             self.on_viewports(cmd)
             return
-        self.facade.operate(self.uid, cmd.type, cmd.name, cmd.opcode, ItemParams(values=cmd.values, text=cmd.params),
-                            on_done=self._answered("SET"))
+        self.facade.operate(
+            self.uid,
+            cmd.type,
+            cmd.name,
+            cmd.opcode,
+            ItemParams(values=cmd.values, text=cmd.params),
+            on_done=self._answered("SET"),
+        )
 
     def on_bind_camera(self, cmd: C.Set) -> None:
         """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that
@@ -447,9 +542,14 @@ class Session(Articulation):
             return
         camera = cmd.name or "Camera"
         if not bindings.bind(client, cmd.robot, camera):
-            self.log_once("bind-full", "SET {Type Camera}: viewer address %.80r refused (longer than %d characters, "
-                          "or %d addresses bound already); ignored", client, bindings.MAX_ADDRESS,
-                          bindings.MAX_BINDINGS)
+            self.log_once(
+                "bind-full",
+                "SET {Type Camera}: viewer address %.80r refused (longer than %d characters, "
+                "or %d addresses bound already); ignored",
+                client,
+                bindings.MAX_ADDRESS,
+                bindings.MAX_BINDINGS,
+            )
             return
         log.info("%s: image viewers at %s see camera %s of robot %s", self.ctx.peer, client, camera, cmd.robot)
 
@@ -464,11 +564,19 @@ class Session(Articulation):
         for index, cam in cmd.viewports:
             if 1 <= index <= len(names):
                 names[index - 1] = cam
+
         def answer(result) -> None:
             time_s, states = result
-            self.send(M.ViewportsResult(
-                time=time_s, config=cfg or config, config_status="OK" if cfg else "Failed",
-                viewports=tuple(M.ViewportState(index=i + 1, camera=c, status=st) for i, (c, st) in enumerate(states))))
+            self.send(
+                M.ViewportsResult(
+                    time=time_s,
+                    config=cfg or config,
+                    config_status="OK" if cfg else "Failed",
+                    viewports=tuple(
+                        M.ViewportState(index=i + 1, camera=c, status=st) for i, (c, st) in enumerate(states)
+                    ),
+                )
+            )
 
         self.facade.set_viewports(self.uid, names, on_done=self._answered("SET", answer))
 
@@ -477,8 +585,9 @@ class Session(Articulation):
     def on_step(self, cmd: C.Step) -> None:
         seconds = cmd.time_s
         if seconds > self.MAX_STEP_S:
-            self.log_once("step", "STEP {Time %g} is longer than %g s; the world was not advanced", seconds,
-                          self.MAX_STEP_S)
+            self.log_once(
+                "step", "STEP {Time %g} is longer than %g s; the world was not advanced", seconds, self.MAX_STEP_S
+            )
             seconds = 0.0
         self.steps_waiting += 1
         order = self.ctx.step_order
@@ -502,8 +611,14 @@ class Session(Articulation):
         """A request the simulation did not carry out (it has stopped, or the request failed
         on an unexpected error, logged with its traceback): an ERROR instead of the reply that
         will not come."""
-        reason = str(error) if isinstance(error, UsarsimError) else (
-            f"the request failed on an unexpected error ({type(error).__name__}; the server's log has the traceback)")
+        reason = (
+            str(error)
+            if isinstance(error, UsarsimError)
+            else (
+                f"the request failed on an unexpected error ({type(error).__name__}; "
+                "the server's log has the traceback)"
+            )
+        )
         self.refuse(command, f"{command.lower()}-not-done", reason, level=logging.ERROR)
 
     def _step_not_done(self, error: BaseException) -> None:

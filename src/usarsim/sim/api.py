@@ -63,18 +63,37 @@ class Facade(Protocol):
     def live_conf(self, uid: int, item_type: str, name: str) -> Any: ...
 
     # robots
-    def spawn(self, uid: int, robot: RobotConfig, name: str, location: Sequence[float], rotation: Sequence[float],
-              on_done: Done, set_down: bool = False) -> None: ...
+    def spawn(
+        self,
+        uid: int,
+        robot: RobotConfig,
+        name: str,
+        location: Sequence[float],
+        rotation: Sequence[float],
+        on_done: Done,
+        set_down: bool = False,
+    ) -> None: ...
     def barrier(self, on_done: Done) -> None: ...
     def remove(self, uid: int) -> None: ...
     def drive(self, uid: int, command: DriveCommand) -> None: ...
     def drive_joints(self, uid: int, orders: list[JointOrder]) -> None: ...
-    def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None, params: ItemParams,
-                on_done: Done | None = None) -> None: ...
+    def operate(
+        self,
+        uid: int,
+        item_type: str | None,
+        name: str | None,
+        opcode: str | None,
+        params: ItemParams,
+        on_done: Done | None = None,
+    ) -> None: ...
     def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None: ...
     def report_victim(self, uid: int, name: str, location: Sequence[float], on_done: Done | None = None) -> None: ...
-    def step(self, seconds: float, on_done: Callable[[float], None],
-             on_refused: Callable[[BaseException], None] | None = None) -> None: ...
+    def step(
+        self,
+        seconds: float,
+        on_done: Callable[[float], None],
+        on_refused: Callable[[BaseException], None] | None = None,
+    ) -> None: ...
 
     # ground truth and pictures
     def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None: ...
@@ -91,8 +110,14 @@ class Facade(Protocol):
     def walls_between(self, start: Sequence[float], end: Sequence[float], on_done: Done) -> None: ...
 
     # recording and live views
-    def watch_frames(self, period_s: float, on_frame: Callable[[WorldFrame], None], *,
-                     radio_model: RadioModel | None = None, links_period_s: float = 1.0) -> None: ...
+    def watch_frames(
+        self,
+        period_s: float,
+        on_frame: Callable[[WorldFrame], None],
+        *,
+        radio_model: RadioModel | None = None,
+        links_period_s: float = 1.0,
+    ) -> None: ...
 
 
 __all__ = ["Done", "Facade", "OutputsHandler"]

@@ -18,8 +18,16 @@ BATTERY_LOAD_FACTOR = 1.0
 
 
 @njit(cache=True)
-def _drain_all(owners: np.ndarray, force: np.ndarray, velocity: np.ndarray, rated: np.ndarray,
-               capacity: np.ndarray, used: np.ndarray, seconds: float, factor: float) -> int:
+def _drain_all(
+    owners: np.ndarray,
+    force: np.ndarray,
+    velocity: np.ndarray,
+    rated: np.ndarray,
+    capacity: np.ndarray,
+    used: np.ndarray,
+    seconds: float,
+    factor: float,
+) -> int:
     """Drain every robot's battery (``used``, in place) by ``seconds`` of use at the load of
     its actuators now (``owners[a]``: the robot of actuator ``a``, counted from 1; 0: none);
     returns how many batteries are out (``capacity - used`` not above 0, NaN too).
@@ -107,8 +115,16 @@ class Batteries:
         if owners is None or len(owners) != m.nu:  # not indexed for this model: as at rest
             owners = np.zeros(0, dtype=np.intp)
         used = self._used
-        if not _drain_all(owners, d.actuator_force, d.actuator_velocity, self._rated, self._capacity, used,
-                          float(seconds), BATTERY_LOAD_FACTOR):
+        if not _drain_all(
+            owners,
+            d.actuator_force,
+            d.actuator_velocity,
+            self._rated,
+            self._capacity,
+            used,
+            float(seconds),
+            BATTERY_LOAD_FACTOR,
+        ):
             return []
         empty = np.flatnonzero(~(self._capacity - used > 0.0))  # battery_left() <= 0 (NaN too)
         out = []

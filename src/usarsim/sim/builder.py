@@ -61,8 +61,9 @@ def _dress(spec: mujoco.MjSpec, g, mat, box_size=None) -> None:
         return
     kind = textures.TEXTURES[mat.texture]
     texture = mat.texture
-    if kind.fitted and (box_size is None
-                        or max(box_size[0], box_size[1]) < FITTED_MIN_RATIO * min(box_size[0], box_size[1])):
+    if kind.fitted and (
+        box_size is None or max(box_size[0], box_size[1]) < FITTED_MIN_RATIO * min(box_size[0], box_size[1])
+    ):
         # not a strip (a parking lot, a cylinder): the surface without its markings
         texture, kind = "asphalt", textures.TEXTURES["asphalt"]
     rgb = tuple(int(round(float(c) * 255)) for c in mat.rgba[:3])
@@ -235,9 +236,15 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
 # What a false alarm of the default material looks like: the thing it imitates (a doll's
 # head of pink plastic with painted eyes, a tan leather work glove, a black rubber boot, a
 # mannequin's leg), colours estimated from product photographs.
-FALSE_ALARM_LOOKS = {"Head": (0.93, 0.74, 0.66), "Hand": (0.72, 0.55, 0.30), "Foot": (0.10, 0.10, 0.10),
-                     "Leg": (0.88, 0.72, 0.60), "Arm": (0.88, 0.72, 0.60), "Chest": (0.88, 0.72, 0.60),
-                     "Pelvis": (0.88, 0.72, 0.60)}
+FALSE_ALARM_LOOKS = {
+    "Head": (0.93, 0.74, 0.66),
+    "Hand": (0.72, 0.55, 0.30),
+    "Foot": (0.10, 0.10, 0.10),
+    "Leg": (0.88, 0.72, 0.60),
+    "Arm": (0.88, 0.72, 0.60),
+    "Chest": (0.88, 0.72, 0.60),
+    "Pelvis": (0.88, 0.72, 0.60),
+}
 
 
 def add_false_alarm_look(spec: mujoco.MjSpec, g, alarm) -> None:
@@ -249,12 +256,11 @@ def add_false_alarm_look(spec: mujoco.MjSpec, g, alarm) -> None:
     if alarm.part != "Head":
         return
     hx, hy, hz = (c / 2.0 for c in alarm.size)
-    for name, local, size, rgb in ((f"look/falsealarm/{alarm.name}/eye0", (hx, -0.3 * hy, -0.2 * hz),
-                                    (0.004, 0.015, 0.015), EYE),
-                                   (f"look/falsealarm/{alarm.name}/eye1", (hx, 0.3 * hy, -0.2 * hz),
-                                    (0.004, 0.015, 0.015), EYE),
-                                   (f"look/falsealarm/{alarm.name}/mouth", (hx, 0.0, 0.35 * hz),
-                                    (0.004, 0.03, 0.008), MOUTH)):
+    for name, local, size, rgb in (
+        (f"look/falsealarm/{alarm.name}/eye0", (hx, -0.3 * hy, -0.2 * hz), (0.004, 0.015, 0.015), EYE),
+        (f"look/falsealarm/{alarm.name}/eye1", (hx, 0.3 * hy, -0.2 * hz), (0.004, 0.015, 0.015), EYE),
+        (f"look/falsealarm/{alarm.name}/mouth", (hx, 0.0, 0.35 * hz), (0.004, 0.03, 0.008), MOUTH),
+    ):
         d = spec.worldbody.add_geom()
         d.name = name
         d.type = mujoco.mjtGeom.mjGEOM_BOX
@@ -268,8 +274,11 @@ def add_false_alarm_look(spec: mujoco.MjSpec, g, alarm) -> None:
 
 
 # MuJoCo light types of the world file's light types.
-LIGHT_TYPES = {"point": mujoco.mjtLightType.mjLIGHT_POINT, "spot": mujoco.mjtLightType.mjLIGHT_SPOT,
-               "directional": mujoco.mjtLightType.mjLIGHT_DIRECTIONAL}
+LIGHT_TYPES = {
+    "point": mujoco.mjtLightType.mjLIGHT_POINT,
+    "spot": mujoco.mjtLightType.mjLIGHT_SPOT,
+    "directional": mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+}
 # A half turn about X: a mesh's vertices (USARSim axes) into the geom's own (MuJoCo) axes.
 MESH_FRAME_QUAT = np.array([0.0, 1.0, 0.0, 0.0])
 

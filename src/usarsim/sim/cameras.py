@@ -104,11 +104,15 @@ class Cameras:
                 cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.camera_name(r.prefix, cam.name))
                 if cid >= 0:
                     snap.cameras[(r.uid, cam.name.lower())] = CameraState(
-                        cam_id=cid, fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
-                        omni=isinstance(cam, OmniCam))
+                        cam_id=cid,
+                        fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
+                        omni=isinstance(cam, OmniCam),
+                    )
             # the chase view behind and above the robot (robotspec.CHASE_CAMERA)
             cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.chase_camera_name(r.prefix))
             if cid >= 0:
-                snap.cameras.setdefault((r.uid, robotspec.CHASE_CAMERA.lower()),
-                                        CameraState(cam_id=cid, fov_rad=robotspec.CHASE_FOV_RAD, omni=False))
+                snap.cameras.setdefault(
+                    (r.uid, robotspec.CHASE_CAMERA.lower()),
+                    CameraState(cam_id=cid, fov_rad=robotspec.CHASE_FOV_RAD, omni=False),
+                )
         return snap

@@ -115,11 +115,19 @@ class Entities:
         self._part_rbound = m.geom_rbound[self._part_ids] if len(self._part_ids) else np.empty(0)
         wavers = [v for v in self.world.victims if v.waving]
         at_rest, lifting = _waving_terms([v.rotation for v in wavers])
-        self._wave_terms = [(int(m.body_mocapid[m.body(f"victim/{v.name}/shoulder").id]), tuple(a.tolist()),
-                             tuple(b.tolist())) for v, a, b in zip(wavers, at_rest, lifting)]
+        self._wave_terms = [
+            (int(m.body_mocapid[m.body(f"victim/{v.name}/shoulder").id]), tuple(a.tolist()), tuple(b.tolist()))
+            for v, a, b in zip(wavers, at_rest, lifting)
+        ]
 
-    def parts_within(self, d: mujoco.MjData, pos: np.ndarray, reach: float, forward: np.ndarray | None = None,
-                     half_angle: float = math.pi) -> bool:
+    def parts_within(
+        self,
+        d: mujoco.MjData,
+        pos: np.ndarray,
+        reach: float,
+        forward: np.ndarray | None = None,
+        half_angle: float = math.pi,
+    ) -> bool:
         """Whether any victim or false-alarm part is within ``reach`` of ``pos`` (MuJoCo
         frame) and, with ``forward`` (a unit vector), inside the cone of ``half_angle``
         about it (a part counts if any of its bounding sphere is)."""

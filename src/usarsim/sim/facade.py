@@ -41,8 +41,15 @@ RADIO_INTERVAL_S = 0.02
 
 
 class SimFacade:
-    def __init__(self, world: WorldConfig, *, seed: int = 0, speed: float | None = 1.0, lockstep: bool = False,
-                 deliver: Callable[[list[Output]], None] | None = None):
+    def __init__(
+        self,
+        world: WorldConfig,
+        *,
+        seed: int = 0,
+        speed: float | None = 1.0,
+        lockstep: bool = False,
+        deliver: Callable[[list[Output]], None] | None = None,
+    ):
         self.world = world
         self.sim = Simulation(world, seed=seed)  # for tests and benchmarks; servers use the methods
         self.lockstep = lockstep
@@ -141,11 +148,21 @@ class SimFacade:
         return self.sim.live_conf.get((uid, item_type, name))
 
     # Robots ------------------------------------------------------------------------
-    def spawn(self, uid: int, robot: RobotConfig, name: str, location: Sequence[float], rotation: Sequence[float],
-              on_done: Done,
-              set_down: bool = False) -> None:
-        self.runner.submit(Request(lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down),
-                                   immediate=True, on_done=on_done))
+    def spawn(
+        self,
+        uid: int,
+        robot: RobotConfig,
+        name: str,
+        location: Sequence[float],
+        rotation: Sequence[float],
+        on_done: Done,
+        set_down: bool = False,
+    ) -> None:
+        self.runner.submit(
+            Request(
+                lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down), immediate=True, on_done=on_done
+            )
+        )
 
     def barrier(self, on_done: Done) -> None:
         """``on_done(simulated time, None)`` once every request submitted before it has been
@@ -165,8 +182,15 @@ class SimFacade:
         """Joint orders (MULTIDRIVE, MISPKG, SET Joint, CAMERA), applied together."""
         self.runner.submit(Request(lambda sim: sim.drive_joints(uid, orders), concurrent=True))
 
-    def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None, params: ItemParams,
-                on_done: Done | None = None) -> None:
+    def operate(
+        self,
+        uid: int,
+        item_type: str | None,
+        name: str | None,
+        opcode: str | None,
+        params: ItemParams,
+        on_done: Done | None = None,
+    ) -> None:
         """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF),
         handed to the server before ``on_done(result, error)``; ``error`` when it was not
         carried out (the simulation has stopped, or the operation failed on an unexpected
@@ -174,16 +198,17 @@ class SimFacade:
         INIT and REPORT are: a request with a reply is answered without a STEP (a PING after it
         is answered after its RES), and what it changes acts from the next STEP on, as a
         DRIVE's speeds do."""
-        self.runner.submit(Request(lambda sim: sim.operate(uid, item_type, name, opcode, params),
-                                   immediate=True, on_done=on_done))
+        self.runner.submit(
+            Request(lambda sim: sim.operate(uid, item_type, name, opcode, params), immediate=True, on_done=on_done)
+        )
 
     def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
         """SET {Type Viewports}: ``on_done((time, [(camera, status), ...]), error)``."""
-        self.runner.submit(Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)),
-                                   immediate=True, on_done=on_done))
+        self.runner.submit(
+            Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)), immediate=True, on_done=on_done)
+        )
 
-    def report_victim(self, uid: int, name: str, location: Sequence[float],
-                      on_done: Done | None = None) -> None:
+    def report_victim(self, uid: int, name: str, location: Sequence[float], on_done: Done | None = None) -> None:
         """``REPORT {Type Victim}``: recorded at the simulated instant it is carried out, as a
         RES output for the robot's client (observers such as the score see it too), handed to
         the server before ``on_done(result, error)``; ``error`` when it was not (the
@@ -191,8 +216,12 @@ class SimFacade:
         result = CommandResult("Victim", name, True, (("Location", tuple(float(v) for v in location)),))
         self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True, on_done=on_done))
 
-    def step(self, seconds: float, on_done: Callable[[float], None],
-             on_refused: Callable[[BaseException], None] | None = None) -> None:
+    def step(
+        self,
+        seconds: float,
+        on_done: Callable[[float], None],
+        on_refused: Callable[[BaseException], None] | None = None,
+    ) -> None:
         """Lock-step STEP: ``on_done(time)`` once ``seconds`` more have run (at once, on the
         calling thread, when it is short and the simulation has nothing else to do), or
         ``on_refused(error)`` when they will not (the simulation has stopped)."""
@@ -202,8 +231,9 @@ class SimFacade:
     def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
         """Everything the ground-truth service knows now (rows of
         :func:`usarsim.sim.truth.truth_rows`), filtered by class and name."""
-        self.runner.submit(Request(lambda sim: sim.truth(class_name, name), immediate=True, on_done=on_done,
-                                   concurrent=True))
+        self.runner.submit(
+            Request(lambda sim: sim.truth(class_name, name), immediate=True, on_done=on_done, concurrent=True)
+        )
 
     def set_multiview_cameras(self, count: int) -> None:
         """How many robot cameras the MultiView shows at most (before the simulation starts)."""
@@ -211,8 +241,9 @@ class SimFacade:
 
     def render_snapshot(self, reuse: Snapshot | None, on_done: Done) -> None:
         """A copy of the state for the render thread (``reuse``: the previous one)."""
-        self.runner.submit(Request(lambda sim: sim.cameras.render_snapshot(reuse), immediate=True,
-                                   on_done=on_done, concurrent=True))
+        self.runner.submit(
+            Request(lambda sim: sim.cameras.render_snapshot(reuse), immediate=True, on_done=on_done, concurrent=True)
+        )
 
     def render_service(self, max_fps: float) -> RenderService:
         """The render thread of the image server, fed with snapshots of this simulation."""
@@ -253,13 +284,15 @@ class SimFacade:
 
     def walls_between_robots(self, a: str, b: str, on_done: Done) -> None:
         """``on_done(n)``: walls between two robots (-1: either is unknown)."""
-        self.runner.submit(Request(lambda sim: RadioNet.walls_between_robots(sim, a, b), immediate=True,
-                                   on_done=on_done))
+        self.runner.submit(
+            Request(lambda sim: RadioNet.walls_between_robots(sim, a, b), immediate=True, on_done=on_done)
+        )
 
     def walls_between(self, start: Sequence[float], end: Sequence[float], on_done: Done) -> None:
         """``on_done(n)``: walls between two points of the world (USARSim frame)."""
-        self.runner.submit(Request(lambda sim: RadioNet.walls_between(sim, start, end), immediate=True,
-                                   on_done=on_done))
+        self.runner.submit(
+            Request(lambda sim: RadioNet.walls_between(sim, start, end), immediate=True, on_done=on_done)
+        )
 
     @property
     def radio_net(self) -> RadioNet | None:
@@ -272,8 +305,14 @@ class SimFacade:
         return self._radio
 
     # Recording and live views ------------------------------------------------------
-    def watch_frames(self, period_s: float, on_frame: Callable[[WorldFrame], None], *,
-                     radio_model: RadioModel | None = None, links_period_s: float = 1.0) -> None:
+    def watch_frames(
+        self,
+        period_s: float,
+        on_frame: Callable[[WorldFrame], None],
+        *,
+        radio_model: RadioModel | None = None,
+        links_period_s: float = 1.0,
+    ) -> None:
         """``on_frame(frame)`` on the simulation thread with the poses of every robot and
         movable object (:class:`usarsim.sim.snapshot.WorldFrame`) each time the simulated
         clock reaches a multiple of ``period_s``, and with the radio links under ``radio_model`` every

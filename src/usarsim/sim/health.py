@@ -107,8 +107,13 @@ class BlowUpGuard:
                 continue
             self.resets += 1
             r.resets += 1
-            log.error("robot '%s' (id %d) became physically unstable at t=%.3f; it is put back where it last "
-                      "was stable, at rest", r.name, r.uid, d.time)
+            log.error(
+                "robot '%s' (id %d) became physically unstable at t=%.3f; it is put back where it last "
+                "was stable, at rest",
+                r.name,
+                r.uid,
+                d.time,
+            )
             if good is not None and np.isfinite(good[qs]).all():
                 d.qpos[qs] = good[qs]
             else:  # no healthy pose known: its spawn pose

@@ -102,9 +102,13 @@ class InterpreterTuning:
         collected = gc.collect() if full else gc.collect(1)
         gc.freeze()
         self.frozen, self._removed, self._changed_at = True, False, None
-        log.debug("heap frozen (%s collection first): %d objects, %d collected, %.1f ms",
-                  "a full" if full else "a young", gc.get_freeze_count(), collected,
-                  (time.perf_counter() - t0) * 1e3)
+        log.debug(
+            "heap frozen (%s collection first): %d objects, %d collected, %.1f ms",
+            "a full" if full else "a young",
+            gc.get_freeze_count(),
+            collected,
+            (time.perf_counter() - t0) * 1e3,
+        )
 
     def stop(self) -> None:
         """Thaw the heap, and give the switch interval back when no other simulation thread

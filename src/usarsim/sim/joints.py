@@ -122,5 +122,7 @@ def position(d: mujoco.MjData, r: SimRobot, name: str) -> float:
 def package_state(d: mujoco.MjData, r: SimRobot, pkg) -> PackageState:
     """MISSTA: each link of a mission package, its position and torque."""
     h = r.handle
-    return PackageState(pkg.name, tuple(
-        (i + 1, position(d, r, n), float(d.actuator_force[h.actuator[n]])) for i, n in enumerate(pkg.links)))
+    return PackageState(
+        pkg.name,
+        tuple((i + 1, position(d, r, n), float(d.actuator_force[h.actuator[n]])) for i, n in enumerate(pkg.links)),
+    )

@@ -118,8 +118,17 @@ class Measurer:
         self._slots: list[_Slot] = []
         self._next = 0
 
-    def submit(self, model: mujoco.MjModel, data: mujoco.MjData, caster: RayCaster, time: float, world,
-               entities, items: list[Due], standing: Standing) -> Future:
+    def submit(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        caster: RayCaster,
+        time: float,
+        world,
+        entities,
+        items: list[Due],
+        standing: Standing,
+    ) -> Future:
         """Measure ``items`` at simulated ``time`` from a copy of ``data`` taken now (and
         ``standing``, taken now)."""
         if model is not self._model:

@@ -93,8 +93,11 @@ def package_frames(robot, package) -> tuple[LinkFrame, ...]:
             ln = links[name]
             p, own, shown = frame_of(ln.parent)
             reported = ln.geo_orientation if ln.geo_orientation is not None else ln.orientation
-            absolute[name] = (p + own @ np.asarray(ln.location, dtype=float), own @ euler_to_mat(*ln.orientation),
-                              shown @ euler_to_mat(*reported))
+            absolute[name] = (
+                p + own @ np.asarray(ln.location, dtype=float),
+                own @ euler_to_mat(*ln.orientation),
+                shown @ euler_to_mat(*reported),
+            )
         return absolute[name]
 
     out = []

@@ -49,8 +49,16 @@ if TYPE_CHECKING:
 MIN_DISTANCE_M = 0.01
 
 
-def waf_signal_dbm(distance_m: float, walls: int, *, pd0_dbm: float, d0_m: float, path_loss_exponent: float,
-                   wall_db: float, max_walls: int | None) -> float:
+def waf_signal_dbm(
+    distance_m: float,
+    walls: int,
+    *,
+    pd0_dbm: float,
+    d0_m: float,
+    path_loss_exponent: float,
+    wall_db: float,
+    max_walls: int | None,
+) -> float:
     """The Wall Attenuation Factor model (manual 3.2.4): S = P(d0) - 10 n log10(d / d0) -
     min(walls, C) WAF, in dBm; ``max_walls`` None: no cap (C infinite)."""
     d = max(float(distance_m), MIN_DISTANCE_M)
@@ -82,9 +90,15 @@ class RadioModel:
     def signal_dbm(self, distance_m: float, walls: int = 0) -> float:
         if self.name == "perfect":
             return 0.0
-        return waf_signal_dbm(distance_m, walls if self.counts_walls else 0, pd0_dbm=self.pd0_dbm, d0_m=self.d0_m,
-                              path_loss_exponent=self.path_loss_exponent, wall_db=self.wall_db,
-                              max_walls=self.max_walls)
+        return waf_signal_dbm(
+            distance_m,
+            walls if self.counts_walls else 0,
+            pd0_dbm=self.pd0_dbm,
+            d0_m=self.d0_m,
+            path_loss_exponent=self.path_loss_exponent,
+            wall_db=self.wall_db,
+            max_walls=self.max_walls,
+        )
 
     def holds(self, dbm: float) -> bool:
         """Whether a link with this signal strength carries messages."""
@@ -95,8 +109,10 @@ class RadioModel:
             return "perfect (0 dBm, every link holds)"
         cap = "no cap" if self.max_walls is None else f"C {self.max_walls}"
         walls = f", WAF {self.wall_db:g} dB, {cap}" if self.counts_walls else ""
-        return (f"{self.name} (P(d0) {self.pd0_dbm:g} dBm, d0 {self.d0_m:g} m, n {self.path_loss_exponent:g}"
-                f"{walls}, cutoff {self.cutoff_dbm:g} dBm)")
+        return (
+            f"{self.name} (P(d0) {self.pd0_dbm:g} dBm, d0 {self.d0_m:g} m, n {self.path_loss_exponent:g}"
+            f"{walls}, cutoff {self.cutoff_dbm:g} dBm)"
+        )
 
 
 PRESETS: dict[str, RadioModel] = {
@@ -118,8 +134,11 @@ def resolve_model(*layers: WirelessConfig | None, model: str | None = None) -> R
     for ly in layers:
         if ly is None:
             continue
-        given = {f.name: getattr(ly, f.name) for f in dataclasses.fields(ly)
-                 if f.name != "model" and getattr(ly, f.name) is not None}
+        given = {
+            f.name: getattr(ly, f.name)
+            for f in dataclasses.fields(ly)
+            if f.name != "model" and getattr(ly, f.name) is not None
+        }
         if "max_walls" in given and given["max_walls"] < 0:
             given["max_walls"] = None
         out = dataclasses.replace(out, **given)
@@ -176,8 +195,11 @@ def load_wireless_file(path: str | Path) -> WirelessFile:
         where = f"{where}: {name}"
         if name == "Model":
             if value.lower() not in WIRELESS_MODELS:
-                raise ConfigError(f"'{value}' is not a radio model{did_you_mean(value.lower(), WIRELESS_MODELS)}",
-                                  path=path, key=where)
+                raise ConfigError(
+                    f"'{value}' is not a radio model{did_you_mean(value.lower(), WIRELESS_MODELS)}",
+                    path=path,
+                    key=where,
+                )
             values["model"] = value.lower()
         elif name == "bDebug":
             if value.lower() not in ("true", "false", "1", "0"):

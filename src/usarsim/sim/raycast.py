@@ -88,8 +88,7 @@ def _ray_local(gtype, s0, s1, s2, px, py, pz, vx, vy, vz):
                 x = t
         return x
     if gtype == SPHERE:
-        x0, x1 = _quad(vx * vx + vy * vy + vz * vz, vx * px + vy * py + vz * pz,
-                       px * px + py * py + pz * pz - s0 * s0)
+        x0, x1 = _quad(vx * vx + vy * vy + vz * vz, vx * px + vy * py + vz * pz, px * px + py * py + pz * pz - s0 * s0)
         return _first(x0, x1)
     if gtype == CAPSULE:
         x = -1.0
@@ -109,8 +108,11 @@ def _ray_local(gtype, s0, s1, s2, px, py, pz, vx, vy, vz):
         return x
     if gtype == ELLIPSOID:
         i0, i1, i2 = 1.0 / (s0 * s0), 1.0 / (s1 * s1), 1.0 / (s2 * s2)
-        x0, x1 = _quad(i0 * vx * vx + i1 * vy * vy + i2 * vz * vz, i0 * vx * px + i1 * vy * py + i2 * vz * pz,
-                       i0 * px * px + i1 * py * py + i2 * pz * pz - 1.0)
+        x0, x1 = _quad(
+            i0 * vx * vx + i1 * vy * vy + i2 * vz * vz,
+            i0 * vx * px + i1 * vy * py + i2 * vz * pz,
+            i0 * px * px + i1 * py * py + i2 * pz * pz - 1.0,
+        )
         return _first(x0, x1)
     if gtype == PLANE:
         if vz > -MINVAL:
@@ -158,8 +160,15 @@ def _normal_local(gtype, s0, s1, s2, qx, qy, qz):
 def _world_normal(gtype, s0, s1, s2, m, dx, dy, dz, out):
     """The outward normal (world frame) into ``out`` at the point (d) relative to a geom
     whose orientation is m (row-major), on its surface."""
-    nx, ny, nz = _normal_local(gtype, s0, s1, s2, m[0] * dx + m[3] * dy + m[6] * dz,
-                               m[1] * dx + m[4] * dy + m[7] * dz, m[2] * dx + m[5] * dy + m[8] * dz)
+    nx, ny, nz = _normal_local(
+        gtype,
+        s0,
+        s1,
+        s2,
+        m[0] * dx + m[3] * dy + m[6] * dz,
+        m[1] * dx + m[4] * dy + m[7] * dz,
+        m[2] * dx + m[5] * dy + m[8] * dz,
+    )
     out[0] = m[0] * nx + m[1] * ny + m[2] * nz
     out[1] = m[3] * nx + m[4] * ny + m[5] * nz
     out[2] = m[6] * nx + m[7] * ny + m[8] * nz
@@ -189,8 +198,12 @@ def _half_extents(gtype, s0, s1, s2):
 @njit(cache=True, nogil=True, inline="always")
 def _cell_span(lo, hi, g, x0, y0, cell, nx, ny):
     """The first and last cell along x and along y that geom g's box overlaps."""
-    return (min(int((lo[g, 0] - x0) / cell), nx - 1), min(int((hi[g, 0] - x0) / cell), nx - 1),
-            min(int((lo[g, 1] - y0) / cell), ny - 1), min(int((hi[g, 1] - y0) / cell), ny - 1))
+    return (
+        min(int((lo[g, 0] - x0) / cell), nx - 1),
+        min(int((hi[g, 0] - x0) / cell), nx - 1),
+        min(int((lo[g, 1] - y0) / cell), ny - 1),
+        min(int((hi[g, 1] - y0) / cell), ny - 1),
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -284,9 +297,18 @@ def same_values(a, b):
 def _ray_in_frame(gtype, s0, s1, s2, m, dx, dy, dz, vx, vy, vz):
     """:func:`_ray_local` for a ray from (d) along (v), both in the world frame relative to
     a geom whose orientation is m (row-major)."""
-    return _ray_local(gtype, s0, s1, s2, m[0] * dx + m[3] * dy + m[6] * dz, m[1] * dx + m[4] * dy + m[7] * dz,
-                      m[2] * dx + m[5] * dy + m[8] * dz, m[0] * vx + m[3] * vy + m[6] * vz,
-                      m[1] * vx + m[4] * vy + m[7] * vz, m[2] * vx + m[5] * vy + m[8] * vz)
+    return _ray_local(
+        gtype,
+        s0,
+        s1,
+        s2,
+        m[0] * dx + m[3] * dy + m[6] * dz,
+        m[1] * dx + m[4] * dy + m[7] * dz,
+        m[2] * dx + m[5] * dy + m[8] * dz,
+        m[0] * vx + m[3] * vy + m[6] * vz,
+        m[1] * vx + m[4] * vy + m[7] * vz,
+        m[2] * vx + m[5] * vy + m[8] * vz,
+    )
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -313,9 +335,33 @@ def _stepping(o, v, lo, c, cell):
 
 
 @njit(cache=True, nogil=True)
-def cast_grid_kernel(orig, dirs, cutoff, gtype, gsize, grbound, gbody, gok, xpos, xmat, exclude_body,
-                     want_normals, out_dist, out_geom, out_normal, x0, y0, cell, nx, ny, start, items, planes,
-                     z0, z1):
+def cast_grid_kernel(
+    orig,
+    dirs,
+    cutoff,
+    gtype,
+    gsize,
+    grbound,
+    gbody,
+    gok,
+    xpos,
+    xmat,
+    exclude_body,
+    want_normals,
+    out_dist,
+    out_geom,
+    out_normal,
+    x0,
+    y0,
+    cell,
+    nx,
+    ny,
+    start,
+    items,
+    planes,
+    z0,
+    z1,
+):
     """Cast ray i from orig[i] along dirs[i] (n x 3 each, MuJoCo world frame) through the
     grid of :func:`build_grid` (filed from the same positions).
 
@@ -340,8 +386,19 @@ def cast_grid_kernel(orig, dirs, cutoff, gtype, gsize, grbound, gbody, gok, xpos
             if not gok[g] or gbody[g] == exclude_body:
                 continue
             tested += 1
-            t = _ray_in_frame(PLANE, gsize[g, 0], gsize[g, 1], gsize[g, 2], xmat[g], ox - xpos[g, 0], oy - xpos[g, 1],
-                              oz - xpos[g, 2], vx, vy, vz)
+            t = _ray_in_frame(
+                PLANE,
+                gsize[g, 0],
+                gsize[g, 1],
+                gsize[g, 2],
+                xmat[g],
+                ox - xpos[g, 0],
+                oy - xpos[g, 1],
+                oz - xpos[g, 2],
+                vx,
+                vy,
+                vz,
+            )
             if t >= 0.0 and (t < best or (t == best and g < bg)):
                 best = t
                 bg = g
@@ -405,8 +462,17 @@ def cast_grid_kernel(orig, dirs, cutoff, gtype, gsize, grbound, gbody, gok, xpos
         out_dist[i] = best
         out_geom[i] = bg
         if want_normals:
-            _world_normal(gtype[bg], gsize[bg, 0], gsize[bg, 1], gsize[bg, 2], xmat[bg], ox + best * vx - xpos[bg, 0],
-                          oy + best * vy - xpos[bg, 1], oz + best * vz - xpos[bg, 2], out_normal[i])
+            _world_normal(
+                gtype[bg],
+                gsize[bg, 0],
+                gsize[bg, 1],
+                gsize[bg, 2],
+                xmat[bg],
+                ox + best * vx - xpos[bg, 0],
+                oy + best * vy - xpos[bg, 1],
+                oz + best * vz - xpos[bg, 2],
+                out_normal[i],
+            )
     return tested
 
 
@@ -417,7 +483,22 @@ def warm_up() -> None:
     gtype, gsize, use = np.array([BOX], np.int64), np.ones((1, 3)), np.ones(1, np.bool_)
     xpos, xmat = np.full((1, 3), 5.0), np.eye(3).reshape(1, 9)
     grid = build_grid(gtype, gsize, use, xpos, xmat, GRID_CELL_M, GRID_MAX_CELLS)
-    cast_grid_kernel(np.zeros((1, 3)), one, 1.0, gtype, gsize, np.ones(1), np.zeros(1, np.int64), use, xpos, xmat,
-                     -1, True, np.empty(1), np.empty(1, np.int32), np.empty((1, 3)), *grid)
+    cast_grid_kernel(
+        np.zeros((1, 3)),
+        one,
+        1.0,
+        gtype,
+        gsize,
+        np.ones(1),
+        np.zeros(1, np.int64),
+        use,
+        xpos,
+        xmat,
+        -1,
+        True,
+        np.empty(1),
+        np.empty(1, np.int32),
+        np.empty((1, 3)),
+        *grid,
+    )
     same_values(np.zeros(1), np.zeros(1))
-

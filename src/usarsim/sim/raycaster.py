@@ -28,7 +28,7 @@ MAX_BOUNCES = 3
 RAY_RESTART_M = 1e-6
 # Whether a ray passes a grid is decided per direction, told apart at this resolution
 # (about 15 microradians; the beams of a scanner are a thousand times farther apart).
-POROSITY_DIR_QUANTUM = 2.0 ** -16
+POROSITY_DIR_QUANTUM = 2.0**-16
 # Surfaces met on one ray at most (grids are met twice each: entering and leaving).
 MAX_LEGS = 64
 # Counting the walls between two points (protocol.md 12.3, the UDK ComServerInterface's
@@ -60,15 +60,22 @@ class RayCaster:
     and grids casts exactly as before, one kernel call per batch.
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, backend: str | None = None,
-                 see_through: dict[str, np.ndarray] | None = None, mirror: np.ndarray | None = None,
-                 porosity: np.ndarray | None = None):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        backend: str | None = None,
+        see_through: dict[str, np.ndarray] | None = None,
+        mirror: np.ndarray | None = None,
+        porosity: np.ndarray | None = None,
+    ):
         self.m = model
         self.d = data
         self.rays_cast = 0
         m = model
-        alpha = np.where(m.geom_matid >= 0, m.mat_rgba[np.maximum(m.geom_matid, 0), 3] if m.nmat else 0.0,
-                         m.geom_rgba[:, 3])
+        alpha = np.where(
+            m.geom_matid >= 0, m.mat_rgba[np.maximum(m.geom_matid, 0), 3] if m.nmat else 0.0, m.geom_rgba[:, 3]
+        )
         group = np.clip(m.geom_group, 0, 5)
         self._visible = (RAY_GROUPS[group] != 0) & (alpha != 0)
         see_through = dict(see_through or {})
@@ -88,8 +95,9 @@ class RayCaster:
         self._effects = self._mirror is not None or self._porosity is not None
         if self._porosity is not None:
             # a stable value per geom (its name survives rebuilds, its id may not)
-            self._salt = np.array([zlib.crc32((m.geom(g).name or f"#{g}").encode()) for g in range(m.ngeom)],
-                                  dtype=np.uint64)
+            self._salt = np.array(
+                [zlib.crc32((m.geom(g).name or f"#{g}").encode()) for g in range(m.ngeom)], dtype=np.uint64
+            )
         # what wall counting sees: the static solids of the world, not robots, movable
         # objects or victims (protocol.md 12.3)
         victims = np.array([m.names.startswith(b"victim/", a) for a in m.name_geomadr], dtype=bool)
@@ -134,10 +142,21 @@ class RayCaster:
         from usarsim.sim import raycast
 
         d = self.d
-        if (self._grid is None or d.time != self._grid_time or not raycast.same_values(d.qpos, self._grid_qpos)
-                or not raycast.same_values(d.mocap_quat.ravel(), self._grid_mocap)):
-            self._grid = raycast.build_grid(self._gtype, self.m.geom_size, self._visible, d.geom_xpos, d.geom_xmat,
-                                            raycast.GRID_CELL_M, raycast.GRID_MAX_CELLS)
+        if (
+            self._grid is None
+            or d.time != self._grid_time
+            or not raycast.same_values(d.qpos, self._grid_qpos)
+            or not raycast.same_values(d.mocap_quat.ravel(), self._grid_mocap)
+        ):
+            self._grid = raycast.build_grid(
+                self._gtype,
+                self.m.geom_size,
+                self._visible,
+                d.geom_xpos,
+                d.geom_xmat,
+                raycast.GRID_CELL_M,
+                raycast.GRID_MAX_CELLS,
+            )
             self._grid_time = d.time
             self._grid_qpos = d.qpos.copy()
             self._grid_mocap = d.mocap_quat.ravel().copy()
@@ -149,12 +168,35 @@ class RayCaster:
         from usarsim.sim.raycast import cast_grid_kernel
 
         m, d = self.m, self.d
-        cast_grid_kernel(origins, dirs, float(max_range), self._gtype, m.geom_size, m.geom_rbound, self._gbody, mask,
-                         d.geom_xpos, d.geom_xmat, int(exclude_body), bool(normals), dist, gid, nrm, *self._filed())
+        cast_grid_kernel(
+            origins,
+            dirs,
+            float(max_range),
+            self._gtype,
+            m.geom_size,
+            m.geom_rbound,
+            self._gbody,
+            mask,
+            d.geom_xpos,
+            d.geom_xmat,
+            int(exclude_body),
+            bool(normals),
+            dist,
+            gid,
+            nrm,
+            *self._filed(),
+        )
 
-    def cast(self, origin: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
-             normals: bool = False, kind: str | None = None,
-             reflect: bool | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    def cast(
+        self,
+        origin: np.ndarray,
+        dirs: np.ndarray,
+        max_range: float,
+        exclude_body: int,
+        normals: bool = False,
+        kind: str | None = None,
+        reflect: bool | None = None,
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Cast ``dirs`` (n x 3 unit vectors, MuJoCo frame) from ``origin``.
 
         Returns (distance, normals, geom ids): distance is ``inf`` where nothing is
@@ -170,9 +212,16 @@ class RayCaster:
         origins = np.broadcast_to(np.asarray(origin, dtype=float), dirs.shape)
         return self.cast_from(origins, dirs, max_range, exclude_body, normals, kind, reflect)
 
-    def cast_from(self, origins: np.ndarray, dirs: np.ndarray, max_range: float, exclude_body: int,
-                  normals: bool = False, kind: str | None = None,
-                  reflect: bool | None = None) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    def cast_from(
+        self,
+        origins: np.ndarray,
+        dirs: np.ndarray,
+        max_range: float,
+        exclude_body: int,
+        normals: bool = False,
+        kind: str | None = None,
+        reflect: bool | None = None,
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Cast ray i from ``origins[i]`` along ``dirs[i]`` (n x 3 each, MuJoCo frame)."""
         dirs = np.ascontiguousarray(dirs, dtype=float).reshape(-1, 3)
         origins = np.ascontiguousarray(origins, dtype=float).reshape(-1, 3)
@@ -187,8 +236,9 @@ class RayCaster:
             reflect = bool(reflect) and self._mirror is not None and kind in MIRROR_KINDS
             porous = self._porosity is not None and kind in POROUS_KINDS
             if reflect or porous:
-                self._cast_effects(origins, dirs, float(max_range), int(exclude_body), kind, reflect, porous,
-                                   dist, gid, nrm)
+                self._cast_effects(
+                    origins, dirs, float(max_range), int(exclude_body), kind, reflect, porous, dist, gid, nrm
+                )
                 return dist, (nrm if normals else None), gid
         if self.backend == "compiled":  # the fast path
             mask = self._masks.get(kind, self._visible) if kind else self._visible
@@ -197,8 +247,16 @@ class RayCaster:
             self._cast_plain(origins, dirs, float(max_range), int(exclude_body), normals, kind, dist, gid, nrm)
         return dist, (nrm if normals else None), gid
 
-    def count_walls(self, starts: np.ndarray, ends: np.ndarray, *, kind: str | None = None,
-                    end_margin: float = 0.0, stop_at_first: bool = False, step: float = WALL_STEP_M) -> np.ndarray:
+    def count_walls(
+        self,
+        starts: np.ndarray,
+        ends: np.ndarray,
+        *,
+        kind: str | None = None,
+        end_margin: float = 0.0,
+        stop_at_first: bool = False,
+        step: float = WALL_STEP_M,
+    ) -> np.ndarray:
         """Walls crossed on each segment ``starts[i]`` -> ``ends[i]`` (n x 3 each, MuJoCo frame).
 
         As USARSim counted obstacles between two radios (protocol.md 12.3): a trace along
@@ -291,7 +349,7 @@ class RayCaster:
                 h = (h ^ (h >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
                 h = (h ^ (h >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
                 h = h ^ (h >> np.uint64(31))
-        u = (h >> np.uint64(11)).astype(float) * (1.0 / 2.0 ** 53)
+        u = (h >> np.uint64(11)).astype(float) * (1.0 / 2.0**53)
         return u < self._porosity[geoms]
 
     def _cast_effects(self, origins, dirs, max_range, exclude_body, kind, reflect, porous, dist, gid, nrm) -> None:
@@ -364,8 +422,20 @@ class RayCaster:
             g = np.zeros(k, np.int32)
             dd = np.zeros(k)
             nn = np.zeros(3 * k)
-            mujoco.mj_multiRay(self.m, self.d, origins[a].copy(), dirs[a:b].reshape(-1).copy(), RAY_GROUPS, 1,
-                               exclude_body, g, dd, nn if normals else None, k, max_range)
+            mujoco.mj_multiRay(
+                self.m,
+                self.d,
+                origins[a].copy(),
+                dirs[a:b].reshape(-1).copy(),
+                RAY_GROUPS,
+                1,
+                exclude_body,
+                g,
+                dd,
+                nn if normals else None,
+                k,
+                max_range,
+            )
             miss = (g < 0) | (dd < 0) | (dd > max_range)
             dd[miss] = np.inf
             g[miss] = -1

@@ -185,15 +185,31 @@ class RenderService:
         instant as the picture)."""
         return self._submit(_Job(layout, Future()))
 
-    def render_free(self, width: int, height: int, *, lookat, azimuth: float, elevation: float, distance: float,
-                    follow: str | None = None) -> Future:
+    def render_free(
+        self,
+        width: int,
+        height: int,
+        *,
+        lookat,
+        azimuth: float,
+        elevation: float,
+        distance: float,
+        follow: str | None = None,
+    ) -> Future:
         """A picture of ``width`` x ``height`` from a free camera (see :class:`FreeView`);
         the Future's result is ``(picture, camera)``: the RGB picture and a dict of the camera
         it was seen from (``lookat``, ``azimuth``, ``elevation``, ``distance``, ``fovy``, the
         vertical field of view in degrees, ``time``, the simulated time of the picture, and
         ``follow``, the robot followed or None when it is not in the world)."""
-        view = FreeView(lookat=tuple(float(v) for v in lookat), azimuth=float(azimuth), elevation=float(elevation),
-                        distance=float(distance), width=int(width), height=int(height), follow=follow)
+        view = FreeView(
+            lookat=tuple(float(v) for v in lookat),
+            azimuth=float(azimuth),
+            elevation=float(elevation),
+            distance=float(distance),
+            width=int(width),
+            height=int(height),
+            follow=follow,
+        )
         return self._submit(_Job(None, Future(), free=view))
 
     def _submit(self, job: _Job) -> Future:
@@ -301,7 +317,7 @@ class RenderService:
             h = min(t.height, height - t.y)
             if cam is None or w <= 0 or h <= 0:
                 continue
-            picture[t.y:t.y + h, t.x:t.x + w] = self._view(snap, cam, t.width, t.height)[:h, :w]
+            picture[t.y : t.y + h, t.x : t.x + w] = self._view(snap, cam, t.width, t.height)[:h, :w]
         return picture
 
     def _view(self, snap: Snapshot, cam: CameraState, width: int, height: int) -> np.ndarray:
@@ -326,7 +342,7 @@ class RenderService:
                 model.cam_fovy[cam.cam_id] = camera_fovy_deg(math.pi / 2, w, height)
                 r = self._renderer(model, w, height)
                 r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
-                out[:, edges[k]:edges[k + 1]] = self._shoot(r, snap)
+                out[:, edges[k] : edges[k + 1]] = self._shoot(r, snap)
         finally:
             data.cam_xmat[cam.cam_id] = base.ravel()
         return out
@@ -365,9 +381,15 @@ class RenderService:
         r = self._renderer(model, v.width, v.height)
         r.update_scene(data, camera=cam, scene_option=SEEN)
         picture = self._shoot(r, snap)
-        return picture, {"lookat": [round(float(c), 4) for c in lookat], "azimuth": v.azimuth,
-                         "elevation": v.elevation, "distance": v.distance,
-                         "fovy": float(model.vis.global_.fovy), "time": round(snap.time, 4), "follow": followed}
+        return picture, {
+            "lookat": [round(float(c), 4) for c in lookat],
+            "azimuth": v.azimuth,
+            "elevation": v.elevation,
+            "distance": v.distance,
+            "fovy": float(model.vis.global_.fovy),
+            "time": round(snap.time, 4),
+            "follow": followed,
+        }
 
 
 def render_with_depth(r: mujoco.Renderer) -> tuple[np.ndarray, np.ndarray]:
@@ -384,5 +406,3 @@ def render_with_depth(r: mujoco.Renderer) -> tuple[np.ndarray, np.ndarray]:
     if gl is None:  # a renderer without an OpenGL context of its own reads rows top down
         return rgb, depth
     return np.flipud(rgb), np.flipud(depth)
-
-

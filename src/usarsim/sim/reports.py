@@ -123,8 +123,11 @@ class ReportSchedule:
                     reports.append(rep)
                 rep.sensors.append(s)
             else:
-                reports.append(Report(r, [s], s.config.scan_interval_s, on_grid(s.config.scan_interval_s),
-                                      f"SEN:{s.TYPE}:{s.name}"))
+                reports.append(
+                    Report(
+                        r, [s], s.config.scan_interval_s, on_grid(s.config.scan_interval_s), f"SEN:{s.TYPE}:{s.name}"
+                    )
+                )
         r.reports = reports
         for rep in reports:
             self._schedule(_Cohort(rep.t0, rep.interval, [rep]))

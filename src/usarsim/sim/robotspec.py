@@ -27,8 +27,7 @@ from usarsim.sim.constants import (
 )
 
 
-def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation,
-              drive=None) -> mujoco.MjsBody:
+def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation, drive=None) -> mujoco.MjsBody:
     """Add a robot's bodies, joints and actuators under ``prefix``; its chassis origin at
     ``location`` (USARSim frame) with ``rotation`` (roll, pitch, yaw).  ``drive``, the
     robot's drive model (:mod:`usarsim.robots`; by default its class), adds what its kind
@@ -111,15 +110,21 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
     # a robot's parts do not collide with each other (MuJoCo filters parent and child only)
     # parent -> child pairs are filtered by MuJoCo already; every other pair of the robot's
     # jointed bodies (chassis, links, wheels on links) is excluded
-    parent_of = {f"{prefix}/{ln.name}": (prefix if ln.parent == "chassis" else f"{prefix}/{ln.parent}")
-                 for ln in robot.links}
-    parent_of.update({f"{prefix}/{w.name}": (prefix if w.parent == "chassis" else f"{prefix}/{w.parent}")
-                      for w in robot.wheels if w.parent != "chassis"})
+    parent_of = {
+        f"{prefix}/{ln.name}": (prefix if ln.parent == "chassis" else f"{prefix}/{ln.parent}") for ln in robot.links
+    }
+    parent_of.update(
+        {
+            f"{prefix}/{w.name}": (prefix if w.parent == "chassis" else f"{prefix}/{w.parent}")
+            for w in robot.wheels
+            if w.parent != "chassis"
+        }
+    )
     # a steered wheel hangs on its knuckle: exclude it from the chassis (wheel wells)
     parent_of.update({f"{prefix}/{w.name}": f"{prefix}/{w.name}/knuckle" for w in robot.wheels if w.steer != "none"})
     names = [prefix, *parent_of]
     for i, a_name in enumerate(names):
-        for b_name in names[i + 1:]:
+        for b_name in names[i + 1 :]:
             if parent_of.get(b_name) == a_name or parent_of.get(a_name) == b_name:
                 continue
             ex = spec.add_exclude()
@@ -313,7 +318,7 @@ def _add_wheel(spec, parent, w, robot, prefix: str, treads=None) -> None:
         g.contype, g.conaffinity = TREAD_WHEEL_CONTYPE, TREAD_WHEEL_CONAFFINITY
         _add_tread(spec, wb, w, robot, prefix, treads)
         if w.driven:
-            j.armature = max(j.armature, treads.drive_inertia_kg * w.radius_m ** 2)
+            j.armature = max(j.armature, treads.drive_inertia_kg * w.radius_m**2)
     if w.driven:
         a = spec.add_actuator()
         a.name = f"{prefix}/{w.name}"
@@ -415,8 +420,15 @@ def robot_model_summary(robot: RobotConfig) -> str:
     from usarsim.robots import make_drive
     from usarsim.sim.builder import world_spec
 
-    world = WorldConfig(name="check", description="", path="", floor=Floor(center=(0, 0), size=(10, 10)),
-                        materials={"floor": Material(name="floor")}, objects=(), start_poses=())
+    world = WorldConfig(
+        name="check",
+        description="",
+        path="",
+        floor=Floor(center=(0, 0), size=(10, 10)),
+        materials={"floor": Material(name="floor")},
+        objects=(),
+        start_poses=(),
+    )
     spec = world_spec(world)
     add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0), make_drive(robot))
     m = spec.compile()

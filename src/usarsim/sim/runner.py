@@ -100,8 +100,14 @@ class SimulationRunner:
     # that the event loop is never held up for longer than this by a STEP.
     INLINE_STEP_WALL_S = 0.005
 
-    def __init__(self, sim: Simulation, deliver: Callable[[list[Output]], None], *,
-                 speed: float | None = 1.0, lockstep: bool = False):
+    def __init__(
+        self,
+        sim: Simulation,
+        deliver: Callable[[list[Output]], None],
+        *,
+        speed: float | None = 1.0,
+        lockstep: bool = False,
+    ):
         self.sim = sim
         self.deliver = deliver
         self.speed = speed
@@ -155,8 +161,12 @@ class SimulationRunner:
             self._queued += 1
             self.queue.put(req)
 
-    def step(self, seconds: float, on_done: Callable[[float], None],
-             on_refused: Callable[[BaseException], None] | None = None) -> None:
+    def step(
+        self,
+        seconds: float,
+        on_done: Callable[[float], None],
+        on_refused: Callable[[BaseException], None] | None = None,
+    ) -> None:
         """Lock-step: run ``seconds`` of simulated time, then ``on_done(time)``; or, when it
         will not run (the simulation has stopped), ``on_refused(error)``.  A STEP expected to
         be short runs at once on the calling thread when the simulation thread has nothing
@@ -205,8 +215,9 @@ class SimulationRunner:
             return
         self._thread.join(self.STOP_TIMEOUT_S if timeout is None else timeout)
         if self._thread.is_alive():
-            log.error("the simulation thread did not stop within %.0f s", self.STOP_TIMEOUT_S
-                      if timeout is None else timeout)
+            log.error(
+                "the simulation thread did not stop within %.0f s", self.STOP_TIMEOUT_S if timeout is None else timeout
+            )
 
     @property
     def alive(self) -> bool:
@@ -362,11 +373,17 @@ class SimulationRunner:
         if round(self._lag_lost, 2) <= 0.0 or (self._lag_logged is not None and now - self._lag_logged <= 10.0):
             return
         if self._lag_logged is not None:
-            log.warning("simulation behind real time: %.2f simulated s skipped in the last %.0f s "
-                        "(the clock does not catch up in bursts)", self._lag_lost, now - self._lag_logged)
+            log.warning(
+                "simulation behind real time: %.2f simulated s skipped in the last %.0f s "
+                "(the clock does not catch up in bursts)",
+                self._lag_lost,
+                now - self._lag_logged,
+            )
         else:
-            log.warning("simulation behind real time: %.2f simulated s skipped "
-                        "(the clock does not catch up in bursts)", self._lag_lost)
+            log.warning(
+                "simulation behind real time: %.2f simulated s skipped (the clock does not catch up in bursts)",
+                self._lag_lost,
+            )
         self._lag_logged, self._lag_lost = now, 0.0
 
     def _run_clocked(self) -> None:

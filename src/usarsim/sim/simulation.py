@@ -77,8 +77,9 @@ def physics_threads(robots: int) -> int:
             log.warning("%s=%r is neither a number nor 'auto'; using 'auto'", PHYSICS_THREADS_ENV, value)
         else:
             if n > PHYSICS_THREADS_LIMIT:
-                log.warning("%s=%d: MuJoCo's pool gets %d threads at most", PHYSICS_THREADS_ENV, n,
-                            PHYSICS_THREADS_LIMIT)
+                log.warning(
+                    "%s=%d: MuJoCo's pool gets %d threads at most", PHYSICS_THREADS_ENV, n, PHYSICS_THREADS_LIMIT
+                )
             return min(n, PHYSICS_THREADS_LIMIT) if n > 1 else 0
     if robots < PHYSICS_POOL_MIN_ROBOTS:
         return 0
@@ -88,6 +89,7 @@ def physics_threads(robots: int) -> int:
         cores = os.cpu_count() or 1
     threads = min(cores - 1, PHYSICS_THREADS_MAX)  # a core for the measuring thread and the server
     return threads if threads > 1 else 0
+
 
 __all__ = ["Output", "SimRobot", "Simulation", "describe_items"]
 
@@ -205,7 +207,8 @@ class Simulation:
             raise SimulationError(
                 f"location {loc[0]:.2f},{loc[1]:.2f} is outside the world '{self.world.name}' "
                 f"(x within {fl.center[0] - fl.size[0] / 2:.2f}..{fl.center[0] + fl.size[0] / 2:.2f}, "
-                f"y within {fl.center[1] - fl.size[1] / 2:.2f}..{fl.center[1] + fl.size[1] / 2:.2f})")
+                f"y within {fl.center[1] - fl.size[1] / 2:.2f}..{fl.center[1] + fl.size[1] / 2:.2f})"
+            )
         if not (-100.0 <= loc[2] <= 100.0):
             raise SimulationError(f"location z {loc[2]:.2f} is too far from the floor (allowed -100..100 m)")
         try:
@@ -226,8 +229,16 @@ class Simulation:
                 loc = (loc[0], loc[1], ground - robot.lowest_point_m - robot.spawn_clearance_m)
         prefix = f"robot{uid}"
         robotspec.add_robot(self.spec, robot, prefix, loc, rot, drive)
-        r = SimRobot(uid=uid, name=name, config=robot, prefix=prefix, spawn_time=self.time,
-                     handle=RobotHandle(prefix), sensors=sensors, drive=drive)
+        r = SimRobot(
+            uid=uid,
+            name=name,
+            config=robot,
+            prefix=prefix,
+            spawn_time=self.time,
+            handle=RobotHandle(prefix),
+            sensors=sensors,
+            drive=drive,
+        )
         for s in sensors:
             s.handle = r.handle
         self.robots[uid] = r
@@ -243,7 +254,7 @@ class Simulation:
         for s in sensors:
             s.reset(view)
         h = r.handle
-        r.spawn_qpos = self.data.qpos[h.root_qpos:h.root_qpos + 7].copy()
+        r.spawn_qpos = self.data.qpos[h.root_qpos : h.root_qpos + 7].copy()
         self.guard.mark_good(self.data)
         self.reports.add_robot(r, self.time)
         log.info("spawned %s '%s' (id %d) at %.2f,%.2f,%.2f at t=%.3f", robot.class_name, name, uid, *loc, self.time)
@@ -303,8 +314,9 @@ class Simulation:
             self.model.light_active[r.handle.light] = bool(r.light) and not r.battery_empty
         r.drive.apply(r, self.data.ctrl)
 
-    def operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
-                params: ItemParams | None) -> CommandResult | ZoomResult | Refusal | None:
+    def operate(
+        self, uid: int, item_type: str | None, name: str | None, opcode: str | None, params: ItemParams | None
+    ) -> CommandResult | ZoomResult | Refusal | None:
         """``SET {Type} {Name} {Opcode} {Params}`` on a mounted item (protocol.md 5.4), with
         the Params typed by the protocol layer: its RES goes out first, then whatever the
         operation reported (EFF, a SEN for SCAN); a Refusal (an ERROR line) when the robot has no
@@ -315,8 +327,9 @@ class Simulation:
             self.outbox.insert(before, Output(uid, self.time, res, "RES", periodic=False))
         return res
 
-    def _operate(self, uid: int, item_type: str | None, name: str | None, opcode: str | None,
-                 params: ItemParams) -> CommandResult | ZoomResult | Refusal | None:
+    def _operate(
+        self, uid: int, item_type: str | None, name: str | None, opcode: str | None, params: ItemParams
+    ) -> CommandResult | ZoomResult | Refusal | None:
         r = self.robots.get(uid)
         if r is None:
             return None
@@ -406,8 +419,11 @@ class Simulation:
         standing = self.standing()
         if self.measurer is not None and any(x.__class__ is tuple for x in items):
             if not inline:
-                self.outbox.push(self.measurer.submit(self.model, self.data, self.caster, now, self.world,
-                                                      self.entities, items, standing))
+                self.outbox.push(
+                    self.measurer.submit(
+                        self.model, self.data, self.caster, now, self.world, self.entities, items, standing
+                    )
+                )
                 return
             self.settle()  # the earlier instants first: a sensor is read by one thread at a time, in order
         for o in measure_all(items, self.view(), standing):
@@ -415,8 +431,11 @@ class Simulation:
 
     def standing(self) -> Standing:
         """What a robot's status reads now besides the physics (usarsim.sim.status)."""
-        return Standing(self.batteries.used_now(), frozenset(uid for uid, r in self.robots.items() if r.light),
-                        tuple(self.cameras.multiview()))
+        return Standing(
+            self.batteries.used_now(),
+            frozenset(uid for uid, r in self.robots.items() if r.light),
+            tuple(self.cameras.multiview()),
+        )
 
     def _emit(self, r: SimRobot, sensors: list[Sensor], key: str, view: WorldView | None = None) -> None:
         o = measure_report(r.uid, sensors, key, view or self.view())
@@ -462,4 +481,3 @@ class Simulation:
         if r is None:
             return None
         return r.handle.location(self.data), r.handle.orientation(self.data)
-

@@ -35,16 +35,31 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
     pair of robots (at most MAX_LINK_ROBOTS robots)."""
     d, m = sim.data, sim.model
     forces = wall_forces(sim)
-    robots = tuple(RobotFrame(r.uid, r.name, r.config, r.handle.location(d),
-                              tuple(frames.wrap_2pi(a) for a in r.handle.orientation(d)),
-                              r.battery_left(), r.spawn_time, forces.get(r.uid, 0.0))
-                   for r in sim.robots.values() if not r.removed)
+    robots = tuple(
+        RobotFrame(
+            r.uid,
+            r.name,
+            r.config,
+            r.handle.location(d),
+            tuple(frames.wrap_2pi(a) for a in r.handle.orientation(d)),
+            r.battery_left(),
+            r.spawn_time,
+            forces.get(r.uid, 0.0),
+        )
+        for r in sim.robots.values()
+        if not r.removed
+    )
     objects = []
     for o in sim.world.objects:
         if o.mass_kg > 0:
             b = m.body(f"movable/{o.name}").id
-            objects.append(ObjectFrame(o.name, frames.from_mj_vec(d.xpos[b]),
-                                       tuple(frames.wrap_2pi(a) for a in frames.mj_mat_to_usar_euler(d.xmat[b]))))
+            objects.append(
+                ObjectFrame(
+                    o.name,
+                    frames.from_mj_vec(d.xpos[b]),
+                    tuple(frames.wrap_2pi(a) for a in frames.mj_mat_to_usar_euler(d.xmat[b])),
+                )
+            )
     links = None
     if radio is not None:
         links = []
@@ -52,7 +67,7 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
             antennas = RadioNet.antennas(sim)
             names = sorted(antennas)
             for i, a in enumerate(names):
-                for b in names[i + 1:]:
+                for b in names[i + 1 :]:
                     ln = radio.link(sim, a, b, antennas)
                     if ln is not None:
                         pa, pb = pair_key(a, b)

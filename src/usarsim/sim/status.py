@@ -52,9 +52,16 @@ def robot_status(r: SimRobot, d: mujoco.MjData, standing: Standing) -> RobotStat
     front, rear = r.drive.steer_angles(d, r.handle)
     joint_angles = tuple((n, joints.position(d, r, n)) for n in r.config.status_joints)
     light = r.uid in standing.lit
-    return RobotStatus(vehicle_type=r.config.vehicle_type, battery_s=int(math.ceil(left - 1e-6)),
-                       front_steer=front, rear_steer=rear, joints=joint_angles, light_toggle=light,
-                       light_intensity=100 if light else 0, view=standing.view_index(r.uid))
+    return RobotStatus(
+        vehicle_type=r.config.vehicle_type,
+        battery_s=int(math.ceil(left - 1e-6)),
+        front_steer=front,
+        rear_steer=rear,
+        joints=joint_angles,
+        light_toggle=light,
+        light_intensity=100 if light else 0,
+        view=standing.view_index(r.uid),
+    )
 
 
 def status_output(rep: Report, d: mujoco.MjData, standing: Standing, now: float) -> Output:

@@ -54,6 +54,7 @@ class TextureKind:
 
 # -- helpers -----------------------------------------------------------------------------
 
+
 def _noise(rng: np.random.Generator, h: int, w: int, cells: int) -> np.ndarray:
     """Smooth value noise in [-1, 1] that repeats seamlessly across the image's edges."""
     cy, cx = max(1, cells * h // max(h, w)), max(1, cells * w // max(h, w))
@@ -108,6 +109,7 @@ def _per_unit(rng: np.random.Generator, unit: np.ndarray, spread: float) -> np.n
 
 # -- the textures ------------------------------------------------------------------------
 
+
 def _osb(rng, base):
     # oriented strand board: long wood strands pressed in layers, mostly along one direction
     h = w = 256
@@ -143,10 +145,10 @@ def _painted_panel(rng, base):
     img[_lines(h, h, 3)[:, None] | _lines(w, w, 3)[None, :]] *= 0.5
     for k in range(8):
         c = 8 + k * 32
-        img[c:c + 2, 6:8] *= 0.6
-        img[6:8, c:c + 2] *= 0.6
+        img[c : c + 2, 6:8] *= 0.6
+        img[6:8, c : c + 2] *= 0.6
     # scuffs near the floor: the lower tenth darker where robots bumped into it
-    img[int(h * 0.9):] *= (0.9 + 0.08 * _fbm(rng, h - int(h * 0.9), w, 16))[..., None]
+    img[int(h * 0.9) :] *= (0.9 + 0.08 * _fbm(rng, h - int(h * 0.9), w, 16))[..., None]
     return img
 
 
@@ -194,7 +196,7 @@ def _paper(rng, base):
         x = 28
         while x < w - 40:
             n = int(rng.integers(6, 26))
-            img[row:row + 3, x:min(x + n, w - 28)] *= 0.45
+            img[row : row + 3, x : min(x + n, w - 28)] *= 0.45
             x += n + 5
     return img
 

@@ -29,6 +29,8 @@ def grid_tiles(cameras, count: int, wide_mode: int, tile_w: int, tile_h: int) ->
     cols = wide_mode if wide_mode > 0 else math.ceil(math.sqrt(count))
     cols = max(1, min(cols, count))
     rows = math.ceil(count / cols)
-    tiles = [Tile(uid, name, (i % cols) * tile_w, (i // cols) * tile_h, tile_w, tile_h)
-             for i, (uid, name) in enumerate(list(cameras)[:count])]
+    tiles = [
+        Tile(uid, name, (i % cols) * tile_w, (i // cols) * tile_h, tile_w, tile_h)
+        for i, (uid, name) in enumerate(list(cameras)[:count])
+    ]
     return tiles, cols * tile_w, rows * tile_h

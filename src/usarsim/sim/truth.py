@@ -34,12 +34,14 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
     for o in sim.world.objects:
         if o.mass_kg > 0:
             b = m.body(f"movable/{o.name}").id
-            rows.append((o.name, "MovableObject", frames.from_mj_vec(d.xpos[b]),
-                         frames.mj_mat_to_usar_euler(d.xmat[b])))
+            rows.append(
+                (o.name, "MovableObject", frames.from_mj_vec(d.xpos[b]), frames.mj_mat_to_usar_euler(d.xmat[b]))
+            )
     robots = len(sim.robots)  # the first rows: ``{Class Robot}`` asks for every one of them
     out = []
     for i, (n, c, loc, rot) in enumerate(rows):
-        if (class_name is None or c.lower() == class_name.lower() or (i < robots and class_name.lower() == "robot")) \
-                and (name is None or n.lower() == name.lower()):
+        if (
+            class_name is None or c.lower() == class_name.lower() or (i < robots and class_name.lower() == "robot")
+        ) and (name is None or n.lower() == name.lower()):
             out.append((n, c, now, tuple(float(x) for x in loc), tuple(frames.wrap_2pi(float(a)) for a in rot)))
     return out

@@ -13,5 +13,20 @@ from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_model
 from usarsim.sim.tiles import Tile, grid_tiles
 from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
 
-__all__ = ["ItemDescription", "Link", "LinkFrame", "ObjectFrame", "Output", "Pair", "RadioModel", "RobotFrame",
-           "RobotNumbers", "Tile", "WorldFrame", "euler_to_mat", "grid_tiles", "pair_key", "resolve_model"]
+__all__ = [
+    "ItemDescription",
+    "Link",
+    "LinkFrame",
+    "ObjectFrame",
+    "Output",
+    "Pair",
+    "RadioModel",
+    "RobotFrame",
+    "RobotNumbers",
+    "Tile",
+    "WorldFrame",
+    "euler_to_mat",
+    "grid_tiles",
+    "pair_key",
+    "resolve_model",
+]

@@ -60,8 +60,12 @@ def victim_colours(name: str) -> dict[str, tuple[float, float, float]]:
     """The colours of a victim, chosen from its name (the same victim looks the same in every
     run): skin, shirt, trousers, hair."""
     k = sum((i + 1) * ord(c) for i, c in enumerate(name))
-    return {"skin": SKIN_TONES[k % len(SKIN_TONES)], "shirt": SHIRTS[(k // 4) % len(SHIRTS)],
-            "trousers": TROUSERS[(k // 20) % len(TROUSERS)], "hair": HAIR[(k // 7) % len(HAIR)]}
+    return {
+        "skin": SKIN_TONES[k % len(SKIN_TONES)],
+        "shirt": SHIRTS[(k // 4) % len(SHIRTS)],
+        "trousers": TROUSERS[(k // 20) % len(TROUSERS)],
+        "hair": HAIR[(k // 7) % len(HAIR)],
+    }
 
 
 def part_colour(part: str, colours: dict) -> list[float]:
@@ -95,11 +99,14 @@ def add_face(body, victim, colours) -> None:
     (hx, hy, hz), _ = victim_part_pose(victim.posture, VICTIM_LYING[0][2], None, None)
     r = VICTIM_LYING[0][3][0]
     if victim.posture == "sitting":
+
         def at(fwd, side, up):  # a point on the head: towards the face, the right, the crown
             return (hx + fwd, hy + side, hz - up)
     else:
+
         def at(fwd, side, up):
             return (hx + up, hy + side, hz - fwd)
+
     prefix = f"look/victim/{victim.name}"
     sphere, box, ellipsoid = mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_ELLIPSOID
     for k, side in enumerate((-0.035, 0.035)):

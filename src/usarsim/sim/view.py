@@ -100,8 +100,9 @@ class RobotHandle:
     def orientation(self, d: mujoco.MjData) -> tuple[float, float, float]:
         return frames.mj_mat_to_usar_euler(d.xmat[self.body_id])
 
-    def sensor_frame(self, d: mujoco.MjData, location, orientation,
-                     mount: str = "HARD") -> tuple[np.ndarray, np.ndarray]:
+    def sensor_frame(
+        self, d: mujoco.MjData, location, orientation, mount: str = "HARD"
+    ) -> tuple[np.ndarray, np.ndarray]:
         """World position and rotation (MuJoCo frame) of an item mounted at ``location``
         / ``orientation`` (USARSim frame) relative to its mount: the chassis (``HARD``)
         or a named part of the robot, which it then follows (a wheel turns it)."""

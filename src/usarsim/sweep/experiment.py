@@ -47,14 +47,32 @@ CLOCKS = ("lockstep", "max")
 # "world": the world's own radio model (its ``wireless:`` section, else WAF); "off": no
 # wireless servers (ComServer, WSS); a model name: that model (serve --wireless-model).
 WIRELESS = ("world", "off", "waf", "waf2009", "distance", "perfect")
-DEFAULTS = {"world": "DM-USAR_yellow", "team": "P2AT", "wireless": "world", "duration": 60.0,
-            "clock": "lockstep", "controller": "usarsim.brains.wander:Wander"}
+DEFAULTS = {
+    "world": "DM-USAR_yellow",
+    "team": "P2AT",
+    "wireless": "world",
+    "duration": 60.0,
+    "clock": "lockstep",
+    "controller": "usarsim.brains.wander:Wander",
+}
 DEFAULT_TIMEOUT_S = 600.0
 DEFAULT_PERIOD_S = 0.1
 # What a controller command may name between braces; each is also an environment variable
 # USARSIM_<NAME> of the command.
-PLACEHOLDERS = ("host", "port", "truth_port", "wcs_port", "seconds", "seed", "world", "lockstep", "robot",
-                "name", "start", "team")
+PLACEHOLDERS = (
+    "host",
+    "port",
+    "truth_port",
+    "wcs_port",
+    "seconds",
+    "seed",
+    "world",
+    "lockstep",
+    "robot",
+    "name",
+    "start",
+    "team",
+)
 # The parameters a brain is given by the sweep itself, never in ``params``.
 SWEEP_GIVES = ("robot", "origin")
 _BRAIN_TARGET = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
@@ -72,8 +90,13 @@ class Member:
     yaw: float = 0.0
 
     def as_dict(self) -> dict[str, Any]:
-        return {"robot": self.robot, "name": self.name, "start": self.start,
-                "location": None if self.location is None else list(self.location), "yaw": self.yaw}
+        return {
+            "robot": self.robot,
+            "name": self.name,
+            "start": self.start,
+            "location": None if self.location is None else list(self.location),
+            "yaw": self.yaw,
+        }
 
 
 @dataclass(frozen=True)
@@ -119,9 +142,16 @@ class Run:
 
     def identity(self) -> dict[str, Any]:
         """What makes two runs the same run (the label, timeout and folder do not)."""
-        return {"world": self.world, "seed": self.seed, "team": [m.as_dict() for m in self.team],
-                "wireless": self.wireless, "duration_s": self.duration_s, "clock": self.clock,
-                "controller": self.controller.identity(), "robot_dirs": list(self.robot_dirs)}
+        return {
+            "world": self.world,
+            "seed": self.seed,
+            "team": [m.as_dict() for m in self.team],
+            "wireless": self.wireless,
+            "duration_s": self.duration_s,
+            "clock": self.clock,
+            "controller": self.controller.identity(),
+            "robot_dirs": list(self.robot_dirs),
+        }
 
     @property
     def run_id(self) -> str:
@@ -131,10 +161,19 @@ class Run:
 
     def columns(self) -> dict[str, Any]:
         """The configuration columns of the run's row."""
-        return {"run_id": self.run_id, "experiment": self.experiment, "world": self.world, "seed": self.seed,
-                "team": self.team_label, "robots_n": len(self.team), "wireless": self.wireless,
-                "duration_s": self.duration_s, "clock": self.clock, "controller": self.controller.label,
-                "config": json.dumps(self.identity(), sort_keys=True)}
+        return {
+            "run_id": self.run_id,
+            "experiment": self.experiment,
+            "world": self.world,
+            "seed": self.seed,
+            "team": self.team_label,
+            "robots_n": len(self.team),
+            "wireless": self.wireless,
+            "duration_s": self.duration_s,
+            "clock": self.clock,
+            "controller": self.controller.label,
+            "config": json.dumps(self.identity(), sort_keys=True),
+        }
 
 
 @dataclass(frozen=True)
@@ -182,8 +221,9 @@ class Reader:
         top = Section(data, path=self.file)
         name = top.str("name", self.path.stem)
         if not re.match(r"^[\w.\-]+$", name):
-            raise top.error("name", f"use letters, digits, '.', '-' and '_' only (it names the results' "
-                                    f"folder), got {name!r}")
+            raise top.error(
+                "name", f"use letters, digits, '.', '-' and '_' only (it names the results' folder), got {name!r}"
+            )
         description = top.raw("description", "")
         if not isinstance(description, str):
             raise top.error("description", f"expected a text, got {description!r}")
@@ -198,14 +238,19 @@ class Reader:
         configs: list[tuple[dict[str, Any], tuple[int, ...], str]] = []  # (values, seeds, key for errors)
         if grid_raw is not None:
             if not isinstance(grid_raw, dict) or not grid_raw:
-                raise self.error("grid", "expected a mapping of run parameters to lists of values "
-                                         f"({', '.join(AXES)}), got {grid_raw!r}")
+                raise self.error(
+                    "grid",
+                    f"expected a mapping of run parameters to lists of values ({', '.join(AXES)}), got {grid_raw!r}",
+                )
             lists: list[tuple[str, list[Any]]] = []
             for k, values in grid_raw.items():
                 key = f"grid.{k}"
                 if k == "seeds":
-                    raise self.error(key, "seeds are not a grid axis: every configuration runs with every seed "
-                                          "of the top-level 'seeds' (or of its 'runs' entry)")
+                    raise self.error(
+                        key,
+                        "seeds are not a grid axis: every configuration runs with every seed "
+                        "of the top-level 'seeds' (or of its 'runs' entry)",
+                    )
                 if k not in AXES:
                     raise self.error(key, f"unknown run parameter '{k}'{did_you_mean(str(k), AXES)}")
                 if not isinstance(values, list) or not values:
@@ -217,8 +262,9 @@ class Reader:
                 configs.append((values, seeds, "grid"))
         if runs_raw is not None:
             if not isinstance(runs_raw, list) or not runs_raw:
-                raise self.error("runs", f"expected a non-empty list of runs (mappings of run parameters), "
-                                         f"got {runs_raw!r}")
+                raise self.error(
+                    "runs", f"expected a non-empty list of runs (mappings of run parameters), got {runs_raw!r}"
+                )
             for i, entry in enumerate(runs_raw):
                 key = f"runs[{i}]"
                 s = Section(entry, path=self.file, key=key)
@@ -240,21 +286,42 @@ class Reader:
         for values, run_seeds, key in configs:
             team = self.place_team(values["team"], values["world"], key)
             for seed in run_seeds:
-                run = Run(experiment=name, world=values["world"][0], seed=seed, team=team,
-                          team_label=team_label(values["team"]), wireless=values["wireless"],
-                          duration_s=values["duration"], clock=values["clock"], controller=values["controller"],
-                          timeout_s=timeout, robot_dirs=self.robot_dirs, cwd=str(self.folder))
+                run = Run(
+                    experiment=name,
+                    world=values["world"][0],
+                    seed=seed,
+                    team=team,
+                    team_label=team_label(values["team"]),
+                    wireless=values["wireless"],
+                    duration_s=values["duration"],
+                    clock=values["clock"],
+                    controller=values["controller"],
+                    timeout_s=timeout,
+                    robot_dirs=self.robot_dirs,
+                    cwd=str(self.folder),
+                )
                 if run.run_id not in seen:  # a configuration given twice runs once
                     seen.add(run.run_id)
                     runs.append(run)
-        return Experiment(name=name, path=self.file, description=description, runs=tuple(runs),
-                          axes=varying_axes([r.columns() for r in runs]))
+        return Experiment(
+            name=name,
+            path=self.file,
+            description=description,
+            runs=tuple(runs),
+            axes=varying_axes([r.columns() for r in runs]),
+        )
 
     # -- one value of each run parameter
 
     def value(self, axis: str, v: Any, key: str) -> Any:
-        return {"world": self.world, "team": self.team, "wireless": self.wireless, "duration": self.duration,
-                "clock": self.clock, "controller": self.controller}[axis](v, key)
+        return {
+            "world": self.world,
+            "team": self.team,
+            "wireless": self.wireless,
+            "duration": self.duration,
+            "clock": self.clock,
+            "controller": self.controller,
+        }[axis](v, key)
 
     def world(self, v: Any, key: str) -> tuple[str, Any]:
         """(the world as a run names it, its WorldConfig)."""
@@ -266,8 +333,9 @@ class Reader:
         if looks_like_path:
             p = Path(v) if Path(v).is_absolute() else self.folder / v
             if not p.exists():
-                raise self.error(key, f"no such world file {str(p)!r}; or give a shipped world: "
-                                      f"{', '.join(world_files())}")
+                raise self.error(
+                    key, f"no such world file {str(p)!r}; or give a shipped world: {', '.join(world_files())}"
+                )
             try:
                 cfg = _world_at(str(p.resolve()))
             except ConfigError as exc:
@@ -282,8 +350,11 @@ class Reader:
     def team(self, v: Any, key: str) -> tuple[_MemberSpec, ...]:
         entries = [v] if isinstance(v, (str, dict)) else v
         if not isinstance(entries, list) or not entries:
-            raise self.error(key, f"expected a robot class (P2AT) or a list of team members "
-                                  f"({{robot: P2AT, count: 2, start: PlayerStart1}}), got {v!r}")
+            raise self.error(
+                key,
+                f"expected a robot class (P2AT) or a list of team members "
+                f"({{robot: P2AT, count: 2, start: PlayerStart1}}), got {v!r}",
+            )
         out = []
         for i, entry in enumerate(entries):
             k = key if isinstance(v, (str, dict)) else f"{key}[{i}]"
@@ -301,19 +372,24 @@ class Reader:
                 if s.has("start"):
                     raise self.error(f"{k}.start", "give either a start pose or a location, not both")
                 if count != 1:
-                    raise self.error(f"{k}.count", "robots placed at a location come one to an entry: "
-                                                   f"give one entry per robot, got count {count}")
+                    raise self.error(
+                        f"{k}.count",
+                        "robots placed at a location come one to an entry: "
+                        f"give one entry per robot, got count {count}",
+                    )
                 out.append(_MemberSpec(robot, 1, (None,), location, yaw, k))
                 continue
             starts = [start] if isinstance(start, str) else start
             if not isinstance(starts, list) or not all(isinstance(x, str) and x.strip() for x in starts):
-                raise self.error(f"{k}.start", f"expected a start pose name, a list of them (one per robot) or "
-                                               f"'auto', got {start!r}")
+                raise self.error(
+                    f"{k}.start", f"expected a start pose name, a list of them (one per robot) or 'auto', got {start!r}"
+                )
             if starts == ["auto"]:
                 starts = ["auto"] * count
             if len(starts) != count:
-                raise self.error(f"{k}.start", f"{len(starts)} start poses for {count} robots: give one per robot, "
-                                               f"or 'auto'")
+                raise self.error(
+                    f"{k}.start", f"{len(starts)} start poses for {count} robots: give one per robot, or 'auto'"
+                )
             out.append(_MemberSpec(robot, count, tuple(None if x == "auto" else x for x in starts), None, yaw, k))
         return tuple(out)
 
@@ -341,8 +417,11 @@ class Reader:
 
     def clock(self, v: Any, key: str) -> str:
         if not isinstance(v, str) or v.lower() not in CLOCKS:
-            raise self.error(key, f"'{v}' is not a clock: lockstep (the controller steps the world: reproducible) "
-                                  f"or max (the simulator runs as fast as it can){did_you_mean(str(v), CLOCKS)}")
+            raise self.error(
+                key,
+                f"'{v}' is not a clock: lockstep (the controller steps the world: reproducible) "
+                f"or max (the simulator runs as fast as it can){did_you_mean(str(v), CLOCKS)}",
+            )
         return v.lower()
 
     def seeds(self, v: Any, key: str) -> tuple[int, ...]:
@@ -354,16 +433,18 @@ class Reader:
             if len(set(v)) != len(v):
                 raise self.error(key, f"a seed is given twice: {v}")
             return tuple(v)
-        raise self.error(key, f"expected a list of seeds (integers >= 0) or a number of seeds N (0 ... N-1), "
-                              f"got {v!r}")
+        raise self.error(key, f"expected a list of seeds (integers >= 0) or a number of seeds N (0 ... N-1), got {v!r}")
 
     def controller(self, v: Any, key: str) -> Controller:
         if isinstance(v, str):
             v = {"brain": v.strip()} if _BRAIN_TARGET.match(v.strip()) else {"command": v}
         s = Section(v, path=self.file, key=key)
         if s.has("brain") == s.has("command"):
-            raise self.error(key, "give either 'brain: module:callable' (a Python brain) or 'command: ...' "
-                                  "(any program, with {host} and {port} placeholders)")
+            raise self.error(
+                key,
+                "give either 'brain: module:callable' (a Python brain) or 'command: ...' "
+                "(any program, with {host} and {port} placeholders)",
+            )
         label = s.str("label", "")
         if s.has("brain"):
             target = s.str("brain").strip()
@@ -387,8 +468,9 @@ class Reader:
 
     def brain(self, target: str, key: str) -> Callable[..., Any]:
         if not _BRAIN_TARGET.match(target):
-            raise self.error(key, f"a brain is 'module:callable' (usarsim.brains.frontier:FrontierExplorer), "
-                                  f"got {target!r}")
+            raise self.error(
+                key, f"a brain is 'module:callable' (usarsim.brains.frontier:FrontierExplorer), got {target!r}"
+            )
         try:
             return resolve_brain(target)
         except (ImportError, AttributeError, TypeError) as exc:
@@ -400,14 +482,22 @@ class Reader:
             if name in SWEEP_GIVES:
                 raise self.error(f"{key}.{name}", f"'{name}' is given by the sweep (each robot and its start pose)")
             if allowed is not None and name not in allowed:
-                raise self.error(f"{key}.{name}", f"{target} has no parameter '{name}'"
-                                                  f"{did_you_mean(name, allowed - set(SWEEP_GIVES))}")
+                raise self.error(
+                    f"{key}.{name}",
+                    f"{target} has no parameter '{name}'{did_you_mean(name, allowed - set(SWEEP_GIVES))}",
+                )
             if name == "bounds" and value != "auto":
-                ok = isinstance(value, list) and len(value) == 4 and all(
-                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
+                ok = (
+                    isinstance(value, list)
+                    and len(value) == 4
+                    and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
+                )
                 if not ok or not (value[0] < value[2] and value[1] < value[3]):
-                    raise self.error(f"{key}.bounds", f"expected [xmin, ymin, xmax, ymax] (metres, xmin < xmax, "
-                                                      f"ymin < ymax) or 'auto' (the world's solids), got {value!r}")
+                    raise self.error(
+                        f"{key}.bounds",
+                        f"expected [xmin, ymin, xmax, ymax] (metres, xmin < xmax, "
+                        f"ymin < ymax) or 'auto' (the world's solids), got {value!r}",
+                    )
 
     def check_command(self, command: str, key: str) -> None:
         try:
@@ -439,8 +529,11 @@ class Reader:
                     continue
                 pose = cfg.start_pose(s)
                 if pose is None:
-                    raise self.error(f"{spec.key}.start", f"world {cfg.name} has no start pose '{s}'"
-                                                          f"{did_you_mean(s, poses)}" + (f" (in {key})" if key else ""))
+                    raise self.error(
+                        f"{spec.key}.start",
+                        f"world {cfg.name} has no start pose '{s}'"
+                        f"{did_you_mean(s, poses)}" + (f" (in {key})" if key else ""),
+                    )
                 if pose.name in taken:
                     raise self.error(f"{spec.key}.start", f"start pose '{pose.name}' is taken twice")
                 taken.add(pose.name)
@@ -454,8 +547,11 @@ class Reader:
                     continue
                 if s is None:
                     if not free:
-                        raise self.error(spec.key, f"the team has more robots than world {cfg.name} has start poses "
-                                                   f"({len(poses)}): place the others with 'location'")
+                        raise self.error(
+                            spec.key,
+                            f"the team has more robots than world {cfg.name} has start poses "
+                            f"({len(poses)}): place the others with 'location'",
+                        )
                     start = free.pop(0)
                 else:
                     start = cfg.start_pose(s).name
@@ -521,8 +617,13 @@ def resolve_brain(target: str) -> Callable[..., Any]:
     obj: Any = module
     for part in attr.split("."):
         if not hasattr(obj, part):
-            names = [n for n in dir(obj) if not n.startswith("_") and callable(getattr(obj, n, None))
-                     and getattr(getattr(obj, n), "__module__", None) == module_name]
+            names = [
+                n
+                for n in dir(obj)
+                if not n.startswith("_")
+                and callable(getattr(obj, n, None))
+                and getattr(getattr(obj, n), "__module__", None) == module_name
+            ]
             raise AttributeError(f"module '{module_name}' has no '{attr}'{did_you_mean(part, names)}")
         obj = getattr(obj, part)
     if not callable(obj):
@@ -533,8 +634,7 @@ def resolve_brain(target: str) -> Callable[..., Any]:
 def brain_parameters(factory: Callable[..., Any]) -> set[str] | None:
     """The keyword parameters a brain accepts (a class: its ``__init__`` and, while each
     passes ``**kw`` on, its bases'); None when it takes any keyword."""
-    targets = [c.__init__ for c in factory.__mro__ if "__init__" in vars(c)] if inspect.isclass(factory) \
-        else [factory]
+    targets = [c.__init__ for c in factory.__mro__ if "__init__" in vars(c)] if inspect.isclass(factory) else [factory]
     names: set[str] = set()
     for fn in targets:
         try:

@@ -26,20 +26,38 @@ from usarsim.sweep.stats import METHOD_NAMES, POISSON, T_CLIPPED, T, poisson_int
 __all__ = ["INTERVALS", "METRICS", "Group", "Stat", "build_report", "summarize", "t975"]
 
 # The scores the summary gives, with their names for people.
-METRICS = {"score": "score", "victims_found": "victims found", "victims_reported": "victims reported",
-           "false_reports": "false reports", "area_m2": "area explored (m²)", "distance_m": "distance (m)",
-           "collisions": "collisions", "robots_lost": "robots lost", "radio_contact_share": "radio contact share"}
+METRICS = {
+    "score": "score",
+    "victims_found": "victims found",
+    "victims_reported": "victims reported",
+    "false_reports": "false reports",
+    "area_m2": "area explored (m²)",
+    "distance_m": "distance (m)",
+    "collisions": "collisions",
+    "robots_lost": "robots lost",
+    "radio_contact_share": "radio contact share",
+}
 PLOTTED = ("score", "victims_found", "area_m2")
-AXIS_NAMES = {"world": "world", "team": "team", "wireless": "wireless model", "duration_s": "duration (s)",
-              "clock": "clock", "controller": "controller"}
+AXIS_NAMES = {
+    "world": "world",
+    "team": "team",
+    "wireless": "wireless model",
+    "duration_s": "duration (s)",
+    "clock": "clock",
+    "controller": "controller",
+}
 
 # Each score's 95 % interval: its method and the range its mean can take (docs/experiments.md).
 # Robots lost are also at most the team's size.
 INTERVALS: dict[str, tuple[str, float | None, float | None]] = {
     "score": (T, None, None),  # penalties make it negative: any number
-    "victims_found": (POISSON, 0.0, None), "victims_reported": (POISSON, 0.0, None),
-    "false_reports": (POISSON, 0.0, None), "collisions": (POISSON, 0.0, None), "robots_lost": (POISSON, 0.0, None),
-    "area_m2": (T_CLIPPED, 0.0, None), "distance_m": (T_CLIPPED, 0.0, None),
+    "victims_found": (POISSON, 0.0, None),
+    "victims_reported": (POISSON, 0.0, None),
+    "false_reports": (POISSON, 0.0, None),
+    "collisions": (POISSON, 0.0, None),
+    "robots_lost": (POISSON, 0.0, None),
+    "area_m2": (T_CLIPPED, 0.0, None),
+    "distance_m": (T_CLIPPED, 0.0, None),
     "radio_contact_share": (T_CLIPPED, 0.0, 1.0),
 }
 
@@ -121,7 +139,7 @@ def short(value: Any, limit: int = 32) -> str:
     text = f"{value:g}" if isinstance(value, float) else str(value)
     if "/" in text and text.endswith((".yaml", ".yml")):
         text = Path(text).stem
-    return text if len(text) <= limit else text[:limit - 1] + "…"
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def fmt(v: float | None, digits: int = 1) -> str:
@@ -143,8 +161,13 @@ def fmt_stat(s: Stat, digits: int = 1) -> str:
 
 def digits_of(metric: str) -> int:
     """The decimals ``metric`` is shown with."""
-    return 3 if metric == "radio_contact_share" else 2 if metric in ("collisions", "robots_lost", "victims_found",
-                                                                       "victims_reported", "false_reports") else 1
+    return (
+        3
+        if metric == "radio_contact_share"
+        else 2
+        if metric in ("collisions", "robots_lost", "victims_found", "victims_reported", "false_reports")
+        else 1
+    )
 
 
 # ---------------------------------------------------------------- plots
@@ -183,13 +206,18 @@ def plot(rows: list[dict[str, Any]], metric: str, axis: str | None, axes: tuple[
             ax.scatter([xi + offset] * len(vals), vals, s=12, alpha=0.35, color=f"C{si % 10}", zorder=2)
         ax.errorbar(mx, my, yerr=[lo, hi], fmt="o", capsize=4, color=f"C{si % 10}", label=label, zorder=3)
     ax.set_xticks(range(len(xs)))
-    ax.set_xticklabels([short(x, 28) for x in xs], rotation=15 if len(xs) > 3 else 0, ha="right" if len(xs) > 3
-                       else "center")
+    ax.set_xticklabels(
+        [short(x, 28) for x in xs], rotation=15 if len(xs) > 3 else 0, ha="right" if len(xs) > 3 else "center"
+    )
     ax.set_xlim(-0.6, len(xs) - 0.4)
     ax.set_xlabel(AXIS_NAMES.get(axis, axis) if axis else "")
     ax.set_ylabel(METRICS[metric])
-    ax.set_title(f"{METRICS[metric]}" + (f" by {AXIS_NAMES.get(axis, axis)}" if axis else "")
-                 + f"\nmean, 95 % CI ({method_of(metric)}); dots: runs", fontsize=10)
+    ax.set_title(
+        f"{METRICS[metric]}"
+        + (f" by {AXIS_NAMES.get(axis, axis)}" if axis else "")
+        + f"\nmean, 95 % CI ({method_of(metric)}); dots: runs",
+        fontsize=10,
+    )
     ax.grid(axis="y", alpha=0.3)
     if len(series) > 1:
         ax.legend(title=", ".join(AXIS_NAMES.get(a, a) for a in others), fontsize=8, title_fontsize=8)
@@ -297,37 +325,52 @@ def _cfg_cell(text: str) -> str:
     return f'<td class="cfg{" word" if whole else ""}">{html.escape(text)}</td>'
 
 
-def _html(folder: Path, rows: list[dict[str, Any]], groups: list[Group], axes: tuple[str, ...],
-          plots: list[tuple[Path, str, bytes]]) -> str:
+def _html(
+    folder: Path,
+    rows: list[dict[str, Any]],
+    groups: list[Group],
+    axes: tuple[str, ...],
+    plots: list[tuple[Path, str, bytes]],
+) -> str:
     e = html.escape
     names = sorted({str(r.get("experiment")) for r in rows}) or [folder.name]
     failed = [r for r in rows if r.get("error")]
     seeds = sorted({r.get("seed") for r in rows if r.get("seed") is not None})
     shown = [c for c in CONFIG_COLUMNS if c in axes] or list(CONFIG_COLUMNS)
     fixed = [c for c in CONFIG_COLUMNS if c not in shown]
-    out = ["<!doctype html>", '<html lang="en"><head><meta charset="utf-8">',
-           '<meta name="viewport" content="width=device-width, initial-scale=1">',
-           '<link rel="icon" href="data:,">',
-           f"<title>usarsim sweep report: {e(', '.join(names))}</title>", f"<style>{_CSS}</style></head><body>",
-           f"<h1>Sweep report: {e(', '.join(names))}</h1>",
-           f'<p class="meta">{len(rows)} runs ({len(failed)} failed) in {len(groups)} configurations; seeds '
-           f"{e(', '.join(map(str, seeds)))}; written {datetime.now(UTC).strftime('%Y-%m-%d %H:%M UTC')} "
-           f"from {e(str(folder.resolve() / 'results.parquet'))}</p>"]
+    out = [
+        "<!doctype html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        '<link rel="icon" href="data:,">',
+        f"<title>usarsim sweep report: {e(', '.join(names))}</title>",
+        f"<style>{_CSS}</style></head><body>",
+        f"<h1>Sweep report: {e(', '.join(names))}</h1>",
+        f'<p class="meta">{len(rows)} runs ({len(failed)} failed) in {len(groups)} configurations; seeds '
+        f"{e(', '.join(map(str, seeds)))}; written {datetime.now(UTC).strftime('%Y-%m-%d %H:%M UTC')} "
+        f"from {e(str(folder.resolve() / 'results.parquet'))}</p>",
+    ]
     if fixed and rows:
         first = rows[0]
-        out.append('<p class="meta">Every run: ' + "; ".join(
-            f"{e(AXIS_NAMES[c])}: {e(short(first.get(c), 80))}" for c in fixed) + "</p>")
+        out.append(
+            '<p class="meta">Every run: '
+            + "; ".join(f"{e(AXIS_NAMES[c])}: {e(short(first.get(c), 80))}" for c in fixed)
+            + "</p>"
+        )
     out.append("<h2>Summary</h2>")
-    out.append('<p class="meta" id="how">Per configuration, over its seeds: the mean, and under it '
-               "[low, high], the 95 % confidence interval of the mean (the standard deviation shows when the "
-               "pointer rests on a cell). Intervals: <b>t</b>: Student's t; <b>t, ≥ 0</b> and <b>t, 0 to 1</b>: "
-               "Student's t clipped to the range the score can take; <b>Poisson</b>: the exact Poisson interval "
-               "(Garwood) of a count per run (robots lost also at most the team's size). Failed runs are counted, "
-               "not averaged.</p>")
+    out.append(
+        '<p class="meta" id="how">Per configuration, over its seeds: the mean, and under it '
+        "[low, high], the 95 % confidence interval of the mean (the standard deviation shows when the "
+        "pointer rests on a cell). Intervals: <b>t</b>: Student's t; <b>t, ≥ 0</b> and <b>t, 0 to 1</b>: "
+        "Student's t clipped to the range the score can take; <b>Poisson</b>: the exact Poisson interval "
+        "(Garwood) of a count per run (robots lost also at most the team's size). Failed runs are counted, "
+        "not averaged.</p>"
+    )
     out.append('<div class="fit"><table id="summary"><thead><tr>')
     out += [f"<th>{e(AXIS_NAMES[c])}</th>" for c in shown]
     out += ["<th>runs</th>", "<th>failed</th>"] + [
-        f'<th>{e(METRICS[m])}<span class="how">mean [95 % CI, {e(_how(m))}]</span></th>' for m in SCORE_COLUMNS]
+        f'<th>{e(METRICS[m])}<span class="how">mean [95 % CI, {e(_how(m))}]</span></th>' for m in SCORE_COLUMNS
+    ]
     out.append("</tr></thead><tbody>")
     for g in groups:
         out.append("<tr>" + "".join(_cfg_cell(short(g.config[c], 60)) for c in shown))
@@ -339,19 +382,25 @@ def _html(folder: Path, rows: list[dict[str, Any]], groups: list[Group], axes: t
             out.append(f'<td class="num"{tip}>{fmt(s.mean, d)}{ci}</td>')
         out.append("</tr>")
     out.append("</tbody></table></div>")
-    out.append("<h2>Plots</h2><div class=\"plots\">")
+    out.append('<h2>Plots</h2><div class="plots">')
     for path, caption, png in plots:
         data = base64.b64encode(png).decode("ascii")
-        out.append(f'<figure><img src="data:image/png;base64,{data}" alt="{e(caption)}">'
-                   f"<figcaption>{e(caption)} ({e(path.name)})</figcaption></figure>")
+        out.append(
+            f'<figure><img src="data:image/png;base64,{data}" alt="{e(caption)}">'
+            f"<figcaption>{e(caption)} ({e(path.name)})</figcaption></figure>"
+        )
     out.append("</div>")
     if failed:
-        out.append("<h2>Failed runs</h2><table id=\"failed\"><thead><tr><th>run</th><th>world</th><th>seed</th>"
-                   "<th>controller</th><th>error</th></tr></thead><tbody>")
+        out.append(
+            '<h2>Failed runs</h2><table id="failed"><thead><tr><th>run</th><th>world</th><th>seed</th>'
+            "<th>controller</th><th>error</th></tr></thead><tbody>"
+        )
         for r in failed:
-            out.append(f"<tr><td>{e(str(r.get('run_id')))}</td><td>{e(short(r.get('world')))}</td>"
-                       f"<td>{e(str(r.get('seed')))}</td><td>{e(short(r.get('controller'), 60))}</td>"
-                       f'<td class="err">{e(str(r.get("error")))}</td></tr>')
+            out.append(
+                f"<tr><td>{e(str(r.get('run_id')))}</td><td>{e(short(r.get('world')))}</td>"
+                f"<td>{e(str(r.get('seed')))}</td><td>{e(short(r.get('controller'), 60))}</td>"
+                f'<td class="err">{e(str(r.get("error")))}</td></tr>'
+            )
         out.append("</tbody></table>")
     out.append("</body></html>")
     return "\n".join(out)

@@ -15,19 +15,44 @@ PARQUET = "results.parquet"
 CSV = "results.csv"
 
 # The team's scores, as the simulator's score file gives them (docs/scoring.md).
-SCORE_COLUMNS = ("score", "victims_found", "victims_reported", "false_reports", "area_m2", "distance_m",
-                 "collisions", "robots_lost", "radio_contact_share")
+SCORE_COLUMNS = (
+    "score",
+    "victims_found",
+    "victims_reported",
+    "false_reports",
+    "area_m2",
+    "distance_m",
+    "collisions",
+    "robots_lost",
+    "radio_contact_share",
+)
 _INT_SCORES = {"victims_found", "victims_reported", "false_reports", "collisions", "robots_lost"}
 
 # Every column of a row, in order, with its type (pyarrow's name).
 COLUMNS: tuple[tuple[str, str], ...] = (
-    ("run_id", "string"), ("experiment", "string"), ("world", "string"), ("seed", "int64"),
-    ("team", "string"), ("robots_n", "int64"), ("wireless", "string"), ("duration_s", "float64"),
-    ("clock", "string"), ("controller", "string"),
+    ("run_id", "string"),
+    ("experiment", "string"),
+    ("world", "string"),
+    ("seed", "int64"),
+    ("team", "string"),
+    ("robots_n", "int64"),
+    ("wireless", "string"),
+    ("duration_s", "float64"),
+    ("clock", "string"),
+    ("controller", "string"),
     *((c, "int64" if c in _INT_SCORES else "float64") for c in SCORE_COLUMNS),
-    ("time_s", "float64"), ("wall_s", "float64"), ("start_s", "float64"), ("setup_s", "float64"),
-    ("control_s", "float64"), ("stop_s", "float64"), ("error", "string"), ("log", "string"),
-    ("robots", "string"), ("config", "string"), ("node", "string"), ("finished_at", "string"),
+    ("time_s", "float64"),
+    ("wall_s", "float64"),
+    ("start_s", "float64"),
+    ("setup_s", "float64"),
+    ("control_s", "float64"),
+    ("stop_s", "float64"),
+    ("error", "string"),
+    ("log", "string"),
+    ("robots", "string"),
+    ("config", "string"),
+    ("node", "string"),
+    ("finished_at", "string"),
 )
 COLUMN_NAMES = tuple(name for name, _ in COLUMNS)
 

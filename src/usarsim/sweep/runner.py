@@ -128,8 +128,15 @@ def execute(run: Run) -> dict[str, Any]:
         extra = ["--score-file", str(score_path)]
         if run.wireless not in ("off", "world"):
             extra += ["--wireless-model", run.wireless]
-        server = launch(world=run.world, seed=run.seed, lockstep=run.clock == "lockstep", speed=None,
-                        wireless=run.wireless != "off", robot_dirs=run.robot_dirs, extra_args=tuple(extra))
+        server = launch(
+            world=run.world,
+            seed=run.seed,
+            lockstep=run.clock == "lockstep",
+            speed=None,
+            wireless=run.wireless != "off",
+            robot_dirs=run.robot_dirs,
+            extra_args=tuple(extra),
+        )
         phases["start_s"] = time.monotonic() - t0
 
         def on_timeout() -> None:
@@ -241,8 +248,10 @@ def _run_brain(run: Run, server: Any, phases: dict[str, float]) -> None:
     factory = resolve_brain(run.controller.target)
     period = run.controller.period
     with server.connect() as world:
-        brains = [factory(robot, origin=origin, **brain_kwargs(run, factory, i))
-                  for i, (robot, origin) in enumerate(_spawn_team(run, world))]
+        brains = [
+            factory(robot, origin=origin, **brain_kwargs(run, factory, i))
+            for i, (robot, origin) in enumerate(_spawn_team(run, world))
+        ]
         if world.lockstep:
             world.step(period)  # the first readings
         phases["setup_s"] = time.monotonic() - t
@@ -255,10 +264,20 @@ def command_values(run: Run, server: Any) -> dict[str, str]:
     """What a controller command's placeholders stand for (docs/experiments.md)."""
     first = run.team[0]
     team = [f"{m.robot}:{m.name}:{m.start or ''}" for m in run.team]
-    return {"host": server.host, "port": str(server.port), "truth_port": str(server.ports.get("truth", "")),
-            "wcs_port": str(server.ports.get("comserver", "")), "seconds": f"{run.duration_s:g}",
-            "seed": str(run.seed), "world": run.world, "lockstep": "1" if run.clock == "lockstep" else "0",
-            "robot": first.robot, "name": first.name, "start": first.start or "", "team": ",".join(team)}
+    return {
+        "host": server.host,
+        "port": str(server.port),
+        "truth_port": str(server.ports.get("truth", "")),
+        "wcs_port": str(server.ports.get("comserver", "")),
+        "seconds": f"{run.duration_s:g}",
+        "seed": str(run.seed),
+        "world": run.world,
+        "lockstep": "1" if run.clock == "lockstep" else "0",
+        "robot": first.robot,
+        "name": first.name,
+        "start": first.start or "",
+        "team": ",".join(team),
+    }
 
 
 def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], deadline: float) -> None:
@@ -273,11 +292,14 @@ def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], dea
     env.update({f"USARSIM_{k.upper()}": v for k, v in values.items()})
     env["USARSIM_TEAM_JSON"] = json.dumps([m.as_dict() for m in run.team])
     out_path = tmp / "controller.log"
-    with open(out_path, "w+b") as out, \
-            connect(server.host, server.port, lockstep=False, truth_port=server.ports["truth"]) as clock:
+    with (
+        open(out_path, "w+b") as out,
+        connect(server.host, server.port, lockstep=False, truth_port=server.ports["truth"]) as clock,
+    ):
         try:
-            proc = subprocess.Popen(argv, cwd=run.cwd, stdin=subprocess.DEVNULL, stdout=out,
-                                    stderr=subprocess.STDOUT, env=env)
+            proc = subprocess.Popen(
+                argv, cwd=run.cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT, env=env
+            )
         except OSError as exc:
             raise RunFailed(f"the controller command cannot start: {exc}") from None
         phases["setup_s"] = time.monotonic() - t
@@ -310,8 +332,9 @@ def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], dea
         if not stopped and proc.returncode != 0 and time.monotonic() <= deadline:
             out.seek(0)
             tail = out.read().decode("utf-8", "replace")[-OUTPUT_TAIL_CHARS:].strip()
-            raise RunFailed(f"the controller exited with code {proc.returncode}"
-                            + (f": {tail}" if tail else " and printed nothing"))
+            raise RunFailed(
+                f"the controller exited with code {proc.returncode}" + (f": {tail}" if tail else " and printed nothing")
+            )
 
 
 # ---------------------------------------------------------------- the sweep
@@ -344,8 +367,7 @@ def start_ray(workers: int | None, address: str | None) -> bool:
     # ray.init makes SIGTERM exit the driver (sys.exit) after its native crash handler printed
     # a stack dump; a handler the caller put in place (stop_on_signals: store what finished,
     # then stop, in one line) is put back after it
-    own_sigterm = signal.getsignal(signal.SIGTERM) if threading.current_thread() is threading.main_thread() \
-        else None
+    own_sigterm = signal.getsignal(signal.SIGTERM) if threading.current_thread() is threading.main_thread() else None
     try:
         if address:
             ray.init(address=address, **quiet)
@@ -372,12 +394,21 @@ def _check_reachable(address: str) -> None:
     try:
         socket.create_connection((host or "127.0.0.1", int(port)), timeout=5.0).close()
     except OSError as exc:
-        raise SweepError(f"cannot join the Ray cluster at {address}: nothing answers there ({exc.strerror or exc}); "
-                         "start its head with 'ray start --head' or give its address") from None
+        raise SweepError(
+            f"cannot join the Ray cluster at {address}: nothing answers there ({exc.strerror or exc}); "
+            "start its head with 'ray start --head' or give its address"
+        ) from None
 
 
-def run_sweep(experiment: Experiment, out_dir: str | Path, *, workers: int | None = None,
-              address: str | None = None, progress: bool = True, console: Any = None) -> SweepOutcome:
+def run_sweep(
+    experiment: Experiment,
+    out_dir: str | Path,
+    *,
+    workers: int | None = None,
+    address: str | None = None,
+    progress: bool = True,
+    console: Any = None,
+) -> SweepOutcome:
     """Run every run of ``experiment`` that ``out_dir`` has no successful row of, as Ray
     tasks (at most ``workers`` at a time when given), storing each row as it arrives.
 
@@ -471,8 +502,13 @@ def _deferred_signals() -> Iterator[None]:
 def _lost_row(run: Run, exc: BaseException) -> dict[str, Any]:
     row = run.columns()
     row.update({c: None for c in SCORE_COLUMNS})
-    row.update(time_s=None, robots=None, error=f"the run's Ray task failed: {_describe(exc)}", log="",
-               finished_at=datetime.now(UTC).isoformat(timespec="seconds"))
+    row.update(
+        time_s=None,
+        robots=None,
+        error=f"the run's Ray task failed: {_describe(exc)}",
+        log="",
+        finished_at=datetime.now(UTC).isoformat(timespec="seconds"),
+    )
     return row
 
 
@@ -493,10 +529,16 @@ class _Progress:
                 TimeRemainingColumn,
             )
 
-            self.progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                                     TextColumn("runs, [red]{task.fields[failed]} failed"), TimeElapsedColumn(),
-                                     TextColumn("ETA"), TimeRemainingColumn(),
-                                     console=console or Console(stderr=True))
+            self.progress = Progress(
+                TextColumn("[bold]{task.description}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("runs, [red]{task.fields[failed]} failed"),
+                TimeElapsedColumn(),
+                TextColumn("ETA"),
+                TimeRemainingColumn(),
+                console=console or Console(stderr=True),
+            )
             self.task = self.progress.add_task(name, total=total, failed=0)
 
     def __enter__(self) -> _Progress:

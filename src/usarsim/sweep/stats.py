@@ -30,14 +30,46 @@ T_CLIPPED = "t-clipped"
 POISSON = "poisson"
 
 # How each method is named for people (tables' footnotes, plots' titles).
-METHOD_NAMES = {T: "Student's t", T_CLIPPED: "Student's t, clipped to the possible range",
-                POISSON: "exact Poisson (Garwood)"}
+METHOD_NAMES = {
+    T: "Student's t",
+    T_CLIPPED: "Student's t, clipped to the possible range",
+    POISSON: "exact Poisson (Garwood)",
+}
 
 # Student's t, two-sided 95 % (the 0.975 quantile), by degrees of freedom; beyond 30 it is
 # interpolated in 1/df towards the normal's 1.960.
-_T975 = (12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145,
-         2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045,
-         2.042)
+_T975 = (
+    12.706,
+    4.303,
+    3.182,
+    2.776,
+    2.571,
+    2.447,
+    2.365,
+    2.306,
+    2.262,
+    2.228,
+    2.201,
+    2.179,
+    2.160,
+    2.145,
+    2.131,
+    2.120,
+    2.110,
+    2.101,
+    2.093,
+    2.086,
+    2.080,
+    2.074,
+    2.069,
+    2.064,
+    2.060,
+    2.056,
+    2.052,
+    2.048,
+    2.045,
+    2.042,
+)
 _T975_FAR = ((30, 2.042), (40, 2.021), (60, 2.000), (120, 1.980), (math.inf, 1.960))
 
 ALPHA = 0.05  # two-sided: 2.5 % on each side
@@ -56,8 +88,9 @@ def t975(df: int) -> float:
     return 1.960
 
 
-def t_interval(values: Sequence[float], low: float | None = None,
-               high: float | None = None) -> tuple[float, float] | None:
+def t_interval(
+    values: Sequence[float], low: float | None = None, high: float | None = None
+) -> tuple[float, float] | None:
     """The 95 % t interval of the mean of ``values`` (None for fewer than two), clipped to
     [``low``, ``high``] where given."""
     n = len(values)

@@ -102,7 +102,7 @@ def raw_to_jpeg(payload: bytes) -> bytes:
     from PIL import Image
 
     w, h = struct.unpack(">HH", payload[:4])
-    bgr = np.frombuffer(payload[4:4 + 3 * w * h], dtype=np.uint8).reshape(h, w, 3)
+    bgr = np.frombuffer(payload[4 : 4 + 3 * w * h], dtype=np.uint8).reshape(h, w, 3)
     buf = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(bgr[:, :, ::-1])).save(buf, "JPEG", quality=85)
     return buf.getvalue()
@@ -124,6 +124,7 @@ def view3d_request(query) -> dict:
     Y left, Z up, metres), ``azimuth`` and ``elevation`` (degrees), ``distance`` (metres),
     ``width`` and ``height`` (pixels), and optionally ``follow``, a robot's name.  Raises
     ValueError with what is wrong."""
+
     def number(key: str) -> float:
         text = query.get(key)
         if text is None:
@@ -141,16 +142,22 @@ def view3d_request(query) -> dict:
         raise ValueError("lookat must be three finite numbers")
     width, height = int(number("width")), int(number("height"))
     if not (VIEW3D_MIN_SIZE <= width <= VIEW3D_MAX_SIZE[0] and VIEW3D_MIN_SIZE <= height <= VIEW3D_MAX_SIZE[1]):
-        raise ValueError(f"the picture must be {VIEW3D_MIN_SIZE}x{VIEW3D_MIN_SIZE}.."
-                         f"{VIEW3D_MAX_SIZE[0]}x{VIEW3D_MAX_SIZE[1]}, not {width}x{height}")
+        raise ValueError(
+            f"the picture must be {VIEW3D_MIN_SIZE}x{VIEW3D_MIN_SIZE}.."
+            f"{VIEW3D_MAX_SIZE[0]}x{VIEW3D_MAX_SIZE[1]}, not {width}x{height}"
+        )
     follow = query.get("follow") or None
     if follow is not None and not NAME_RE.match(follow):
         raise ValueError(f"not a robot name: {follow!r}")
-    return {"width": width, "height": height, "lookat": lookat,
-            "azimuth": math.remainder(number("azimuth"), 360.0),
-            "elevation": min(90.0, max(-90.0, number("elevation"))),
-            "distance": min(VIEW3D_DISTANCE_M[1], max(VIEW3D_DISTANCE_M[0], number("distance"))),
-            "follow": follow}
+    return {
+        "width": width,
+        "height": height,
+        "lookat": lookat,
+        "azimuth": math.remainder(number("azimuth"), 360.0),
+        "elevation": min(90.0, max(-90.0, number("elevation"))),
+        "distance": min(VIEW3D_DISTANCE_M[1], max(VIEW3D_DISTANCE_M[0], number("distance"))),
+        "follow": follow,
+    }
 
 
 def truth_row(text: str) -> dict | None:
@@ -161,9 +168,13 @@ def truth_row(text: str) -> dict | None:
         return None
     seg = {s.key.lower(): s.value for s in raw.segments}
     try:
-        return {"name": seg["name"], "class": seg["class"], "time": float(seg["time"]),
-                "location": [float(v) for v in seg["location"].split(",")],
-                "rotation": [float(v) for v in seg["rotation"].split(",")]}
+        return {
+            "name": seg["name"],
+            "class": seg["class"],
+            "time": float(seg["time"]),
+            "location": [float(v) for v in seg["location"].split(",")],
+            "rotation": [float(v) for v in seg["rotation"].split(",")],
+        }
     except (KeyError, ValueError):
         return None
 
@@ -337,8 +348,10 @@ class WebConsole:
     async def stop(self) -> None:
         self._stopped = True
         self.app.facade.remove_output_watcher(self._outputs_seen)
-        await asyncio.gather(*(ws.close(code=1001, message=b"the simulator is shutting down")
-                               for ws in list(self._sockets)), return_exceptions=True)
+        await asyncio.gather(
+            *(ws.close(code=1001, message=b"the simulator is shutting down") for ws in list(self._sockets)),
+            return_exceptions=True,
+        )
         for task in list(self._tasks):
             task.cancel()
         for b in list(self._bridges):
@@ -362,12 +375,22 @@ class WebConsole:
         if open_now <= self.max_connections:
             return await handler(request)
         if self.refused == 0 or open_now > self._refused_at:
-            refuse(log, f"console {request.remote}", open_now, self.max_connections, "--max-web-connections",
-                   what=request.path, state="open")
+            refuse(
+                log,
+                f"console {request.remote}",
+                open_now,
+                self.max_connections,
+                "--max-web-connections",
+                what=request.path,
+                state="open",
+            )
         self.refused += 1
         self._refused_at = open_now
-        return web.Response(status=503, text=f"usarsim: more than {self.max_connections} connections to the web "
-                            "console; close a page and retry\n", headers={"Connection": "close", "Retry-After": "5"})
+        return web.Response(
+            status=503,
+            text=f"usarsim: more than {self.max_connections} connections to the web console; close a page and retry\n",
+            headers={"Connection": "close", "Retry-After": "5"},
+        )
 
     @property
     def service_host(self) -> str:
@@ -394,14 +417,20 @@ class WebConsole:
     async def _info(self, request: web.Request) -> web.Response:
         a = self.app
         image = a.image
-        return web.json_response({
-            "version": __version__,
-            "world": a.world.name,
-            "lockstep": bool(a.facade.lockstep),
-            "ports": {"control": a.control.port, "truth": a.truth.port if a.truth is not None else None,
-                      "image": image.port if image is not None else None, "web": self.port},
-            "image_size": [a.image_settings.width, a.image_settings.height] if image is not None else None,
-        })
+        return web.json_response(
+            {
+                "version": __version__,
+                "world": a.world.name,
+                "lockstep": bool(a.facade.lockstep),
+                "ports": {
+                    "control": a.control.port,
+                    "truth": a.truth.port if a.truth is not None else None,
+                    "image": image.port if image is not None else None,
+                    "web": self.port,
+                },
+                "image_size": [a.image_settings.width, a.image_settings.height] if image is not None else None,
+            }
+        )
 
     async def _world(self, request: web.Request) -> web.Response:
         if self._world_json is None:
@@ -437,8 +466,9 @@ class WebConsole:
         try:
             rows = await self._truth.query()
         except (TimeoutError, OSError, ConnectionError, asyncio.IncompleteReadError) as exc:
-            return web.json_response({"error": f"the ground-truth service did not answer: {exc}", "objects": []},
-                                     status=503)
+            return web.json_response(
+                {"error": f"the ground-truth service did not answer: {exc}", "objects": []}, status=503
+            )
         return web.json_response({"objects": rows})
 
     # the 3-D view ---------------------------------------------------------------------------
@@ -475,8 +505,9 @@ class WebConsole:
         finally:
             self._view3d_rendering -= 1
         camera["width"], camera["height"] = req["width"], req["height"]
-        return web.Response(body=jpeg, content_type="image/jpeg",
-                            headers={"X-View": json.dumps(camera, separators=(",", ":"))})
+        return web.Response(
+            body=jpeg, content_type="image/jpeg", headers={"X-View": json.dumps(camera, separators=(",", ":"))}
+        )
 
     # robot sessions -----------------------------------------------------------------------
     async def _control_ws(self, request: web.Request) -> web.WebSocketResponse:
@@ -518,8 +549,9 @@ class WebConsole:
                 await ws.close()
         return ws
 
-    async def _relay_lines(self, reader: asyncio.StreamReader, ws: web.WebSocketResponse,
-                           bridge: ControlBridge) -> None:
+    async def _relay_lines(
+        self, reader: asyncio.StreamReader, ws: web.WebSocketResponse, bridge: ControlBridge
+    ) -> None:
         """Every line the simulator sends on a control connection, one WebSocket message each.
         A page that reads slowly slows this down, and the simulator then keeps only the
         latest status and sensor lines for it, as for any slow client."""
@@ -566,11 +598,20 @@ class WebConsole:
             by_type.setdefault(d.item_type, []).append(d)
         lines = []
         for item_type, items in by_type.items():
-            geo = M.ItemGeometry(item_type=item_type, items=tuple(
-                M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount) for d in items))
-            conf = M.ItemConfiguration(item_type=item_type, items=tuple(
-                M.ItemConf(name=d.name, fields=tuple(facade.live_conf(uid, d.item_type, d.name) or d.conf))
-                for d in items))
+            geo = M.ItemGeometry(
+                item_type=item_type,
+                items=tuple(
+                    M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount)
+                    for d in items
+                ),
+            )
+            conf = M.ItemConfiguration(
+                item_type=item_type,
+                items=tuple(
+                    M.ItemConf(name=d.name, fields=tuple(facade.live_conf(uid, d.item_type, d.name) or d.conf))
+                    for d in items
+                ),
+            )
             lines += [M.format_message(geo).rstrip("\r\n"), M.format_message(conf).rstrip("\r\n")]
         return lines
 
@@ -617,9 +658,15 @@ class WebConsole:
             self._watches.add(watch)
             self._set_watched()
             robot = session.robot
-            await ws.send_json({"watching": watch.name, "class": robot.class_name if robot is not None else None,
-                                "controller": conn.peer, "time": round(self.app.facade.time, 3),
-                                "describe": self._describe(uid, robot) if robot is not None else []})
+            await ws.send_json(
+                {
+                    "watching": watch.name,
+                    "class": robot.class_name if robot is not None else None,
+                    "controller": conn.peer,
+                    "time": round(self.app.facade.time, 3),
+                    "describe": self._describe(uid, robot) if robot is not None else [],
+                }
+            )
             log.info("console %s: watching robot %s of %s", request.remote, watch.name, conn.peer)
             pump = self._spawn(self._relay_watch(ws, watch))
             async for _ in ws:
@@ -654,8 +701,13 @@ class WebConsole:
                         continue
                     await ws.send_str(text)
                 if not self._present(w):
-                    await ws.send_json({"left": w.name, "time": round(self.app.facade.time, 3),
-                                        "reason": "its controller's connection closed"})
+                    await ws.send_json(
+                        {
+                            "left": w.name,
+                            "time": round(self.app.facade.time, 3),
+                            "reason": "its controller's connection closed",
+                        }
+                    )
                     await ws.close(code=1000, message=b"the robot left the world")
                     return
         except (ConnectionError, OSError, RuntimeError):

@@ -56,22 +56,33 @@ def _mesh_vertices(path: str) -> np.ndarray:
         if len(data) < 84:
             return np.zeros((0, 3))
         (count,) = struct.unpack_from("<I", data, 80)
-        tris = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
-                             count=min(count, (len(data) - 84) // 50), offset=84)
+        tris = np.frombuffer(
+            data,
+            dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
+            count=min(count, (len(data) - 84) // 50),
+            offset=84,
+        )
         return tris["v"].reshape(-1, 3).astype(float)
     except (OSError, ValueError):
         return np.zeros((0, 3))
 
 
-def shape_points(shape: str, size=(0.0, 0.0, 0.0), radius: float = 0.0, length: float = 0.0,
-                 mesh_file: str = "", scale=(1.0, 1.0, 1.0)) -> np.ndarray:
+def shape_points(
+    shape: str,
+    size=(0.0, 0.0, 0.0),
+    radius: float = 0.0,
+    length: float = 0.0,
+    mesh_file: str = "",
+    scale=(1.0, 1.0, 1.0),
+) -> np.ndarray:
     """Points of a shape's outline in its own frame (N x 3)."""
     if shape == "cylinder":
         a = np.linspace(0.0, 2.0 * math.pi, CIRCLE_POINTS, endpoint=False)
         ring = np.stack([radius * np.cos(a), radius * np.sin(a)], axis=1)
         h = length / 2.0
-        return np.concatenate([np.column_stack([ring, np.full(len(a), -h)]),
-                               np.column_stack([ring, np.full(len(a), h)])])
+        return np.concatenate(
+            [np.column_stack([ring, np.full(len(a), -h)]), np.column_stack([ring, np.full(len(a), h)])]
+        )
     if shape == "mesh":
         v = _mesh_vertices(mesh_file)
         return v * np.asarray(scale, dtype=float) if len(v) else np.zeros((1, 3))
@@ -124,8 +135,15 @@ def world_json(world: WorldConfig) -> dict:
     for o in world.objects:
         pts = shape_points(o.shape, o.size, o.radius_m, o.length_m, o.mesh_file, o.scale)
         poly, top, bottom = footprint(pts, o.center, o.rotation)
-        entry = {"name": o.name, "shape": o.shape, "poly": poly, "top": round(top, 3), "bottom": round(bottom, 3),
-                 "rgba": _rgba(world, o.material), "movable": o.mass_kg > 0}
+        entry = {
+            "name": o.name,
+            "shape": o.shape,
+            "poly": poly,
+            "top": round(top, 3),
+            "bottom": round(bottom, 3),
+            "rgba": _rgba(world, o.material),
+            "movable": o.mass_kg > 0,
+        }
         if o.mass_kg > 0:  # drawn where the ground truth says it is now: its outline in its own frame
             local, _, _ = footprint(pts, (0.0, 0.0, 0.0), (o.rotation[0], o.rotation[1], 0.0))
             entry.update(local=local, center=_r(o.center), yaw=round(o.rotation[2], 4))
@@ -155,11 +173,20 @@ def world_json(world: WorldConfig) -> dict:
         "objects": objects,
         "false_alarms": alarms,
         "water": water,
-        "victims": [{"name": v.name, "location": _r(v.location), "rotation": _r(v.rotation), "posture": v.posture,
-                     "waving": v.waving} for v in world.victims],
+        "victims": [
+            {
+                "name": v.name,
+                "location": _r(v.location),
+                "rotation": _r(v.rotation),
+                "posture": v.posture,
+                "waving": v.waving,
+            }
+            for v in world.victims
+        ],
         "rfid_tags": [{"id": t.tag_id, "location": _r(t.location)} for t in world.rfid_tags],
-        "start_poses": [{"name": p.name, "location": _r(p.location), "rotation": _r(p.rotation)}
-                        for p in world.start_poses],
+        "start_poses": [
+            {"name": p.name, "location": _r(p.location), "rotation": _r(p.rotation)} for p in world.start_poses
+        ],
     }
 
 
@@ -176,8 +203,11 @@ def robot_class_json(robot) -> dict:
         "dimensions": _r(robot.geometry.dimensions),
         "max_speed": round(robot.max_speed_rad_s, 4),
         "max_front_steer": round(robot.max_front_steer_rad, 4),
-        "aerial": {"linear": robot.aerial.max_linear_m_s, "vertical": robot.aerial.max_vertical_m_s,
-                   "yaw_rate": robot.aerial.max_yaw_rate_rad_s},
+        "aerial": {
+            "linear": robot.aerial.max_linear_m_s,
+            "vertical": robot.aerial.max_vertical_m_s,
+            "yaw_rate": robot.aerial.max_yaw_rate_rad_s,
+        },
         # the Z (down) of a location where the robot stands on a floor at z = 0
         "spawn_z": round(-(robot.lowest_point_m + robot.spawn_clearance_m), 3),
         "cameras": cameras,

@@ -44,8 +44,9 @@ def check_word(text: str, what: str, forbidden: str) -> str:
     """``text`` when it is one non-empty word free of the ``forbidden`` characters, for
     formatting what a client sends; otherwise :class:`~usarsim.errors.ProtocolError`."""
     if not text or len(text.split()) != 1 or text != text.strip() or any(c in forbidden for c in text):
-        raise ProtocolError(f"cannot send {what} {shorten(text)}: it must be one word without "
-                            f"spaces or any of {forbidden!r}")
+        raise ProtocolError(
+            f"cannot send {what} {shorten(text)}: it must be one word without spaces or any of {forbidden!r}"
+        )
     return text
 
 
@@ -54,8 +55,10 @@ def check_value(text: str, what: str) -> str:
     (no braces or line breaks, no blanks around it, not empty); otherwise
     :class:`~usarsim.errors.ProtocolError`."""
     if not text or text != text.strip() or any(c in "{}\r\n" for c in text):
-        raise ProtocolError(f"cannot send {what} {shorten(text)}: it must be non-empty text without "
-                            "braces, line breaks or blanks at its ends")
+        raise ProtocolError(
+            f"cannot send {what} {shorten(text)}: it must be non-empty text without "
+            "braces, line breaks or blanks at its ends"
+        )
     return text
 
 
@@ -63,6 +66,7 @@ def format_unknown(word: str, segments: tuple[Segment, ...]) -> str:
     """``WORD {Key value} ...`` ending with CR LF: a request of a word the server does not
     know, as a client would send it (to test a server's answer)."""
     parts = [check_word(word, "request word", "{}")]
-    parts += [format_segment(check_word(s.key, "key", "{}"), check_value(s.value, s.key) if s.value else "")
-              for s in segments]
+    parts += [
+        format_segment(check_word(s.key, "key", "{}"), check_value(s.value, s.key) if s.value else "") for s in segments
+    ]
     return " ".join(parts) + "\r\n"

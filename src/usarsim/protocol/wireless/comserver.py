@@ -220,8 +220,9 @@ def parse_wcs_request(text: str) -> WcsRequest:
     cls, usage, ports = spec
     args = words[1:]
     if len(args) != len(ports):
-        raise ProtocolError(f"{word} takes {len(ports)} words ({word} {usage};), got {len(args)} in "
-                            f"{shorten(text.strip())}")
+        raise ProtocolError(
+            f"{word} takes {len(ports)} words ({word} {usage};), got {len(args)} in {shorten(text.strip())}"
+        )
     values = [parse_port(a, f"{word}: a port") if is_port else a for a, is_port in zip(args, ports)]
     command: WcsRequest = cls(*values)
     return command
@@ -237,8 +238,10 @@ def format_wcs_request(cmd: WcsRequest) -> str:
     spec = _COMMANDS.get(getattr(cmd, "type", ""))
     if spec is None or not isinstance(cmd, spec[0]):
         raise TypeError(f"not a ComServer command: {cmd!r}")
-    words = [check_port(v, f"{cmd.type} port") if is_port else check_word(v, f"{cmd.type} word", _FORBIDDEN)
-             for v, is_port in zip(astuple(cmd), spec[2])]
+    words = [
+        check_port(v, f"{cmd.type} port") if is_port else check_word(v, f"{cmd.type} word", _FORBIDDEN)
+        for v, is_port in zip(astuple(cmd), spec[2])
+    ]
     return " ".join([cmd.type, *words]) + ";"
 
 
@@ -464,8 +467,11 @@ class SendParser:
                     out.append(bytes(self._body))
                     self._state = "head"
                 else:
-                    out.append(SendProblem("wrong-length", f"SEND of {len(self._body)} bytes not followed by ';' "
-                                                           "(a wrong length)"))
+                    out.append(
+                        SendProblem(
+                            "wrong-length", f"SEND of {len(self._body)} bytes not followed by ';' (a wrong length)"
+                        )
+                    )
                     self._state = "skip"
                 self._body = bytearray()
             elif st == "close":
@@ -484,7 +490,7 @@ class SendParser:
                 if j < 0:
                     buf.clear()
                     break
-                del buf[:j + 1]
+                del buf[: j + 1]
                 self._state = "head"
         return out
 

@@ -91,8 +91,9 @@ class GetObsPoints:
         raises :class:`~usarsim.errors.ProtocolError` (answered ``{ObstCount -1}``)."""
         p, q = parse_vector(self.start), parse_vector(self.end)
         if not all(math.isfinite(v) for v in p + q):
-            raise ProtocolError(f"GETOBS: Start and End must be finite, got {shorten(self.start)} and "
-                                f"{shorten(self.end)}")
+            raise ProtocolError(
+                f"GETOBS: Start and End must be finite, got {shorten(self.start)} and {shorten(self.end)}"
+            )
         return p, q  # type: ignore[return-value]
 
 
@@ -201,8 +202,10 @@ def format_interface_reply(reply: InterfaceReply) -> str:
     """The line the ComServerInterface sends for ``reply``, ending with CR LF."""
     if isinstance(reply, Positions):
         parts = [f"POSITIONS {{Robots {len(reply.robots)}}}"]
-        parts += [f"{{Name {r.name} Location {vec4(r.location)} BatteryEmpty {bool_str(r.battery_empty)}}}"
-                  for r in reply.robots]
+        parts += [
+            f"{{Name {r.name} Location {vec4(r.location)} BatteryEmpty {bool_str(r.battery_empty)}}}"
+            for r in reply.robots
+        ]
         return " ".join(parts) + _CRLF
     if isinstance(reply, NumObs):
         query = _query(reply.query) + " " if reply.query is not None else ""

@@ -209,8 +209,7 @@ def _parse_reverse_dns(raw: RawMessage) -> WssRequest:
         return WssInvalid("REVERSEDNS", REASON_PORT_NOT_INTEGER)
 
 
-_REQUEST_PARSERS = {"INIT": _parse_init, "GETSS": _parse_getss, "DNS": _parse_dns,
-                    "REVERSEDNS": _parse_reverse_dns}
+_REQUEST_PARSERS = {"INIT": _parse_init, "GETSS": _parse_getss, "DNS": _parse_dns, "REVERSEDNS": _parse_reverse_dns}
 
 
 def parse_wss_request(line: str) -> WssRequest:

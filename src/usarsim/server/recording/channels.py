@@ -27,20 +27,37 @@ LOG_TOPIC = "/usarsim/log"
 RADIO_PREFIX = "/usarsim/radio/"
 
 STATE_SCHEMA = {
-    "title": "usarsim.RobotState", "type": "object",
-    "properties": {"battery_s": {"type": "number", "description": "battery left, s"},
-                   "speed_m_s": {"type": "number", "description": "ground speed from the ground truth, m/s"},
-                   "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"},
-                   "yaw": {"type": "number", "description": "USARSim yaw, rad"}}}
+    "title": "usarsim.RobotState",
+    "type": "object",
+    "properties": {
+        "battery_s": {"type": "number", "description": "battery left, s"},
+        "speed_m_s": {"type": "number", "description": "ground speed from the ground truth, m/s"},
+        "x": {"type": "number"},
+        "y": {"type": "number"},
+        "z": {"type": "number"},
+        "yaw": {"type": "number", "description": "USARSim yaw, rad"},
+    },
+}
 STATUS_SCHEMA = {
-    "title": "usarsim.RobotStatus", "type": "object",
-    "properties": {"battery_s": {"type": "integer", "description": "STA's Battery, s"},
-                   "front_steer": {"type": "number"}, "rear_steer": {"type": "number"},
-                   "light": {"type": "boolean"}}}
+    "title": "usarsim.RobotStatus",
+    "type": "object",
+    "properties": {
+        "battery_s": {"type": "integer", "description": "STA's Battery, s"},
+        "front_steer": {"type": "number"},
+        "rear_steer": {"type": "number"},
+        "light": {"type": "boolean"},
+    },
+}
 LINK_SCHEMA = {
-    "title": "usarsim.RadioLink", "type": "object",
-    "properties": {"signal_dbm": {"type": "number"}, "distance_m": {"type": "number"},
-                   "walls": {"type": "integer"}, "holds": {"type": "boolean"}}}
+    "title": "usarsim.RadioLink",
+    "type": "object",
+    "properties": {
+        "signal_dbm": {"type": "number"},
+        "distance_m": {"type": "number"},
+        "walls": {"type": "integer"},
+        "holds": {"type": "boolean"},
+    },
+}
 
 LEVELS = ((logging.ERROR, LogLevel.Error), (logging.WARNING, LogLevel.Warning), (logging.INFO, LogLevel.Info))
 
@@ -55,9 +72,12 @@ def log_level(levelno: int) -> LogLevel:
 
 
 def json_channel(schema: dict) -> Callable[[str, foxglove.Context], object]:
-    return lambda topic, ctx: foxglove.Channel(topic, schema=foxglove.Schema(
-        name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()), message_encoding="json",
-        context=ctx)
+    return lambda topic, ctx: foxglove.Channel(
+        topic,
+        schema=foxglove.Schema(name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()),
+        message_encoding="json",
+        context=ctx,
+    )
 
 
 def typed(cls) -> Callable[[str, foxglove.Context], object]:
@@ -79,9 +99,11 @@ STATUS = json_channel(STATUS_SCHEMA)
 LINK = json_channel(LINK_SCHEMA)
 
 
-_XYZ = [PackedElementField(name="x", offset=0, type=PackedElementFieldNumericType.Float32),
-        PackedElementField(name="y", offset=4, type=PackedElementFieldNumericType.Float32),
-        PackedElementField(name="z", offset=8, type=PackedElementFieldNumericType.Float32)]
+_XYZ = [
+    PackedElementField(name="x", offset=0, type=PackedElementFieldNumericType.Float32),
+    PackedElementField(name="y", offset=4, type=PackedElementFieldNumericType.Float32),
+    PackedElementField(name="z", offset=8, type=PackedElementFieldNumericType.Float32),
+]
 
 
 def point_cloud(robot: str, v: RangeScan3DReading, t: float) -> PointCloud:
@@ -97,5 +119,6 @@ def point_cloud(robot: str, v: RangeScan3DReading, t: float) -> PointCloud:
     yaw = hfov / 2.0 - hres * (k % cols)  # USARSim yaw: to the right
     c = np.cos(pitch)
     xyz = np.column_stack((r * c * np.cos(yaw), -r * c * np.sin(yaw), r * np.sin(pitch))).astype("<f4")
-    return PointCloud(timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", point_stride=12, fields=_XYZ,
-                      data=xyz.tobytes())
+    return PointCloud(
+        timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", point_stride=12, fields=_XYZ, data=xyz.tobytes()
+    )

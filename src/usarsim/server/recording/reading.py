@@ -161,7 +161,7 @@ class _Reader:
 
     def _channel(self, body: bytes) -> None:
         cid, _, n = struct.unpack_from("<HHI", body, 0)  # channel id, schema id, topic's length
-        raw = body[8:8 + n]
+        raw = body[8 : 8 + n]
         if len(raw) != n:
             raise ValueError("the topic runs past the record's end")
         self.channels[cid] = raw.decode("utf-8")
@@ -175,7 +175,7 @@ class _Reader:
         out.count += 1
         out.end_ns = max(out.end_ns, log_time)
         if self.topics is None or topic in self.topics:
-            out.messages.append((topic, log_time, body[_MESSAGE.size:]))
+            out.messages.append((topic, log_time, body[_MESSAGE.size :]))
 
     def _records(self, pos: int, data: bytes, whole: bool) -> None:
         """The records of a chunk's uncompressed data; ``whole``: it must end with a record (a
@@ -187,7 +187,7 @@ class _Reader:
             opcode, length = _HEAD.unpack_from(data, k)
             if k + _HEAD.size + length > len(data):
                 break
-            body = data[k + _HEAD.size:k + _HEAD.size + length]
+            body = data[k + _HEAD.size : k + _HEAD.size + length]
             if opcode == CHANNEL:
                 self._channel(body)
             elif opcode == MESSAGE:
@@ -202,13 +202,13 @@ class _Reader:
 
     def _chunk(self, pos: int, body: bytes) -> None:
         _, _, usize, crc = _CHUNK.unpack_from(body, 0)
-        n, = struct.unpack_from("<I", body, _CHUNK.size)
+        (n,) = struct.unpack_from("<I", body, _CHUNK.size)
         k = _CHUNK.size + 4
-        compression = body[k:k + n].decode("utf-8")
+        compression = body[k : k + n].decode("utf-8")
         k += n
-        rlen, = struct.unpack_from("<Q", body, k)
+        (rlen,) = struct.unpack_from("<Q", body, k)
         k += 8
-        records = body[k:k + rlen]
+        records = body[k : k + rlen]
         if len(records) != rlen:
             raise ValueError("the chunk's records run past the record's end")
         if compression == "zstd":
@@ -245,10 +245,10 @@ class _Reader:
         """The records of a chunk cut short: its complete zstd blocks (a block is written
         whole or not at all; its messages are taken as they are, with no checksum to check)."""
         try:
-            n, = struct.unpack_from("<I", body, _CHUNK.size)
+            (n,) = struct.unpack_from("<I", body, _CHUNK.size)
             k = _CHUNK.size + 4
-            compression = body[k:k + n].decode("utf-8")
-            records = body[k + n + 8:]
+            compression = body[k : k + n].decode("utf-8")
+            records = body[k + n + 8 :]
             if compression == "zstd":
                 import zstandard
 
@@ -267,15 +267,15 @@ def _metadata(body: bytes) -> tuple[str, dict[str, str]]:
 
     def string() -> str:
         nonlocal k
-        n, = struct.unpack_from("<I", body, k)
-        s = body[k + 4:k + 4 + n]
+        (n,) = struct.unpack_from("<I", body, k)
+        s = body[k + 4 : k + 4 + n]
         if len(s) != n:
             raise ValueError("a string runs past the record's end")
         k += 4 + n
         return s.decode("utf-8")
 
     name = string()
-    size, = struct.unpack_from("<I", body, k)
+    (size,) = struct.unpack_from("<I", body, k)
     k += 4
     end = k + size
     pairs = {}

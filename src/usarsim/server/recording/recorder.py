@@ -91,20 +91,28 @@ def _write_options():
     physics keeps the other core."""
     from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
-    return MCAPWriteOptions(compression=MCAPCompression.Zstd, compression_level=1, compression_threads=0,
-                            chunk_size=CHUNK_SIZE)
+    return MCAPWriteOptions(
+        compression=MCAPCompression.Zstd, compression_level=1, compression_threads=0, chunk_size=CHUNK_SIZE
+    )
 
 
 # foxglove-sdk's own log: its native WebSocket server logs through Python's logging, under
 # these names (its Rust modules'; pyo3-log hands each record to the logger of that exact name,
 # so a filter goes on each).
-SDK_LOGGERS = ("foxglove.websocket.server", "foxglove.websocket_server", "foxglove.websocket.connected_client",
-               "foxglove.websocket.connected_client.poller", "foxglove.websocket.connected_client.send_lossy",
-               "foxglove.websocket.advertise")
+SDK_LOGGERS = (
+    "foxglove.websocket.server",
+    "foxglove.websocket_server",
+    "foxglove.websocket.connected_client",
+    "foxglove.websocket.connected_client.poller",
+    "foxglove.websocket.connected_client.send_lossy",
+    "foxglove.websocket.advertise",
+)
 # A viewer gone without closing its WebSocket (an app killed, a laptop closed, a network
 # dropped): what the sdk logs then, as an ERROR.
-_VIEWER_GONE = re.compile(r"Connection reset|without closing handshake|Broken pipe|Connection aborted|timed out|"
-                          r"os error (?:32|103|104|110)\b")
+_VIEWER_GONE = re.compile(
+    r"Connection reset|without closing handshake|Broken pipe|Connection aborted|timed out|"
+    r"os error (?:32|103|104|110)\b"
+)
 _HANDSHAKE_FAILED = re.compile(r"Dropping client (\S+): handshake failed")
 # The WebSocket subprotocols the sdk's server accepts (foxglove-sdk 0.30); a viewer that
 # offers none of them is answered HTTP 400 (docs/recording.md, "Live in Foxglove").
@@ -127,10 +135,14 @@ class _SdkLogFilter(logging.Filter):
         if refused:
             record.levelno, record.levelname = logging.WARNING, "WARNING"
             record.msg, record.args = (
-                f"Foxglove: refused the connection from {refused.group(1)} (HTTP 400): not a WebSocket viewer "
-                f"that offers the subprotocol {' or '.join(SUBPROTOCOLS)}; a viewer that offers only "
-                "foxglove.websocket.v1 (Lichtblick up to 1.21, older Foxglove Studio builds) cannot connect: use "
-                "the Foxglove app or a newer Lichtblick (docs/recording.md, 'Live in Foxglove')"), None
+                (
+                    f"Foxglove: refused the connection from {refused.group(1)} (HTTP 400): not a WebSocket viewer "
+                    f"that offers the subprotocol {' or '.join(SUBPROTOCOLS)}; a viewer that offers only "
+                    "foxglove.websocket.v1 (Lichtblick up to 1.21, older Foxglove Studio builds) cannot connect: use "
+                    "the Foxglove app or a newer Lichtblick (docs/recording.md, 'Live in Foxglove')"
+                ),
+                None,
+            )
         return True
 
 
@@ -148,8 +160,7 @@ class _LogTap(logging.Handler):
             msg = record.getMessage()
         except Exception:  # a bad format string in a log call must not stop the server
             msg = str(record.msg)
-        self.rec._q.put(("log", self.rec.sim_time(), record.levelno, record.name, msg, record.pathname,
-                         record.lineno))
+        self.rec._q.put(("log", self.rec.sim_time(), record.levelno, record.name, msg, record.pathname, record.lineno))
 
 
 @dataclass(slots=True)
@@ -170,8 +181,10 @@ class _Seen:
 def _moved(before, now) -> bool:
     if before is None:
         return True
-    return math.dist(before.location, now.location) > 1e-3 or \
-        max(abs(math.remainder(a - b, math.tau)) for a, b in zip(before.rotation, now.rotation, strict=True)) > 1e-3
+    return (
+        math.dist(before.location, now.location) > 1e-3
+        or max(abs(math.remainder(a - b, math.tau)) for a, b in zip(before.rotation, now.rotation, strict=True)) > 1e-3
+    )
 
 
 class _CountingQueue:
@@ -190,8 +203,11 @@ class _CountingQueue:
         self._q.put(item)
         if self.queued - self.done > BACKLOG_WARNING and not self._warned:
             self._warned = True
-            log.warning("recording: %d items wait to be written: the recorder falls behind the simulation "
-                        "(nothing is dropped; memory grows until it catches up)", self.queued - self.done)
+            log.warning(
+                "recording: %d items wait to be written: the recorder falls behind the simulation "
+                "(nothing is dropped; memory grows until it catches up)",
+                self.queued - self.done,
+            )
 
     def get(self, timeout: float | None = None):
         """The next item; queue.Empty when none came within ``timeout`` seconds."""
@@ -216,9 +232,18 @@ class Recorder:
     """Records to ``path`` (an MCAP file) and/or serves ``foxglove_port`` live; either may be
     None.  :meth:`attach` before the simulation starts, :meth:`start`, then :meth:`stop`."""
 
-    def __init__(self, world: WorldConfig, info: dict[str, str], *, path: str | None = None,
-                 foxglove_port: int | None = None, host: str = "127.0.0.1", frame_period_s: float = FRAME_PERIOD_S,
-                 camera_fps: float = 0.0, camera_size: tuple[int, int] = CAMERA_SIZE):
+    def __init__(
+        self,
+        world: WorldConfig,
+        info: dict[str, str],
+        *,
+        path: str | None = None,
+        foxglove_port: int | None = None,
+        host: str = "127.0.0.1",
+        frame_period_s: float = FRAME_PERIOD_S,
+        camera_fps: float = 0.0,
+        camera_size: tuple[int, int] = CAMERA_SIZE,
+    ):
         self.world = world
         self.info = info
         self.path = path
@@ -290,8 +315,9 @@ class Recorder:
         try:
             if self.path is not None:
                 ctx = foxglove.Context()
-                self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=ctx,
-                                                  writer_options=_write_options())
+                self._writer = foxglove.open_mcap(
+                    self.path, allow_overwrite=True, context=ctx, writer_options=_write_options()
+                )
                 self._writer.write_metadata(METADATA_NAME, self.info)
                 self._file_sink = _Sink(ctx)
                 self._sinks.append(self._file_sink)
@@ -303,9 +329,14 @@ class Recorder:
             ctx = foxglove.Context()
             try:
                 self.server = foxglove.start_server(
-                    name=f"usarsim {self.world.name}", host=self.host, port=self.foxglove_port, context=ctx,
-                    capabilities=[foxglove.Capability.Time], server_listener=_Listener(self),
-                    message_backlog_size=LIVE_BACKLOG)
+                    name=f"usarsim {self.world.name}",
+                    host=self.host,
+                    port=self.foxglove_port,
+                    context=ctx,
+                    capabilities=[foxglove.Capability.Time],
+                    server_listener=_Listener(self),
+                    message_backlog_size=LIVE_BACKLOG,
+                )
             except Exception as exc:
                 if self._writer is not None:
                     self._writer.close()
@@ -333,8 +364,9 @@ class Recorder:
         if self._writer is not None:
             self._writer.close()
             self._writer = None
-            log.info("recording: %d transcript chunks and %d messages written to %s", self.chunks, self.messages,
-                     self.path)
+            log.info(
+                "recording: %d transcript chunks and %d messages written to %s", self.chunks, self.messages, self.path
+            )
         if self.server is not None:
             self.server.stop()
             self.server = None
@@ -374,9 +406,15 @@ class Recorder:
 
     # The recorder's thread -----------------------------------------------------------
     def _run(self) -> None:
-        handlers = {"chunk": self._write_chunk, "outs": self._write_outputs, "frame": self._write_frame,
-                    "log": self._write_log, "world": self._write_world, "resend": self._resend_static,
-                    "picture": self._write_picture}
+        handlers = {
+            "chunk": self._write_chunk,
+            "outs": self._write_outputs,
+            "frame": self._write_frame,
+            "log": self._write_log,
+            "world": self._write_world,
+            "resend": self._resend_static,
+            "picture": self._write_picture,
+        }
         self._flushed_wall = time.monotonic()
         while True:
             wait = None
@@ -398,8 +436,10 @@ class Recorder:
             self._q.done += 1
             if self._writer is not None and item[0] != "resend":
                 self._unflushed = True
-                if time.monotonic() - self._flushed_wall >= FLUSH_WALL_S or \
-                        self._time() - self._flushed_sim >= FLUSH_SIM_S:
+                if (
+                    time.monotonic() - self._flushed_wall >= FLUSH_WALL_S
+                    or self._time() - self._flushed_sim >= FLUSH_SIM_S
+                ):
                     self._flush()
 
     def _flush(self) -> None:
@@ -425,8 +465,9 @@ class Recorder:
             sink.channel(topic, make).log(msg, log_time=ns)
         self.messages += 1
 
-    def _write_chunk(self, seq: int, conn: int, where, kind: str, sim_time: float, wall_time: float, data,
-                     size: int | None) -> None:
+    def _write_chunk(
+        self, seq: int, conn: int, where, kind: str, sim_time: float, wall_time: float, data, size: int | None
+    ) -> None:
         if self._file_sink is None:  # the transcript is for replay: the file only
             return
         port, peer = where or ("?", "?")
@@ -443,8 +484,14 @@ class Recorder:
             self._write_world([self._live_sink])
 
     def _write_log(self, t: float, levelno: int, name: str, msg: str, path: str, line: int) -> None:
-        self._log(ch.LOG_TOPIC, ch.LOG, Log(timestamp=scene.timestamp(t), level=ch.log_level(levelno),
-                                                          message=msg, name=name, file=path, line=line), t)
+        self._log(
+            ch.LOG_TOPIC,
+            ch.LOG,
+            Log(
+                timestamp=scene.timestamp(t), level=ch.log_level(levelno), message=msg, name=name, file=path, line=line
+            ),
+            t,
+        )
 
     # outputs ------------------------------------------------------------------------
     def _write_outputs(self, outs: list[Output]) -> None:
@@ -465,19 +512,45 @@ class Recorder:
             half = (n - 1) * v.resolution_rad / 2.0 if n > 1 else 0.0
             # USARSim sends the rightmost beam first: counter-clockwise from -half seen from above;
             # the ranges as the SEN line gives them (4 decimals, protocol.md 5)
-            self._log(f"/{robot}/{v.name}", ch.LASER, FLaserScan(
-                timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", start_angle=-half, end_angle=half,
-                ranges=np.round(np.asarray(v.ranges_m, dtype=float), 4).tolist()), t)
+            self._log(
+                f"/{robot}/{v.name}",
+                ch.LASER,
+                FLaserScan(
+                    timestamp=scene.timestamp(t),
+                    frame_id=f"{robot}/{v.name}",
+                    start_angle=-half,
+                    end_angle=half,
+                    ranges=np.round(np.asarray(v.ranges_m, dtype=float), 4).tolist(),
+                ),
+                t,
+            )
         elif isinstance(v, RangeScan3DReading):
             self._log(f"/{robot}/{v.name}", ch.CLOUD, ch.point_cloud(robot, v, t), t)
         elif isinstance(v, OdometryReading):
-            self._log(f"/{robot}/odometry", ch.POSE, PoseInFrame(
-                timestamp=scene.timestamp(t), frame_id=f"{robot}/odom",
-                pose=scene.pose((v.x_m, v.y_m, 0.0), (0.0, 0.0, v.theta_rad))), t)
+            self._log(
+                f"/{robot}/odometry",
+                ch.POSE,
+                PoseInFrame(
+                    timestamp=scene.timestamp(t),
+                    frame_id=f"{robot}/odom",
+                    pose=scene.pose((v.x_m, v.y_m, 0.0), (0.0, 0.0, v.theta_rad)),
+                ),
+                t,
+            )
         elif isinstance(v, RobotStatus):
-            self._log(f"/{robot}/status", ch.STATUS, json.dumps(
-                {"battery_s": v.battery_s, "front_steer": v.front_steer, "rear_steer": v.rear_steer,
-                 "light": v.light_toggle}).encode(), t)
+            self._log(
+                f"/{robot}/status",
+                ch.STATUS,
+                json.dumps(
+                    {
+                        "battery_s": v.battery_s,
+                        "front_steer": v.front_steer,
+                        "rear_steer": v.rear_steer,
+                        "light": v.light_toggle,
+                    }
+                ).encode(),
+                t,
+            )
 
     # frames -------------------------------------------------------------------------
     def _write_frame(self, f: WorldFrame) -> None:
@@ -497,22 +570,45 @@ class Recorder:
             if new:
                 seen = self._seen[name] = self._appears(r, t)
             if new or refresh:
-                self._log(ch.ROBOTS_TOPIC, ch.SCENE, SceneUpdate(entities=[
-                    scene.robot_entity(name, seen.class_name, seen.dimensions, t)]), t)
+                self._log(
+                    ch.ROBOTS_TOPIC,
+                    ch.SCENE,
+                    SceneUpdate(entities=[scene.robot_entity(name, seen.class_name, seen.dimensions, t)]),
+                    t,
+                )
                 tfs.append(scene.transform(scene.WORLD_FRAME, f"{name}/odom", seen.start[0], seen.start[1], t))
                 tfs += [scene.transform(name, f"{name}/{n}", loc, rot, t) for n, loc, rot in seen.mounts]
             position = scene.vec(r.location)
             rotation = scene.quat(r.rotation)
-            tfs.append(FrameTransform(timestamp=ts, parent_frame_id=scene.WORLD_FRAME, child_frame_id=name,
-                                      translation=position, rotation=rotation))
+            tfs.append(
+                FrameTransform(
+                    timestamp=ts,
+                    parent_frame_id=scene.WORLD_FRAME,
+                    child_frame_id=name,
+                    translation=position,
+                    rotation=rotation,
+                )
+            )
             dt = t - seen.time
             speed = math.dist(r.location, seen.location) / dt if dt > 0 else 0.0
             seen.location, seen.time = r.location, t
-            self._log(seen.pose_topic, ch.POSE, PoseInFrame(timestamp=ts, frame_id=scene.WORLD_FRAME,
-                                                          pose=Pose(position=position, orientation=rotation)), t)
-            self._log(seen.state_topic, ch.STATE, (
-                '{"battery_s":%.3f,"speed_m_s":%.4f,"x":%.4f,"y":%.4f,"z":%.4f,"yaw":%.4f}' % (
-                    r.battery_s, speed, r.location[0], r.location[1], r.location[2], r.rotation[2])).encode(), t)
+            self._log(
+                seen.pose_topic,
+                ch.POSE,
+                PoseInFrame(
+                    timestamp=ts, frame_id=scene.WORLD_FRAME, pose=Pose(position=position, orientation=rotation)
+                ),
+                t,
+            )
+            self._log(
+                seen.state_topic,
+                ch.STATE,
+                (
+                    '{"battery_s":%.3f,"speed_m_s":%.4f,"x":%.4f,"y":%.4f,"z":%.4f,"yaw":%.4f}'
+                    % (r.battery_s, speed, r.location[0], r.location[1], r.location[2], r.rotation[2])
+                ).encode(),
+                t,
+            )
             waiting = self._waiting.pop(r.uid, None)
             for o in waiting or ():
                 self._write_output(name, o)
@@ -532,9 +628,19 @@ class Recorder:
                     self._objects[o.name] = o
                 self._log(ch.OBJECTS_TOPIC, ch.SCENE, scene.objects_scene(self.world, moved, t), t)
         for ln in f.links or ():
-            self._log(f"{ch.RADIO_PREFIX}{ln.a}-{ln.b}", ch.LINK, json.dumps(
-                {"signal_dbm": round(ln.signal_dbm, 3), "distance_m": round(ln.distance_m, 3), "walls": ln.walls,
-                 "holds": ln.holds}).encode(), t)
+            self._log(
+                f"{ch.RADIO_PREFIX}{ln.a}-{ln.b}",
+                ch.LINK,
+                json.dumps(
+                    {
+                        "signal_dbm": round(ln.signal_dbm, 3),
+                        "distance_m": round(ln.distance_m, 3),
+                        "walls": ln.walls,
+                        "holds": ln.holds,
+                    }
+                ).encode(),
+                t,
+            )
         if self._renderer is not None and t - self._last_pictures >= 1.0 / self.camera_fps - 1e-9:
             self._last_pictures = t
             self._ask_pictures()
@@ -545,12 +651,17 @@ class Recorder:
         """A robot seen for the first time: its class, size, mounts and cameras."""
         numbers, items = self._describe(r.config) if self._describe is not None else (None, [])
         log.debug("recording: robot %s (%s) appears at t=%.3f", r.name, r.config.class_name, t)
-        return _Seen(class_name=r.config.class_name,
-                     dimensions=numbers.dimensions if numbers is not None else r.config.geometry.dimensions,
-                     mounts=tuple((i.name, i.location, i.orientation) for i in items),
-                     cameras=tuple(i.name for i in items if i.item_type == "Camera"),
-                     start=(r.location, r.rotation), location=r.location, time=t,
-                     pose_topic=f"/{r.name}/pose", state_topic=f"/{r.name}/state")
+        return _Seen(
+            class_name=r.config.class_name,
+            dimensions=numbers.dimensions if numbers is not None else r.config.geometry.dimensions,
+            mounts=tuple((i.name, i.location, i.orientation) for i in items),
+            cameras=tuple(i.name for i in items if i.item_type == "Camera"),
+            start=(r.location, r.rotation),
+            location=r.location,
+            time=t,
+            pose_topic=f"/{r.name}/pose",
+            state_topic=f"/{r.name}/state",
+        )
 
     # cameras ------------------------------------------------------------------------
     def _ask_pictures(self) -> None:
@@ -593,8 +704,12 @@ class Recorder:
                 log.warning("recording: no camera pictures: %s", error)
             return
         self.pictures += 1
-        self._log(f"/{robot}/{cam}", ch.IMAGE, CompressedImage(
-            timestamp=scene.timestamp(t), frame_id=f"{robot}/{cam}", data=jpeg, format="jpeg"), t)
+        self._log(
+            f"/{robot}/{cam}",
+            ch.IMAGE,
+            CompressedImage(timestamp=scene.timestamp(t), frame_id=f"{robot}/{cam}", data=jpeg, format="jpeg"),
+            t,
+        )
 
 
 class _Listener(ServerListener):

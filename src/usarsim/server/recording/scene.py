@@ -74,8 +74,12 @@ def quat_wxyz(rpy) -> tuple[float, float, float, float]:
     cr, sr = math.cos(hr), math.sin(hr)
     cp, sp = math.cos(hp), math.sin(hp)
     cy, sy = math.cos(hy), math.sin(hy)
-    return (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy)
+    return (
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    )
 
 
 def quat(rpy) -> Quaternion:
@@ -95,8 +99,12 @@ def color(rgba) -> Color:
 def _mul(a, b) -> tuple[float, float, float, float]:
     aw, ax, ay, az = a
     bw, bx, by, bz = b
-    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
+    return (
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    )
 
 
 def mesh_triangles(path: str, scale=(1.0, 1.0, 1.0)) -> list[tuple[float, float, float]]:
@@ -128,8 +136,11 @@ def mesh_triangles(path: str, scale=(1.0, 1.0, 1.0)) -> list[tuple[float, float,
         (count,) = struct.unpack_from("<I", data, 80)
         for i in range(min(count, (len(data) - 84) // 50)):
             v = struct.unpack_from("<9f", data, 84 + 50 * i + 12)
-            out += [(v[0] * sx, v[1] * sy, v[2] * sz), (v[3] * sx, v[4] * sy, v[5] * sz),
-                    (v[6] * sx, v[7] * sy, v[8] * sz)]
+            out += [
+                (v[0] * sx, v[1] * sy, v[2] * sz),
+                (v[3] * sx, v[4] * sy, v[5] * sz),
+                (v[6] * sx, v[7] * sy, v[8] * sz),
+            ]
         return out
     except (OSError, ValueError, IndexError, struct.error):
         return []
@@ -146,13 +157,19 @@ def _object_primitives(o: StaticObject, rgba, location=None, rotation=None) -> d
         return {"cubes": [CubePrimitive(pose=p, size=Vector3(x=o.size[0], y=o.size[1], z=o.size[2]), color=c)]}
     if o.shape == "cylinder":
         d = 2.0 * o.radius_m
-        return {"cylinders": [CylinderPrimitive(pose=p, size=Vector3(x=d, y=d, z=o.length_m), bottom_scale=1.0,
-                                                top_scale=1.0, color=c)]}
+        return {
+            "cylinders": [
+                CylinderPrimitive(
+                    pose=p, size=Vector3(x=d, y=d, z=o.length_m), bottom_scale=1.0, top_scale=1.0, color=c
+                )
+            ]
+        }
     pts = mesh_triangles(o.mesh_file, o.scale)
     w, x, y, z = _mul(quat_wxyz(rot), MESH_FRAME_QUAT)
     turned = Pose(position=vec(loc), orientation=Quaternion(x=x, y=y, z=z, w=w))
-    return {"triangles": [TriangleListPrimitive(pose=turned, points=[FPoint3(x=a, y=b, z=cc) for a, b, cc in pts],
-                                                color=c)]}
+    return {
+        "triangles": [TriangleListPrimitive(pose=turned, points=[FPoint3(x=a, y=b, z=cc) for a, b, cc in pts], color=c)]
+    }
 
 
 def _rgba(world: WorldConfig, material: str):
@@ -165,9 +182,18 @@ def world_scene(world: WorldConfig, t: float = 0.0) -> SceneUpdate:
     one entity per kind (``floor``, ``static``, ``victims``, ...), in the ``world`` frame."""
     ts = timestamp(t)
     fl = world.floor
-    floor = SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id="floor", cubes=[CubePrimitive(
-        pose=pose((fl.center[0], fl.center[1], 0.005), (0.0, 0.0, 0.0)),
-        size=Vector3(x=fl.size[0], y=fl.size[1], z=0.01), color=color(_rgba(world, fl.material)))])
+    floor = SceneEntity(
+        timestamp=ts,
+        frame_id=WORLD_FRAME,
+        id="floor",
+        cubes=[
+            CubePrimitive(
+                pose=pose((fl.center[0], fl.center[1], 0.005), (0.0, 0.0, 0.0)),
+                size=Vector3(x=fl.size[0], y=fl.size[1], z=0.01),
+                color=color(_rgba(world, fl.material)),
+            )
+        ],
+    )
     cubes, cylinders, triangles = [], [], []
     for o in world.objects:
         if o.mass_kg > 0:
@@ -176,32 +202,87 @@ def world_scene(world: WorldConfig, t: float = 0.0) -> SceneUpdate:
         cubes += prims.get("cubes", [])
         cylinders += prims.get("cylinders", [])
         triangles += prims.get("triangles", [])
-    static = SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id="static", cubes=cubes, cylinders=cylinders,
-                         triangles=triangles)
+    static = SceneEntity(
+        timestamp=ts, frame_id=WORLD_FRAME, id="static", cubes=cubes, cylinders=cylinders, triangles=triangles
+    )
     victims = SceneEntity(
-        timestamp=ts, frame_id=WORLD_FRAME, id="victims",
+        timestamp=ts,
+        frame_id=WORLD_FRAME,
+        id="victims",
         # a person lying (1.7 m x 0.5 m x 0.25 m) or standing; the pelvis is at the location
-        cubes=[CubePrimitive(pose=pose(v.location, v.rotation), color=color(VICTIM_RGBA),
-                             size=Vector3(x=0.5, y=0.5, z=1.7) if v.posture == "standing"
-                             else Vector3(x=1.7, y=0.5, z=0.25)) for v in world.victims],
-        texts=[TextPrimitive(pose=pose((v.location[0], v.location[1], v.location[2] - 0.5), (0.0, 0.0, 0.0)),
-                             billboard=True, font_size=14.0, scale_invariant=True, color=color(VICTIM_RGBA),
-                             text=v.name) for v in world.victims])
-    alarms = SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id="false_alarms",
-                         cubes=[CubePrimitive(pose=pose(a.center, a.rotation), size=Vector3(
-                             x=a.size[0], y=a.size[1], z=a.size[2]), color=color(ALARM_RGBA))
-                             for a in world.false_alarms])
-    tags = SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id="rfid_tags",
-                       spheres=[SpherePrimitive(pose=pose(g.location, (0.0, 0.0, 0.0)),
-                                                size=Vector3(x=0.08, y=0.08, z=0.08), color=color(TAG_RGBA))
-                                for g in world.rfid_tags])
-    water = SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id="water",
-                        cubes=[CubePrimitive(pose=pose(w.center, (0.0, 0.0, 0.0)), size=Vector3(
-                            x=w.size[0], y=w.size[1], z=w.size[2]), color=color(WATER_RGBA)) for w in world.water])
-    starts = SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id="start_poses",
-                         texts=[TextPrimitive(pose=pose(p.location, (0.0, 0.0, 0.0)), billboard=True, font_size=12.0,
-                                              scale_invariant=True, color=color(START_RGBA), text=p.name)
-                                for p in world.start_poses])
+        cubes=[
+            CubePrimitive(
+                pose=pose(v.location, v.rotation),
+                color=color(VICTIM_RGBA),
+                size=Vector3(x=0.5, y=0.5, z=1.7) if v.posture == "standing" else Vector3(x=1.7, y=0.5, z=0.25),
+            )
+            for v in world.victims
+        ],
+        texts=[
+            TextPrimitive(
+                pose=pose((v.location[0], v.location[1], v.location[2] - 0.5), (0.0, 0.0, 0.0)),
+                billboard=True,
+                font_size=14.0,
+                scale_invariant=True,
+                color=color(VICTIM_RGBA),
+                text=v.name,
+            )
+            for v in world.victims
+        ],
+    )
+    alarms = SceneEntity(
+        timestamp=ts,
+        frame_id=WORLD_FRAME,
+        id="false_alarms",
+        cubes=[
+            CubePrimitive(
+                pose=pose(a.center, a.rotation),
+                size=Vector3(x=a.size[0], y=a.size[1], z=a.size[2]),
+                color=color(ALARM_RGBA),
+            )
+            for a in world.false_alarms
+        ],
+    )
+    tags = SceneEntity(
+        timestamp=ts,
+        frame_id=WORLD_FRAME,
+        id="rfid_tags",
+        spheres=[
+            SpherePrimitive(
+                pose=pose(g.location, (0.0, 0.0, 0.0)), size=Vector3(x=0.08, y=0.08, z=0.08), color=color(TAG_RGBA)
+            )
+            for g in world.rfid_tags
+        ],
+    )
+    water = SceneEntity(
+        timestamp=ts,
+        frame_id=WORLD_FRAME,
+        id="water",
+        cubes=[
+            CubePrimitive(
+                pose=pose(w.center, (0.0, 0.0, 0.0)),
+                size=Vector3(x=w.size[0], y=w.size[1], z=w.size[2]),
+                color=color(WATER_RGBA),
+            )
+            for w in world.water
+        ],
+    )
+    starts = SceneEntity(
+        timestamp=ts,
+        frame_id=WORLD_FRAME,
+        id="start_poses",
+        texts=[
+            TextPrimitive(
+                pose=pose(p.location, (0.0, 0.0, 0.0)),
+                billboard=True,
+                font_size=12.0,
+                scale_invariant=True,
+                color=color(START_RGBA),
+                text=p.name,
+            )
+            for p in world.start_poses
+        ],
+    )
     return SceneUpdate(entities=[floor, static, victims, alarms, tags, water, starts])
 
 
@@ -213,8 +294,14 @@ def objects_scene(world: WorldConfig, frames_, t: float) -> SceneUpdate:
     for f in frames_:
         o = by_name.get(f.name)
         if o is not None:
-            ents.append(SceneEntity(timestamp=ts, frame_id=WORLD_FRAME, id=f"movable/{o.name}",
-                                    **_object_primitives(o, _rgba(world, o.material), f.location, f.rotation)))
+            ents.append(
+                SceneEntity(
+                    timestamp=ts,
+                    frame_id=WORLD_FRAME,
+                    id=f"movable/{o.name}",
+                    **_object_primitives(o, _rgba(world, o.material), f.location, f.rotation),
+                )
+            )
     return SceneUpdate(entities=ents)
 
 
@@ -222,13 +309,28 @@ def robot_entity(name: str, class_name: str, dimensions, t: float) -> SceneEntit
     """A robot drawn as its bounding box (GEO's dimensions) with its name above it, in its
     own frame: it moves with the frame transform."""
     dx, dy, dz = dimensions
-    return SceneEntity(timestamp=timestamp(t), frame_id=name, id=f"robot/{name}", frame_locked=True,
-                       cubes=[CubePrimitive(pose=pose((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
-                                            size=Vector3(x=dx, y=dy, z=dz), color=color(ROBOT_RGBA))],
-                       texts=[TextPrimitive(pose=pose((0.0, 0.0, -dz / 2 - 0.3), (0.0, 0.0, 0.0)), billboard=True,
-                                            font_size=14.0, scale_invariant=True, color=color(ROBOT_RGBA),
-                                            text=f"{name} ({class_name})")],
-                       lifetime=Duration(sec=0, nsec=0))
+    return SceneEntity(
+        timestamp=timestamp(t),
+        frame_id=name,
+        id=f"robot/{name}",
+        frame_locked=True,
+        cubes=[
+            CubePrimitive(
+                pose=pose((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), size=Vector3(x=dx, y=dy, z=dz), color=color(ROBOT_RGBA)
+            )
+        ],
+        texts=[
+            TextPrimitive(
+                pose=pose((0.0, 0.0, -dz / 2 - 0.3), (0.0, 0.0, 0.0)),
+                billboard=True,
+                font_size=14.0,
+                scale_invariant=True,
+                color=color(ROBOT_RGBA),
+                text=f"{name} ({class_name})",
+            )
+        ],
+        lifetime=Duration(sec=0, nsec=0),
+    )
 
 
 def robot_deletion(name: str, t: float) -> SceneUpdate:
@@ -236,5 +338,10 @@ def robot_deletion(name: str, t: float) -> SceneUpdate:
 
 
 def transform(parent: str, child: str, location, rotation, t: float) -> FrameTransform:
-    return FrameTransform(timestamp=timestamp(t), parent_frame_id=parent, child_frame_id=child,
-                          translation=vec(location), rotation=quat(rotation))
+    return FrameTransform(
+        timestamp=timestamp(t),
+        parent_frame_id=parent,
+        child_frame_id=child,
+        translation=vec(location),
+        rotation=quat(rotation),
+    )

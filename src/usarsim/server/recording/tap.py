@@ -108,7 +108,8 @@ class TappedProtocol(asyncio.Protocol):
         return getattr(self.inner, name)
 
 
-def tapped(factory: Callable[[], asyncio.Protocol], sink: Sink, port: str,
-           binary: bool = False) -> Callable[[], asyncio.Protocol]:
+def tapped(
+    factory: Callable[[], asyncio.Protocol], sink: Sink, port: str, binary: bool = False
+) -> Callable[[], asyncio.Protocol]:
     """A protocol factory whose connections are tapped."""
     return lambda: TappedProtocol(factory(), sink, port, binary)

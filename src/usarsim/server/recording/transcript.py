@@ -32,7 +32,7 @@ KINDS = ("open", "in", "out", "close")
 SCHEMA = {
     "title": SCHEMA_NAME,
     "description": "Bytes one connection of the simulator received (in) or sent (out), or its opening or "
-                   "closing, in the order the server saw them.",
+    "closing, in the order the server saw them.",
     "type": "object",
     "properties": {
         "seq": {"type": "integer", "description": "order of the chunk in the recording, from 0"},
@@ -67,8 +67,15 @@ class Chunk:
 
 
 def encode_chunk(c: Chunk) -> bytes:
-    d = {"seq": c.seq, "conn": c.conn, "port": c.port, "peer": c.peer, "kind": c.kind,
-         "sim_time": round(c.sim_time, 9), "wall_time": round(c.wall_time, 6)}
+    d = {
+        "seq": c.seq,
+        "conn": c.conn,
+        "port": c.port,
+        "peer": c.peer,
+        "kind": c.kind,
+        "sim_time": round(c.sim_time, 9),
+        "wall_time": round(c.wall_time, 6),
+    }
     if c.size is not None:
         d["bytes"] = c.size
     else:
@@ -78,9 +85,17 @@ def encode_chunk(c: Chunk) -> bytes:
 
 def decode_chunk(data: bytes) -> Chunk:
     d = json.loads(data)
-    return Chunk(seq=int(d["seq"]), conn=int(d["conn"]), port=str(d["port"]), peer=str(d["peer"]),
-                 kind=str(d["kind"]), sim_time=float(d["sim_time"]), wall_time=float(d["wall_time"]),
-                 text=str(d.get("text", "")), size=d.get("bytes"))
+    return Chunk(
+        seq=int(d["seq"]),
+        conn=int(d["conn"]),
+        port=str(d["port"]),
+        peer=str(d["peer"]),
+        kind=str(d["kind"]),
+        sim_time=float(d["sim_time"]),
+        wall_time=float(d["wall_time"]),
+        text=str(d.get("text", "")),
+        size=d.get("bytes"),
+    )
 
 
 def split_lines(chunks: Iterable[Chunk]) -> Iterator[tuple[Chunk, str]]:
@@ -96,18 +111,24 @@ def split_lines(chunks: Iterable[Chunk]) -> Iterator[tuple[Chunk, str]]:
             i = pending.find("\n")
             if i < 0:
                 break
-            line, pending = pending[:i], pending[i + 1:]
+            line, pending = pending[:i], pending[i + 1 :]
             yield c, line[:-1] if line.endswith("\r") else line
     if pending and last is not None:
         yield last, pending
 
 
-def run_info(*, version: str, world: str, world_path: str, seed: int, lockstep: bool, speed: float | None,
-             options: dict) -> dict[str, str]:
+def run_info(
+    *, version: str, world: str, world_path: str, seed: int, lockstep: bool, speed: float | None, options: dict
+) -> dict[str, str]:
     """The metadata record of a recording: strings only, as MCAP stores them."""
-    return {"version": version, "world": world, "world_path": world_path, "seed": str(seed),
-            "clock": "lockstep" if lockstep else ("max" if speed is None else f"speed {speed:g}"),
-            "options": json.dumps(options, sort_keys=True)}
+    return {
+        "version": version,
+        "world": world,
+        "world_path": world_path,
+        "seed": str(seed),
+        "clock": "lockstep" if lockstep else ("max" if speed is None else f"speed {speed:g}"),
+        "options": json.dumps(options, sort_keys=True),
+    }
 
 
 @dataclass(frozen=True)
@@ -128,6 +149,12 @@ def parse_run_info(meta: dict[str, str]) -> RunInfo:
         speed = None
     elif clock.startswith("speed "):
         speed = float(clock.split()[1])
-    return RunInfo(version=meta.get("version", "?"), world=meta.get("world", ""),
-                   world_path=meta.get("world_path", ""), seed=int(meta.get("seed", "0")),
-                   lockstep=clock == "lockstep", speed=speed, options=json.loads(meta.get("options", "{}")))
+    return RunInfo(
+        version=meta.get("version", "?"),
+        world=meta.get("world", ""),
+        world_path=meta.get("world_path", ""),
+        seed=int(meta.get("seed", "0")),
+        lockstep=clock == "lockstep",
+        speed=speed,
+        options=json.loads(meta.get("options", "{}")),
+    )

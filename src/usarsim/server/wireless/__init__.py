@@ -62,15 +62,16 @@ class WirelessServers:
         limit = options.max_connections
         self.comserver = ComServer(self.service, host=host, port=options.wcs_port, max_connections=limit)
         self.wss = WssServer(self.service, host=host, port=options.wss_port, max_connections=limit)
-        self.interface = ComInterfaceServer(self.service, host=host, port=options.interface_port,
-                                            max_connections=limit)
+        self.interface = ComInterfaceServer(self.service, host=host, port=options.interface_port, max_connections=limit)
         log.info("wireless: radio model %s", model.describe())
 
     def servers(self) -> list[tuple[object, str, str]]:
         """(server, listener name, what names its port in an error)."""
-        return [(self.comserver, "comserver", "the ComServer port %s (--wcs-port)"),
-                (self.wss, "wss", "the WSS port %s (--wss-port)"),
-                (self.interface, "cominterface", "the ComServerInterface port %s (--cominterface-port)")]
+        return [
+            (self.comserver, "comserver", "the ComServer port %s (--wcs-port)"),
+            (self.wss, "wss", "the WSS port %s (--wss-port)"),
+            (self.interface, "cominterface", "the ComServerInterface port %s (--cominterface-port)"),
+        ]
 
     def bind_loop(self) -> None:
         """The event loop the link changes are handed to (call from it, before the start)."""

@@ -192,8 +192,14 @@ class ComServer(WirelessServer):
 
     connection = WcsConnection
 
-    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WCS_PORT,
-                 max_connections: int = MAX_CONNECTIONS):
+    def __init__(
+        self,
+        service: WirelessService,
+        *,
+        host: str = "127.0.0.1",
+        port: int = WCS_PORT,
+        max_connections: int = MAX_CONNECTIONS,
+    ):
         super().__init__(service, host, port, max_connections)
         self.registered: dict[str, str] = {}  # robot name -> the IP its client listens on
         self.holders: dict[str, WcsConnection | None] = {}  # robot name -> the connection that registered it
@@ -277,8 +283,14 @@ class ComServer(WirelessServer):
         try:
             t, ln = await svc.check(a, b)
             if ln is None or not ln.holds:
-                svc.event("comserver: %s - %s out of range (%s)", a, b, "no such robot" if ln is None else
-                          f"{ln.signal_dbm:.2f} dBm, {ln.walls} walls, {ln.distance_m:.2f} m")
+                svc.event(
+                    "comserver: %s - %s out of range (%s)",
+                    a,
+                    b,
+                    "no such robot"
+                    if ln is None
+                    else f"{ln.signal_dbm:.2f} dBm, {ln.walls} walls, {ln.distance_m:.2f} m",
+                )
                 return WcsFail.cannot_connect(b)
             # a robot's registration ends with its connection, which may close meanwhile
             if (b, pb) not in self.listening:
@@ -306,8 +318,9 @@ class ComServer(WirelessServer):
         loop = asyncio.get_running_loop()
 
         async def one(robot, ip, port):
-            _, end = await asyncio.wait_for(loop.create_connection(lambda: _LinkEnd(robot), ip, port),
-                                            CONNECT_TIMEOUT_S)
+            _, end = await asyncio.wait_for(
+                loop.create_connection(lambda: _LinkEnd(robot), ip, port), CONNECT_TIMEOUT_S
+            )
             return end
 
         results = await asyncio.gather(*(one(*t) for t in targets), return_exceptions=True)

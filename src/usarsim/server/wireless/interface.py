@@ -68,6 +68,12 @@ class ComInterfaceServer(WirelessServer):
 
     connection = InterfaceConnection
 
-    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = INTERFACE_PORT,
-                 max_connections: int = MAX_CONNECTIONS):
+    def __init__(
+        self,
+        service: WirelessService,
+        *,
+        host: str = "127.0.0.1",
+        port: int = INTERFACE_PORT,
+        max_connections: int = MAX_CONNECTIONS,
+    ):
         super().__init__(service, host, port, max_connections)

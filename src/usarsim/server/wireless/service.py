@@ -254,8 +254,9 @@ class LineConnection(WirelessConnection):
 class WirelessListener(TcpListener):
     """The TCP listener of one server, making its kind of :class:`WirelessConnection`."""
 
-    def __init__(self, factory: type[WirelessConnection], owner: WirelessServer, host: str, port: int,
-                 max_connections: int):
+    def __init__(
+        self, factory: type[WirelessConnection], owner: WirelessServer, host: str, port: int, max_connections: int
+    ):
         super().__init__(host, port)
         self._factory = factory
         self.owner = owner  # the server the connections serve

@@ -143,8 +143,9 @@ class Pipe:
             raise
         except (TimeoutError, OSError) as exc:
             sock.close()
-            self.port.server.service.event("wss: cannot connect to %s at %s:%d: %s", self.port.dst, dst_ip,
-                                           dst_port, exc)
+            self.port.server.service.event(
+                "wss: cannot connect to %s at %s:%d: %s", self.port.dst, dst_ip, dst_port, exc
+            )
             self.close()
             return
         self.ends.append(dst)
@@ -243,8 +244,9 @@ class RelayPort:
                 try:
                     self._bind()
                 except OSError as exc:
-                    log.error("wss: cannot listen again on relay port %d (%s -> %s): %s", self.number, self.src,
-                              self.dst, exc)
+                    log.error(
+                        "wss: cannot listen again on relay port %d (%s -> %s): %s", self.number, self.src, self.dst, exc
+                    )
                     return
             self._sock.listen(16)
             loop.add_reader(self._sock.fileno(), self._accept)
@@ -356,8 +358,11 @@ class WssConnection(LineConnection):
             return await srv.dns(me, req)
         if isinstance(req, WssReverseDns):
             who = srv.reverse_dns(me, req.port)
-            return WssReverseDnsReply(req.port, robot=who) if who is not None else \
-                WssReverseDnsReply(req.port, error=REVERSEDNS_UNKNOWN_PORT)
+            return (
+                WssReverseDnsReply(req.port, robot=who)
+                if who is not None
+                else WssReverseDnsReply(req.port, error=REVERSEDNS_UNKNOWN_PORT)
+            )
         if req is not None:  # unknown, or INIT again
             self.log_once(f"unknown-{kind}", "unknown or repeated command %s", kind)
         return WssError(REASON_UNKNOWN_METHOD)
@@ -379,8 +384,14 @@ class WssServer(WirelessServer):
 
     connection = WssConnection
 
-    def __init__(self, service: WirelessService, *, host: str = "127.0.0.1", port: int = WSS_PORT,
-                 max_connections: int = MAX_CONNECTIONS):
+    def __init__(
+        self,
+        service: WirelessService,
+        *,
+        host: str = "127.0.0.1",
+        port: int = WSS_PORT,
+        max_connections: int = MAX_CONNECTIONS,
+    ):
         super().__init__(service, host, port, max_connections)
         self.robots: dict[str, WssRobot] = {}
         self.ports: dict[tuple[str, str, int], RelayPort] = {}
@@ -406,8 +417,13 @@ class WssServer(WirelessServer):
         for rp in [*self.ports.values(), *self.retired]:
             if rp.pair == pair and time >= rp.checked_at and rp.up != up:
                 rp.set_up(up, time)
-                self.service.event("wss relay port %d (%s -> %s) %s", rp.number, rp.src, rp.dst,
-                                   "listening" if up else "refusing connections")
+                self.service.event(
+                    "wss relay port %d (%s -> %s) %s",
+                    rp.number,
+                    rp.src,
+                    rp.dst,
+                    "listening" if up else "refusing connections",
+                )
 
     # requests ---------------------------------------------------------------------------
     async def getss(self, me: str, other: str) -> WssSignal:
@@ -450,8 +466,7 @@ class WssServer(WirelessServer):
         if not dst_port:
             return None
         if len(self.ports) >= MAX_RELAY_PORTS:  # each is a listening socket: keep file descriptors for the rest
-            log.warning("wss: no relay port for %s -> %s:%d: %d allocated already", src, dst, dst_port,
-                        MAX_RELAY_PORTS)
+            log.warning("wss: no relay port for %s -> %s:%d: %d allocated already", src, dst, dst_port, MAX_RELAY_PORTS)
             return None
         pair = pair_key(src, dst)
         self.service.watch(pair)
@@ -474,8 +489,9 @@ class WssServer(WirelessServer):
             return None
         self.ports[key] = rp
         self.by_number[rp.number] = rp
-        self.service.event("wss relay port %d for %s -> %s:%d (%s)", rp.number, src, dst, dst_port,
-                           "listening" if up else "link down")
+        self.service.event(
+            "wss relay port %d for %s -> %s:%d (%s)", rp.number, src, dst, dst_port, "listening" if up else "link down"
+        )
         return rp.number
 
     def reverse_dns(self, me: str, port: int) -> str | None:

@@ -15,8 +15,9 @@ class Gaits(System):
         return any(r.drive.STEP_EVERY is not None for r in sim.robots.values())
 
     def max_steps(self) -> int | None:
-        return min((r.drive.STEP_EVERY for r in self.sim.robots.values() if r.drive.STEP_EVERY is not None),
-                   default=None)
+        return min(
+            (r.drive.STEP_EVERY for r in self.sim.robots.values() if r.drive.STEP_EVERY is not None), default=None
+        )
 
     def pre_step(self) -> None:
         sim = self.sim

@@ -74,8 +74,9 @@ class Grasps(System):
             for f in h.fingers:
                 bodies = {b for b, _ in touching.get(f, ())}
                 common = bodies if common is None else common & bodies
-            grip = {b: sum(mu_n for f in h.fingers for bb, mu_n in touching.get(f, ()) if bb == b)
-                    for b in (common or ())}
+            grip = {
+                b: sum(mu_n for f in h.fingers for bb, mu_n in touching.get(f, ()) if bb == b) for b in (common or ())
+            }
             if h.held >= 0:
                 if h.held not in grip or self._weld_force(d, h.eq) > grip[h.held]:
                     self._release(h, d)
@@ -88,9 +89,12 @@ class Grasps(System):
     @staticmethod
     def _loose(m, b: int) -> bool:
         """A movable object of the world: a body of its own on a free joint."""
-        return (int(m.body_rootid[b]) == b and m.body_jntnum[b] == 1
-                and m.jnt_type[m.body_jntadr[b]] == mujoco.mjtJoint.mjJNT_FREE
-                and mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b).startswith("movable/"))
+        return (
+            int(m.body_rootid[b]) == b
+            and m.body_jntnum[b] == 1
+            and m.jnt_type[m.body_jntadr[b]] == mujoco.mjtJoint.mjJNT_FREE
+            and mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b).startswith("movable/")
+        )
 
     @classmethod
     def _touching(cls, m, d) -> dict[int, list[tuple[int, float]]]:
