@@ -111,6 +111,7 @@ def test_a_wall_1_m_away_under_water_keeps_most_of_its_colours(harbour, monkeypa
     from usarsim.config.catalog import resolve_robot
     from usarsim.sim import render
     from usarsim.sim.simulation import Simulation
+    from usarsim.sim.tiles import Tile
     from usarsim.sim.underwater import Water
 
     sim = Simulation(harbour)
@@ -120,7 +121,7 @@ def test_a_wall_1_m_away_under_water_keeps_most_of_its_colours(harbour, monkeypa
     def picture():
         service = render.RenderService(lambda reuse, done: done(sim.cameras.render_snapshot(reuse), None), max_fps=0)
         try:
-            return service.render(WIDTH, HEIGHT, [render.Tile(1, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=120)
+            return service.render(WIDTH, HEIGHT, [Tile(1, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=120)
         finally:
             service.stop()
 
