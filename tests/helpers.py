@@ -268,26 +268,33 @@ class ServerThread:
         robot_dirs: tuple[str, ...] = (),
         image=None,
         wireless_model: str | None = None,
+        sim=None,
     ):
+        """``sim``: the simulation's :class:`usarsim.sim.settings.SimSettings` (None: the defaults)."""
         from usarsim.server.app import Application
+        from usarsim.server.config import ServeConfig
+        from usarsim.server.image import ImageSettings
         from usarsim.server.wireless import WirelessOptions
 
         # every listener on a free port (0), so that tests never collide
         wireless = WirelessOptions(wcs_port=0, wss_port=0, interface_port=0, model=wireless_model)
         self.app = Application(
-            world,
-            host="127.0.0.1",
-            port=0,
-            seed=seed,
-            speed=speed,
-            lockstep=lockstep,
-            max_connections=max_connections,
-            robot_dirs=robot_dirs,
-            truth_port=0,
-            image_port=0,
-            image=image,
-            wireless=wireless,
-            web_port=0,
+            ServeConfig(
+                world=world,
+                host="127.0.0.1",
+                port=0,
+                seed=seed,
+                speed=speed,
+                lockstep=lockstep,
+                max_connections=max_connections,
+                robot_dirs=robot_dirs,
+                truth_port=0,
+                image_port=0,
+                **({} if sim is None else {"sim": sim}),
+                image=image if image is not None else ImageSettings(),
+                wireless=wireless,
+                web_port=0,
+            )
         )
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._serve, name="test-server-loop", daemon=True)

@@ -697,6 +697,7 @@ def cmd_serve(args) -> int:
     from usarsim.config.catalog import resolve_world
     from usarsim.errors import UsarsimError
     from usarsim.server.app import Application
+    from usarsim.server.config import ServeConfig
     from usarsim.server.listener import call_on_loop
 
     try:
@@ -767,44 +768,48 @@ def cmd_serve(args) -> int:
             max_connections=max(1, args.max_wireless_connections),
         )
     control_port = ports["port"]
-    # what cameras draw: read when the world is built and by the render threads
-    if args.shadows:
-        os.environ["USARSIM_SHADOWS"] = "1"
-    if args.no_textures:
-        os.environ["USARSIM_TEXTURES"] = "0"
-    if args.physics_threads is not None:
-        os.environ["USARSIM_PHYSICS_THREADS"] = str(args.physics_threads)
-    if args.sensors_inline:
-        os.environ["USARSIM_SENSOR_THREAD"] = "0"
-    app = Application(
-        world,
-        host=args.host,
-        port=control_port,
-        seed=args.seed,
-        speed=args.speed,
-        lockstep=args.lockstep,
-        max_connections=args.max_connections,
-        robot_dirs=tuple(args.robot_dir),
-        truth_port=ports["truth_port"],
-        image_port=None if args.no_image else ports["image_port"],
-        image=image,
-        wireless=wireless,
-        web_port=None if args.no_web else ports["web_port"],
-        max_robots=args.max_robots,
-        max_line_bytes=max(64, args.max_line_bytes),
-        max_pending_bytes=max(4, args.max_pending_kb) * 1024,
-        max_viewers=max(1, args.max_viewers),
-        max_web_connections=max(2, args.max_web_connections),
-        record=args.record if args.record_format == "foxglove" else None,
-        foxglove_port=resolve_foxglove_port(args.foxglove, args.port_offset),
-        run_options=run_options(args),
-        record_cameras_fps=max(0.0, args.record_cameras),
-        record_camera_size=args.record_camera_size,
-        score=args.score,
-        score_file=args.score_file,
-        step_grace_s=_step_grace_s(args),
-        on_score_line=lambda line: print(f"usarsim: {line}", flush=True),
-    )
+    from usarsim.sim.settings import SimSettings
+
+    threads = args.physics_threads
+    try:
+        config = ServeConfig(
+            world=world,
+            sim=SimSettings(
+                shadows=args.shadows,
+                textures=not args.no_textures,
+                physics_threads=None if threads in (None, "auto") else int(threads),
+                sensor_thread=not args.sensors_inline,
+            ),
+            host=args.host,
+            port=control_port,
+            seed=args.seed,
+            speed=args.speed,
+            lockstep=args.lockstep,
+            max_connections=args.max_connections,
+            robot_dirs=tuple(args.robot_dir),
+            truth_port=ports["truth_port"],
+            image_port=None if args.no_image else ports["image_port"],
+            image=image,
+            wireless=wireless,
+            web_port=None if args.no_web else ports["web_port"],
+            max_robots=args.max_robots,
+            max_line_bytes=max(64, args.max_line_bytes),
+            max_pending_bytes=max(4, args.max_pending_kb) * 1024,
+            max_viewers=max(1, args.max_viewers),
+            max_web_connections=max(2, args.max_web_connections),
+            record=args.record if args.record_format == "foxglove" else None,
+            foxglove_port=resolve_foxglove_port(args.foxglove, args.port_offset),
+            run_options=run_options(args),
+            record_cameras_fps=max(0.0, args.record_cameras),
+            record_camera_size=args.record_camera_size,
+            score=args.score,
+            score_file=args.score_file,
+            step_grace_s=_step_grace_s(args),
+        )
+    except ValueError as exc:
+        print(f"usarsim: error: {exc}", file=sys.stderr)
+        return 1
+    app = Application(config, on_score_line=lambda line: print(f"usarsim: {line}", flush=True))
 
     _raise_file_limit()
 

@@ -239,6 +239,7 @@ class Replayer:
         from usarsim.config.catalog import resolve_world
         from usarsim.errors import UsarsimError
         from usarsim.server.app import Application
+        from usarsim.server.config import ServeConfig
 
         info = self.rec.info
         try:
@@ -250,20 +251,22 @@ class Replayer:
         opts = info.options
         dirs = tuple(d for d in opts.get("robot_dirs", []) if os.path.isdir(d))
         return Application(
-            world,
-            host="127.0.0.1",
-            port=0,
-            seed=info.seed,
-            speed=None,
-            lockstep=True,
-            max_connections=max(64, int(opts.get("max_connections") or 64)),
-            robot_dirs=dirs,
-            truth_port=0,
-            image_port=None,
-            wireless=None,
-            web_port=None,
-            max_robots=opts.get("max_robots"),
-            max_line_bytes=int(opts.get("max_line_bytes") or 8192),
+            ServeConfig(
+                world=world,
+                host="127.0.0.1",
+                port=0,
+                seed=info.seed,
+                speed=None,
+                lockstep=True,
+                max_connections=max(64, int(opts.get("max_connections") or 64)),
+                robot_dirs=dirs,
+                truth_port=0,
+                image_port=None,
+                wireless=None,
+                web_port=None,
+                max_robots=opts.get("max_robots"),
+                max_line_bytes=int(opts.get("max_line_bytes") or 8192),
+            )
         )
 
     async def run(self) -> Report:

@@ -96,7 +96,7 @@ def test_sim_loads_no_asyncio_protocol_or_server(module):
 SRC = Path(__file__).resolve().parents[2] / "src" / "usarsim"
 # What the servers and the console may import of the simulation layer: its facade and the
 # types that cross it (design.md 2 and 5).
-SIM_DOOR = ("usarsim.sim.api", "usarsim.sim.facade", "usarsim.sim.types")
+SIM_DOOR = ("usarsim.sim.api", "usarsim.sim.facade", "usarsim.sim.settings", "usarsim.sim.types")
 BELOW_THE_DOOR = ("usarsim.sim", "usarsim.sensors", "usarsim.effecters", "usarsim.robots", "mujoco")
 
 

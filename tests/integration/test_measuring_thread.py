@@ -10,6 +10,7 @@ import os
 import pytest
 
 from helpers import segments, sen_type
+from usarsim.sim.settings import SimSettings
 
 ROBOTS = (
     "INIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}",
@@ -20,9 +21,8 @@ ROBOTS = (
 STEPS = (0.004, 0.004, 0.1, 0.37, 0.2, 1.0, 0.052, 0.5, 0.004, 2.0)
 
 
-def lockstep_session(server_factory, monkeypatch, thread: str) -> tuple[list[str], bool]:
-    monkeypatch.setenv("USARSIM_SENSOR_THREAD", thread)
-    srv = server_factory(lockstep=True)
+def lockstep_session(server_factory, thread: bool) -> tuple[list[str], bool]:
+    srv = server_factory(lockstep=True, sim=SimSettings(sensor_thread=thread))
     clients = []
     for init in ROBOTS:
         c = srv.connect()
@@ -42,9 +42,9 @@ def lockstep_session(server_factory, monkeypatch, thread: str) -> tuple[list[str
     return lines, threaded
 
 
-def test_the_measuring_thread_gives_the_same_lines_as_the_simulation_thread(server_factory, monkeypatch):
-    inline, inline_threaded = lockstep_session(server_factory, monkeypatch, "0")
-    threaded, threaded_threaded = lockstep_session(server_factory, monkeypatch, "1")
+def test_the_measuring_thread_gives_the_same_lines_as_the_simulation_thread(server_factory):
+    inline, inline_threaded = lockstep_session(server_factory, False)
+    threaded, threaded_threaded = lockstep_session(server_factory, True)
     assert not inline_threaded and threaded_threaded
     kinds = {sen_type(ln.split(" ", 1)[1]) for ln in inline if " SEN " in f" {ln.split(' ', 1)[1]}"}
     assert {"Sonar", "RangeScanner", "GPS", "INS", "GroundTruth", "Encoder"} <= kinds, kinds
@@ -52,9 +52,8 @@ def test_the_measuring_thread_gives_the_same_lines_as_the_simulation_thread(serv
     assert threaded == inline
 
 
-def test_clocked_readings_come_in_time_order_and_settings_wait_for_them(server_factory, monkeypatch):
-    monkeypatch.setenv("USARSIM_SENSOR_THREAD", "1")
-    srv = server_factory(lockstep=False, speed=None)
+def test_clocked_readings_come_in_time_order_and_settings_wait_for_them(server_factory):
+    srv = server_factory(lockstep=False, speed=None, sim=SimSettings(sensor_thread=True))
     c = srv.connect()
     c.nfo()
     c.send(ROBOTS[0])
@@ -81,11 +80,10 @@ def test_clocked_readings_come_in_time_order_and_settings_wait_for_them(server_f
     assert all(b >= a - 1e-9 for a, b in zip(times, times[1:]))
 
 
-@pytest.mark.parametrize("thread", ["0", "1"])
-def test_sensors_read_the_world_with_or_without_the_measuring_thread(server_factory, monkeypatch, thread):
+@pytest.mark.parametrize("thread", [False, True])
+def test_sensors_read_the_world_with_or_without_the_measuring_thread(server_factory, thread):
     """A robot facing a wall reads it on its laser either way."""
-    monkeypatch.setenv("USARSIM_SENSOR_THREAD", thread)
-    srv = server_factory(lockstep=True)
+    srv = server_factory(lockstep=True, sim=SimSettings(sensor_thread=thread))
     c = srv.connect()
     c.nfo()
     c.send(ROBOTS[0])

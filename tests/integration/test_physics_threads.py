@@ -9,13 +9,13 @@ import pytest
 from usarsim.config.catalog import resolve_robot
 from usarsim.controls import DriveCommand, WheelSpeeds
 from usarsim.sim import simulation
+from usarsim.sim.settings import SimSettings
 from usarsim.sim.simulation import Simulation
 
 
-def driven_world(world, monkeypatch, threads: str) -> tuple[np.ndarray, int, float]:
+def driven_world(world, threads: int) -> tuple[np.ndarray, int, float]:
     """Three P2ATs driven for 2 s: the state, the pool's threads, how far the first went."""
-    monkeypatch.setenv("USARSIM_PHYSICS_THREADS", threads)
-    sim = Simulation(world, seed=1)
+    sim = Simulation(world, seed=1, settings=SimSettings(physics_threads=threads))
     p2at = resolve_robot("P2AT")
     for uid, pose in enumerate(world.start_poses[:3], start=1):
         sim.spawn(uid, p2at, f"R{uid}", pose.location, pose.rotation, set_down=True)
@@ -26,9 +26,9 @@ def driven_world(world, monkeypatch, threads: str) -> tuple[np.ndarray, int, flo
     return sim.data.qpos.copy(), sim.threads, moved
 
 
-def test_the_pool_gives_the_same_physics_bit_for_bit(yellow_world, monkeypatch):
-    one, no_pool, moved = driven_world(yellow_world, monkeypatch, "0")
-    pooled, threads, _ = driven_world(yellow_world, monkeypatch, "2")
+def test_the_pool_gives_the_same_physics_bit_for_bit(yellow_world):
+    one, no_pool, moved = driven_world(yellow_world, 0)
+    pooled, threads, _ = driven_world(yellow_world, 2)
     assert no_pool == 0 and threads == 2
     assert moved > 0.3  # the robots drove, with contacts all the way
     np.testing.assert_array_equal(pooled, one)
@@ -39,18 +39,14 @@ def test_the_pool_gives_the_same_physics_bit_for_bit(yellow_world, monkeypatch):
     [(2, 64, 0), (2, 159, 0), (2, 160, 0), (2, 256, 0), (4, 64, 3), (4, 256, 3), (4, 16, 0), (16, 64, 8), (1, 256, 0)],
 )
 def test_auto_leaves_a_core_to_the_measuring_thread(monkeypatch, cores, robots, want):
-    monkeypatch.delenv("USARSIM_PHYSICS_THREADS", raising=False)
     monkeypatch.setattr(simulation.os, "sched_getaffinity", lambda pid: set(range(cores)))
     assert simulation.physics_threads(robots) == want
 
 
-def test_a_number_of_threads_overrides_and_nonsense_is_auto(monkeypatch):
+def test_a_number_of_threads_overrides_and_out_of_range_is_refused(monkeypatch):
     monkeypatch.setattr(simulation.os, "sched_getaffinity", lambda pid: set(range(4)))
-    monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "5")
-    assert simulation.physics_threads(1) == 5
-    monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "1")
-    assert simulation.physics_threads(256) == 0
-    monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "100000")
-    assert simulation.physics_threads(1) == 256  # held to what serve --physics-threads takes
-    monkeypatch.setenv("USARSIM_PHYSICS_THREADS", "lots")
-    assert simulation.physics_threads(64) == 3
+    assert simulation.physics_threads(1, 5) == 5
+    assert simulation.physics_threads(256, 1) == 0
+    assert simulation.physics_threads(64, None) == 3  # None: the automatic rule
+    with pytest.raises(ValueError, match="physics_threads must be within 0..256"):
+        SimSettings(physics_threads=100000)  # what serve --physics-threads takes at most

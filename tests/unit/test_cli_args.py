@@ -4,7 +4,7 @@ runner's lag warning that ``usarsim serve`` prints."""
 
 from __future__ import annotations
 
-import inspect
+import dataclasses
 import logging
 
 import pytest
@@ -57,9 +57,9 @@ def test_main_adds_up_both_places(monkeypatch):
 
 def test_default_ports_are_the_servers_defaults():
     from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
-    from usarsim.server.app import Application
+    from usarsim.server.config import ServeConfig
 
-    defaults = {k: v.default for k, v in inspect.signature(Application).parameters.items()}
+    defaults = {f.name: f.default for f in dataclasses.fields(ServeConfig)}
     assert DEFAULT_PORTS == {
         "port": defaults["port"],
         "truth_port": defaults["truth_port"],

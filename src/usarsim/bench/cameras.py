@@ -26,14 +26,14 @@ class _ServedCamera:
         import socket
 
         from usarsim.server.app import Application
+        from usarsim.server.config import ServeConfig
         from usarsim.server.image import ImageSettings
-        from usarsim.sim.builder import TEXTURES_ENV
+        from usarsim.sim.settings import SimSettings
 
-        before = os.environ.get(TEXTURES_ENV)
-        os.environ[TEXTURES_ENV] = "1" if textures else "0"  # read while the world is built
-        try:
-            self.app = Application(
-                world,
+        self.app = Application(
+            ServeConfig(
+                world=world,
+                sim=SimSettings(textures=textures),
                 host="127.0.0.1",
                 port=0,
                 seed=0,
@@ -44,27 +44,23 @@ class _ServedCamera:
                 image=ImageSettings(image_type=3, width=w, height=h, max_fps=0.0),
                 web_port=None,
             )
-            self.server = ServedApp(self.app)
-            try:
-                self.ctl = socket.create_connection(("127.0.0.1", self.app.control.port), timeout=30)
-                pose = world.start_poses[0]
-                self.ctl.sendall(
-                    f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
-                    "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode()
-                )
-                sim = self.app.facade.sim
-                deadline = time.monotonic() + 30
-                while not sim.robots and time.monotonic() < deadline:
-                    time.sleep(0.01)
-                time.sleep(0.5)
-            except BaseException:
-                self.close()  # the server's thread and sockets go with a failed start
-                raise
-        finally:
-            if before is None:
-                os.environ.pop(TEXTURES_ENV, None)
-            else:
-                os.environ[TEXTURES_ENV] = before
+        )
+        self.server = ServedApp(self.app)
+        try:
+            self.ctl = socket.create_connection(("127.0.0.1", self.app.control.port), timeout=30)
+            pose = world.start_poses[0]
+            self.ctl.sendall(
+                f"INIT {{ClassName USARBot.P2AT}} {{Name Bench}} {{Start {pose.name}}}\r\n"
+                "SET {Type Camera} {Robot Bench} {Name Camera} {Client 127.0.0.1}\r\n".encode()
+            )
+            sim = self.app.facade.sim
+            deadline = time.monotonic() + 30
+            while not sim.robots and time.monotonic() < deadline:
+                time.sleep(0.01)
+            time.sleep(0.5)
+        except BaseException:
+            self.close()  # the server's thread and sockets go with a failed start
+            raise
         try:
             self.viewer = socket.create_connection(("127.0.0.1", self.app.image.port), timeout=60)
             self.frame()  # the first picture opens the GL context

@@ -82,12 +82,22 @@ def round_trip_result(world, count: int) -> dict | None:
     ``count`` each (at least 100): what ``usarsim bench --round-trips --json`` prints; None
     when a client failed (said on stderr)."""
     from usarsim.server.app import Application
+    from usarsim.server.config import ServeConfig
 
     count = max(100, int(count))
     result = {"world": world.name, "step_s": ROUND_TRIP_STEP_S, "count": count, "cpu_count": os.cpu_count()}
     for robot in (False, True):
         app = Application(
-            world, host="127.0.0.1", port=0, seed=0, lockstep=True, truth_port=None, image_port=None, web_port=None
+            ServeConfig(
+                world=world,
+                host="127.0.0.1",
+                port=0,
+                seed=0,
+                lockstep=True,
+                truth_port=None,
+                image_port=None,
+                web_port=None,
+            )
         )
         served = ServedApp(app)
         try:

@@ -66,21 +66,24 @@ def _measure_rtf(
     window,
 ) -> dict:
     from usarsim.server.app import Application
+    from usarsim.server.config import ServeConfig
 
     poses = spread_spots(world, n)
     app = Application(
-        world,
-        host="127.0.0.1",
-        port=0,
-        seed=0,
-        speed=speed,
-        lockstep=False,
-        max_connections=max(64, n),
-        truth_port=None,
-        image_port=None,
-        web_port=None,
-        record=record,
-        record_cameras_fps=cameras_fps,
+        ServeConfig(
+            world=world,
+            host="127.0.0.1",
+            port=0,
+            seed=0,
+            speed=speed,
+            lockstep=False,
+            max_connections=max(64, n),
+            truth_port=None,
+            image_port=None,
+            web_port=None,
+            record=record,
+            record_cameras_fps=cameras_fps,
+        )
     )
     served = ServedApp(app)
     rss_before = rss_mb()  # the world built, no robot yet

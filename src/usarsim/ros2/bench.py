@@ -164,19 +164,22 @@ class _ClockSampler:
 def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain: int) -> dict:
     from usarsim.bench.serving import ServedApp
     from usarsim.server.app import Application
+    from usarsim.server.config import ServeConfig
 
     n = len(spots)
     app = Application(
-        world,
-        host="127.0.0.1",
-        port=0,
-        seed=0,
-        speed=1.0,
-        lockstep=False,
-        max_connections=max(64, 2 * n),
-        truth_port=None,
-        image_port=None,
-        web_port=None,
+        ServeConfig(
+            world=world,
+            host="127.0.0.1",
+            port=0,
+            seed=0,
+            speed=1.0,
+            lockstep=False,
+            max_connections=max(64, 2 * n),
+            truth_port=None,
+            image_port=None,
+            web_port=None,
+        )
     )
     served = ServedApp(app)
     sim = app.facade.sim

@@ -4,99 +4,74 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Callable
 
-from usarsim.config.world import WorldConfig
+from usarsim.server.config import ServeConfig
 from usarsim.server.control import ControlServer
-from usarsim.server.image import CameraBindings, ImageServer, ImageSettings
-from usarsim.server.ordering import STEP_GRACE_S
+from usarsim.server.image import CameraBindings, ImageServer
 from usarsim.server.truth import TruthServer
-from usarsim.server.wireless import WirelessOptions, WirelessServers
+from usarsim.server.wireless import WirelessServers
 from usarsim.sim.facade import SimFacade
 
 log = logging.getLogger("usarsim")
 
 
 class Application:
-    def __init__(
-        self,
-        world: WorldConfig,
-        *,
-        host: str = "127.0.0.1",
-        port: int = 3000,
-        seed: int = 0,
-        speed: float | None = 1.0,
-        lockstep: bool = False,
-        max_connections: int = 64,
-        robot_dirs: tuple[str, ...] = (),
-        truth_port: int | None = 3989,
-        image_port: int | None = 5003,
-        image: ImageSettings | None = None,
-        wireless: WirelessOptions | None = None,
-        web_port: int | None = 8080,
-        max_robots: int | None = None,
-        max_line_bytes: int = 8192,
-        max_pending_bytes: int = 256 * 1024,
-        max_viewers: int = 16,
-        max_web_connections: int = 64,
-        record: str | None = None,
-        foxglove_port: int | None = None,
-        run_options: dict | None = None,
-        record_cameras_fps: float = 0.0,
-        record_camera_size: tuple[int, int] = (320, 240),
-        score: bool = False,
-        score_file: str | None = None,
-        score_every_s: float = 10.0,
-        on_score_line=None,
-        step_grace_s: float = STEP_GRACE_S,
-    ):
+    """The composition root of one ``usarsim serve``: the simulation and every listener, built
+    from one :class:`~usarsim.server.config.ServeConfig` (``on_score_line``: where the live
+    score's lines go, with ``score``)."""
+
+    def __init__(self, config: ServeConfig, *, on_score_line: Callable[[str], None] | None = None):
+        self.config = c = config
+        world = c.world
         self.world = world
-        self.host = host
-        self.facade = SimFacade(world, seed=seed, speed=speed, lockstep=lockstep)
+        self.host = c.host
+        self.facade = SimFacade(world, seed=c.seed, speed=c.speed, lockstep=c.lockstep, settings=c.sim)
         self.camera_bindings = CameraBindings()
         self.control = ControlServer(
             self.facade,
-            host=host,
-            port=port,
-            max_connections=max_connections,
-            robot_dirs=tuple(robot_dirs),
-            max_line_bytes=max_line_bytes,
-            max_pending_bytes=max_pending_bytes,
-            max_robots=max_connections if max_robots is None else max_robots,
-            step_grace_s=step_grace_s,
+            host=c.host,
+            port=c.port,
+            max_connections=c.max_connections,
+            robot_dirs=c.robot_dirs,
+            max_line_bytes=c.max_line_bytes,
+            max_pending_bytes=c.max_pending_bytes,
+            max_robots=c.robot_limit,
+            step_grace_s=c.step_grace_s,
+            camera_bindings=self.camera_bindings,
         )
-        self.control.camera_bindings = self.camera_bindings
         # the ground-truth service (protocol.md 12.4); None: not served
         self.truth = (
-            TruthServer(self.facade, host=host, port=truth_port, max_connections=max_viewers)
-            if truth_port is not None
+            TruthServer(self.facade, host=c.host, port=c.truth_port, max_connections=c.max_viewers)
+            if c.truth_port is not None
             else None
         )
         # the image server (protocol.md 10) and its render thread; None: not served
-        self.image_settings = image or ImageSettings()
+        self.image_settings = c.image
         self.image = None
-        if image_port is not None:
+        if c.image_port is not None:
             renderer = self.facade.render_service(self.image_settings.max_fps)
             self.image = ImageServer(
                 renderer,
                 self.camera_bindings,
                 self.image_settings,
-                host=host,
-                port=image_port,
-                max_connections=max_viewers,
+                host=c.host,
+                port=c.image_port,
+                max_connections=c.max_viewers,
             )
         self.facade.set_multiview_cameras(self.image_settings.camera_num)  # before its thread starts
         # the wireless simulation (protocol.md 12): ComServer, WSS, ComServerInterface; None: not served
-        self.wireless = WirelessServers(self.facade, wireless, host=host) if wireless is not None else None
+        self.wireless = WirelessServers(self.facade, c.wireless, host=c.host) if c.wireless is not None else None
         # the operator console in the browser (usarsim.web), a client of the listeners above;
         # None: not served
         self.web = None
-        if web_port is not None:
+        if c.web_port is not None:
             from usarsim.web import WebConsole
 
-            self.web = WebConsole(self, host=host, port=web_port, max_connections=max_web_connections)
+            self.web = WebConsole(self, host=c.host, port=c.web_port, max_connections=c.max_web_connections)
         # the recording (--record) and the live Foxglove view (--foxglove); None: neither
         self.recorder = None
-        if record is not None or foxglove_port is not None:
+        if c.record is not None or c.foxglove_port is not None:
             from usarsim import __version__
             from usarsim.server.recording import Recorder, run_info
 
@@ -104,19 +79,19 @@ class Application:
                 version=__version__,
                 world=world.name,
                 world_path=world.path,
-                seed=seed,
-                lockstep=lockstep,
-                speed=speed,
-                options=dict(run_options or {}),
+                seed=c.seed,
+                lockstep=c.lockstep,
+                speed=c.speed,
+                options=dict(c.run_options),
             )
             self.recorder = Recorder(
                 world,
                 info,
-                path=record,
-                foxglove_port=foxglove_port,
-                host=host,
-                camera_fps=record_cameras_fps,
-                camera_size=record_camera_size,
+                path=c.record,
+                foxglove_port=c.foxglove_port,
+                host=c.host,
+                camera_fps=c.record_cameras_fps,
+                camera_size=c.record_camera_size,
             )
             self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
             self.control.tap = self.recorder
@@ -128,12 +103,16 @@ class Application:
 
         # the score (--score prints it live, --score-file writes it at the end); None: not kept
         self.score = None
-        if score or score_file is not None:
+        if c.score or c.score_file is not None:
             from usarsim.scoring import ScoreKeeper
             from usarsim.sim.types import resolve_model
 
             self.score = ScoreKeeper(
-                world, seed=seed, path=score_file, print_every_s=score_every_s if score else 0.0, on_line=on_score_line
+                world,
+                seed=c.seed,
+                path=c.score_file,
+                print_every_s=c.score_every_s if c.score else 0.0,
+                on_line=on_score_line,
             )
             self.score.attach(
                 self.facade, self.wireless.service.model if self.wireless is not None else resolve_model(world.wireless)

@@ -24,6 +24,7 @@ from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.outputs import message_for
 from usarsim.readings import PackageState
 from usarsim.server.connection import ServerConnection
+from usarsim.server.image import CameraBindings
 from usarsim.server.listener import TcpListener
 from usarsim.server.ordering import STEP_GRACE_S, StepOrder
 from usarsim.server.session import ALIVE, CLOSED, NEW, SPAWNING, Session, SessionContext
@@ -249,13 +250,13 @@ class ControlServer(TcpListener):
         max_pending_bytes: int = HIGH_WATER,
         max_robots: int | None = None,
         step_grace_s: float = STEP_GRACE_S,
+        camera_bindings: CameraBindings | None = None,
     ):
         super().__init__(host, port)
         self.facade = facade
         self.robot_dirs = robot_dirs  # extra folders of robot files (serve --robot-dir)
-        from usarsim.server.image import CameraBindings
-
-        self.camera_bindings = CameraBindings()  # SET {Type Camera} {Client ip}; shared with the image server
+        # SET {Type Camera} {Client ip}; shared with the image server
+        self.camera_bindings = camera_bindings if camera_bindings is not None else CameraBindings()
         self.max_connections = max_connections
         self.max_line_bytes = max_line_bytes
         # output waiting for a slow client beyond which its sensor lines are held latest-wins

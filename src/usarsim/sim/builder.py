@@ -5,8 +5,6 @@ to and removed from that spec while the simulation runs (:mod:`usarsim.sim.robot
 
 from __future__ import annotations
 
-import os
-
 import mujoco
 import numpy as np
 
@@ -33,10 +31,9 @@ SLIPPERY_PRIORITY = 2
 # The largest picture the image server renders (the offscreen buffer the model reserves).
 MAX_PICTURE_WIDTH, MAX_PICTURE_HEIGHT = 1920, 1080
 
-# Textures on the world's surfaces (usarsim.sim.textures): on unless the environment variable
-# USARSIM_TEXTURES is 0, off, false or no (plain colours: the quickest pictures on a machine
-# that renders in software).  What is seen only: no geom's size, contact or friction changes.
-TEXTURES_ENV = "USARSIM_TEXTURES"
+# Textures on the world's surfaces (usarsim.sim.textures): on unless SimSettings.textures says
+# otherwise (serve --no-textures: plain colours, the quickest pictures on a machine that renders
+# in software).  What is seen only: no geom's size, contact or friction changes.
 # The side of each light's shadow map (pixels).  A software renderer (Mesa llvmpipe) draws
 # the scene once more into it for every light that casts shadows; 1024 pixels over an
 # arena's 20 m gives shadows about 2 cm sharp, and costs a third of MuJoCo's 4096 default.
@@ -46,18 +43,14 @@ SHADOW_MAP_PX = 1024
 FITTED_MIN_RATIO = 4.0
 
 
-def textures_enabled() -> bool:
-    return os.environ.get(TEXTURES_ENV, "1").strip().lower() not in ("0", "off", "false", "no")
-
-
-def _dress(spec: mujoco.MjSpec, g, mat, box_size=None) -> None:
+def _dress(spec: mujoco.MjSpec, g, mat, box_size=None, textured: bool = True) -> None:
     """The look of a world geom of material ``mat``: its colour, and its texture when the
     material names one (a MuJoCo material whose texture is made around the colour; the
     colour then comes from the texture, the geom keeps the material's opacity).  A fitted
     texture (a road's markings) runs along the longer horizontal side of the box of full
     extents ``box_size``, once across its width."""
     g.rgba = list(mat.rgba)
-    if not mat.texture or not textures_enabled():
+    if not mat.texture or not textured:
         return
     kind = textures.TEXTURES[mat.texture]
     texture = mat.texture
@@ -108,7 +101,7 @@ def _dress(spec: mujoco.MjSpec, g, mat, box_size=None) -> None:
         markings.add_road_markings(spec, g, along_x, kind.specular)
 
 
-def world_spec(world: WorldConfig) -> mujoco.MjSpec:
+def world_spec(world: WorldConfig, *, textures: bool = True) -> mujoco.MjSpec:
     s = mujoco.MjSpec()
     s.modelname = world.name
     s.compiler.degree = False  # joint ranges are in radians, as everywhere in usarsim
@@ -142,7 +135,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
     g.type = mujoco.mjtGeom.mjGEOM_PLANE
     g.size = [fl.size[0] / 2.0, fl.size[1] / 2.0, 0.1]
     g.pos = [fl.center[0], -fl.center[1], 0.0]
-    _dress(s, g, floor_mat)
+    _dress(s, g, floor_mat, textured=textures)
     g.friction = [floor_mat.friction, SPIN_FRICTION, ROLL_FRICTION]
     if floor_mat.friction < 1.0:
         g.priority = SLIPPERY_PRIORITY
@@ -187,7 +180,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         else:
             g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
             g.size = [obj.radius_m, obj.length_m / 2.0, 0.0]
-        _dress(s, g, mat, obj.size if obj.shape == "box" else None)
+        _dress(s, g, mat, obj.size if obj.shape == "box" else None, textured=textures)
         g.friction = [mat.friction, SPIN_FRICTION, ROLL_FRICTION]
         if mat.friction < 1.0:
             g.priority = SLIPPERY_PRIORITY
@@ -203,7 +196,7 @@ def world_spec(world: WorldConfig) -> mujoco.MjSpec:
         g.size = [a.size[0] / 2.0, a.size[1] / 2.0, a.size[2] / 2.0]
         g.pos = frames.to_mj_vec(a.center).tolist()
         g.quat = frames.usar_euler_to_mj_quat(a.rotation).tolist()
-        _dress(s, g, mat)
+        _dress(s, g, mat, textured=textures)
         if a.material == "default":
             add_false_alarm_look(s, g, a)
         g.group = GROUP_STATIC

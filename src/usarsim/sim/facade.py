@@ -22,6 +22,7 @@ from usarsim.robots import drive_class
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, package_frames
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner
+from usarsim.sim.settings import SimSettings
 from usarsim.sim.simulation import Simulation, describe_items
 from usarsim.sim.snapshot import FrameWatch
 from usarsim.sim.worldframe import WorldFrame
@@ -49,9 +50,10 @@ class SimFacade:
         speed: float | None = 1.0,
         lockstep: bool = False,
         deliver: Callable[[list[Output]], None] | None = None,
+        settings: SimSettings | None = None,
     ):
         self.world = world
-        self.sim = Simulation(world, seed=seed)  # for tests and benchmarks; servers use the methods
+        self.sim = Simulation(world, seed=seed, settings=settings)  # for tests and benchmarks; servers use the methods
         self.lockstep = lockstep
         self.speed = speed
         self._deliver = deliver or (lambda outs: None)
@@ -249,7 +251,7 @@ class SimFacade:
         """The render thread of the image server, fed with snapshots of this simulation."""
         from usarsim.sim.render import RenderService
 
-        return RenderService(self.render_snapshot, max_fps=max_fps)
+        return RenderService(self.render_snapshot, max_fps=max_fps, shadows=self.sim.settings.shadows)
 
     # The radio (protocol.md 12) ----------------------------------------------------
     def open_radio(self, model: RadioModel, on_change: Callable[[float, list[tuple[Pair, bool]]], None]) -> None:

@@ -17,7 +17,7 @@ sensors' configuration) changes only in requests that are not marked ``concurren
 (spawns, removals, SET on items...), and the simulation waits for every reading to be
 taken before it runs those (:meth:`Simulation.settle`).
 
-``USARSIM_SENSOR_THREAD=0`` (``serve --sensors-inline``) measures on the simulation
+``SimSettings(sensor_thread=False)`` (``serve --sensors-inline``) measures on the simulation
 thread instead.
 """
 
@@ -40,7 +40,6 @@ if TYPE_CHECKING:
     from usarsim.sim.raycaster import RayCaster
     from usarsim.sim.reports import Report
 
-SENSOR_THREAD_ENV = "USARSIM_SENSOR_THREAD"
 # Copies of the world in use at once: instants measured, or waiting to be, while the
 # physics runs on; the simulation waits for the oldest when all are taken.
 SLOTS = 3
@@ -49,11 +48,6 @@ SLOTS = 3
 # the server's event loop and the clients want more processors than there are, the kernel
 # then gives the simulation thread the larger share instead of an equal one.
 MEASURING_NICE = 5
-
-
-def sensor_thread_wanted() -> bool:
-    """Whether sensors are measured on a thread of their own (USARSIM_SENSOR_THREAD)."""
-    return os.environ.get(SENSOR_THREAD_ENV, "1").strip().lower() not in ("0", "off", "false", "no")
 
 
 def measure_report(uid: int, sensors: list[Sensor], key: str, view: WorldView) -> Output | None:

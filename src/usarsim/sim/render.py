@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import queue
 import threading
 import time
@@ -48,16 +47,6 @@ MAX_RENDERERS = 8
 # which in a large world cuts away everything close to the camera: 5 m in a town 300 m
 # across, where a road robot's camera then sees the sky through the road ahead of it.
 NEAR_CLIP_M = 0.02
-
-# Shadows of the world's lights that cast them: off unless the environment variable
-# USARSIM_SHADOWS is 1, on, true or yes (a RenderService's ``shadows`` overrides it).  Each
-# light that casts shadows draws the scene once more, into its shadow map: on a software
-# renderer (Mesa llvmpipe, 2 cores) that halves the image server's frames per second.
-SHADOWS_ENV = "USARSIM_SHADOWS"
-
-
-def shadows_enabled() -> bool:
-    return os.environ.get(SHADOWS_ENV, "0").strip().lower() in ("1", "on", "true", "yes")
 
 
 def _seen_groups() -> mujoco.MjvOption:
@@ -158,10 +147,13 @@ class RenderService:
     simulation thread and call ``on_done(snapshot, error)``; ``render`` returns a Future
     of an RGB picture (height x width x 3, uint8, rows top to bottom)."""
 
-    def __init__(self, take_snapshot, max_fps: float = 30.0, shadows: bool | None = None):
+    def __init__(self, take_snapshot, max_fps: float = 30.0, shadows: bool = False):
+        """``shadows``: the lights that cast shadows do (SimSettings.shadows): each draws the
+        scene once more, into its shadow map; on a software renderer (Mesa llvmpipe, 2 cores)
+        that halves the frames a second."""
         self._take_snapshot = take_snapshot
         self.max_fps = max_fps
-        self.shadows = shadows_enabled() if shadows is None else bool(shadows)
+        self.shadows = bool(shadows)
         self._queue: queue.Queue[_Job | None] = queue.Queue()
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()

@@ -36,7 +36,6 @@ from typing import Any
 
 from usarsim.errors import SimulationStopped, UsarsimError
 from usarsim.sim.interpreter import InterpreterTuning
-from usarsim.sim.measuring import sensor_thread_wanted
 from usarsim.sim.simulation import Output, Simulation
 
 log = logging.getLogger("usarsim.sim")
@@ -226,7 +225,7 @@ class SimulationRunner:
     # Thread body -------------------------------------------------------------------
     def _run(self) -> None:
         try:
-            self.sim.measure_on_thread(sensor_thread_wanted())
+            self.sim.measure_on_thread(self.sim.settings.sensor_thread)
             self._interpreter.start(self.sim)
             self._running = True
             if self.lockstep:

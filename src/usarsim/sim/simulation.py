@@ -42,6 +42,7 @@ from usarsim.sim.outputs import Output
 from usarsim.sim.raycaster import RayCaster
 from usarsim.sim.reports import EPS, ReportSchedule
 from usarsim.sim.robot import SimRobot, describe_items
+from usarsim.sim.settings import PHYSICS_THREADS_LIMIT, SimSettings
 from usarsim.sim.status import Standing
 from usarsim.sim.systems.righting import start_righting
 from usarsim.sim.view import RobotHandle, WorldView
@@ -59,28 +60,17 @@ log = logging.getLogger("usarsim.sim")
 # alternately, 2026-11-25: 0.92-1.03 times real time with it, 1.04-1.09 without): the
 # measuring thread and the server's Python need the second core as much.  So it gets every
 # core but one from PHYSICS_POOL_MIN_ROBOTS robots on (none on two cores).
-# USARSIM_PHYSICS_THREADS (serve --physics-threads) sets its threads: 0 or 1 for none, "auto"
-# (the default) for that rule, at most PHYSICS_THREADS_MAX.
-PHYSICS_THREADS_ENV = "USARSIM_PHYSICS_THREADS"
+# SimSettings.physics_threads (serve --physics-threads) sets its threads: 0 or 1 for none, None
+# ("auto", the default) for that rule, at most PHYSICS_THREADS_MAX.
 PHYSICS_POOL_MIN_ROBOTS = 32
 PHYSICS_THREADS_MAX = 8
-PHYSICS_THREADS_LIMIT = 256  # a number asked for is held to this (serve --physics-threads takes no more)
 
 
-def physics_threads(robots: int) -> int:
-    """Threads of MuJoCo's pool for a world of ``robots`` robots (0: no pool)."""
-    value = os.environ.get(PHYSICS_THREADS_ENV, "auto").strip().lower() or "auto"
-    if value != "auto":
-        try:
-            n = int(value)
-        except ValueError:
-            log.warning("%s=%r is neither a number nor 'auto'; using 'auto'", PHYSICS_THREADS_ENV, value)
-        else:
-            if n > PHYSICS_THREADS_LIMIT:
-                log.warning(
-                    "%s=%d: MuJoCo's pool gets %d threads at most", PHYSICS_THREADS_ENV, n, PHYSICS_THREADS_LIMIT
-                )
-            return min(n, PHYSICS_THREADS_LIMIT) if n > 1 else 0
+def physics_threads(robots: int, asked: int | None = None) -> int:
+    """Threads of MuJoCo's pool for a world of ``robots`` robots (0: no pool); ``asked``: the
+    number :class:`SimSettings` gives (None: the rule above)."""
+    if asked is not None:
+        return min(asked, PHYSICS_THREADS_LIMIT) if asked > 1 else 0
     if robots < PHYSICS_POOL_MIN_ROBOTS:
         return 0
     try:
@@ -95,11 +85,12 @@ __all__ = ["Output", "SimRobot", "Simulation", "describe_items"]
 
 
 class Simulation:
-    def __init__(self, world: WorldConfig, *, seed: int = 0):
+    def __init__(self, world: WorldConfig, *, seed: int = 0, settings: SimSettings | None = None):
         self.world = world
         self.seed = seed
+        self.settings = settings or SimSettings()
         self.dt = world.timestep_s
-        self.spec = builder.world_spec(world)
+        self.spec = builder.world_spec(world, textures=self.settings.textures)
         self.model = self.spec.compile()
         self.data = mujoco.MjData(self.model)
         self.threads = 0  # MuJoCo's thread pool: none until the robots are many (physics_threads)
@@ -164,7 +155,7 @@ class Simulation:
     def _rebuild(self) -> None:
         self.settle()  # the sensors are configured anew for the new model
         self.model, self.data = self.spec.recompile(self.model, self.data)
-        threads = physics_threads(len(self.robots))
+        threads = physics_threads(len(self.robots), self.settings.physics_threads)
         if threads != self.threads:
             log.info("physics on %s", f"{threads} threads (MuJoCo's thread pool)" if threads else "one thread")
         self.threads = threads

@@ -1,0 +1,32 @@
+"""How the simulation runs on this machine: what ``usarsim serve``'s options choose besides the
+world, handed down by the composition root (:class:`usarsim.server.config.ServeConfig`).  None
+of them changes what is simulated: the same seed and commands give the same readings whatever
+they are (pictures aside: shadows and textures are what cameras see)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# A number of MuJoCo pool threads asked for is held to this (serve --physics-threads takes no more).
+PHYSICS_THREADS_LIMIT = 256
+
+
+@dataclass(frozen=True, kw_only=True)
+class SimSettings:
+    """``shadows``: the world's lights cast shadows in pictures (each such light draws the scene
+    once more, into its shadow map: on a software renderer that halves the image server's
+    frames a second); ``textures``: surfaces show their materials' textures (off: plain
+    colours, the quickest pictures); ``physics_threads``: MuJoCo's thread pool (None: the
+    automatic rule of :func:`usarsim.sim.simulation.physics_threads`; 0 or 1: no pool);
+    ``sensor_thread``: sensor readings are taken on a thread of their own while the physics
+    runs on (:mod:`usarsim.sim.measuring`)."""
+
+    shadows: bool = False
+    textures: bool = True
+    physics_threads: int | None = None
+    sensor_thread: bool = True
+
+    def __post_init__(self) -> None:
+        n = self.physics_threads
+        if n is not None and not 0 <= n <= PHYSICS_THREADS_LIMIT:
+            raise ValueError(f"physics_threads must be within 0..{PHYSICS_THREADS_LIMIT} (or None: automatic), got {n}")
