@@ -18,7 +18,7 @@ from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder, WheelSpeeds
 from usarsim.errors import UsarsimError
 from usarsim.readings import CommandResult
-from usarsim.sim.api import Done, OutputsHandler
+from usarsim.sim.api import Done, OutputsHandler, RobotEntry
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers
 
 
@@ -43,7 +43,8 @@ class FakeFacade:
     descriptions: list[ItemDescription] = field(default_factory=list)
     spawn_error: str | None = None  # the next spawn fails with this
     calls: list[tuple[str, tuple]] = field(default_factory=list)
-    robots: dict[int, Spawned] = field(default_factory=dict)
+    spawned: dict[int, Spawned] = field(default_factory=dict)
+    directory: dict[int, RobotEntry] = field(default_factory=dict)
     now: float = 0.0
     started: bool = False
     stopped: bool = False
@@ -153,6 +154,7 @@ class FakeFacade:
         rotation: Any,
         on_done: Done,
         set_down: bool = False,
+        controller: str = "",
     ) -> None:
         self.calls.append(("spawn", (uid, robot.class_name, name, tuple(location), tuple(rotation), set_down)))
         if self._refuse(on_done):
@@ -161,7 +163,8 @@ class FakeFacade:
             error, self.spawn_error = self.spawn_error, None
             on_done(None, UsarsimError(error))
             return
-        self.robots[uid] = Spawned(uid, robot, name, tuple(location), tuple(rotation), set_down)
+        self.spawned[uid] = Spawned(uid, robot, name, tuple(location), tuple(rotation), set_down)
+        self.directory[uid] = RobotEntry(uid, name, robot, controller)
         on_done(uid, None)
 
     def barrier(self, on_done: Done) -> None:
@@ -170,7 +173,18 @@ class FakeFacade:
 
     def remove(self, uid: int) -> None:
         self.calls.append(("remove", (uid,)))
-        self.robots.pop(uid, None)
+        self.spawned.pop(uid, None)
+        self.directory.pop(uid, None)
+
+    def robots(self) -> tuple[RobotEntry, ...]:
+        return tuple(self.directory.values())
+
+    def robot(self, uid: int) -> RobotEntry | None:
+        return self.directory.get(uid)
+
+    def find_robot(self, name: str) -> RobotEntry | None:
+        exact = next((e for e in self.directory.values() if e.name == name), None)
+        return exact or next((e for e in self.directory.values() if e.name.lower() == name.lower()), None)
 
     def drive(self, uid: int, command: DriveCommand) -> None:
         self.calls.append(("drive", (uid, command)))
@@ -233,7 +247,7 @@ class FakeFacade:
         on_done(None, None)
 
     def robot_positions(self, on_done: Done) -> None:
-        on_done([(s.name, s.location, False) for s in self.robots.values()], None)
+        on_done([(s.name, s.location, False) for s in self.spawned.values()], None)
 
     def walls_between_robots(self, a: str, b: str, on_done: Done) -> None:
         on_done(0, None)

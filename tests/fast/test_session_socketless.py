@@ -193,7 +193,7 @@ def test_the_session_holds_its_lines_while_the_spawn_is_under_way(yellow_world):
     """A spawn not answered yet (the simulation thread is busy) holds the lines after it."""
     pending = []
     facade = FakeFacade(yellow_world)
-    facade.spawn = lambda uid, robot, name, loc, rot, on_done, set_down=False: pending.append(on_done)
+    facade.spawn = lambda uid, robot, name, loc, rot, on_done, **kw: pending.append(on_done)
     sent: list = []
     session = Session(
         SessionContext(facade=facade, peer="t", emit=sent.append, threadsafe=lambda fn: fn, admit=lambda: None), uid=1
@@ -202,3 +202,11 @@ def test_the_session_holds_its_lines_while_the_spawn_is_under_way(yellow_world):
     assert session.state == SPAWNING and session.holding
     pending[0](1, None)
     assert session.state == ALIVE and not session.holding
+
+
+def test_a_spawned_robot_is_in_the_directory_under_its_name_with_its_controller(wire):
+    w = wire()
+    w("INIT {ClassName USARBot.P2AT} {Start PlayerStart1} {Name Scout}")
+    (entry,) = w.facade.robots()
+    assert (entry.uid, entry.name, entry.robot.class_name, entry.controller) == (7, "Scout", "P2AT", "test:1")
+    assert w.facade.find_robot("scout") is entry and w.facade.robot(7) is entry

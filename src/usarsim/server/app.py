@@ -9,6 +9,7 @@ from collections.abc import Callable
 from usarsim.server.config import ServeConfig
 from usarsim.server.control import ControlServer
 from usarsim.server.image import CameraBindings, ImageServer
+from usarsim.server.listener import Service
 from usarsim.server.truth import TruthServer
 from usarsim.server.wireless import WirelessServers
 from usarsim.sim.facade import SimFacade
@@ -69,6 +70,7 @@ class Application:
             from usarsim.web import WebConsole
 
             self.web = WebConsole(self, host=c.host, port=c.web_port, max_connections=c.max_web_connections)
+        self.services = self._services()  # every listener, started and stopped alike
         # the recording (--record) and the live Foxglove view (--foxglove); None: neither
         self.recorder = None
         if c.record is not None or c.foxglove_port is not None:
@@ -96,10 +98,11 @@ class Application:
             self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
             self.control.tap = self.recorder
             self.control.tap_name = "control"
-            for srv, name, _ in self._extras():
-                listener = getattr(srv, "listener", srv)
-                if name != "web" and hasattr(listener, "tap_name"):
-                    listener.tap, listener.tap_name, listener.tap_binary = self.recorder, name, name == "image"
+            for service in self.services[1:]:
+                listener = getattr(service.server, "listener", service.server)
+                if service.name != "web" and hasattr(listener, "tap_name"):
+                    listener.tap, listener.tap_name = self.recorder, service.name
+                    listener.tap_binary = service.name == "image"
 
         # the score (--score prints it live, --score-file writes it at the end); None: not kept
         self.score = None
@@ -118,63 +121,55 @@ class Application:
                 self.facade, self.wireless.service.model if self.wireless is not None else resolve_model(world.wireless)
             )
 
-    def _extras(self) -> list[tuple[object, str, str]]:
-        """(server, listener name, what names its port in an error) of every listener
-        beside the control port."""
-        out = []
+    def _services(self) -> list[Service]:
+        """Every listener, in the order they start: the control port first, the console last
+        (it connects to the others)."""
+        out = [Service("control", self.control, "the control port", "--port")]
         if self.truth is not None:
-            out.append((self.truth, "truth", "the ground-truth port %s (--truth-port)"))
+            out.append(Service("truth", self.truth, "the ground-truth port", "--truth-port"))
         if self.image is not None:
-            out.append((self.image, "image", "the image port %s (--image-port)"))
+            out.append(Service("image", self.image, "the image port", "--image-port"))
         if self.wireless is not None:
             out += self.wireless.servers()
-        if self.web is not None:  # last: it connects to the others
-            out.append((self.web, "web", "the web port %s (--web-port)"))
+        if self.web is not None:
+            out.append(Service("web", self.web, "the web port", "--web-port"))
         return out
 
     async def start(self) -> None:
         """Open every listener, then start the simulation.  An OSError (a port taken) names
-        the listener in its ``usarsim_listener`` attribute."""
-        try:
-            await self.control.start()
-        except OSError as exc:
-            exc.usarsim_listener = f"the control port {self.control.port} (--port)"
-            raise
-        started = [self.control]
+        the listener in its ``usarsim_listener`` attribute; the listeners opened before it are
+        closed again."""
         if self.wireless is not None:
             self.wireless.bind_loop()
-        for extra, _, what in self._extras():
-            try:
-                await extra.start()
-            except OSError as exc:
-                exc.usarsim_listener = what % extra.port
-                for srv in started:
-                    await srv.stop()
-                raise
-            started.append(extra)
-        if self.recorder is not None:
-            try:
-                self.recorder.start()
-            except OSError:  # the file not writable, the Foxglove port taken: named in the error
-                for srv in started:
-                    await srv.stop()
-                raise
+        started: list[Service] = []
+        try:
+            for service in self.services:
+                try:
+                    await service.server.start()
+                except OSError as exc:
+                    exc.usarsim_listener = service.describe()  # type: ignore[attr-defined]
+                    raise
+                started.append(service)
+            if self.recorder is not None:
+                self.recorder.start()  # the file not writable, the Foxglove port taken: named in the error
+        except OSError:
+            for service in reversed(started):
+                await service.server.stop()
+            raise
         if self.score is not None:
             self.score.start()
         self.facade.start()
 
     def listeners(self) -> list[tuple[str, str, int]]:
-        out = [("control", self.host, self.control.port)] + [
-            (name, self.host, srv.port) for srv, name, _ in self._extras()
-        ]
+        """(name, host, port) of every listener, once started."""
+        out = [(s.name, self.host, s.server.port) for s in self.services]
         if self.recorder is not None and self.recorder.server is not None:
             out.append(("foxglove", self.host, self.recorder.foxglove_port))
         return out
 
     async def stop(self) -> None:
-        for srv, _, _ in reversed(self._extras()):
-            await srv.stop()
-        await self.control.stop()
+        for service in reversed(self.services):
+            await service.server.stop()
         for _ in range(3):  # the closed connections' connection_lost (scheduled by close()) run
             await asyncio.sleep(0)
         self.facade.stop()

@@ -6,6 +6,34 @@ it and every connection.  The connections themselves share
 from __future__ import annotations
 
 import asyncio
+from dataclasses import dataclass
+from typing import Protocol
+
+
+class Listening(Protocol):
+    """What every listener of a server offers: its port (the one taken, once started), and an
+    asynchronous start and stop."""
+
+    @property
+    def port(self) -> int: ...
+    async def start(self) -> object: ...  # what it returns (a port) is not used
+    async def stop(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class Service:
+    """One listener of a ``usarsim serve``, as the server starts, stops, logs and names it:
+    ``name`` (``control``, ``truth``, ...), the ``server``, what it is called in an error
+    (``the ground-truth port``) and the option that sets its port (``--truth-port``)."""
+
+    name: str
+    server: Listening
+    what: str
+    option: str
+
+    def describe(self) -> str:
+        """``the ground-truth port 3989 (--truth-port)``: how an error names it."""
+        return f"{self.what} {self.server.port} ({self.option})"
 
 
 def call_on_loop(loop: asyncio.AbstractEventLoop | None, fn, *args) -> None:

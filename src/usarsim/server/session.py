@@ -333,7 +333,16 @@ class Session(Articulation):
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
         self.state = SPAWNING
-        self.facade.spawn(self.uid, robot, self.robot_name, location, rotation, self._spawn_done, set_down=set_down)
+        self.facade.spawn(
+            self.uid,
+            robot,
+            self.robot_name,
+            location,
+            rotation,
+            self._spawn_done,
+            set_down=set_down,
+            controller=self.ctx.peer,
+        )
 
     def _solid_at(self, robot: RobotConfig, location, rotation) -> str | None:
         """The solid of the world (not a movable object, which may have been pushed away) that

@@ -13,6 +13,7 @@ the request (the simulation's, or the caller's for a short lock-step STEP).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
@@ -26,6 +27,19 @@ if TYPE_CHECKING:
     from usarsim.sim.worldframe import WorldFrame
 
 Done = Callable[[Any, BaseException | None], None]
+
+
+@dataclass(frozen=True)
+class RobotEntry:
+    """A robot in the world, as the robot directory lists it: its connection's ``uid``, its
+    ``name``, its class and who drives it (``controller``: its client, as logs name it)."""
+
+    uid: int
+    name: str
+    robot: RobotConfig
+    controller: str = ""
+
+
 OutputsHandler = Callable[[list["Output"]], None]
 
 
@@ -72,9 +86,13 @@ class Facade(Protocol):
         rotation: Sequence[float],
         on_done: Done,
         set_down: bool = False,
+        controller: str = "",
     ) -> None: ...
     def barrier(self, on_done: Done) -> None: ...
     def remove(self, uid: int) -> None: ...
+    def robots(self) -> tuple[RobotEntry, ...]: ...
+    def robot(self, uid: int) -> RobotEntry | None: ...
+    def find_robot(self, name: str) -> RobotEntry | None: ...
     def drive(self, uid: int, command: DriveCommand) -> None: ...
     def drive_joints(self, uid: int, orders: list[JointOrder]) -> None: ...
     def operate(
@@ -120,4 +138,4 @@ class Facade(Protocol):
     ) -> None: ...
 
 
-__all__ = ["Done", "Facade", "OutputsHandler"]
+__all__ = ["Done", "Facade", "OutputsHandler", "RobotEntry"]

@@ -19,6 +19,7 @@ from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
 from usarsim.robots import drive_class
+from usarsim.sim.api import RobotEntry
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, package_frames
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner
@@ -62,6 +63,7 @@ class SimFacade:
         self._radio: RadioNet | None = None
         self._watchers: tuple[Callable[[list[Output]], None], ...] = ()
         self._frame_watches: dict[tuple[float, float], FrameWatch] = {}  # (period, links period) -> watch
+        self._directory: dict[int, RobotEntry] = {}  # the robots in the world, by connection (robots())
 
     def set_deliver(self, deliver: Callable[[list[Output]], None]) -> None:
         self._deliver = deliver
@@ -159,10 +161,20 @@ class SimFacade:
         rotation: Sequence[float],
         on_done: Done,
         set_down: bool = False,
+        controller: str = "",
     ) -> None:
+        """Spawn a robot; once it stands in the world it is in the robot directory
+        (:meth:`robots`) under ``name``, driven by ``controller`` (its client, as logs name it)."""
+        entry = RobotEntry(uid, name, robot, controller)
+
+        def spawned(result: Any, error: BaseException | None) -> None:
+            if error is None:
+                self._directory = {**self._directory, uid: entry}
+            on_done(result, error)
+
         self.runner.submit(
             Request(
-                lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down), immediate=True, on_done=on_done
+                lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down), immediate=True, on_done=spawned
             )
         )
 
@@ -173,7 +185,24 @@ class SimFacade:
         self.runner.submit(Request(lambda sim: sim.time, immediate=True, on_done=on_done))
 
     def remove(self, uid: int) -> None:
+        if uid in self._directory:
+            self._directory = {k: v for k, v in self._directory.items() if k != uid}
         self.runner.submit(Request(lambda sim: sim.remove(uid), immediate=True))
+
+    # The robot directory: who is in the world (any thread; a copy replaced as a whole) -----
+    def robots(self) -> tuple[RobotEntry, ...]:
+        """Every robot standing in the world, in the order they were spawned."""
+        return tuple(self._directory.values())
+
+    def robot(self, uid: int) -> RobotEntry | None:
+        """The robot of connection ``uid`` while it is in the world."""
+        return self._directory.get(uid)
+
+    def find_robot(self, name: str) -> RobotEntry | None:
+        """The robot called ``name`` (exactly, else ignoring case), None if there is none."""
+        entries = self.robots()
+        exact = next((e for e in entries if e.name == name), None)
+        return exact or next((e for e in entries if e.name.lower() == name.lower()), None)
 
     def drive(self, uid: int, command: DriveCommand) -> None:
         """One DRIVE: its parts go to the robot's drive model, which applies those its kind

@@ -53,7 +53,7 @@ from usarsim.protocol.grammar import parse_line
 from usarsim.server.connection import peer_address, refuse, write_open
 from usarsim.server.control import output_to_message
 from usarsim.server.listener import call_on_loop
-from usarsim.server.session import ALIVE, SPAWNING
+from usarsim.sim.api import RobotEntry
 
 log = logging.getLogger("usarsim.web")
 
@@ -212,10 +212,10 @@ class RobotWatch:
     sends that robot's client, read-only.  While the page reads slowly, the status and sensor
     lines wait latest-wins per stream, as for a slow client."""
 
-    def __init__(self, uid: int, name: str, conn):
-        self.uid = uid
-        self.name = name
-        self.conn = conn  # the control connection of the robot's controller
+    def __init__(self, entry: RobotEntry):
+        self.entry = entry  # the robot in the facade's directory
+        self.uid = entry.uid
+        self.name = entry.name
         self.pending: deque = deque()
         self.ready = asyncio.Event()
 
@@ -570,24 +570,13 @@ class WebConsole:
             await ws.close(code=1000, message=b"the simulator closed the connection")
 
     # watching another controller's robot -----------------------------------------------------
-    def _find_robot(self, name: str):
-        """(uid, control connection) of the robot called ``name`` (exactly, else ignoring
-        case), None if no connection has one."""
-        found = None
-        for uid, conn in list(self.app.control.connections.items()):
-            s = conn.session
-            if s is None or s.state not in (SPAWNING, ALIVE) or not s.robot_name:
-                continue
-            if s.robot_name == name:
-                return uid, conn
-            if found is None and s.robot_name.lower() == name.lower():
-                found = uid, conn
-        return found
+    def _find_robot(self, name: str) -> RobotEntry | None:
+        """The robot called ``name`` (exactly, else ignoring case) in the facade's directory."""
+        return self.app.facade.find_robot(name)
 
     def _present(self, w: RobotWatch) -> bool:
-        """Whether the watched robot is still in the world: its controller's connection is open."""
-        conn = self.app.control.connections.get(w.uid)
-        return conn is w.conn and conn.session is not None and conn.session.state in (SPAWNING, ALIVE)
+        """Whether the watched robot is still in the world (in the facade's directory)."""
+        return self.app.facade.robot(w.uid) is w.entry
 
     def _describe(self, uid: int, robot) -> list[str]:
         """GEO and CONF lines of every mounted item of the robot, as GETGEO and GETCONF of its
@@ -652,22 +641,20 @@ class WebConsole:
             if found is None:
                 await ws.send_json({"error": f"no robot called {name} in the world"})
                 return ws
-            uid, conn = found
-            session = conn.session
-            watch = RobotWatch(uid, session.robot_name, conn)
+            watch = RobotWatch(found)
             self._watches.add(watch)
             self._set_watched()
-            robot = session.robot
+            robot = found.robot
             await ws.send_json(
                 {
                     "watching": watch.name,
-                    "class": robot.class_name if robot is not None else None,
-                    "controller": conn.peer,
+                    "class": robot.class_name,
+                    "controller": found.controller,
                     "time": round(self.app.facade.time, 3),
-                    "describe": self._describe(uid, robot) if robot is not None else [],
+                    "describe": self._describe(found.uid, robot),
                 }
             )
-            log.info("console %s: watching robot %s of %s", request.remote, watch.name, conn.peer)
+            log.info("console %s: watching robot %s of %s", request.remote, watch.name, found.controller)
             pump = self._spawn(self._relay_watch(ws, watch))
             async for _ in ws:
                 pass  # read-only: nothing the page sends here reaches the robot or its controller

@@ -23,6 +23,7 @@ import asyncio
 import logging
 
 from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT, SendParser
+from usarsim.server.listener import Service
 from usarsim.sim.api import Facade
 from usarsim.sim.types import resolve_model
 
@@ -65,12 +66,12 @@ class WirelessServers:
         self.interface = ComInterfaceServer(self.service, host=host, port=options.interface_port, max_connections=limit)
         log.info("wireless: radio model %s", model.describe())
 
-    def servers(self) -> list[tuple[object, str, str]]:
-        """(server, listener name, what names its port in an error)."""
+    def servers(self) -> list[Service]:
+        """The three listeners, as the server starts and names them."""
         return [
-            (self.comserver, "comserver", "the ComServer port %s (--wcs-port)"),
-            (self.wss, "wss", "the WSS port %s (--wss-port)"),
-            (self.interface, "cominterface", "the ComServerInterface port %s (--cominterface-port)"),
+            Service("comserver", self.comserver, "the ComServer port", "--wcs-port"),
+            Service("wss", self.wss, "the WSS port", "--wss-port"),
+            Service("cominterface", self.interface, "the ComServerInterface port", "--cominterface-port"),
         ]
 
     def bind_loop(self) -> None:
