@@ -35,7 +35,7 @@ def doc_plugins():
 
 
 def test_the_page_has_its_worked_examples():
-    assert {"sensor", "effecter", "drive", "system"} <= set(examples())
+    assert {"sensor", "effecter", "drive", "system", "radio"} <= set(examples())
 
 
 def test_the_drive_example_drives_a_p2at_in_metres_per_second(doc_plugins, test_world):
@@ -115,3 +115,11 @@ def test_the_effecter_example_pans_the_camera_towards_a_point(doc_plugins, test_
     (x, y, _), (_, _, yaw) = sim.pose_of(1)
     assert pan == pytest.approx(math.atan2(0.5 - y, -5.0 - x) - yaw, abs=0.02) and pan > 0.3
     assert not sim.operate(1, "LookAt", "Aim", "Aim", ItemParams(values=(1.0,), text="1")).ok
+
+
+def test_the_radio_example_cuts_links_beyond_its_range(doc_plugins, test_world):
+    from usarsim.sim.radio import resolve_model
+
+    model = resolve_model(test_world.wireless, model="disc")
+    assert type(model).__name__ == "Disc" and not model.counts_walls
+    assert model.holds(model.signal_dbm(14.9)) and not model.holds(model.signal_dbm(15.1))

@@ -643,6 +643,34 @@ def test_the_model_is_chosen_by_the_world_or_the_command_line(radio_world, tmp_p
             srv.stop()
 
 
+def test_a_radio_model_added_as_a_plugin_is_chosen_by_name_and_used_over_the_wire(radio_world):
+    """tests/plugins/freespace_radio.py (one file, registered by importing it) on the lane with
+    six walls, 20 m long: free space ignores the walls, so the link that the manual's model
+    cuts opens, at the strength of Friis's formula for 20 dBm at 2.4 GHz."""
+    import plugins.freespace_radio  # noqa: F401  (registers the radio model "freespace")
+
+    expected = 20.0 - 20.0 * math.log10(4.0 * math.pi * 20.0 * 2.4e9 / 299_792_458.0)
+    srv = ServerThread(radio_world, seed=4, wireless_model="freespace").start()
+    try:
+        assert srv.app.wireless.service.model.describe().startswith("freespace (20 dBm at 2.4 GHz")
+        stations(srv, ["A6", "B6"])
+        wcs = Wcs(srv.app.wireless.comserver.port)
+        la, lb = listener(), listener()
+        try:
+            for n in ("A6", "B6"):
+                assert wcs.ask(f"REGISTER {n} 127.0.0.1;") == "OK;"
+            assert wcs.ask("GETSS A6 B6;") == f"OK:{expected:.2f};"
+            reply, ends = wcs_open(wcs, "A6", la, "B6", lb)
+            assert reply == "OK;"
+            for e in ends or ():
+                e.close()
+        finally:
+            for sk in (wcs.sock, la, lb):
+                sk.close()
+    finally:
+        srv.stop()
+
+
 WALL_WORLD = """name: WallCount
 floor: {center: [0.0, 0.0], size: [30.0, 10.0]}
 materials:

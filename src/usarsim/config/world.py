@@ -56,7 +56,7 @@ VICTIM_POSTURES = ("lying", "sitting")
 # Radio propagation models of the wireless simulation (usarsim.sim.radio; manual 3.2.4,
 # protocol.md 12.2): the Wall Attenuation Factor model with the manual's constants, the
 # same with the later USARSim code's, distance only, a perfect link.
-WIRELESS_MODELS = ("waf", "waf2009", "distance", "perfect")
+WIRELESS_MODELS = ("waf", "waf2009", "distance", "perfect")  # built in (usarsim.sim.radio); plugins add more
 # How deep inside a solid a point must lie to be in it (metres, WorldConfig.solid_at): a
 # start pose set on a floor or a platform, up to 1 cm into it, is on it, not inside.
 SOLID_MARGIN_M = 0.01
@@ -853,10 +853,16 @@ def _named_poses(top: Section, key: str, what: str) -> tuple[StartPose, ...]:
 
 
 def _wireless(s: Section) -> WirelessConfig:
-    """The ``wireless`` section: ``model`` (WIRELESS_MODELS), the ini keys of WIRELESS_KEYS
-    and ``cache_distance_m``."""
+    """The ``wireless`` section: ``model`` (a radio model's name: the built-in WIRELESS_MODELS or
+    a plugin's, checked against the registry of usarsim.sim.radio when the server starts), the
+    ini keys of WIRELESS_KEYS and ``cache_distance_m``."""
     d = FieldDefaults(WirelessConfig)
-    model = s.str("model", d.model, choices=WIRELESS_MODELS)
+    model = s.str("model", d.model)
+    if model is not None and (not model.isidentifier() or model != model.lower()):
+        raise s.error(
+            "model",
+            f"a radio model's name is a lower-case word (built in: {', '.join(WIRELESS_MODELS)}), got {model!r}",
+        )
     d0 = s.float("eDo", d.d0_m, min=0.0, min_exclusive=True)
     n = s.float("eN", d.path_loss_exponent, min=0.0, max=10.0)
     waf = s.float("eAttenFac", d.wall_db, min=0.0, max=200.0)

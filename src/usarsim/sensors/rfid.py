@@ -81,6 +81,10 @@ def _tag_and_data(text: str | None) -> tuple[int | None, str]:
 
 @SENSORS.register("RFID", "RFIDSensor")
 class RFID(Sensor[RfidConfig]):
+    """An RFID reader (protocol.md 6.3, 7.10): the tags within range, by the sensing mode
+    (every tag in the radius, only those with no wall between, or those whose attenuated
+    signal is above the threshold), with their memory."""
+
     RAY_KIND = "laser"  # radio does not pass walls any better than light here; glass counts as a wall
     ALIASES = {
         "MaxRange": "max_range_m",

@@ -58,6 +58,10 @@ RSC = TypeVar("RSC", bound=RangeScannerConfig)
 
 @SENSORS.register("RangeScanner")
 class RangeScanner(Sensor[RSC]):
+    """A scanning laser range finder (protocol.md 6.3, 7.3): one sweep of beams across its
+    field of view, rightmost first, each the distance to what it hits (MaxRange when nothing),
+    with the relative noise of its settings."""
+
     SCANNABLE = True
     Config = RangeScannerConfig
     RAY_KIND = "laser"  # which materials the beams pass through (world materials' see_through)

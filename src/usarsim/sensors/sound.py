@@ -67,6 +67,9 @@ class SoundConfig(SensorConfig):
 
 @SENSORS.register("Sound", "SoundSensor")
 class Sound(Sensor[SoundConfig]):
+    """Victims groaning (protocol.md 6.3): the loudest sound above the threshold, spread
+    spherically and muffled by walls (see the module's docstring)."""
+
     ALIASES = {"Threshold": "threshold_db", "WallLoss": "wall_loss_db", "Sigma": "sigma_db"}
 
     def measure(self, view: WorldView) -> SoundReading:
@@ -109,6 +112,9 @@ class HumanMotionConfig(SensorConfig):
 
 @SENSORS.register("HumanMotion", "HumanMotionSensor")
 class HumanMotion(Sensor[HumanMotionConfig]):
+    """A moving person in view (protocol.md 6.3): the highest probability of a waving victim's
+    arm in the field of view, within range and in line of sight (see the module's docstring)."""
+
     RAY_KIND = "camera"
     ALIASES = {"MaxRange": "max_range_m", "FOV": "fov_rad", "Sigma": "sigma"}
 

@@ -58,6 +58,9 @@ class VictSensorConfig(SensorConfig):
 
 @SENSORS.register("VictSensor", "VictimSensor")
 class VictSensor(Sensor[VictSensorConfig]):
+    """The victim sensor (protocol.md 6.3, 7.9): the victims' parts its rays hit within its
+    field of view and range, named and located in the robot's frame."""
+
     RAY_KIND = "camera"
     ALIASES = {
         "MaxRange": "max_range_m",

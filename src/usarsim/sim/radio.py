@@ -33,13 +33,14 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from usarsim.config.reader import did_you_mean
 from usarsim.config.world import WIRELESS_KEYS, WIRELESS_MODELS, WirelessConfig
 from usarsim.errors import ConfigError
+from usarsim.registry import Registry
 from usarsim.sim import frames
 
 if TYPE_CHECKING:
@@ -66,8 +67,23 @@ def waf_signal_dbm(
     return pd0_dbm - 10.0 * path_loss_exponent * math.log10(d / d0_m) - counted * wall_db
 
 
+# The radio models by name (``--wireless-model``, a world's ``wireless`` section): a model is
+# one class registered here (a plugin's own too: tests/plugins/freespace_radio.py).
+RADIO_MODELS = Registry("radio model")
+
+
+@RADIO_MODELS.register("waf")
 @dataclass(frozen=True, kw_only=True)
 class RadioModel:
+    """A radio propagation model: the signal strength between two antennas ``distance_m``
+    apart with ``walls`` walls between them, and whether a link of that strength holds.
+
+    This base is the manual's WAF model (3.2.4); a model of another kind subclasses it,
+    registers with :data:`RADIO_MODELS` and overrides :meth:`signal_dbm` (and :meth:`holds`
+    or :meth:`describe` if it must).  Every model carries the ComConnection constants of
+    USARComServer.ini (a world's ``wireless`` section and ``--wireless-config`` change them)
+    and uses those it needs."""
+
     name: str = "waf"
     pd0_dbm: float = -49.67
     d0_m: float = 2.0
@@ -76,20 +92,17 @@ class RadioModel:
     max_walls: int | None = 5  # C; None: no cap
     wall_db: float = 6.625  # WAF
     cache_distance_m: float = 1.0
+    COUNTS_WALLS: ClassVar[bool] = True  # whether signal_dbm uses the walls (they are counted by ray casts)
 
     def __post_init__(self) -> None:
-        if self.name not in WIRELESS_MODELS:
-            raise ValueError(f"unknown radio model {self.name!r}{did_you_mean(self.name, WIRELESS_MODELS)}")
         if not self.d0_m > 0 or self.path_loss_exponent < 0 or self.wall_db < 0 or self.cache_distance_m < 0:
             raise ValueError("need eDo > 0, eN >= 0, eAttenFac >= 0 and cache_distance_m >= 0")
 
     @property
     def counts_walls(self) -> bool:
-        return self.name in ("waf", "waf2009")
+        return self.COUNTS_WALLS
 
     def signal_dbm(self, distance_m: float, walls: int = 0) -> float:
-        if self.name == "perfect":
-            return 0.0
         return waf_signal_dbm(
             distance_m,
             walls if self.counts_walls else 0,
@@ -102,11 +115,9 @@ class RadioModel:
 
     def holds(self, dbm: float) -> bool:
         """Whether a link with this signal strength carries messages."""
-        return self.name == "perfect" or dbm >= self.cutoff_dbm
+        return dbm >= self.cutoff_dbm
 
     def describe(self) -> str:
-        if self.name == "perfect":
-            return "perfect (0 dBm, every link holds)"
         cap = "no cap" if self.max_walls is None else f"C {self.max_walls}"
         walls = f", WAF {self.wall_db:g} dB, {cap}" if self.counts_walls else ""
         return (
@@ -115,12 +126,60 @@ class RadioModel:
         )
 
 
-PRESETS: dict[str, RadioModel] = {
-    "waf": RadioModel(),
-    "waf2009": RadioModel(name="waf2009", path_loss_exponent=1.0, wall_db=6.325, max_walls=None),
-    "distance": RadioModel(name="distance"),
-    "perfect": RadioModel(name="perfect"),
-}
+@RADIO_MODELS.register("waf2009")
+@dataclass(frozen=True, kw_only=True)
+class Waf2009Model(RadioModel):
+    """The WAF formula with the later USARSim code's constants (the UDK ComServer's ini and the
+    WSS obstacle model, protocol.md 12.1 and 12.2): n = 1, WAF = 6.325 dB, no cap on walls."""
+
+    name: str = "waf2009"
+    path_loss_exponent: float = 1.0
+    wall_db: float = 6.325
+    max_walls: int | None = None
+
+
+@RADIO_MODELS.register("distance")
+@dataclass(frozen=True, kw_only=True)
+class DistanceModel(RadioModel):
+    """The WSS distance-only model: the WAF formula with walls ignored."""
+
+    name: str = "distance"
+    COUNTS_WALLS: ClassVar[bool] = False
+
+
+@RADIO_MODELS.register("perfect")
+@dataclass(frozen=True, kw_only=True)
+class PerfectModel(RadioModel):
+    """The WSS's Noop model: 0 dBm, every link holds."""
+
+    name: str = "perfect"
+    COUNTS_WALLS: ClassVar[bool] = False
+
+    def signal_dbm(self, distance_m: float, walls: int = 0) -> float:
+        return 0.0
+
+    def holds(self, dbm: float) -> bool:
+        return True
+
+    def describe(self) -> str:
+        return "perfect (0 dBm, every link holds)"
+
+
+def model_names() -> list[str]:
+    """The radio models registered (built in and plugins')."""
+    return RADIO_MODELS.names()
+
+
+def new_model(name: str) -> RadioModel:
+    """The model ``name`` with its own default constants; ConfigError if none has that name."""
+    if name not in RADIO_MODELS:
+        raise ConfigError(f"unknown radio model {name!r}{did_you_mean(name, model_names())}")
+    model: RadioModel = RADIO_MODELS.get(name)()
+    return model
+
+
+# The built-in models with their default constants.
+PRESETS: dict[str, RadioModel] = {name: new_model(name) for name in WIRELESS_MODELS}
 
 
 def resolve_model(*layers: WirelessConfig | None, model: str | None = None) -> RadioModel:
@@ -128,9 +187,7 @@ def resolve_model(*layers: WirelessConfig | None, model: str | None = None) -> R
     naming one, else ``waf``; its preset's constants, then those each layer gives, in order
     (the world's, then the configuration file's)."""
     name = model or next((ly.model for ly in reversed(layers) if ly is not None and ly.model), None) or "waf"
-    if name not in PRESETS:
-        raise ConfigError(f"unknown radio model {name!r}{did_you_mean(name, WIRELESS_MODELS)}")
-    out = PRESETS[name]
+    out = new_model(name)
     for ly in layers:
         if ly is None:
             continue
@@ -194,9 +251,9 @@ def load_wireless_file(path: str | Path) -> WirelessFile:
             raise ConfigError(f"unknown key '{key}'{did_you_mean(key, known.values())}", path=path, key=where)
         where = f"{where}: {name}"
         if name == "Model":
-            if value.lower() not in WIRELESS_MODELS:
+            if value.lower() not in RADIO_MODELS:
                 raise ConfigError(
-                    f"'{value}' is not a radio model{did_you_mean(value.lower(), WIRELESS_MODELS)}",
+                    f"'{value}' is not a radio model{did_you_mean(value.lower(), model_names())}",
                     path=path,
                     key=where,
                 )

@@ -8,6 +8,8 @@ from usarsim.sim.systems.base import SYSTEMS, System
 
 @SYSTEMS.register("gaits")
 class Gaits(System):
+    """The walking robots' gaits: each sets its leg joints' targets before a stretch of steps."""
+
     ORDER = 60
 
     @classmethod

@@ -15,6 +15,8 @@ AERIAL_LEVEL_STIFFNESS = 20.0
 
 @SYSTEMS.register("levelling")
 class Levelling(System):
+    """Hovering robots keep level: a restoring torque towards upright, before each stretch."""
+
     ORDER = 30
 
     @classmethod

@@ -21,6 +21,8 @@ HULL_PITCH_RIGHTING = 0.05  # its pitch righting, relative to its roll righting
 
 @SYSTEMS.register("water")
 class Water(System):
+    """Buoyancy, drag and a vessel's propulsion for every robot in the world's water."""
+
     ORDER = 40
 
     @classmethod
