@@ -1,0 +1,7 @@
+"""``python -m usarsim.cli``: the ``usarsim`` command."""
+
+import sys
+
+from usarsim.cli import main
+
+sys.exit(main())
