@@ -1,0 +1,268 @@
+"""One run of a sweep, on whatever process calls it (a Ray worker in a sweep): start its own
+simulator, spawn the team, drive it with the run's controller (a Python brain, or a command
+that connects itself) for the simulated duration, stop the simulator and return the run's
+row with its score.
+
+:func:`execute` never raises: a run that fails returns its row with the error and the tail
+of the simulator's log.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import shlex
+import shutil
+import subprocess
+import tempfile
+import threading
+import time
+from collections.abc import Callable
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from usarsim.sweep.results import SCORE_COLUMNS
+from usarsim.sweep.runs import Run, brain_parameters, resolve_brain
+
+LOG_TAIL_CHARS = 3000  # of the simulator's log (stderr), kept in the row of a failed run
+OUTPUT_TAIL_CHARS = 1500  # of a controller command's output, in its error
+POLL_S = 0.05  # how often the clock of a run driven by a command is looked at (wall seconds)
+# In lock-step a command drives the clock itself: once the duration is reached it has this
+# long (wall seconds) to stop by itself before it is stopped.
+GRACE_S = 3.0
+
+
+class RunFailed(Exception):
+    """A run could not be completed; the message says why."""
+
+
+def execute(run: Run) -> dict[str, Any]:
+    """Run ``run`` here and return its row: the configuration columns, the team's scores,
+    the simulated time the score covers, wall times of each phase, the error (None when it
+    went well) and, for a failed run, the tail of the simulator's log."""
+    from usarsim.client import launch
+
+    row: dict[str, Any] = run.columns()
+    row.update({c: None for c in SCORE_COLUMNS})
+    row.update(time_s=None, robots=None, error=None, log="", node=platform.node())
+    t0 = time.monotonic()
+    phases = {"start_s": 0.0, "setup_s": 0.0, "control_s": 0.0, "stop_s": 0.0}
+    tmp = Path(tempfile.mkdtemp(prefix="usarsim-run-"))
+    score_path = tmp / "score.json"
+    server = None
+    timed_out = threading.Event()
+    watchdog: threading.Timer | None = None
+    error: str | None = None
+    try:
+        extra = ["--score-file", str(score_path)]
+        if run.wireless not in ("off", "world"):
+            extra += ["--wireless-model", run.wireless]
+        server = launch(
+            world=run.world,
+            seed=run.seed,
+            lockstep=run.clock == "lockstep",
+            speed=None,
+            wireless=run.wireless != "off",
+            robot_dirs=run.robot_dirs,
+            extra_args=tuple(extra),
+        )
+        phases["start_s"] = time.monotonic() - t0
+
+        def on_timeout() -> None:
+            timed_out.set()
+            if server.proc.poll() is None:
+                server.proc.terminate()  # the controller's next wait fails; the score is still written
+
+        watchdog = threading.Timer(max(0.0, run.timeout_s - (time.monotonic() - t0)), on_timeout)
+        watchdog.daemon = True
+        watchdog.start()
+        if run.controller.kind == "brain":
+            _run_brain(run, server, phases)
+        else:
+            _run_command(run, server, tmp, phases, deadline=t0 + run.timeout_s)
+    except Exception as exc:  # a failed run is a row, never the end of the sweep
+        error = _describe(exc)
+    finally:
+        if watchdog is not None:
+            watchdog.cancel()
+        t_stop = time.monotonic()
+        if server is not None:
+            server.close(keep_stderr=True)  # SIGTERM: the simulator writes the score file
+            row["log"] = server.stderr_tail(LOG_TAIL_CHARS)
+            server.close()
+        if timed_out.is_set():
+            error = f"timed out after {run.timeout_s:g} s of wall time (the experiment's 'timeout')"
+        if server is not None:
+            try:
+                _read_score(score_path, row)
+            except RunFailed as exc:
+                error = error or str(exc)
+        phases["stop_s"] = time.monotonic() - t_stop
+        shutil.rmtree(tmp, ignore_errors=True)
+    row.update({k: round(v, 4) for k, v in phases.items()})
+    row["wall_s"] = round(time.monotonic() - t0, 4)
+    row["error"] = error
+    if error is None:
+        row["log"] = ""
+    else:  # what the simulator scored of a failed run stays out of the score columns (time_s tells how far it got)
+        row.update({c: None for c in SCORE_COLUMNS})
+    row["finished_at"] = datetime.now(UTC).isoformat(timespec="seconds")
+    row["_finished_epoch"] = time.time()
+    return row
+
+
+def _describe(exc: BaseException) -> str:
+    text = str(exc).strip()
+    if isinstance(exc, RunFailed):
+        return text
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _read_score(path: Path, row: dict[str, Any]) -> None:
+    """The team's scores of the simulator's score file (serve --score-file) into ``row``."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise RunFailed("the simulator wrote no score file (see its log)") from None
+    except (OSError, ValueError) as exc:
+        raise RunFailed(f"the simulator's score file cannot be read: {exc}") from None
+    team = data.get("team") or {}
+    for c in SCORE_COLUMNS:
+        row[c] = team.get(c)
+    row["time_s"] = data.get("time_s")
+    row["robots"] = json.dumps(data.get("robots") or {}, sort_keys=True)
+
+
+def _spawn_team(run: Run, world: Any) -> list[tuple[Any, tuple[float, float, float]]]:
+    """Every robot of the team in the world, with the world pose it starts from (x, y, yaw)."""
+    poses = {p.name: p for p in world.start_poses}
+    out = []
+    for m in run.team:
+        if m.location is not None:
+            robot = world.spawn(m.robot, m.name, location=m.location, rotation=(0.0, 0.0, m.yaw))
+            out.append((robot, (m.location[0], m.location[1], m.yaw)))
+        else:
+            pose = poses[m.start]
+            robot = world.spawn(m.robot, m.name, start=m.start)
+            out.append((robot, (pose.location[0], pose.location[1], pose.rotation[2])))
+    return out
+
+
+def brain_kwargs(run: Run, factory: Callable[..., Any], index: int) -> dict[str, Any]:
+    """The keyword arguments of the ``index``-th robot's brain: the experiment's ``params``,
+    ``bounds`` as a :class:`usarsim.brains.Bounds` (four numbers, or ``auto``: the box of the
+    world's static solids), and ``seed`` (when the brain takes one and the file gives none)
+    from the run's seed, so that each seed varies the brain's own choices too."""
+    kwargs = run.controller.param_dict
+    if "bounds" in kwargs:
+        from usarsim.brains import Bounds
+
+        b = kwargs["bounds"]
+        if b == "auto":
+            from usarsim.brains.coverage import FloorMap
+            from usarsim.config.catalog import resolve_world
+
+            b = [float(v) for v in FloorMap.from_world(resolve_world(run.world)).solids_box]
+        kwargs["bounds"] = Bounds(*(float(v) for v in b))
+    accepted = brain_parameters(factory)
+    if "seed" not in kwargs and accepted is not None and "seed" in accepted:
+        kwargs["seed"] = run.seed * 1000 + index
+    return kwargs
+
+
+def _run_brain(run: Run, server: Any, phases: dict[str, float]) -> None:
+    from usarsim.brains.runner import run as run_brains
+
+    t = time.monotonic()
+    factory = resolve_brain(run.controller.target)
+    period = run.controller.period
+    with server.connect() as world:
+        brains = [
+            factory(robot, origin=origin, **brain_kwargs(run, factory, i))
+            for i, (robot, origin) in enumerate(_spawn_team(run, world))
+        ]
+        if world.lockstep:
+            world.step(period)  # the first readings
+        phases["setup_s"] = time.monotonic() - t
+        t = time.monotonic()
+        run_brains(world, brains, run.duration_s, period=period, until_done="never")
+        phases["control_s"] = time.monotonic() - t
+
+
+def command_values(run: Run, server: Any) -> dict[str, str]:
+    """What a controller command's placeholders stand for (docs/experiments.md)."""
+    first = run.team[0]
+    team = [f"{m.robot}:{m.name}:{m.start or ''}" for m in run.team]
+    return {
+        "host": server.host,
+        "port": str(server.port),
+        "truth_port": str(server.ports.get("truth", "")),
+        "wcs_port": str(server.ports.get("comserver", "")),
+        "seconds": f"{run.duration_s:g}",
+        "seed": str(run.seed),
+        "world": run.world,
+        "lockstep": "1" if run.clock == "lockstep" else "0",
+        "robot": first.robot,
+        "name": first.name,
+        "start": first.start or "",
+        "team": ",".join(team),
+    }
+
+
+def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], deadline: float) -> None:
+    """Run the controller command until it exits or the simulated time reaches the
+    duration (then it is stopped: SIGTERM, SIGKILL 5 s later)."""
+    from usarsim.client import connect
+
+    t = time.monotonic()
+    values = command_values(run, server)
+    argv = [part.format(**values) for part in shlex.split(run.controller.target)]
+    env = dict(os.environ)
+    env.update({f"USARSIM_{k.upper()}": v for k, v in values.items()})
+    env["USARSIM_TEAM_JSON"] = json.dumps([m.as_dict() for m in run.team])
+    out_path = tmp / "controller.log"
+    with (
+        open(out_path, "w+b") as out,
+        connect(server.host, server.port, lockstep=False, truth_port=server.ports["truth"]) as clock,
+    ):
+        try:
+            proc = subprocess.Popen(
+                argv, cwd=run.cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT, env=env
+            )
+        except OSError as exc:
+            raise RunFailed(f"the controller command cannot start: {exc}") from None
+        phases["setup_s"] = time.monotonic() - t
+        t = time.monotonic()
+        stopped = False
+        reached: float | None = None  # when the simulated time reached the duration (wall)
+        try:
+            while proc.poll() is None:
+                if time.monotonic() > deadline:
+                    break  # the watchdog says so
+                if server.proc.poll() is not None:
+                    raise RunFailed("the simulator stopped while the controller ran (see its log)")
+                if reached is None:
+                    now = [o.time for o in clock.truth()]
+                    if now and max(now) >= run.duration_s - 1e-9:
+                        reached = time.monotonic()
+                if reached is not None and (run.clock != "lockstep" or time.monotonic() - reached > GRACE_S):
+                    stopped = True
+                    break
+                time.sleep(POLL_S)
+        finally:
+            if proc.poll() is None:
+                proc.terminate()
+                try:
+                    proc.wait(5)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait(5)
+        phases["control_s"] = time.monotonic() - t
+        if not stopped and proc.returncode != 0 and time.monotonic() <= deadline:
+            out.seek(0)
+            tail = out.read().decode("utf-8", "replace")[-OUTPUT_TAIL_CHARS:].strip()
+            raise RunFailed(
+                f"the controller exited with code {proc.returncode}" + (f": {tail}" if tail else " and printed nothing")
+            )
