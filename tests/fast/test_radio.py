@@ -168,9 +168,13 @@ def test_a_world_chooses_its_radio_model(tmp_path):
     p.write_text(WORLD + "wireless: {eCutof: -80}\n")
     with pytest.raises(ConfigError, match=r"wireless.eCutof: unknown key 'eCutof' \(did you mean 'eCutoff'\?\)"):
         load_world(p)
-    p.write_text(WORLD + "wireless: {model: wall}\n")
-    with pytest.raises(ConfigError, match="wireless.model"):
+    p.write_text(WORLD + "wireless: {model: Wall Model}\n")
+    with pytest.raises(ConfigError, match="wireless.model"):  # not a model's name at all
         load_world(p)
+    # a name no model has (a plugin's may be registered later) is refused when it is resolved
+    p.write_text(WORLD + "wireless: {model: wall}\n")
+    with pytest.raises(ConfigError, match=r"unknown radio model 'wall'; allowed: distance, "):
+        resolve_model(load_world(p).wireless)
 
 
 # --------------------------------------------------------------------------- ComServer link framing

@@ -6,12 +6,15 @@ metres and radians; the floor's top surface is the plane z = 0.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import struct
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
+from typing import Any
 
+from usarsim.config.elements import ELEMENT_KINDS, Landmark
 from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml, name_entries
 from usarsim.errors import ConfigError
 
@@ -252,6 +255,10 @@ class WorldConfig:
     lights: tuple[Light, ...] = ()  # none: the default lighting (builder.world_spec)
     ambient_light: tuple[float, float, float] | None = None  # None: MuJoCo's default (0.1 grey)
     wireless: WirelessConfig | None = None  # None: the default radio model
+    # the entries of sections read by registered element kinds (usarsim.config.elements), by
+    # kind; their solids are among ``objects``, their landmarks here
+    elements: tuple[tuple[str, tuple[Any, ...]], ...] = ()
+    landmarks: tuple[Landmark, ...] = ()
     extra: dict = field(default_factory=dict)
 
     def start_pose(self, name: str) -> StartPose | None:
@@ -705,6 +712,7 @@ def _world(data: dict, path: str) -> WorldConfig:
                 scale=s.vec("scale", 3, od.scale, positive=True),
             )
         objects.append(obj)
+    elements, landmarks = _elements(top, names, objects, materials)
 
     poses = _named_poses(top, "start_poses", "start pose")
     path_nodes = _named_poses(top, "path_nodes", "path node")
@@ -832,7 +840,46 @@ def _world(data: dict, path: str) -> WorldConfig:
         lights=tuple(lights),
         ambient_light=ambient,
         wireless=wireless,
+        elements=elements,
+        landmarks=landmarks,
     )
+
+
+def _elements(
+    top: Section, names: set[str], objects: list[StaticObject], materials: dict[str, Material]
+) -> tuple[tuple[tuple[str, tuple[Any, ...]], ...], tuple[Landmark, ...]]:
+    """The sections of the registered element kinds (usarsim.config.elements): each entry
+    parsed by its kind, its solids added to ``objects`` (named ``<kind>/<entry>/<solid>``), its
+    landmarks collected."""
+    elements = []
+    landmarks: list[Landmark] = []
+    for kind_name in ELEMENT_KINDS.names():
+        if not top.has(kind_name):
+            continue
+        kind = ELEMENT_KINDS.get(kind_name)
+        entries = []
+        taken: set[str] = set()
+        for s in top.entries(kind_name):
+            element = kind.parse(s)
+            if element.name in taken:
+                raise s.error("name", f"two {kind_name} entries are called '{element.name}'")
+            taken.add(element.name)
+            for solid in kind.solids(element):
+                solid = dataclasses.replace(solid, name=f"{kind_name}/{element.name}/{solid.name}")
+                if solid.name in names:
+                    raise s.error("name", f"object '{solid.name}' has the name of another object")
+                if solid.material not in materials:
+                    raise s.error(
+                        "name",
+                        f"{kind_name} '{element.name}': its solid names no material of the "
+                        f"world: '{solid.material}'{did_you_mean(solid.material, materials)}",
+                    )
+                names.add(solid.name)
+                objects.append(solid)
+            landmarks.extend(kind.landmarks(element))
+            entries.append(element)
+        elements.append((kind_name, tuple(entries)))
+    return tuple(elements), tuple(landmarks)
 
 
 def _named_poses(top: Section, key: str, what: str) -> tuple[StartPose, ...]:

@@ -16,7 +16,8 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
     rotation) of every robot (its class and INIT name; the class ``Robot`` asks for every
     robot), victim (``Victim``), RFID tag
     (``RFIDTag``, named by its id), false alarm (``FalseAlarm``) and movable object
-    (``MovableObject``); world frame, rotations in [0, 2 pi).  Filtered by class and
+    (``MovableObject``), and the landmarks of the world's element kinds (their own classes);
+    world frame, rotations in [0, 2 pi).  Filtered by class and
     name (any case) when given."""
     now = sim.time
     m, d = sim.model, sim.data
@@ -37,6 +38,8 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
             rows.append(
                 (o.name, "MovableObject", frames.from_mj_vec(d.xpos[b]), frames.mj_mat_to_usar_euler(d.xmat[b]))
             )
+    for lm in sim.world.landmarks:  # what the world's element kinds list (usarsim.config.elements)
+        rows.append((lm.name, lm.class_name, lm.location, lm.rotation))
     robots = len(sim.robots)  # the first rows: ``{Class Robot}`` asks for every one of them
     out = []
     for i, (n, c, loc, rot) in enumerate(rows):
