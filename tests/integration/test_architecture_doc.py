@@ -35,7 +35,7 @@ def doc_plugins():
 
 
 def test_the_page_has_its_worked_examples():
-    assert {"sensor", "effecter", "drive", "system", "radio"} <= set(examples())
+    assert {"sensor", "effecter", "drive", "system", "radio", "element"} <= set(examples())
 
 
 def test_the_drive_example_drives_a_p2at_in_metres_per_second(doc_plugins, test_world):
@@ -123,3 +123,16 @@ def test_the_radio_example_cuts_links_beyond_its_range(doc_plugins, test_world):
     model = resolve_model(test_world.wireless, model="disc")
     assert type(model).__name__ == "Disc" and not model.counts_walls
     assert model.holds(model.signal_dbm(14.9)) and not model.holds(model.signal_dbm(15.1))
+
+
+def test_the_element_example_lays_cones_the_world_holds_as_solids_and_landmarks(doc_plugins, tmp_path):
+    from helpers import TEST_WORLD
+    from usarsim.config.world import load_world
+
+    p = tmp_path / "Coned.yaml"
+    p.write_text(TEST_WORLD + "cones:\n  - {name: C1, location: [1.0, 2.0, 0.0]}\n")
+    w = load_world(p)
+    (body,) = [o for o in w.objects if o.name == "cones/C1/body"]
+    assert body.shape == "cylinder" and body.center == (1.0, 2.0, -0.25)
+    assert [(lm.name, lm.class_name) for lm in w.landmarks] == [("C1", "Cone")]
+    assert w.solid_at((1.0, 2.0, -0.25), movable=False) == "cylinder 'cones/C1/body'"  # a robot may not start in it
