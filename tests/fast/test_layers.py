@@ -36,6 +36,7 @@ PROTOCOL_MODULES = [
     "usarsim.protocol.numbers",
     "usarsim.protocol.outputs",
     "usarsim.protocol.wireless",
+    "usarsim.protocol.upis",
 ]
 
 

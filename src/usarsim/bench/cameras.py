@@ -69,16 +69,16 @@ class _ServedCamera:
             raise
 
     def frame(self) -> None:
-        import struct
+        from usarsim.protocol import upis
 
-        self.viewer.sendall(b"OK")
-        head = b""
-        while len(head) < 5:
-            head += self.viewer.recv(5 - len(head))
-        n = struct.unpack(">I", head[1:5])[0]
-        got = 0
-        while got < n:
-            got += len(self.viewer.recv(min(1 << 20, n - got)))
+        self.viewer.sendall(upis.ask_whole())
+        reader = upis.FrameReader()
+        while True:
+            data = self.viewer.recv(min(1 << 20, reader.wanted()))
+            if not data:
+                raise ConnectionError("the image server closed the connection")
+            if reader.feed(data):
+                return
 
     def fps(self, count: int) -> float:
         t0 = time.perf_counter()

@@ -17,12 +17,12 @@ from __future__ import annotations
 import collections
 import io
 import logging
-import struct
 import threading
 from dataclasses import dataclass
 
 import numpy as np
 
+from usarsim.protocol import upis
 from usarsim.server.connection import ServerConnection, peer_address
 from usarsim.server.listener import TcpListener
 from usarsim.sim.types import Tile, grid_tiles
@@ -87,18 +87,18 @@ class CameraBindings:
 
 
 def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
-    """One UPIS frame: type byte, 4-byte big-endian length, payload."""
+    """One UPIS frame (:func:`usarsim.protocol.upis.frame`) of an RGB picture."""
     h, w = rgb.shape[:2]
-    if image_type == 0 or w == 0 or h == 0:  # an empty rectangle goes back as an empty raw picture
-        image_type = 0
-        payload = struct.pack(">HH", w, h) + np.ascontiguousarray(rgb[:, :, ::-1]).tobytes()
+    if image_type == upis.RAW or w == 0 or h == 0:  # an empty rectangle goes back as an empty raw picture
+        image_type = upis.RAW
+        payload = upis.raw_payload(w, h, np.ascontiguousarray(rgb[:, :, ::-1]).tobytes())
     else:
         from PIL import Image
 
         buf = io.BytesIO()
         Image.fromarray(np.ascontiguousarray(rgb)).save(buf, "JPEG", quality=JPEG_QUALITY[image_type])
         payload = buf.getvalue()
-    return struct.pack(">BI", image_type, len(payload)) + payload
+    return upis.frame(image_type, payload)
 
 
 class ImageConnection(ServerConnection):
@@ -109,7 +109,7 @@ class ImageConnection(ServerConnection):
 
     def __init__(self, server: ImageServer):
         super().__init__(server)
-        self.buffer = bytearray()
+        self.requests_in = upis.RequestReader()
         self.pending: collections.deque[tuple[int, int, int, int] | None] = collections.deque()
         self.busy = False
         self.requests = 0
@@ -119,24 +119,8 @@ class ImageConnection(ServerConnection):
         self._next()
 
     def data_received(self, data: bytes) -> None:
-        self.buffer += data
-        b = self.buffer
-        while b:
-            if b[0] == ord("O"):
-                if len(b) < 2:
-                    break
-                if b[1] == ord("K"):
-                    self._queue(None)
-                    del b[:2]
-                else:
-                    del b[:1]
-            elif b[0] == ord("U"):
-                if len(b) < 17:
-                    break
-                self._queue(struct.unpack(">IIII", bytes(b[1:17])))
-                del b[:17]
-            else:
-                del b[:1]  # CR, LF and anything else: ignored
+        for rect in self.requests_in.feed(data):
+            self._queue(rect)
         self._next()
 
     def _queue(self, rect) -> None:
