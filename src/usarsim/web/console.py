@@ -27,6 +27,8 @@ message that says so.  Nothing the page sends on that socket goes anywhere.
 
 Routes: ``/`` the page, ``/static/*`` its files, ``/api/info``, ``/api/world``,
 ``/api/classes``, ``/api/truth``, ``/api/view3d``, ``/ws/control``, ``/ws/video``, ``/ws/watch``.
+The robot sessions and pictures are :class:`usarsim.web.bridge.BridgeRoutes`, the watched
+robots :class:`usarsim.web.watch.WatchRoutes`: parts of :class:`WebConsole`.
 """
 
 from __future__ import annotations
@@ -36,76 +38,28 @@ import io
 import json
 import logging
 import math
-import re
-import socket
-import struct
-import time
-from collections import deque
 from pathlib import Path
 
-from aiohttp import WSMsgType, web
+from aiohttp import web
 
 from usarsim import __version__
-from usarsim.errors import ProtocolError, UsarsimError
-from usarsim.protocol import messages as M
-from usarsim.protocol.framing import LineBuffer
-from usarsim.protocol.grammar import parse_line
-from usarsim.server.connection import peer_address, refuse, write_open
-from usarsim.server.control import output_to_message
-from usarsim.server.listener import call_on_loop
-from usarsim.sim.api import RobotEntry
+from usarsim.errors import UsarsimError
+from usarsim.server.connection import refuse
+from usarsim.web.bridge import MAX_PAGE_MESSAGE, NAME_RE, BridgeRoutes, ControlBridge, TruthClient
+from usarsim.web.bridge import raw_to_jpeg as raw_to_jpeg
+from usarsim.web.bridge import truth_row as truth_row
+from usarsim.web.watch import RobotWatch, WatchRoutes
 
 log = logging.getLogger("usarsim.web")
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
-MAX_SERVER_LINE = 4 << 20  # the longest line relayed to the page (a 3D scanner's SEN line is long)
-MAX_PAGE_MESSAGE = 64 * 1024  # the longest message a page may send
-MAX_PICTURES_ASKED = 2  # pictures a page may have asked for and not yet received
-TRUTH_MAX_AGE_S = 0.05  # answers of the ground-truth service younger than this are shared
-TRUTH_TIMEOUT_S = 5.0
-BIND_WAIT_S = 1.0  # how long a camera binding sent over a control connection may take to apply
-CLOSE_TIMEOUT_S = 2.0  # how long a closing WebSocket waits for the browser's answer
 MAX_CONNECTIONS = 64  # open connections on the web port at most (``usarsim serve --max-web-connections``)
-NAME_RE = re.compile(r"[A-Za-z0-9_.\-]{1,64}\Z")  # robot and camera names the page may bind to
-WATCH_FIND_S = 3.0  # how long a watch waits for a robot that is still being spawned
-WATCH_CHECK_S = 0.2  # how often a watch checks that its robot is still in the world
-WATCH_MAX_PENDING = 512  # lines waiting for a slow page, beyond which only the latest of each stream is kept
 VIEW3D_MAX_RENDERING = 4  # 3-D view pictures being made at once, all pages together; more are answered 503
 VIEW3D_MAX_SIZE = (1280, 960)  # the largest 3-D view picture (width, height)
 VIEW3D_MIN_SIZE = 16
 VIEW3D_DISTANCE_M = (0.2, 2000.0)  # how near and how far the free camera may be from the point it orbits
 VIEW3D_TIMEOUT_S = 30.0
 VIEW3D_JPEG_QUALITY = 80  # libjpeg's 1..100 scale
-
-
-def _loopback(host: str) -> str:
-    """Where the bridge reaches a listener bound to ``host``."""
-    if host in ("", "0.0.0.0", "*"):
-        return "127.0.0.1"
-    if host == "::":
-        return "::1"
-    return host
-
-
-def _no_delay(writer: asyncio.StreamWriter) -> None:
-    sock = writer.get_extra_info("socket")
-    if sock is not None:
-        try:
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        except OSError:
-            pass
-
-
-def raw_to_jpeg(payload: bytes) -> bytes:
-    """A raw UPIS picture (16-bit width and height, then B, G, R rows) as a JPEG file."""
-    import numpy as np
-    from PIL import Image
-
-    w, h = struct.unpack(">HH", payload[:4])
-    bgr = np.frombuffer(payload[4 : 4 + 3 * w * h], dtype=np.uint8).reshape(h, w, 3)
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(bgr[:, :, ::-1])).save(buf, "JPEG", quality=85)
-    return buf.getvalue()
 
 
 def rgb_to_jpeg(rgb, quality: int = VIEW3D_JPEG_QUALITY) -> bytes:
@@ -160,137 +114,7 @@ def view3d_request(query) -> dict:
     }
 
 
-def truth_row(text: str) -> dict | None:
-    """One line of the ground-truth service as a dict, None if it is not one."""
-    try:
-        raw = parse_line("TRUTH " + text)
-    except ProtocolError:
-        return None
-    seg = {s.key.lower(): s.value for s in raw.segments}
-    try:
-        return {
-            "name": seg["name"],
-            "class": seg["class"],
-            "time": float(seg["time"]),
-            "location": [float(v) for v in seg["location"].split(",")],
-            "rotation": [float(v) for v in seg["rotation"].split(",")],
-        }
-    except (KeyError, ValueError):
-        return None
-
-
-class ControlBridge:
-    """One page's robot session: a WebSocket and the control connection it is relayed to."""
-
-    def __init__(self, page: str, writer: asyncio.StreamWriter):
-        self.page = page
-        self.writer = writer
-        self.robot: str | None = None  # the Name of the INIT sent on it
-        self.alive = False  # the simulator has sent status or sensor lines: the robot exists
-
-    def note_sent(self, line: str) -> None:
-        if line.lstrip()[:4].upper() != "INIT":
-            return
-        try:
-            raw = parse_line(line)
-        except ProtocolError:
-            return
-        for s in raw.segments:
-            if s.key.lower() == "name" and s.value:
-                self.robot = s.value.strip()
-
-    def note_received(self, line: str) -> None:
-        if not self.alive and (line.startswith("STA") or line.startswith("SEN")):
-            self.alive = True
-
-    def send_line(self, line: str) -> None:
-        write_open(self.writer, line.encode("ascii", "replace") + b"\r\n")
-
-
-class RobotWatch:
-    """A page watching a robot that another connection drives: the outputs the simulation
-    sends that robot's client, read-only.  While the page reads slowly, the status and sensor
-    lines wait latest-wins per stream, as for a slow client."""
-
-    def __init__(self, entry: RobotEntry):
-        self.entry = entry  # the robot in the facade's directory
-        self.uid = entry.uid
-        self.name = entry.name
-        self.pending: deque = deque()
-        self.ready = asyncio.Event()
-
-    def put(self, outs: list) -> None:
-        self.pending.extend(o for o in outs if o.uid == self.uid)
-        if len(self.pending) > WATCH_MAX_PENDING:
-            self._compact()
-        if self.pending:
-            self.ready.set()
-
-    def _compact(self) -> None:
-        latest = {o.key: o for o in self.pending if o.periodic}
-        kept = [o for o in self.pending if not o.periodic or latest[o.key] is o]
-        self.pending = deque(kept[-WATCH_MAX_PENDING:])
-
-    def take(self) -> list:
-        out = list(self.pending)
-        self.pending.clear()
-        self.ready.clear()
-        return out
-
-
-class TruthClient:
-    """A connection to the ground-truth service, shared by every page: one request at a
-    time, answers shared for ``TRUTH_MAX_AGE_S``."""
-
-    def __init__(self, host: str, port: int):
-        self.host, self.port = host, port
-        self._lock = asyncio.Lock()
-        self._reader: asyncio.StreamReader | None = None
-        self._writer: asyncio.StreamWriter | None = None
-        self._answer: list[dict] = []
-        self._at = -1.0
-
-    async def query(self) -> list[dict]:
-        async with self._lock:
-            if time.monotonic() - self._at < TRUTH_MAX_AGE_S:
-                return self._answer
-            for attempt in (0, 1):  # a connection the service closed is opened again once
-                try:
-                    rows = await asyncio.wait_for(self._ask(), TRUTH_TIMEOUT_S)
-                    break
-                except (TimeoutError, OSError, asyncio.IncompleteReadError, ConnectionError):
-                    self.close()
-                    if attempt:
-                        raise
-            self._answer, self._at = rows, time.monotonic()
-            return rows
-
-    async def _ask(self) -> list[dict]:
-        if self._writer is None:
-            self._reader, self._writer = await asyncio.open_connection(self.host, self.port)
-            _no_delay(self._writer)
-        assert self._reader is not None
-        self._writer.write(b"{Class}\r\n")  # no class and no name given: everything
-        await self._writer.drain()
-        rows = []
-        while True:
-            line = await self._reader.readline()
-            if not line:
-                raise ConnectionError("the ground-truth service closed the connection")
-            text = line.decode("ascii", "replace").strip()
-            if text == "{End}":
-                return rows
-            row = truth_row(text)
-            if row is not None:
-                rows.append(row)
-
-    def close(self) -> None:
-        if self._writer is not None:
-            self._writer.close()
-        self._reader = self._writer = None
-
-
-class WebConsole:
+class WebConsole(BridgeRoutes, WatchRoutes):
     """The console's HTTP and WebSocket server for one :class:`usarsim.server.app.Application`
     (its ports, world and robot folders)."""
 
@@ -391,10 +215,6 @@ class WebConsole:
             text=f"usarsim: more than {self.max_connections} connections to the web console; close a page and retry\n",
             headers={"Connection": "close", "Retry-After": "5"},
         )
-
-    @property
-    def service_host(self) -> str:
-        return _loopback(self.app.host)
 
     def _spawn(self, coro) -> asyncio.Task:
         task = asyncio.get_running_loop().create_task(coro)
@@ -508,301 +328,3 @@ class WebConsole:
         return web.Response(
             body=jpeg, content_type="image/jpeg", headers={"X-View": json.dumps(camera, separators=(",", ":"))}
         )
-
-    # robot sessions -----------------------------------------------------------------------
-    async def _control_ws(self, request: web.Request) -> web.WebSocketResponse:
-        ws = web.WebSocketResponse(max_msg_size=MAX_PAGE_MESSAGE, timeout=CLOSE_TIMEOUT_S)
-        await ws.prepare(request)
-        self._sockets.add(ws)
-        bridge = None
-        pump = None
-        try:
-            try:
-                reader, writer = await asyncio.open_connection(self.service_host, self.app.control.port)
-            except OSError as exc:
-                await ws.close(code=1011, message=f"cannot reach the control port: {exc.strerror}".encode()[:120])
-                return ws
-            _no_delay(writer)
-            bridge = ControlBridge(request.query.get("page", ""), writer)
-            self._bridges.add(bridge)
-            log.info("console %s: robot session opened on the control port", request.remote)
-            pump = self._spawn(self._relay_lines(reader, ws, bridge))
-            async for msg in ws:
-                if msg.type != WSMsgType.TEXT:
-                    continue
-                for line in msg.data.replace("\r", "\n").split("\n"):
-                    if line.strip():
-                        bridge.note_sent(line)
-                        bridge.send_line(line)
-                await writer.drain()
-        except (ConnectionError, OSError):
-            pass
-        finally:
-            self._sockets.discard(ws)
-            if bridge is not None:
-                self._bridges.discard(bridge)
-                bridge.writer.close()  # closing the connection removes the robot
-                log.info("console %s: robot session %s closed", request.remote, bridge.robot or "")
-            if pump is not None:
-                pump.cancel()
-            if not ws.closed:
-                await ws.close()
-        return ws
-
-    async def _relay_lines(
-        self, reader: asyncio.StreamReader, ws: web.WebSocketResponse, bridge: ControlBridge
-    ) -> None:
-        """Every line the simulator sends on a control connection, one WebSocket message each.
-        A page that reads slowly slows this down, and the simulator then keeps only the
-        latest status and sensor lines for it, as for any slow client."""
-        lines = LineBuffer(max_line_bytes=MAX_SERVER_LINE)
-        try:
-            while True:
-                data = await reader.read(1 << 16)
-                if not data:
-                    break
-                for line in lines.feed(data):
-                    bridge.note_received(line)
-                    await ws.send_str(line)
-        except (ConnectionError, OSError, RuntimeError):
-            return
-        if not ws.closed:
-            await ws.close(code=1000, message=b"the simulator closed the connection")
-
-    # watching another controller's robot -----------------------------------------------------
-    def _find_robot(self, name: str) -> RobotEntry | None:
-        """The robot called ``name`` (exactly, else ignoring case) in the facade's directory."""
-        return self.app.facade.find_robot(name)
-
-    def _present(self, w: RobotWatch) -> bool:
-        """Whether the watched robot is still in the world (in the facade's directory)."""
-        return self.app.facade.robot(w.uid) is w.entry
-
-    def _describe(self, uid: int, robot) -> list[str]:
-        """GEO and CONF lines of every mounted item of the robot, as GETGEO and GETCONF of its
-        controller would answer them (the page draws its range sensors with them)."""
-        facade = self.app.facade
-        by_type: dict[str, list] = {}
-        for d in facade.describe(robot):
-            by_type.setdefault(d.item_type, []).append(d)
-        lines = []
-        for item_type, items in by_type.items():
-            geo = M.ItemGeometry(
-                item_type=item_type,
-                items=tuple(
-                    M.ItemPose(name=d.name, location=d.location, orientation=d.orientation, mount=d.mount)
-                    for d in items
-                ),
-            )
-            conf = M.ItemConfiguration(
-                item_type=item_type,
-                items=tuple(
-                    M.ItemConf(name=d.name, fields=tuple(facade.live_conf(uid, d.item_type, d.name) or d.conf))
-                    for d in items
-                ),
-            )
-            lines += [M.format_message(geo).rstrip("\r\n"), M.format_message(conf).rstrip("\r\n")]
-        return lines
-
-    def _set_watched(self) -> None:
-        self._watched = frozenset(w.uid for w in self._watches)
-
-    def _outputs_seen(self, outs: list) -> None:
-        """Every batch of outputs, on the simulation thread: those of watched robots go to
-        the event loop; nothing else is done here."""
-        watched = self._watched
-        if not watched:
-            return
-        mine = [o for o in outs if o.uid in watched]
-        if mine:
-            call_on_loop(self._loop, self._fan_out, mine)
-
-    def _fan_out(self, outs: list) -> None:
-        for w in self._watches:
-            w.put(outs)
-
-    async def _watch_ws(self, request: web.Request) -> web.WebSocketResponse:
-        """A robot another client drives, watched read-only: see the module's description."""
-        ws = web.WebSocketResponse(max_msg_size=MAX_PAGE_MESSAGE, timeout=CLOSE_TIMEOUT_S)
-        await ws.prepare(request)
-        self._sockets.add(ws)
-        name = request.query.get("robot", "")
-        watch = None
-        pump = None
-        try:
-            if not NAME_RE.match(name):
-                await ws.send_json({"error": f"not a robot name: {name!r}"})
-                return ws
-            found = self._find_robot(name)
-            deadline = time.monotonic() + WATCH_FIND_S
-            while found is None and time.monotonic() < deadline and not ws.closed:
-                await asyncio.sleep(0.05)
-                found = self._find_robot(name)
-            if found is None:
-                await ws.send_json({"error": f"no robot called {name} in the world"})
-                return ws
-            watch = RobotWatch(found)
-            self._watches.add(watch)
-            self._set_watched()
-            robot = found.robot
-            await ws.send_json(
-                {
-                    "watching": watch.name,
-                    "class": robot.class_name,
-                    "controller": found.controller,
-                    "time": round(self.app.facade.time, 3),
-                    "describe": self._describe(found.uid, robot),
-                }
-            )
-            log.info("console %s: watching robot %s of %s", request.remote, watch.name, found.controller)
-            pump = self._spawn(self._relay_watch(ws, watch))
-            async for _ in ws:
-                pass  # read-only: nothing the page sends here reaches the robot or its controller
-        except (ConnectionError, OSError):
-            pass
-        finally:
-            self._sockets.discard(ws)
-            if watch is not None:
-                self._watches.discard(watch)
-                self._set_watched()
-            if pump is not None:
-                pump.cancel()
-            if not ws.closed:
-                await ws.close()
-        return ws
-
-    async def _relay_watch(self, ws: web.WebSocketResponse, w: RobotWatch) -> None:
-        """The watched robot's lines, one WebSocket message each, then ``{"left": name}`` and
-        the end of the socket once the robot has left the world."""
-        try:
-            while True:
-                try:
-                    await asyncio.wait_for(w.ready.wait(), WATCH_CHECK_S)
-                except TimeoutError:
-                    pass
-                for o in w.take():
-                    try:
-                        text = M.format_message(output_to_message(o)).rstrip("\r\n")
-                    except Exception:
-                        log.exception("cannot format %r", o)
-                        continue
-                    await ws.send_str(text)
-                if not self._present(w):
-                    await ws.send_json(
-                        {
-                            "left": w.name,
-                            "time": round(self.app.facade.time, 3),
-                            "reason": "its controller's connection closed",
-                        }
-                    )
-                    await ws.close(code=1000, message=b"the robot left the world")
-                    return
-        except (ConnectionError, OSError, RuntimeError):
-            return
-
-    # pictures ------------------------------------------------------------------------------
-    def _bridge_for(self, page: str, robot: str) -> ControlBridge | None:
-        """The control connection a camera binding is sent over: the one of the robot
-        itself, else another of the same page whose robot exists."""
-        best = None
-        for b in self._bridges:
-            if not b.alive or b.writer.is_closing():
-                continue
-            if b.robot is not None and b.robot.lower() == robot.lower():
-                return b
-            if b.page and b.page == page and best is None:
-                best = b
-        return best
-
-    async def _bind(self, page: str, client: tuple[str, int], robot: str | None, camera: str) -> dict:
-        """Show the image connection at ``client`` a robot camera (None: release it)."""
-        bindings = self.app.camera_bindings
-        address = peer_address(*client)
-        if robot is None:
-            bindings.release(address)
-            return {"bound": None}
-        bridge = self._bridge_for(page, robot)
-        line = f"SET {{Type Camera}} {{Robot {robot}}} {{Name {camera}}} {{Client {address}}}"
-        if bridge is None:
-            # no robot of this page to speak for it (a spectator): the binding is made
-            # directly, as the control server would make it
-            if not bindings.bind(address, robot, camera):
-                return {"error": f"no camera binding: {len(bindings)} viewers bound already"}
-            return {"bound": robot, "camera": camera, "via": "direct"}
-        bridge.send_line(line)
-        deadline = time.monotonic() + BIND_WAIT_S
-        while bindings.lookup(*client) != (robot, camera) and time.monotonic() < deadline:
-            await asyncio.sleep(0.01)
-        return {"bound": robot, "camera": camera, "via": "control", "robot": bridge.robot, "line": line}
-
-    async def _video_ws(self, request: web.Request) -> web.WebSocketResponse:
-        # JPEG pictures do not compress further: no per-message deflate
-        ws = web.WebSocketResponse(max_msg_size=MAX_PAGE_MESSAGE, timeout=CLOSE_TIMEOUT_S, compress=False)
-        await ws.prepare(request)
-        self._sockets.add(ws)
-        image = self.app.image
-        page = request.query.get("page", "")
-        writer = None
-        frames = None
-        client = ("", 0)
-        try:
-            if image is None:
-                await ws.send_json({"error": "no image server (usarsim serve was started with --no-image)"})
-                return ws
-            try:
-                reader, writer = await asyncio.open_connection(self.service_host, image.port)
-            except OSError as exc:
-                await ws.send_json({"error": f"cannot reach the image port: {exc.strerror}"})
-                return ws
-            _no_delay(writer)
-            sockname = writer.get_extra_info("sockname")
-            client = (sockname[0], sockname[1])
-            asked = [0]
-            frames = self._spawn(self._relay_pictures(reader, ws, asked))
-            async for msg in ws:
-                if msg.type != WSMsgType.TEXT:
-                    continue
-                if msg.data.strip() == "OK":
-                    if asked[0] < MAX_PICTURES_ASKED:
-                        asked[0] += 1
-                        writer.write(b"OK")
-                    continue
-                try:
-                    req = json.loads(msg.data)
-                except ValueError:
-                    continue
-                if not isinstance(req, dict) or "bind" not in req:
-                    continue
-                robot, camera = req.get("bind"), str(req.get("camera") or "Camera")
-                if robot is not None and not (NAME_RE.match(str(robot)) and NAME_RE.match(camera)):
-                    await ws.send_json({"error": f"not a robot and camera name: {robot!r} {camera!r}"})
-                    continue
-                await ws.send_json(await self._bind(page, client, None if robot is None else str(robot), camera))
-        except (ConnectionError, OSError):
-            pass
-        finally:
-            self._sockets.discard(ws)
-            if client[1]:
-                self.app.camera_bindings.release(peer_address(*client))
-            if frames is not None:
-                frames.cancel()
-            if writer is not None:
-                writer.close()
-            if not ws.closed:
-                await ws.close()
-        return ws
-
-    async def _relay_pictures(self, reader: asyncio.StreamReader, ws: web.WebSocketResponse, asked: list) -> None:
-        """Each UPIS picture as one binary WebSocket message holding a JPEG file."""
-        loop = asyncio.get_running_loop()
-        try:
-            while True:
-                kind, length = struct.unpack(">BI", await reader.readexactly(5))
-                payload = await reader.readexactly(length)
-                asked[0] = max(0, asked[0] - 1)
-                if kind == 0:
-                    payload = await loop.run_in_executor(None, raw_to_jpeg, payload)
-                await ws.send_bytes(payload)
-        except (asyncio.IncompleteReadError, ConnectionError, OSError, RuntimeError):
-            if not ws.closed:
-                await ws.close(code=1011, message=b"the image server closed the connection")
