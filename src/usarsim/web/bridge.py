@@ -22,7 +22,6 @@ import json
 import logging
 import re
 import socket
-import struct
 import time
 from collections.abc import Callable, Coroutine
 from typing import Any
@@ -30,6 +29,7 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from usarsim.errors import ProtocolError
+from usarsim.protocol import upis
 from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.grammar import parse_line
 from usarsim.server.connection import peer_address, write_open
@@ -69,8 +69,8 @@ def raw_to_jpeg(payload: bytes) -> bytes:
     import numpy as np
     from PIL import Image
 
-    w, h = struct.unpack(">HH", payload[:4])
-    bgr = np.frombuffer(payload[4 : 4 + 3 * w * h], dtype=np.uint8).reshape(h, w, 3)
+    w, h, pixels = upis.parse_raw(payload)
+    bgr = np.frombuffer(pixels, dtype=np.uint8).reshape(h, w, 3)
     buf = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(bgr[:, :, ::-1])).save(buf, "JPEG", quality=85)
     return buf.getvalue()
@@ -312,7 +312,7 @@ class BridgeRoutes:
                 if msg.data.strip() == "OK":
                     if asked[0] < MAX_PICTURES_ASKED:
                         asked[0] += 1
-                        writer.write(b"OK")
+                        writer.write(upis.ask_whole())
                     continue
                 try:
                     req = json.loads(msg.data)
@@ -344,10 +344,10 @@ class BridgeRoutes:
         loop = asyncio.get_running_loop()
         try:
             while True:
-                kind, length = struct.unpack(">BI", await reader.readexactly(5))
+                kind, length = upis.HEADER.unpack(await reader.readexactly(upis.HEADER.size))
                 payload = await reader.readexactly(length)
                 asked[0] = max(0, asked[0] - 1)
-                if kind == 0:
+                if kind == upis.RAW:
                     payload = await loop.run_in_executor(None, raw_to_jpeg, payload)
                 await ws.send_bytes(payload)
         except (asyncio.IncompleteReadError, ConnectionError, OSError, RuntimeError):
