@@ -22,7 +22,7 @@ AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
 
 
 @DRIVES.register("aerial")
-class Aerial(DriveModel):
+class Aerial(DriveModel[Velocities]):
     """``DRIVE {AltitudeVelocity} {LinearVelocity} {LateralVelocity} {RotationalVelocity}``:
     m/s up, forward, right and rad/s clockwise; unsent ones keep their value; limited to
     the robot's maxima (percentages of them when Normalized); all zero: hover."""

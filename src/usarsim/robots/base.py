@@ -13,7 +13,7 @@ with ``@DRIVES.register("name")``, plus robot files that say ``drive: name``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar
 
 from usarsim.config.robot import RobotConfig, Wheel
 from usarsim.controls import DrivePart
@@ -47,7 +47,10 @@ class Treads:
     solref: tuple[float, float] = (0.02, 1.0)
 
 
-class DriveModel:
+P = TypeVar("P", bound=DrivePart)  # the kind of DRIVE part a drive applies
+
+
+class DriveModel(Generic[P]):
     """One robot's drive: its kind's commands, state and controls.
 
     Class attributes say what the simulation must do for the kind: ``ACCEPTS`` the kinds
@@ -97,7 +100,7 @@ class DriveModel:
         return []
 
     # Commands and controls ------------------------------------------------------------------
-    def command(self, part: DrivePart, normalized: bool) -> None:
+    def command(self, part: P, normalized: bool) -> None:
         """Apply one part of a DRIVE (only kinds in ``ACCEPTS`` are given)."""
 
     def wheel_target(self, w: Wheel) -> float:
@@ -170,7 +173,9 @@ class DriveModel:
         """A vessel's hull (buoyancy, drag); None for a robot not built for water."""
         return None
 
-    def propulsion(self, rot: np.ndarray, lin: np.ndarray, frac: float) -> tuple[Any, tuple]:
+    def propulsion(
+        self, rot: np.ndarray, lin: np.ndarray, frac: float
+    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
         """A vessel's own force and torques in water (its propeller, rudder and planes)."""
         raise NotImplementedError
 
@@ -182,7 +187,7 @@ class DriveModel:
         """Before a stretch of physics steps (kinds with ``STEP_EVERY``)."""
 
 
-def drive_class(robot: RobotConfig) -> type[DriveModel]:
+def drive_class(robot: RobotConfig) -> type[DriveModel[Any]]:
     """The drive model class a robot file names (ConfigError naming the file when unknown)."""
     try:
         return DRIVES.get(robot.drive)
@@ -190,7 +195,7 @@ def drive_class(robot: RobotConfig) -> type[DriveModel]:
         raise ConfigError(str(exc), path=robot.path, key="drive") from None
 
 
-def make_drive(robot: RobotConfig) -> DriveModel:
+def make_drive(robot: RobotConfig) -> DriveModel[Any]:
     """A new drive model for one robot (its file checked for what the kind needs)."""
     cls = drive_class(robot)
     cls.check(robot)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import mujoco
 
-from usarsim.config.robot import RobotConfig
+from usarsim.config.robot import Gait, Link, RobotConfig
 from usarsim.controls import Velocities, WheelSpeeds
 from usarsim.errors import ConfigError
 from usarsim.robots.base import DRIVES, DriveModel, clamp
@@ -52,7 +52,7 @@ def _smooth(x: float) -> float:
 
 
 @DRIVES.register("legged")
-class Legged(DriveModel):
+class Legged(DriveModel[Velocities | WheelSpeeds]):
     """The gait of a walking robot, and the velocities it walks at."""
 
     ACCEPTS = frozenset({Velocities, WheelSpeeds})
@@ -61,6 +61,9 @@ class Legged(DriveModel):
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
+        self.check(robot)
+        assert robot.gait is not None  # check() refuses a robot without one
+        self.gait: Gait = robot.gait
         self.walk = {"linear": 0.0, "lateral": 0.0, "rotational": 0.0}
         self.sides = [0.0, 0.0]  # the last {Left} {Right}, rad/s (or percent)
         # the gait's clock; how far it has set off (0 standing, 1 walking; it fades in over
@@ -73,10 +76,18 @@ class Legged(DriveModel):
         self.gait_amp = 0.0
         self.gait_rise = 0.0
         self.gait_walks_at_once = False
-        self.gait_vel: tuple = (0.0, 0.0, 0.0)
+        self.gait_vel: tuple[float, ...] = (0.0, 0.0, 0.0)
         self.gait_last = 0.0
-        self.feet: list = []
-        self.swing_from: list = []
+        self.feet: list[list[float]] = []
+        self.swing_from: list[list[float] | None] = []
+
+    def _leg_link(self, name: str) -> Link:
+        link = self.robot.link(name)
+        if link is None:
+            raise ConfigError(
+                f"the gait names a leg joint the robot has no link of: {name}", path=self.robot.path, key="gait"
+            )
+        return link
 
     @classmethod
     def check(cls, robot: RobotConfig) -> None:
@@ -84,7 +95,7 @@ class Legged(DriveModel):
             raise ConfigError("a walking robot (drive: legged) needs its gait", path=robot.path, key="gait")
 
     def command(self, part: Velocities | WheelSpeeds, normalized: bool) -> None:
-        g = self.robot.gait
+        g = self.gait
         if isinstance(part, WheelSpeeds):
             # a side's speed as a fraction of the robot's MaxSpeed (or of 100 %): the mean of
             # the two sides walks forward, their difference turns (left faster: right turn)
@@ -121,7 +132,7 @@ class Legged(DriveModel):
         its steps in over half a period before it speeds up.  It comes to rest over half a
         period.  At rest its feet are back under its hips and its joints are left to joint
         commands."""
-        g = self.robot.gait
+        g = self.gait
         if r.battery_empty:
             return
         cmd = (self.walk["linear"], self.walk["lateral"], self.walk["rotational"])
@@ -176,12 +187,13 @@ class Legged(DriveModel):
                         f[j] -= ground[j] * dt
                 self.swing_from[i] = None
             else:
-                if self.swing_from[i] is None:  # it stood until (p - duty) x period ago
+                start = self.swing_from[i]
+                if start is None:  # it stood until (p - duty) x period ago
                     stood = max(0.0, dt - (p - g.duty) * g.period_s)
-                    self.swing_from[i] = [x - gx * stood for x, gx in zip(f, ground)]
+                    start = self.swing_from[i] = [x - gx * stood for x, gx in zip(f, ground)]
                 s_ = _smooth((p - g.duty) / (1.0 - g.duty))
                 for j in range(3):
-                    f[j] = self.swing_from[i][j] + (ground[j] * stance_t / 2.0 - self.swing_from[i][j]) * s_
+                    f[j] = start[j] + (ground[j] * stance_t / 2.0 - start[j]) * s_
             f[0] = max(-reach, min(reach, f[0]))
             f[1] = max(-reach, min(reach, f[1]))
             f[2] = max(-0.8, min(0.8, f[2]))
@@ -189,13 +201,13 @@ class Legged(DriveModel):
             self.feet = [[0.0, 0.0, 0.0] for _ in range(n)]
         for name, value in self._leg_targets(self.gait_clock, self.gait_amp):
             r.joints[name] = (0, value)
-            joints.apply(sim.model, sim.data, r, self.robot.link(name))
+            joints.apply(sim.model, sim.data, r, self._leg_link(name))
 
     def _leg_targets(self, t: float, amp: float) -> list[tuple[str, float]]:
         """The angle of every leg joint of a walking robot at time ``t`` of its gait, its
         feet where ``self.feet`` puts them, its sway and steps scaled by ``amp`` (0: standing,
         every foot under its hip)."""
-        g = self.robot.gait
+        g = self.gait
         # a swaying robot sways first and steps once it sways fully
         step_amp = max(0.0, 2.0 * amp - 1.0) if g.sway_m > 0.0 else amp
         phases = [(t / g.period_s + leg.phase) % 1.0 for leg in g.legs]
@@ -234,5 +246,5 @@ class Legged(DriveModel):
             r.joints[name] = (0, value)
             d.qpos[r.handle.joint_qpos[name]] = value
             d.act[int(m.actuator_actadr[r.handle.actuator[name]])] = value
-            joints.apply(sim.model, sim.data, r, self.robot.link(name))
+            joints.apply(sim.model, sim.data, r, self._leg_link(name))
         mujoco.mj_forward(m, d)

@@ -17,7 +17,7 @@ DOWN = np.array([0.0, 0.0, -1.0])  # MuJoCo: a clockwise turn seen from above is
 
 
 @DRIVES.register("nautical")
-class Nautical(DriveModel):
+class Nautical(DriveModel[NauticalDrive]):
     """``DRIVE {Propeller} {Rudder} {SternPlane}``: the propeller as a fraction of full thrust,
     -1..1 (percent when Normalized); rudder and stern planes in radians (positive: turn
     right, rise), within the vessel's limits.  Unsent values are kept."""
@@ -27,6 +27,9 @@ class Nautical(DriveModel):
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
+        self.check(robot)
+        assert robot.nautical is not None  # check() refuses a vessel without them
+        self.spec: NauticalSpec = robot.nautical
         self.sail = {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0}
 
     @classmethod
@@ -36,10 +39,10 @@ class Nautical(DriveModel):
 
     @property
     def vessel(self) -> NauticalSpec:
-        return self.robot.nautical
+        return self.spec
 
     def command(self, part: NauticalDrive, normalized: bool) -> None:
-        n = self.robot.nautical
+        n = self.spec
         for key, value, top, scale in (
             ("propeller", part.propeller, 1.0, 0.01),
             ("rudder", part.rudder, n.max_rudder_rad, n.max_rudder_rad / 100.0),
@@ -48,11 +51,13 @@ class Nautical(DriveModel):
             if value is not None and math.isfinite(value):
                 self.sail[key] = clamp(value * scale if normalized else value, top)
 
-    def propulsion(self, rot: np.ndarray, lin: np.ndarray, frac: float) -> tuple[np.ndarray, tuple]:
+    def propulsion(
+        self, rot: np.ndarray, lin: np.ndarray, frac: float
+    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
         """The propeller's thrust along the hull, and the torques of the rudder (turn right:
         clockwise seen from above) and the stern planes (rise: nose up, about the body's
         right axis, -y as +y is its left), which grow with the speed through the water."""
-        n = self.robot.nautical
+        n = self.spec
         forward = rot[:, 0]
         speed = float(forward @ lin)
         thrust = forward * (self.sail["propeller"] * n.max_thrust_n * frac)

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from usarsim.controls import DrivePart
 from usarsim.robots.base import DRIVES, DriveModel
 
 
 @DRIVES.register("static")
-class Static(DriveModel):
+class Static(DriveModel[DrivePart]):
     """No drive part applies; Light, Flip and joint orders still do."""

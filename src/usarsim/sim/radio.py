@@ -30,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
@@ -45,6 +45,8 @@ from usarsim.sim import frames
 
 if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
+
+Point = tuple[float, float, float]  # an antenna, MuJoCo frame
 
 # Closer than this, two antennas count as this far apart (the formula has no value at 0).
 MIN_DISTANCE_M = 0.01
@@ -280,7 +282,7 @@ def load_wireless_file(path: str | Path) -> WirelessFile:
             if not math.isfinite(number):
                 raise ConfigError(f"expected a number, got {value!r}", path=path, key=where)
             values[field] = int(number) if field == "max_walls" else number
-    layer = WirelessConfig(**values)
+    layer = WirelessConfig(**values)  # type: ignore[arg-type]  # each value read for its field above
     try:  # the constants' ranges, as RadioModel checks them
         resolve_model(layer)
     except (ValueError, ConfigError) as exc:
@@ -328,7 +330,7 @@ class RadioNet:
         self.on_change: Callable[[float, list[tuple[Pair, bool]]], None] | None = None
         self.min_interval_s = 0.0
         self._reported: dict[Pair, bool] = {}
-        self._walls: dict[Pair, tuple[tuple, tuple, int]] = {}
+        self._walls: dict[Pair, tuple[Point, Point, int]] = {}
         self._last = -math.inf
 
     # robots ---------------------------------------------------------------------------
@@ -340,12 +342,12 @@ class RadioNet:
 
     # walls ----------------------------------------------------------------------------
     @staticmethod
-    def _count(sim: Simulation, pa, pb) -> int:
+    def _count(sim: Simulation, pa: Sequence[float] | np.ndarray, pb: Sequence[float] | np.ndarray) -> int:
         """Walls crossed between two points (MuJoCo frame)."""
         return int(sim.caster.count_walls(np.array([pa], dtype=float), np.array([pb], dtype=float))[0])
 
     @classmethod
-    def walls_between(cls, sim: Simulation, start, end) -> int:
+    def walls_between(cls, sim: Simulation, start: Sequence[float], end: Sequence[float]) -> int:
         """Walls crossed between two points of the world (USARSim frame)."""
         return cls._count(sim, frames.to_mj_vec(start), frames.to_mj_vec(end))
 
@@ -358,7 +360,7 @@ class RadioNet:
             return -1
         return cls._count(sim, pa, pb)
 
-    def _cached_walls(self, sim: Simulation, pair: Pair, pa: tuple, pb: tuple) -> int:
+    def _cached_walls(self, sim: Simulation, pair: Pair, pa: Point, pb: Point) -> int:
         hit = self._walls.get(pair)
         lim = self.model.cache_distance_m
         if hit is not None and math.dist(pa, hit[0]) <= lim and math.dist(pb, hit[1]) <= lim:
@@ -380,12 +382,12 @@ class RadioNet:
                 out[key] = tuple(d.xpos[r.handle.body_id].tolist())
         return out
 
-    def _signal(self, sim: Simulation, pair: Pair, pa: tuple, pb: tuple) -> tuple[float, int]:
+    def _signal(self, sim: Simulation, pair: Pair, pa: Point, pb: Point) -> tuple[float, int]:
         m = self.model
         walls = self._cached_walls(sim, pair, pa, pb) if m.counts_walls else 0
         return m.signal_dbm(math.dist(pa, pb), walls), walls
 
-    def link(self, sim: Simulation, a: str, b: str, antennas: dict | None = None) -> Link | None:
+    def link(self, sim: Simulation, a: str, b: str, antennas: dict[str, Point] | None = None) -> Link | None:
         """The link between the robots named ``a`` and ``b`` now; None when either is not
         in the simulation."""
         antennas = antennas if antennas is not None else self.antennas(sim)

@@ -11,7 +11,8 @@ with ``@SYSTEMS.register("name")``, imported by this package's ``__init__``.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, ClassVar, TypeVar
 
 from usarsim.registry import Registry
 
@@ -19,6 +20,7 @@ if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
 
 SYSTEMS = Registry("world system")
+T = TypeVar("T")
 
 # Forces the simulation sets by hand (self-righting, levelling, water, rollers) are renewed
 # at least every 10 physics steps (40 ms).
@@ -33,7 +35,7 @@ class System:
     ORDER: ClassVar[int] = 100  # systems run in increasing order
     EVERY_STEPS: ClassVar[int | None] = EXTERNAL_FORCE_STEPS
 
-    def __init__(self, sim: Simulation):
+    def __init__(self, sim: Simulation) -> None:
         self.sim = sim
 
     @classmethod
@@ -53,14 +55,14 @@ class System:
         """Set this system's forces (or motions) for the next stretch of physics steps."""
 
 
-def mounted(sim: Simulation, kind: type) -> list:
+def mounted(sim: Simulation, kind: type[T]) -> list[T]:
     """Every item of class ``kind`` (a Gripper, a RollerTable) mounted on the world's robots."""
     return [s for r in sim.robots.values() for s in r.sensors if isinstance(s, kind)]
 
 
-def collect(sim: Simulation, previous: list[System] = ()) -> list[System]:
+def collect(sim: Simulation, previous: Sequence[System] = ()) -> list[System]:
     """The systems the world needs now, in order; one still wanted keeps its instance (and
     its state) from ``previous``."""
     kept = {type(s): s for s in previous}
-    classes = sorted((SYSTEMS.get(n) for n in SYSTEMS.names()), key=lambda c: (c.ORDER, c.TYPE))
+    classes: list[type[System]] = sorted((SYSTEMS.get(n) for n in SYSTEMS.names()), key=lambda c: (c.ORDER, c.TYPE))
     return [kept.get(cls) or cls(sim) for cls in classes if cls.wanted(sim)]

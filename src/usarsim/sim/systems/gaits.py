@@ -3,7 +3,12 @@ of walking robots set their leg joints' targets."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from usarsim.sim.systems.base import SYSTEMS, System
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
 
 
 @SYSTEMS.register("gaits")
@@ -13,7 +18,7 @@ class Gaits(System):
     ORDER = 60
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return any(r.drive.STEP_EVERY is not None for r in sim.robots.values())
 
     def max_steps(self) -> int | None:

@@ -15,12 +15,17 @@ carries grows beyond that friction (the object is pulled out, or shaken loose).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import mujoco
 import numpy as np
 
 from usarsim.effecters import Gripper
 from usarsim.sim.robotspec import grasp_name
 from usarsim.sim.systems.base import SYSTEMS, System, mounted
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
 
 
 class _Hold:
@@ -43,13 +48,13 @@ class Grasps(System):
 
     ORDER = 60
 
-    def __init__(self, sim):
+    def __init__(self, sim: Simulation) -> None:
         super().__init__(sim)
         self._model = None
         self._holds: list[_Hold] = []
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return bool(mounted(sim, Gripper))
 
     def active(self) -> bool:
@@ -87,7 +92,7 @@ class Grasps(System):
                     self._weld(h, m, d, b)
 
     @staticmethod
-    def _loose(m, b: int) -> bool:
+    def _loose(m: mujoco.MjModel, b: int) -> bool:
         """A movable object of the world: a body of its own on a free joint."""
         return (
             int(m.body_rootid[b]) == b
@@ -97,7 +102,7 @@ class Grasps(System):
         )
 
     @classmethod
-    def _touching(cls, m, d) -> dict[int, list[tuple[int, float]]]:
+    def _touching(cls, m: mujoco.MjModel, d: mujoco.MjData) -> dict[int, list[tuple[int, float]]]:
         """For each body, the loose bodies it touches and, for each contact, its friction
         coefficient times its normal force (N)."""
         out: dict[int, list[tuple[int, float]]] = {}
@@ -112,13 +117,13 @@ class Grasps(System):
         return out
 
     @staticmethod
-    def _weld_force(d, eq: int) -> float:
+    def _weld_force(d: mujoco.MjData, eq: int) -> float:
         """The force (N) the weld carries now."""
         rows = np.nonzero((d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY) & (d.efc_id == eq))[0]
         return float(np.linalg.norm(d.efc_force[rows[:3]])) if rows.size else 0.0
 
     @staticmethod
-    def _weld(h: _Hold, m, d, b: int) -> None:
+    def _weld(h: _Hold, m: mujoco.MjModel, d: mujoco.MjData, b: int) -> None:
         f = h.fingers[0]
         rel = d.xmat[f].reshape(3, 3).T @ (d.xpos[b] - d.xpos[f])
         inverse = np.empty(4)
@@ -134,7 +139,7 @@ class Grasps(System):
         h.held = b
 
     @staticmethod
-    def _release(h: _Hold, d) -> None:
+    def _release(h: _Hold, d: mujoco.MjData) -> None:
         if h.held >= 0:
             d.eq_active[h.eq] = 0
             h.held = -1

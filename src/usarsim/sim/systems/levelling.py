@@ -3,10 +3,15 @@ torque towards upright; their roll and pitch rates are damped by their servos.""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
 
 # N m per rad of tilt per kg: hovering robots right themselves (and a vessel's hull, by
 # its weight hanging below its buoyancy, in roll: systems.water).
@@ -20,7 +25,7 @@ class Levelling(System):
     ORDER = 30
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return any(r.drive.HOVERS for r in sim.robots.values())
 
     def pre_step(self) -> None:

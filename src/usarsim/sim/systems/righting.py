@@ -52,7 +52,7 @@ class Righting(System):
 
     ORDER = 20
 
-    def __init__(self, sim: Simulation):
+    def __init__(self, sim: Simulation) -> None:
         super().__init__(sim)
         # the robots being righted, by id (asked twice every stretch of steps: with hundreds
         # of robots, looking at each of them then cost more than the rest of the stretch's
@@ -60,7 +60,7 @@ class Righting(System):
         self.righting: dict[int, SimRobot] = {}
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return bool(sim.robots)
 
     def active(self) -> bool:

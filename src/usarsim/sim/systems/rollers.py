@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import mujoco
 import numpy as np
 
 from usarsim.effecters import RollerTable
 from usarsim.effecters.roller_table import ROLLER_FRICTION
 from usarsim.sim.systems.base import SYSTEMS, System, mounted
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
 
 # How quickly the rollers bring a load to their speed: a first-order time constant (s), the
 # force capped at the rollers' grip x the load's weight.  An estimate (no roller table's
@@ -28,7 +33,7 @@ class RollerTables(System):
 
     ORDER = 50
 
-    def __init__(self, sim):
+    def __init__(self, sim: Simulation) -> None:
         super().__init__(sim)
         self._pushed: set[int] = set()
         self._model = sim.model  # body ids are the model's: they change with a rebuild
@@ -38,7 +43,7 @@ class RollerTables(System):
         return 1 if self._pushed else self.EVERY_STEPS
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return bool(mounted(sim, RollerTable))
 
     def pre_step(self) -> None:

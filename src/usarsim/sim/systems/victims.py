@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from usarsim.sim.systems.base import SYSTEMS, System
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
 
 
 @SYSTEMS.register("victims")
@@ -14,7 +19,7 @@ class WavingVictims(System):
     EVERY_STEPS = None
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return sim.entities.has_motion
 
     def pre_step(self) -> None:

@@ -4,6 +4,7 @@ every robot in water; robots not built for water lose their battery there (as in
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -12,6 +13,9 @@ from usarsim.sim import frames
 from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
 from usarsim.sim.systems.levelling import AERIAL_LEVEL_STIFFNESS
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
 
 log = logging.getLogger("usarsim.sim")
 
@@ -26,7 +30,7 @@ class Water(System):
     ORDER = 40
 
     @classmethod
-    def wanted(cls, sim) -> bool:
+    def wanted(cls, sim: Simulation) -> bool:
         return bool(sim.world.water and sim.robots)
 
     def pre_step(self) -> None:
