@@ -27,6 +27,7 @@ from usarsim.config.reader import did_you_mean
 from usarsim.errors import ConfigError, PluginNotFoundError
 from usarsim.readings import FieldValue, ItemParams, OperationResult, ZoomResult
 from usarsim.registry import Registry
+from usarsim.sensors.noise import Noise
 from usarsim.sim.outputs import ItemDescription
 
 if TYPE_CHECKING:
@@ -160,6 +161,7 @@ class Sensor(Item[SC]):
     RESETTABLE: ClassVar[bool] = False  # {Opcode RESET} starts it over (Odometry, Encoder, Tachometer)
     SCANNABLE: ClassVar[bool] = False  # {Opcode SCAN} makes it scan at once (the range scanners)
     Config: ClassVar[type[ItemConfig]] = SensorConfig
+    NOISE: ClassVar[Noise | None] = None  # what corrupts what it senses (usarsim.sensors.noise)
 
     def __init__(self, item: MountedItem, config: SC, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
@@ -167,8 +169,19 @@ class Sensor(Item[SC]):
         self._upos = 0
 
     def measure(self, view: WorldView) -> Any:
-        """Return a reading (or, for packed sensors, this item's part of one)."""
+        """Return a reading (or, for packed sensors, this item's part of one): by default what
+        :meth:`sense` gives, corrupted by the class's ``NOISE``, made a reading by :meth:`reading`
+        (a sensor whose noise is its own model's overrides this instead)."""
+        true = self.sense(view)
+        return self.reading(true if self.NOISE is None else self.NOISE.apply(self, true))
+
+    def sense(self, view: WorldView) -> Any:
+        """The true values, before any noise."""
         raise NotImplementedError
+
+    def reading(self, values: Any) -> Any:
+        """The reading (or this item's part of one) of the values sensed and corrupted."""
+        return values
 
     @classmethod
     def measure_group(cls, sensors: list[Self], view: WorldView) -> list[Any]:

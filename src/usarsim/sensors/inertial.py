@@ -17,6 +17,7 @@ import numpy as np
 
 from usarsim.readings import ImuReading, OrientationReading, TachometerReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sensors.noise import RELATIVE
 from usarsim.sim import frames
 from usarsim.sim.frames import wrap_2pi
 
@@ -63,6 +64,7 @@ class Tachometer(Sensor[TachometerConfig]):
     ``SET {Type Tachometer} {Opcode RESET}`` zeroes the angles (protocol.md 5.4)."""
 
     RESETTABLE = True
+    NOISE = RELATIVE
 
     def configure(self, view: WorldView) -> None:
         h = self.handle
@@ -73,13 +75,12 @@ class Tachometer(Sensor[TachometerConfig]):
     def reset(self, view: WorldView) -> None:
         self._zero = view.data.qpos[self._qpos].copy()
 
-    def measure(self, view: WorldView) -> TachometerReading:
+    def sense(self, view: WorldView) -> tuple[np.ndarray, np.ndarray]:
         d = view.data
-        vel = d.qvel[self._qvel].astype(float)
-        pos = d.qpos[self._qpos] - self._zero
-        if self.config.noise > 0:
-            vel = self.relative_noise(vel)
-            pos = self.relative_noise(pos)
+        return d.qvel[self._qvel].astype(float), d.qpos[self._qpos] - self._zero
+
+    def reading(self, values: tuple[np.ndarray, np.ndarray]) -> TachometerReading:
+        vel, pos = values
         return TachometerReading(self.name, tuple(vel.tolist()), tuple(pos.tolist()))
 
 

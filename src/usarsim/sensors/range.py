@@ -12,6 +12,7 @@ import numpy as np
 
 from usarsim.readings import FieldValue, RangeItem, RangeReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
+from usarsim.sensors.noise import RANGES
 from usarsim.sim import frames
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
@@ -43,6 +44,7 @@ class RangeSensor(Sensor[RC]):
     PACKED = True
     RAY_KIND = "laser"  # which materials the rays pass through (world materials' see_through)
     Config = RangeSensorConfig
+    NOISE = RANGES
     ALIASES = {"MaxRange": "max_range_m", "MinRange": "min_range_m"}
 
     def _directions(self) -> np.ndarray:
@@ -54,15 +56,11 @@ class RangeSensor(Sensor[RC]):
         dist, _, _ = view.caster.cast(pos, dirs, self.config.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
         return float(dist.min())
 
-    def measure(self, view: WorldView) -> RangeItem:
-        cfg = self.config
-        r = self._true_range(view)
-        if math.isinf(r):
-            value = cfg.max_range_m
-        else:
-            value = self.relative_noise_scalar(r)
-        value = min(max(value, cfg.min_range_m), cfg.max_range_m)
-        return RangeItem(self.name, value)
+    def sense(self, view: WorldView) -> float:
+        return self._true_range(view)
+
+    def reading(self, values: float) -> RangeItem:
+        return RangeItem(self.name, values)
 
     @classmethod
     def combine(cls, parts: list[RangeItem]) -> RangeReading:
@@ -185,15 +183,8 @@ class Sonar(RangeSensor[SonarConfig]):
         assert nrm is not None  # asked for
         seen = np.isfinite(dist) & (np.abs(np.einsum("ij,ij->i", u, nrm)) >= cos_max[owner])
         nearest = np.minimum.reduceat(np.where(seen, dist, np.inf), starts)
-        items = []
-        for s, r in zip(sensors, nearest.tolist()):
-            cfg = s.config
-            if r <= cfg.max_range_m:
-                value = s.relative_noise_scalar(r)
-            else:
-                value = cfg.max_range_m
-            items.append(RangeItem(s.name, min(max(value, cfg.min_range_m), cfg.max_range_m)))
-        return items
+        noise = cls.NOISE.apply  # each sonar's own noise, in order, from its own generator
+        return [RangeItem(s.name, noise(s, r)) for s, r in zip(sensors, nearest.tolist())]
 
 
 @dataclass(frozen=True, kw_only=True)

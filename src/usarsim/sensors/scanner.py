@@ -13,6 +13,7 @@ import numpy as np
 from usarsim.errors import ConfigError
 from usarsim.readings import FieldValue, ItemParams, OperationResult, RangeScan3DReading, RangeScanReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
+from usarsim.sensors.noise import RANGES
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
 if TYPE_CHECKING:
@@ -64,6 +65,7 @@ class RangeScanner(Sensor[RSC]):
 
     SCANNABLE = True
     Config = RangeScannerConfig
+    NOISE = RANGES
     RAY_KIND = "laser"  # which materials the beams pass through (world materials' see_through)
     ALIASES = {
         "MaxRange": "max_range_m",
@@ -109,15 +111,14 @@ class RangeScanner(Sensor[RSC]):
         else:
             self._dirs = unit_dirs_yaw_pitch(offsets, np.zeros(n))
 
-    def measure(self, view: WorldView) -> RangeScanReading:
+    def sense(self, view: WorldView) -> np.ndarray:
         cfg = self.config
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, cfg.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
-        hit = np.isfinite(dist)
-        values = np.full(len(dist), cfg.max_range_m)
-        if hit.any():
-            values[hit] = self.relative_noise(dist[hit])
-        np.clip(values, cfg.min_range_m, cfg.max_range_m, out=values)
+        return dist
+
+    def reading(self, values: np.ndarray) -> RangeScanReading:
+        cfg = self.config
         return RangeScanReading(
             self.TYPE, self.name, trunc4(cfg.resolution_rad), trunc4(cfg.fov_rad), tuple(values.tolist())
         )
@@ -291,6 +292,8 @@ class RangeScanner3D(Sensor[RangeScanner3DConfig]):
     when the sweep would not fit in one line.
     """
 
+    NOISE = RANGES
+
     SCANNABLE = True
     RAY_KIND = "laser"
     ALIASES = {
@@ -322,15 +325,14 @@ class RangeScanner3D(Sensor[RangeScanner3DConfig]):
         pp, yy = np.meshgrid(pitches, yaws, indexing="ij")
         self._dirs = unit_dirs_yaw_pitch(yy.reshape(-1), pp.reshape(-1))
 
-    def measure(self, view: WorldView) -> RangeScan3DReading:
+    def sense(self, view: WorldView) -> np.ndarray:
         c = self.config
         pos, rot = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
         dist, _, _ = view.caster.cast(pos, self._dirs @ rot.T, c.max_range_m, self.handle.body_id, kind=self.RAY_KIND)
-        values = np.full(len(dist), c.max_range_m)
-        hit = np.isfinite(dist)
-        if hit.any():
-            values[hit] = self.relative_noise(dist[hit])
-        np.clip(values, c.min_range_m, c.max_range_m, out=values)
+        return dist
+
+    def reading(self, values: np.ndarray) -> RangeScan3DReading:
+        c = self.config
         return RangeScan3DReading(
             self.name,
             (trunc4(c.vertical_resolution_rad), trunc4(c.horizontal_resolution_rad)),
