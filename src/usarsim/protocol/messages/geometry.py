@@ -1,0 +1,266 @@
+"""Geometry and configuration of the robot and its items, with their formats and parsers:
+the replies to ``GETGEO`` (``GEO``, protocol.md §6.8) and ``GETCONF`` (``CONF``, §6.7) for
+the robot itself, its sensors and effecters, and the empty reply when nothing matched the
+query (§5.5).  The parsers of ``GEO`` and ``CONF`` hand the lines of mission packages and
+actuators to :mod:`.articulated`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from usarsim.readings import FieldValue
+
+from ..grammar import RawMessage
+from ..numbers import f4, vec4
+from .articulated import (
+    CONF_PARSERS,
+    GEO_PARSERS,
+    ActuatorConfiguration,
+    ActuatorGeometry,
+    MisPkgConfiguration,
+    MisPkgGeometry,
+)
+from .common import _CRLF, Vec3, _fields, _groups, _Reader
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RobotGeometry:
+    """Reply to ``GETGEO {Type Robot}`` (§6.8); ``Name`` carries the robot class.
+
+    The wheel keys are left out when None (robots without wheels).
+    """
+
+    vehicle_type: str = "GroundVehicle"
+    class_name: str
+    dimensions: Vec3
+    cog: Vec3 = (0.0, 0.0, 0.0)
+    wheel_radius: float | None = None
+    wheel_separation: float | None = None
+    wheel_base: float | None = None
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RobotConfiguration:
+    """Reply to ``GETCONF {Type Robot}`` (§6.7); ``Name`` carries the robot class."""
+
+    vehicle_type: str = "GroundVehicle"
+    class_name: str
+    steering_type: str
+    mass_kg: float
+    max_speed: float
+    max_torque: float
+    max_front_steer: float = 0.0
+    max_rear_steer: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class ItemPose:
+    """Mount pose of one sensor or effecter, relative to ``mount`` (``HARD`` = chassis)."""
+
+    name: str
+    location: Vec3
+    orientation: Vec3
+    mount: str = "HARD"
+
+
+@dataclass(frozen=True, slots=True)
+class ItemGeometry:
+    """``GEO {Type T} {Name N Location ... Orientation ... Mount M} ...`` (packed, §6.8)."""
+
+    item_type: str
+    items: tuple[ItemPose, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class EmptyGeometry:
+    """``GEO {Type T}`` or ``GEO {Type T} {Name N}``: nothing matched the query (§5.5)."""
+
+    item_type: str
+    name: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class ItemConf:
+    """Configuration of one item: typed ``(key, value)`` pairs in order, printed by
+    :func:`format_value` (a value read back from a line is its text, printed as it is)."""
+
+    name: str
+    fields: tuple[tuple[str, FieldValue], ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class ItemConfiguration:
+    """``CONF {Type T} {Name N1} {Key v} ... {Name N2} ...`` (repeated-key groups, §6.7).
+
+    Every item type has its own keys; their typed values are printed by
+    :func:`format_value`.  A single item without fields prints exactly like
+    :class:`EmptyConfiguration` with a name, and is read back as one.
+    """
+
+    item_type: str
+    items: tuple[ItemConf, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class EmptyConfiguration:
+    """``CONF {Type T}`` or ``CONF {Type T} {Name N}``: nothing matched the query (§5.5)."""
+
+    item_type: str
+    name: str | None = None
+
+
+GeometryMessage = RobotGeometry | ItemGeometry | EmptyGeometry | MisPkgGeometry | ActuatorGeometry
+ConfigurationMessage = (
+    RobotConfiguration | ItemConfiguration | EmptyConfiguration | MisPkgConfiguration | ActuatorConfiguration
+)
+
+# ---- formatting
+
+
+def _fmt_robot_geometry(m: RobotGeometry) -> str:
+    s = "GEO {Type %s} {Name %s} {Dimensions %s} {COG %s}" % (
+        m.vehicle_type,
+        m.class_name,
+        vec4(m.dimensions),
+        vec4(m.cog),
+    )
+    if m.wheel_radius is not None:
+        s += " {WheelRadius %s}" % f4(m.wheel_radius)
+    if m.wheel_separation is not None:
+        s += " {WheelSeparation %s}" % f4(m.wheel_separation)
+    if m.wheel_base is not None:
+        s += " {WheelBase %s}" % f4(m.wheel_base)
+    return s + _CRLF
+
+
+def _fmt_robot_configuration(m: RobotConfiguration) -> str:
+    return (
+        "CONF {Type %s} {Name %s} {SteeringType %s} {Mass %s} {MaxSpeed %s} {MaxTorque %s} "
+        "{MaxFrontSteer %s} {MaxRearSteer %s}\r\n"
+        % (
+            m.vehicle_type,
+            m.class_name,
+            m.steering_type,
+            f4(m.mass_kg),
+            f4(m.max_speed),
+            f4(m.max_torque),
+            f4(m.max_front_steer),
+            f4(m.max_rear_steer),
+        )
+    )
+
+
+def _fmt_item_geometry(m: ItemGeometry) -> str:
+    items = "".join(
+        " {Name %s Location %s Orientation %s Mount %s}" % (i.name, vec4(i.location), vec4(i.orientation), i.mount)
+        for i in m.items
+    )
+    return "GEO {Type %s}%s\r\n" % (m.item_type, items)
+
+
+def _type_and_name(head: str, item_type: str, name: str | None) -> str:
+    if name is None:
+        return "%s {Type %s}\r\n" % (head, item_type)
+    return "%s {Type %s} {Name %s}\r\n" % (head, item_type, name)
+
+
+def _fmt_item_configuration(m: ItemConfiguration) -> str:
+    parts = ["CONF {Type %s}" % m.item_type]
+    for item in m.items:
+        parts.append("{Name %s}" % item.name)
+        parts.extend(_fields(item.fields))
+    return " ".join(parts) + _CRLF
+
+
+# ---- parsing
+
+
+def _only_type_and_name(raw: RawMessage) -> bool:
+    keys = [s.key.lower() for s in raw.segments]
+    if keys == ["type"]:
+        return True
+    return keys == ["type", "name"] and len(raw.segments[1].value.split()) == 1
+
+
+def _parse_geo(r: _Reader) -> GeometryMessage:
+    raw = r.raw
+    item_type = r.text("Type")
+    if _only_type_and_name(raw):
+        return EmptyGeometry(item_type=item_type, name=raw.get("Name"))
+    if raw.has("Dimensions"):
+        return RobotGeometry(
+            vehicle_type=item_type,
+            class_name=r.text("Name"),
+            dimensions=r.req_vec3("Dimensions"),
+            cog=r.req_vec3("COG"),
+            wheel_radius=r.opt_float("WheelRadius"),
+            wheel_separation=r.opt_float("WheelSeparation"),
+            wheel_base=r.opt_float("WheelBase"),
+        )
+    articulated = GEO_PARSERS.get(item_type.lower())
+    if articulated is not None:
+        return articulated(r)
+    items = []
+    for group in _groups(raw.segments, "Name"):
+        tokens = group[0].value.split()
+        if len(tokens) > 1 and len(tokens) % 2:  # packed UT layout: name, then key value pairs
+            fields = {tokens[i].lower(): tokens[i + 1] for i in range(1, len(tokens), 2)}
+            name = tokens[0]
+        else:  # separate UDK layout: {Name n} {Location ...} {Orientation ...} {Mount m}
+            fields = {s.key.lower(): s.value for s in group[1:]}
+            name = group[0].value
+        if "location" not in fields or "orientation" not in fields:
+            raise r.error("Name", group[0].value, "'name Location x,y,z Orientation r,p,y Mount m'")
+        location = r.vector("Location", fields["location"])
+        orientation = r.vector("Orientation", fields["orientation"])
+        items.append(
+            ItemPose(
+                name=name,
+                location=location,  # type: ignore[arg-type]
+                orientation=orientation,  # type: ignore[arg-type]
+                mount=fields.get("mount", "HARD"),
+            )
+        )
+    return ItemGeometry(item_type=item_type, items=tuple(items))
+
+
+def _parse_conf(r: _Reader) -> ConfigurationMessage:
+    raw = r.raw
+    item_type = r.text("Type")
+    if _only_type_and_name(raw):
+        return EmptyConfiguration(item_type=item_type, name=raw.get("Name"))
+    if raw.has("SteeringType"):
+        return RobotConfiguration(
+            vehicle_type=item_type,
+            class_name=r.text("Name"),
+            steering_type=r.text("SteeringType"),
+            mass_kg=r.req_float("Mass"),
+            max_speed=r.req_float("MaxSpeed"),
+            max_torque=r.req_float("MaxTorque"),
+            max_front_steer=r.opt_float("MaxFrontSteer") or 0.0,
+            max_rear_steer=r.opt_float("MaxRearSteer") or 0.0,
+        )
+    articulated = CONF_PARSERS.get(item_type.lower())
+    if articulated is not None:
+        return articulated(r)
+    items = tuple(
+        ItemConf(name=g[0].value, fields=tuple((s.key, s.value) for s in g[1:])) for g in _groups(raw.segments, "Name")
+    )
+    return ItemConfiguration(item_type=item_type, items=items)
+
+
+FORMATTERS: dict[type, Callable[[Any], str]] = {
+    RobotGeometry: _fmt_robot_geometry,
+    RobotConfiguration: _fmt_robot_configuration,
+    ItemGeometry: _fmt_item_geometry,
+    EmptyGeometry: lambda m: _type_and_name("GEO", m.item_type, m.name),
+    ItemConfiguration: _fmt_item_configuration,
+    EmptyConfiguration: lambda m: _type_and_name("CONF", m.item_type, m.name),
+}
+
+PARSERS: dict[str, Callable[[_Reader], GeometryMessage | ConfigurationMessage]] = {
+    "GEO": _parse_geo,
+    "CONF": _parse_conf,
+}

@@ -1,0 +1,464 @@
+"""Sensor messages: the ``SEN`` line of every kind of reading (protocol.md §6.3), its format
+and its parser, one pair per reading type.  Time is printed with 4 decimals; ground truth,
+INS and INU orientations are normalised into [0, 2 pi), scanner ``Resolution``/``FOV``
+truncated rather than rounded (§2.4)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from usarsim.errors import ProtocolError
+from usarsim.readings import (
+    EncoderItem,
+    EncoderReading,
+    GpsReading,
+    HumanMotionReading,
+    ImuReading,
+    OdometryReading,
+    OrientationReading,
+    PoseReading,
+    RangeItem,
+    RangeReading,
+    RangeScan3DReading,
+    RangeScanReading,
+    Reading,
+    RfidReading,
+    RfidTag,
+    SoundReading,
+    TachometerReading,
+    TouchItem,
+    TouchReading,
+    VictimPart,
+    VictimReading,
+)
+
+from ..grammar import Segment, format_segment, parse_float, parse_int
+from ..numbers import bool_str, f4, t4, vec4, vec_angle4, vec_t4
+from .common import _CRLF, _Reader
+from .results import UnknownMessage
+
+
+@dataclass(frozen=True, slots=True)
+class SensorMessage:
+    """A ``SEN`` line (§6.3): ``{Time t}`` first (4 decimals) unless ``time`` is None."""
+
+    time: float | None
+    reading: Reading
+
+
+# ---- SEN bodies: everything after "{Type T}" is produced per reading type.
+
+
+def _sen_range(r: RangeReading) -> str:
+    body = " ".join(["{Name %s Range %s}" % (i.name, f4(i.range_m)) for i in r.items])
+    return "{Type %s} %s" % (r.sensor_type, body) if body else "{Type %s}" % r.sensor_type
+
+
+def _range_list(values: tuple[float, ...]) -> str:
+    return "{Range %s}" % vec4(values) if values else "{Range}"
+
+
+def _sen_scan(r: RangeScanReading) -> str:
+    return "{Type %s} {Name %s} {Resolution %s} {FOV %s} %s" % (
+        r.sensor_type,
+        r.name,
+        t4(r.resolution_rad),
+        t4(r.fov_rad),
+        _range_list(r.ranges_m),
+    )
+
+
+def _sen_scan3d(r: RangeScan3DReading) -> str:
+    # a line of the split form holds one row and names it like the RangeImager's frames
+    # (protocol.md 6.3); a whole sweep is the one line of the RangeScanner3D row there
+    frame = "" if r.frame is None else "{Frames %d} {Frame %d} " % (r.frames or 0, r.frame)
+    return "{Type %s} {Name %s} %s{Resolution %s} {FOV %s} %s" % (
+        r.sensor_type,
+        r.name,
+        frame,
+        vec_t4(r.resolution_rad),
+        vec_t4(r.fov_rad),
+        _range_list(r.ranges_m),
+    )
+
+
+def _scan3d_rows(r: RangeScan3DReading) -> list[RangeScan3DReading] | None:
+    """The rows of a whole 3D sweep to be sent split, each a reading of its own (None: it is
+    not to be split, or has no known rows)."""
+    rows = r.frames
+    if not r.split or r.frame is not None or not rows or len(r.ranges_m) % rows:
+        return None
+    n = len(r.ranges_m) // rows
+    return [
+        RangeScan3DReading(
+            r.name,
+            r.resolution_rad,
+            r.fov_rad,
+            r.ranges_m[k * n : (k + 1) * n],
+            sensor_type=r.sensor_type,
+            frames=rows,
+            frame=k,
+            split=True,
+        )
+        for k in range(rows)
+    ]
+
+
+def _sen_odometry(r: OdometryReading) -> str:
+    # Theta is printed as the sensor integrated it (UT examples show values in [0, 2 pi)).
+    return "{Type Odometry} {Name %s} {Pose %s,%s,%s}" % (
+        r.name,
+        f4(r.x_m),
+        f4(r.y_m),
+        f4(r.theta_rad),
+    )
+
+
+def _sen_encoder(r: EncoderReading) -> str:
+    body = " ".join(["{Name %s Tick %d}" % (i.name, i.tick) for i in r.items])
+    return "{Type Encoder} " + body if body else "{Type Encoder}"
+
+
+def _sen_pose(r: PoseReading) -> str:
+    return "{Type %s} {Name %s} {Location %s} {Orientation %s}" % (
+        r.sensor_type,
+        r.name,
+        vec4(r.location),
+        vec_angle4(r.orientation),
+    )
+
+
+def _sen_orientation(r: OrientationReading) -> str:
+    # INU orientation: normalised into [0, 2 pi) like the other UT orientation sensors.
+    return "{Type %s} {Name %s} {Orientation %s}" % (
+        r.sensor_type,
+        r.name,
+        vec_angle4(r.orientation),
+    )
+
+
+def _sen_touch(r: TouchReading) -> str:
+    body = " ".join(["{Name %s Touch %s}" % (i.name, bool_str(i.touching)) for i in r.items])
+    return "{Type Touch} " + body if body else "{Type Touch}"
+
+
+def _gps_coordinate(c: tuple[int, float, str]) -> str:
+    return "%d,%s,%s" % (c[0], f4(c[1]), c[2])
+
+
+def _sen_gps(r: GpsReading) -> str:
+    if r.fix and r.latitude is not None and r.longitude is not None:
+        return "{Type GPS} {Name %s} {Latitude %s} {Longitude %s} {Fix 1} {Satellites %d}" % (
+            r.name,
+            _gps_coordinate(r.latitude),
+            _gps_coordinate(r.longitude),
+            r.satellites,
+        )
+    return "{Type GPS} {Name %s} {Fix %d} {Satellites %d}" % (
+        r.name,
+        1 if r.fix else 0,
+        r.satellites,
+    )
+
+
+def _sen_tachometer(r: TachometerReading) -> str:
+    return "{Type Tachometer} {Name %s} {Vel %s} {Pos %s}" % (
+        r.name,
+        vec4(r.velocities_rad_s),
+        vec4(r.positions_rad),
+    )
+
+
+def _sen_imu(r: ImuReading) -> str:
+    # UDK layout; the rotation is printed as measured (not normalised).
+    return "{Type IMU} {Name %s} {XYZAcceleration %s} {AngularVel %s} {AngularAccel %s} {Rotation %s}" % (
+        r.name,
+        vec4(r.acceleration),
+        vec4(r.angular_velocity),
+        vec4(r.angular_acceleration),
+        vec4(r.orientation),
+    )
+
+
+def _sen_victim(r: VictimReading) -> str:
+    if not r.parts:
+        return "{Type VictSensor} {Status NoVictims}"
+    parts = " ".join(["{PartName %s} {Location %s}" % (p.part_name, vec4(p.location)) for p in r.parts])
+    return "{Type VictSensor} {Name %s} %s" % (r.name, parts)
+
+
+def _rfid_tag(t: RfidTag) -> str:
+    s = "{ID %d} {Location %s}" % (t.tag_id, vec4(t.location))
+    if t.memory is not None:
+        s += " " + format_segment("Mem", t.memory)
+    return s
+
+
+def _sen_rfid(r: RfidReading) -> str:
+    if not r.tags:
+        return "{Type RFID} {Name %s}" % r.name
+    return "{Type RFID} {Name %s} %s" % (r.name, " ".join(map(_rfid_tag, r.tags)))
+
+
+def _sen_sound(r: SoundReading) -> str:
+    return "{Type Sound} {Name %s} {Loudness %s} {Duration %s}" % (r.name, f4(r.loudness_db), f4(r.duration_s))
+
+
+def _sen_human_motion(r: HumanMotionReading) -> str:
+    return "{Type HumanMotion} {Name %s} {Prob %s}" % (r.name, f4(r.probability))
+
+
+_SEN_BODIES: dict[type, Callable[[Any], str]] = {
+    RangeReading: _sen_range,
+    RangeScanReading: _sen_scan,
+    RangeScan3DReading: _sen_scan3d,
+    OdometryReading: _sen_odometry,
+    EncoderReading: _sen_encoder,
+    PoseReading: _sen_pose,
+    OrientationReading: _sen_orientation,
+    TouchReading: _sen_touch,
+    GpsReading: _sen_gps,
+    TachometerReading: _sen_tachometer,
+    ImuReading: _sen_imu,
+    VictimReading: _sen_victim,
+    RfidReading: _sen_rfid,
+    SoundReading: _sen_sound,
+    HumanMotionReading: _sen_human_motion,
+}
+
+
+def format_reading(reading: Reading, time: float | None = None) -> str:
+    """The SEN line for a reading (same as ``format_message(SensorMessage(...))``).
+
+    A whole 3D sweep is one line (protocol.md 6.3) unless it asks for the split form
+    (``split``): then it is written as one line per row, top row first, each with
+    ``{Frames rows} {Frame k}`` after the Name and the same Time."""
+    head = "SEN " if time is None else "SEN {Time %s} " % f4(time)
+    if isinstance(reading, RangeScan3DReading) and reading.split:
+        rows = _scan3d_rows(reading)
+        if rows is not None:
+            return "".join([head + _sen_scan3d(row) + _CRLF for row in rows])
+    try:
+        body = _SEN_BODIES[type(reading)](reading)
+    except KeyError:
+        raise TypeError(f"not a sensor reading: {reading!r}") from None
+    return head + body + _CRLF
+
+
+def _fmt_sensor(m: SensorMessage) -> str:
+    return format_reading(m.reading, m.time)
+
+
+# ---- parsing
+
+
+def _packed(r: _Reader, seg: Segment, field: str) -> tuple[str, str]:
+    """``{Name n Field v}`` -> (n, v)."""
+    tokens = seg.value.split()
+    if len(tokens) != 3 or tokens[1].lower() != field.lower():
+        raise r.error(seg.key, seg.value, f"'name {field} value'")
+    return tokens[0], tokens[2]
+
+
+def _named_values(r: _Reader, field: str) -> list[tuple[str, Segment]]:
+    """Items of packed (``{Name n Field v}``) or separate (``{Name n} {Field v}``) layout."""
+    out: list[tuple[str, Segment]] = []
+    pending: str | None = None
+    for s in r.raw.segments:
+        k = s.key.lower()
+        if k == "name":
+            if len(s.value.split()) == 1:
+                pending = s.value
+            else:
+                name, value = _packed(r, s, field)
+                out.append((name, Segment(field, value)))
+        elif k == field.lower() and pending is not None:
+            out.append((pending, s))
+            pending = None
+    return out
+
+
+def _sen_parse_range(r: _Reader, t: str) -> Reading:
+    return RangeReading(
+        sensor_type=t,
+        items=tuple(RangeItem(name=n, range_m=r.number(s)) for n, s in _named_values(r, "Range")),
+    )
+
+
+def _sen_parse_scan(r: _Reader, t: str) -> Reading:
+    return RangeScanReading(
+        sensor_type=t,
+        name=r.text("Name"),
+        resolution_rad=r.req_float("Resolution"),
+        fov_rad=r.req_float("FOV"),
+        ranges_m=r.vector("Range", r.text("Range"), None),
+    )
+
+
+def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
+    frame = r.raw.get("Frame")
+    return RangeScan3DReading(
+        sensor_type=t,
+        name=r.text("Name"),
+        resolution_rad=r.vector("Resolution", r.text("Resolution"), 2),  # type: ignore[arg-type]
+        fov_rad=r.vector("FOV", r.text("FOV"), 2),  # type: ignore[arg-type]
+        ranges_m=r.vector("Range", r.text("Range"), None),
+        frames=None if frame is None else r.req_int("Frames"),
+        frame=None if frame is None else r.integer(Segment("Frame", frame)),
+        split=frame is not None,
+    )
+
+
+def _sen_parse_odometry(r: _Reader, t: str) -> Reading:
+    x, y, theta = r.req_vec3("Pose")
+    return OdometryReading(name=r.text("Name"), x_m=x, y_m=y, theta_rad=theta)
+
+
+def _sen_parse_encoder(r: _Reader, t: str) -> Reading:
+    return EncoderReading(items=tuple(EncoderItem(name=n, tick=r.integer(s)) for n, s in _named_values(r, "Tick")))
+
+
+def _sen_parse_pose(r: _Reader, t: str) -> Reading:
+    return PoseReading(
+        sensor_type=t,
+        name=r.text("Name"),
+        location=r.req_vec3("Location"),
+        orientation=r.req_vec3("Orientation"),
+    )
+
+
+def _sen_parse_orientation(r: _Reader, t: str) -> Reading:
+    return OrientationReading(sensor_type=t, name=r.text("Name"), orientation=r.req_vec3("Orientation"))
+
+
+def _sen_parse_touch(r: _Reader, t: str) -> Reading:
+    return TouchReading(items=tuple(TouchItem(name=n, touching=r.bool(s)) for n, s in _named_values(r, "Touch")))
+
+
+def _gps_parse(r: _Reader, key: str) -> tuple[int, float, str] | None:
+    value = r.raw.get(key)
+    if value is None:
+        return None
+    parts = [p.strip() for p in value.split(",")]
+    if len(parts) != 3 or parts[2] not in ("N", "S", "E", "W"):
+        raise r.error(key, value, "degrees,minutes,hemisphere such as 39,8.0341,N")
+    try:
+        return parse_int(parts[0]), parse_float(parts[1]), parts[2]
+    except ProtocolError as exc:
+        raise r.error(key, value, "degrees,minutes,hemisphere such as 39,8.0341,N") from exc
+
+
+def _sen_parse_gps(r: _Reader, t: str) -> Reading:
+    return GpsReading(
+        name=r.text("Name"),
+        fix=r.req_int("Fix") != 0,
+        satellites=r.req_int("Satellites"),
+        latitude=_gps_parse(r, "Latitude"),
+        longitude=_gps_parse(r, "Longitude"),
+    )
+
+
+def _sen_parse_tachometer(r: _Reader, t: str) -> Reading:
+    return TachometerReading(
+        name=r.text("Name"),
+        velocities_rad_s=r.vector("Vel", r.text("Vel"), None),
+        positions_rad=r.vector("Pos", r.text("Pos"), None),
+    )
+
+
+def _sen_parse_imu(r: _Reader, t: str) -> Reading:
+    return ImuReading(
+        name=r.text("Name"),
+        acceleration=r.req_vec3("XYZAcceleration"),
+        angular_velocity=r.req_vec3("AngularVel"),
+        angular_acceleration=r.req_vec3("AngularAccel"),
+        orientation=r.req_vec3("Rotation"),
+    )
+
+
+def _sen_parse_victim(r: _Reader, t: str) -> Reading:
+    parts: list[VictimPart] = []
+    part: str | None = None
+    for s in r.raw.segments:
+        k = s.key.lower()
+        if k == "partname":
+            part = s.value
+        elif k == "location":
+            if part is None:
+                raise r.error(s.key, s.value, "{PartName p} before each {Location}")
+            location = r.vector(s.key, s.value)
+            parts.append(VictimPart(part_name=part, location=location))  # type: ignore[arg-type]
+            part = None
+    # "{Status NoVictims}" lines carry no Name; the UT sensor is named VictSensor.
+    return VictimReading(name=r.raw.get("Name") or "VictSensor", parts=tuple(parts))
+
+
+def _rfid_tag_from(r: _Reader, tag: dict[str, Any]) -> RfidTag:
+    if "location" not in tag:
+        raise ProtocolError(f"{r.what}: {{ID {tag['tag_id']}}} has no {{Location x,y,z}}")
+    return RfidTag(**tag)
+
+
+def _sen_parse_rfid(r: _Reader, t: str) -> Reading:
+    tags: list[RfidTag] = []
+    tag: dict[str, Any] | None = None
+    for s in r.raw.segments:
+        k = s.key.lower()
+        if k == "id":
+            if tag is not None:
+                tags.append(_rfid_tag_from(r, tag))
+            tag = {"tag_id": r.integer(s)}
+        elif tag is not None and k == "location":
+            tag["location"] = r.vector(s.key, s.value)
+        elif tag is not None and k == "mem":
+            tag["memory"] = s.value
+    if tag is not None:
+        tags.append(_rfid_tag_from(r, tag))
+    return RfidReading(name=r.text("Name"), tags=tuple(tags))
+
+
+def _sen_parse_sound(r: _Reader, t: str) -> Reading:
+    return SoundReading(name=r.text("Name"), loudness_db=r.req_float("Loudness"), duration_s=r.req_float("Duration"))
+
+
+def _sen_parse_human_motion(r: _Reader, t: str) -> Reading:
+    return HumanMotionReading(name=r.text("Name"), probability=r.req_float("Prob"))
+
+
+_SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
+    "sonar": _sen_parse_range,
+    "ir": _sen_parse_range,
+    "rangesensor": _sen_parse_range,
+    "rangescanner": _sen_parse_scan,
+    "irscanner": _sen_parse_scan,
+    "rangescanner3d": _sen_parse_scan3d,
+    "3drangescanner": _sen_parse_scan3d,
+    "odometry": _sen_parse_odometry,
+    "encoder": _sen_parse_encoder,
+    "groundtruth": _sen_parse_pose,
+    "ins": _sen_parse_pose,
+    "inu": _sen_parse_orientation,
+    "touch": _sen_parse_touch,
+    "gps": _sen_parse_gps,
+    "tachometer": _sen_parse_tachometer,
+    "imu": _sen_parse_imu,
+    "victsensor": _sen_parse_victim,
+    "rfid": _sen_parse_rfid,
+    "sound": _sen_parse_sound,
+    "humanmotion": _sen_parse_human_motion,
+}
+
+
+def _parse_sen(r: _Reader) -> SensorMessage | UnknownMessage:
+    sensor_type = r.text("Type")
+    parser = _SEN_PARSERS.get(sensor_type.lower())
+    if parser is None:
+        return UnknownMessage(type=r.raw.type, segments=r.raw.segments)
+    return SensorMessage(time=r.opt_time(), reading=parser(r, sensor_type))
+
+
+FORMATTERS: dict[type, Callable[[Any], str]] = {SensorMessage: _fmt_sensor}
+
+PARSERS: dict[str, Callable[[_Reader], SensorMessage | UnknownMessage]] = {"SEN": _parse_sen}
