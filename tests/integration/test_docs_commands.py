@@ -29,6 +29,7 @@ import re
 import selectors
 import shlex
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -51,6 +52,44 @@ COMMENT = re.compile(r"\s#\s?")
 SERVER = re.compile(r"^(usarsim serve|bash scripts/serve\.sh)\b")
 LISTENING = re.compile(r"usarsim: control listening on|listening on \S+:\d+")
 COMMAND_TIMEOUT_S = 300
+
+
+class PortGuard:
+    """The default ports, held (bound on every address, not listening) while no command of a
+    page runs: a test of the shared phase beside this one binds free ports (port 0), and so do
+    Ray and the browser, and the kernel would otherwise be free to give one of them a default
+    port (the WSS's 50000 is inside Linux's range of free ports) just before a page's server
+    needs it."""
+
+    def __init__(self) -> None:
+        from usarsim.cli import DEFAULT_PORTS, FOXGLOVE_PORT
+
+        self.ports = sorted({*DEFAULT_PORTS.values(), FOXGLOVE_PORT})
+        self.held: list[socket.socket] = []
+
+    def hold(self) -> None:
+        for port in self.ports:
+            s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                s.bind(("0.0.0.0", port))
+            except OSError:  # a server of the page still closing, or another program's
+                s.close()
+                continue
+            self.held.append(s)
+
+    def release(self) -> None:
+        for s in self.held:
+            s.close()
+        self.held = []
+
+
+@pytest.fixture(scope="module")
+def port_guard():
+    guard = PortGuard()
+    guard.hold()
+    yield guard
+    guard.release()
 
 
 def pages() -> list[str]:
@@ -205,7 +244,7 @@ def pages_with_commands() -> list[str]:
 
 @pytest.mark.ports
 @pytest.mark.parametrize("page", pages_with_commands())
-def test_every_command_of_the_page_runs_as_printed(page, clone_folder):
+def test_every_command_of_the_page_runs_as_printed(page, clone_folder, port_guard):
     steps = commands(page)
     tmp_path = clone_folder
     server: Background | None = None
@@ -215,6 +254,7 @@ def test_every_command_of_the_page_runs_as_printed(page, clone_folder):
                 if server is not None:
                     server.stop()
                     server = None
+                    port_guard.hold()
                 continue
             if kind == "file":
                 (tmp_path / command).parent.mkdir(parents=True, exist_ok=True)
@@ -223,16 +263,22 @@ def test_every_command_of_the_page_runs_as_printed(page, clone_folder):
             if kind != "beside" and server is not None:
                 server.stop()
                 server = None
+                port_guard.hold()
+            port_guard.release()  # the command takes them; held again once it (or its server) is done
             if kind == "background":
                 server = Background(command, tmp_path, tmp_path / f"{Path(page).stem}-background{i}.log")
             else:
                 _run(command, tmp_path)
+                if server is None:
+                    port_guard.hold()
         if server is not None:
             server.stop()
             server = None
     finally:
         if server is not None:
             server.kill()
+        port_guard.release()
+        port_guard.hold()
 
 
 INLINE = re.compile(r"`(usarsim (?:serve|validate|worlds|robots|bench|replay|sweep|report|ros2)\b[^`]*)`")

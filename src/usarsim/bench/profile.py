@@ -185,11 +185,19 @@ def _sensor_rows(s: pstats.Stats) -> tuple[list[tuple[str, float]], float]:
         if cls in seen:
             continue
         seen.add(cls)
-        keys = {_where(getattr(cls, m)) for m in ("measure", "measure_group") if m in cls.__dict__}
+        # a sensor's own measurement: measure (or sense and reading, with the framework's noise
+        # between them, counted on its own row below)
+        keys = {_where(getattr(cls, m)) for m in ("measure", "measure_group", "sense", "reading") if m in cls.__dict__}
         t = _cum(s, keys)
         if t > 0:
             per_type.append((f"sensor {cls.__name__}", t))
             total += t
+    from usarsim.sensors.noise import Noise
+
+    noise = _cum(s, [_where(cls.apply) for cls in Noise.__subclasses__()])
+    if noise > 0:
+        per_type.append(("sensor noise (declared, applied by the framework)", noise))
+        total += noise
     statuses = _cum(s, [_where(status.status_output)])  # made where the sensors are read
     if statuses > 0:
         per_type.append(("statuses (STA, MISSTA)", statuses))
