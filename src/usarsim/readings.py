@@ -78,6 +78,9 @@ class RangeScan3DReading:
 
 @dataclass(frozen=True, slots=True)
 class OdometryReading:
+    """``SEN {Type Odometry} {Pose x,y,theta}`` (protocol.md 6.3, 7.4): the pose dead-reckoned from the wheels, x and
+    y in metres and theta in radians, relative to the pose at spawn or at the last reset."""
+
     name: str
     x_m: float
     y_m: float
@@ -86,6 +89,9 @@ class OdometryReading:
 
 @dataclass(frozen=True, slots=True)
 class EncoderItem:
+    """One wheel encoder of a packed Encoder line (protocol.md 6.3, 7.5): its name and its accumulated ticks (the
+    wheel's turn over the encoder's resolution)."""
+
     name: str
     tick: int
 
@@ -118,12 +124,16 @@ class OrientationReading:
 
 @dataclass(frozen=True, slots=True)
 class TouchItem:
+    """One touch sensor of a packed Touch line (protocol.md 6.3): its name and whether it is in contact."""
+
     name: str
     touching: bool
 
 
 @dataclass(frozen=True, slots=True)
 class TouchReading:
+    """All touch sensors of a robot (packed in one SEN line, protocol.md 6.3)."""
+
     items: tuple[TouchItem, ...]
 
 
@@ -140,6 +150,9 @@ class GpsReading:
 
 @dataclass(frozen=True, slots=True)
 class TachometerReading:
+    """``SEN {Type Tachometer} {Vel ...} {Pos ...}`` (protocol.md 6.3, 7.5): each wheel's spin speed (rad/s) and
+    accumulated angle (rad), one value per wheel."""
+
     name: str
     velocities_rad_s: tuple[float, ...]
     positions_rad: tuple[float, ...]
@@ -158,6 +171,9 @@ class ImuReading:
 
 @dataclass(frozen=True, slots=True)
 class VictimPart:
+    """One ``{PartName p} {Location x,y,z}`` pair of a victim sensor line (protocol.md 6.3, 7.9): a body part seen,
+    and where, relative to the sensor (metres)."""
+
     part_name: str
     location: Vec3
     # the victim whose part it is, in the simulation (the score's ground truth); never on the
@@ -167,12 +183,18 @@ class VictimPart:
 
 @dataclass(frozen=True, slots=True)
 class VictimReading:
+    """``SEN {Type VictSensor}`` (protocol.md 6.3, 7.9): the victim body parts (and false alarms) the sensor's rays
+    hit; none: ``{Status NoVictims}``."""
+
     name: str
     parts: tuple[VictimPart, ...]
 
 
 @dataclass(frozen=True, slots=True)
 class RfidTag:
+    """One ``{ID id} {Location x,y,z}`` pair of an RFID line (protocol.md 6.3, 7.10): a tag in range and where it is
+    relative to the sensor (metres), with ``{Mem text}`` when its memory is not blank."""
+
     tag_id: int
     location: Vec3
     memory: str | None = None
@@ -180,6 +202,9 @@ class RfidTag:
 
 @dataclass(frozen=True, slots=True)
 class RfidReading:
+    """``SEN {Type RFID}`` (protocol.md 6.3, 7.10): the tags within the reader's range; with none, the line names the
+    reader only."""
+
     name: str
     tags: tuple[RfidTag, ...]
 

@@ -30,6 +30,9 @@ class ReplayError(UsarsimError):
 
 @dataclass
 class Recording:
+    """A recording (MCAP, ``usarsim serve --record``) read back: its run information and the transcript's chunks in
+    order, and, for one the server did not close, where its readable part ends."""
+
     path: str
     info: RunInfo
     chunks: list[Chunk]
@@ -100,6 +103,9 @@ def read_recording(path: str | os.PathLike) -> Recording:
 
 @dataclass
 class Difference:
+    """The first server line where a replay differs from its recording: the connection, the line's number on it and
+    its simulated time (s), and the recorded and replayed lines (None where one side has no line)."""
+
     conn: int
     port: str
     peer: str
@@ -124,6 +130,10 @@ def _clip(s: str, n: int = 400) -> str:
 
 @dataclass
 class Report:
+    """What a replay found: the connections replayed and skipped, by port, the client lines sent, how many server
+    lines were compared and how many came out identical, the first difference and, in real time, the largest
+    difference of the numbers by kind of line."""
+
     info: RunInfo
     connections: dict[str, int] = field(default_factory=dict)  # replayed, by port
     skipped: dict[str, int] = field(default_factory=dict)  # not replayed, by port

@@ -62,6 +62,9 @@ def physics_parts(before: dict, after: dict) -> list[tuple[str, float]]:
 
 @dataclass
 class ThreadProfile:
+    """What the profile measured of one thread over the bench's measured stretch: its ``cProfile`` statistics, its
+    wall time and its CPU time in seconds (the difference is time spent waiting for the GIL or asleep)."""
+
     stats: pstats.Stats | None = None
     wall_s: float = 0.0
     cpu_s: float = 0.0

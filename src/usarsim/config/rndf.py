@@ -131,6 +131,9 @@ class Waypoint:
 
 @dataclass(frozen=True)
 class Checkpoint:
+    """An RNDF ``checkpoint`` line: checkpoint ``id`` (a positive integer unique in the file) marks the waypoint
+    ``waypoint`` (``m.n.p`` or ``z.s.p``), the places an MDF lists to visit."""
+
     id: int
     waypoint: str
 
@@ -145,6 +148,9 @@ class Exit:
 
 @dataclass(frozen=True, kw_only=True)
 class Lane:
+    """An RNDF ``lane`` block of a segment: its waypoints in order and its optional width (feet in the file),
+    boundaries, checkpoints, stop waypoints and exits."""
+
     id: str  # "m.n"
     waypoints: tuple[Waypoint, ...]
     width_ft: float | None = None
@@ -161,6 +167,8 @@ class Lane:
 
 @dataclass(frozen=True, kw_only=True)
 class Segment:
+    """An RNDF ``segment`` block: segment ``id`` and its lanes in order, with its optional ``segment_name``."""
+
     id: int
     lanes: tuple[Lane, ...]
     name: str | None = None
@@ -168,6 +176,9 @@ class Segment:
 
 @dataclass(frozen=True, kw_only=True)
 class Perimeter:
+    """The ``perimeter`` block of an RNDF zone (``z.0``): its points in order around the zone, and the exits that
+    leave the zone from them."""
+
     id: str  # "z.0"
     points: tuple[Waypoint, ...]
     exits: tuple[Exit, ...] = ()
@@ -175,6 +186,9 @@ class Perimeter:
 
 @dataclass(frozen=True, kw_only=True)
 class Spot:
+    """An RNDF parking ``spot`` block of a zone: its two waypoints, an optional width (feet in the file) and its
+    checkpoints."""
+
     id: str  # "z.s"
     waypoints: tuple[Waypoint, ...]  # the two points of the spot: its entry and its far end
     width_ft: float | None = None
@@ -187,6 +201,9 @@ class Spot:
 
 @dataclass(frozen=True, kw_only=True)
 class Zone:
+    """An RNDF ``zone`` block (an open area such as a parking lot): zone ``id``, its perimeter, its parking spots and
+    its optional ``zone_name``."""
+
     id: int
     perimeter: Perimeter
     spots: tuple[Spot, ...] = ()
@@ -195,6 +212,9 @@ class Zone:
 
 @dataclass(frozen=True, kw_only=True)
 class Rndf:
+    """A parsed RNDF (route network definition file): its segments and zones, with ``path`` the file it was read
+    from; the methods collect its lanes, points, checkpoints, exits and stops across segments and zones."""
+
     name: str
     path: str
     segments: tuple[Segment, ...]
@@ -241,6 +261,8 @@ class Rndf:
 
 @dataclass(frozen=True)
 class SpeedLimit:
+    """An MDF ``speed_limits`` entry: the minimum and maximum speed, in miles per hour, in segment or zone ``id``."""
+
     id: int  # a segment or zone id
     min_mph: float
     max_mph: float
@@ -248,6 +270,9 @@ class SpeedLimit:
 
 @dataclass(frozen=True, kw_only=True)
 class Mdf:
+    """A parsed MDF (mission data file): the checkpoints of the named RNDF to visit, in order, and the speed limits
+    of its segments and zones, with ``path`` the file it was read from."""
+
     name: str
     rndf_name: str
     path: str

@@ -61,6 +61,10 @@ class RobotGeometryConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class RobotConfig:
+    """A robot class as its robot file describes it: the identity CONF and GEO report (vehicle and steering type,
+    geometry), its drive, mass and limits, and the parts it is built from (chassis pieces, wheels, links, mission
+    packages and mounted sensors and effecters)."""
+
     class_name: str
     description: str = ""
     path: str

@@ -68,6 +68,10 @@ class Link:
 
 @dataclass(frozen=True, kw_only=True)
 class Wheel:
+    """An entry of a robot file's ``wheels``: a wheel on the chassis or on a link, with its position, size (metres)
+    and mass, its side, whether it is driven, and how it is steered (Ackermann axle, or a holonomic wheel numbered
+    for DRIVE, protocol.md 5.3c)."""
+
     name: str
     position: Vec3
     radius_m: float

@@ -92,6 +92,9 @@ WIRELESS_KEYS = {
 
 @dataclass(frozen=True, kw_only=True)
 class Material:
+    """An entry of a world file's ``materials``: the colour, friction and camera texture of the surfaces that name
+    it, the sensor rays it lets through, and its special effects (a mirror, a porous grid fender; manual 3.2.1)."""
+
     name: str
     rgba: tuple[float, float, float, float] = (0.7, 0.7, 0.7, 1.0)
     friction: float = 1.0
@@ -108,6 +111,9 @@ class Material:
 
 @dataclass(frozen=True, kw_only=True)
 class StaticObject:
+    """An entry of a world file's ``objects``: a box, cylinder or mesh at ``center`` (USARSim frame, metres) with its
+    rotation and material; ramps and stairs are expanded into boxes, and a mass above 0 makes it a movable object."""
+
     name: str
     shape: str
     center: Vec3
@@ -142,6 +148,9 @@ class Light:
 
 @dataclass(frozen=True, kw_only=True)
 class StartPose:
+    """An entry of a world file's ``start_poses``: a named location and rotation where robots may be spawned, as
+    ``GETSTARTPOSES`` lists them (protocol.md 5.2, 6.1); the world's ``path_nodes`` are written alike."""
+
     name: str
     location: Vec3
     rotation: Vec3 = (0.0, 0.0, 0.0)
@@ -149,6 +158,9 @@ class StartPose:
 
 @dataclass(frozen=True, kw_only=True)
 class Floor:
+    """A world file's ``floor``: the rectangle of the plane z = 0 (centre and extents in metres) that range sensors
+    see and robots may be spawned above, and its material."""
+
     center: tuple[float, float]
     size: tuple[float, float]
     material: str = "floor"
@@ -218,6 +230,9 @@ class WaterVolume:
 
 @dataclass(frozen=True, kw_only=True)
 class RfidTagConfig:
+    """An entry of a world file's ``rfid_tags``: an RFID tag lying in the world with its integer id, location and the
+    memory text robots read and write (protocol.md 7.10)."""
+
     tag_id: int
     location: Vec3
     memory: str = ""
@@ -240,6 +255,10 @@ class WirelessConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class WorldConfig:
+    """A world as its world file describes it: the floor, materials, objects, start poses and path nodes, the
+    victims, false alarms, RFID tags, water and lights, the physics timestep and gravity, the geo reference and the
+    radio model."""
+
     name: str
     description: str = ""
     path: str

@@ -17,6 +17,9 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, kw_only=True)
 class GripperConfig(ItemConfig):
+    """A ``Gripper`` item's settings in a robot file (protocol.md 8): its finger links and the joint values, metres
+    or radians, that open and close them."""
+
     fingers: tuple[str, ...] = ()  # link names of the fingers (prismatic or revolute joints)
     open_value: float = 0.04  # joint value of an open finger (m or rad)
     closed_value: float = -0.02  # beyond touching: the fingers squeeze with their MaxTorque

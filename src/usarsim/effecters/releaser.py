@@ -20,6 +20,8 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, kw_only=True)
 class RfidReleaserConfig(ItemConfig):
+    """An ``RFIDReleaser`` item's settings in a robot file (protocol.md 8): how many tags its magazine holds."""
+
     # The magazine's size was not recovered (protocol.md 8): 10 tags, an estimate.
     capacity: int = 10
 

@@ -19,6 +19,9 @@ ROLLER_FRICTION = 0.05  # the table's top between its rollers' pushes
 
 @dataclass(frozen=True, kw_only=True)
 class RollerTableConfig(ItemConfig):
+    """A ``RollerTable`` item's settings in a robot file (protocol.md 8): which chassis piece is the table's top, the
+    rollers' top speed in m/s and their grip on a load."""
+
     # Our design (no USARSim source describes its roller table, protocol.md 8): a chassis
     # piece of the robot is the table's top, and what lies on it is carried along the
     # robot's X axis at up to 0.3 m/s, gripped with friction 1.

@@ -19,6 +19,9 @@ END = "{End}\r\n"
 
 @dataclass(frozen=True, slots=True)
 class TruthRequest:
+    """A ground-truth request ``{Class c} {Name n}`` (protocol.md 12.4): the class and name of the objects asked for,
+    case-insensitive; None matches any."""
+
     class_name: str | None = None
     name: str | None = None
 
@@ -30,6 +33,9 @@ class TruthRequest:
 
 @dataclass(frozen=True, slots=True)
 class TruthObject:
+    """One object of a ground-truth answer (protocol.md 12.4): its name, class, the simulated time, and its location
+    (m) and rotation (rad, roll, pitch, yaw) in the world frame."""
+
     name: str
     class_name: str
     time: float

@@ -58,6 +58,10 @@ class Weights:
 
 @dataclass
 class RobotScore:
+    """What the score keeps of one robot (docs/scoring.md): victims it found, distance travelled (m), collisions, why
+    it was lost, its samples in radio contact, the floor cells its lasers explored, and the recent poses and battery
+    it is judged lost by."""
+
     name: str
     class_name: str
     victims_found: set[str] = field(default_factory=set)
@@ -76,6 +80,9 @@ class RobotScore:
 
 
 class Scorer:
+    """The score of a run, kept from the world frames and the robots' outputs fed to it in order (:meth:`frame`,
+    :meth:`outputs`); :meth:`result` gives it as a JSON-ready dict at any time."""
+
     def __init__(
         self,
         world: WorldConfig,

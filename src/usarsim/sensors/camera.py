@@ -33,6 +33,9 @@ CAMERAS = ITEMS.new("camera")
 
 @dataclass(frozen=True, kw_only=True)
 class CameraConfig(ItemConfig):
+    """A camera's settings in a robot file (protocol.md 6.7, 7.11): its default, narrowest and widest horizontal
+    field of view (rad), the range ``SET {Opcode Zoom}`` may move in, and the size of its pictures in pixels."""
+
     # UT CONF example (protocol.md 6.7): CameraDefFov 0.8727, CameraMinFov 0.3491,
     # CameraMaxFov 1.5708 (the zoom range of the UT test UI, 20 to 90 degrees).
     def_fov_rad: float = 0.8727
@@ -103,6 +106,8 @@ class Camera(CameraItem[CC]):
 
 @dataclass(frozen=True, kw_only=True)
 class OmniCamConfig(CameraConfig):
+    """An omnidirectional camera's settings: a field of view fixed all around (360 degrees), which no zoom changes."""
+
     # An omnidirectional camera sees all around: a fixed 360 degree field of view.
     def_fov_rad: float = 2 * math.pi - 1e-6
     min_fov_rad: float = 2 * math.pi - 1e-6

@@ -191,6 +191,9 @@ SKY = Constellation()
 
 @dataclass(frozen=True, kw_only=True)
 class GpsConfig(SensorConfig):
+    """A GPS sensor's settings in a robot file (protocol.md 7.6): its scan interval and the position noise, in
+    metres, at many satellites in view (``minNoise``) and at few (``maxNoise``)."""
+
     # UDK GPSSensor defaults (protocol.md 7.6): ScanInterval 0.2 s, maxNoise 2.5 m,
     # minNoise 0.75 m.
     scan_interval_s: float = 0.2

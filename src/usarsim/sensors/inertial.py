@@ -49,6 +49,9 @@ def _wrapped(angles: np.ndarray) -> tuple[float, float, float]:
 
 @dataclass(frozen=True, kw_only=True)
 class TachometerConfig(SensorConfig):
+    """A Tachometer's settings in a robot file (protocol.md 7.5): its scan interval and relative noise, none by
+    default."""
+
     # Tachometer ScanInterval 0.2 (protocol.md 7.5).  No noise by default: the UDK
     # Tachometer.uc (listed in protocol.md's Sources) reports the exact wheel values;
     # ``Noise`` (protocol.md 7.1, relative, uniform) may add some.
@@ -89,6 +92,9 @@ class Tachometer(Sensor[TachometerConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class ImuConfig(SensorConfig):
+    """An IMU's settings in a robot file (UDK layout, protocol.md 6.3): its scan interval, the Gaussian noise of each
+    quantity it reports, and whether its acceleration includes gravity."""
+
     # The UDK IMU.uc (protocol.md Sources) sets no ScanInterval of its own: the sensor
     # base 0.1 s applies (protocol.md 7.1).  It adds no noise either, so every sigma
     # defaults to 0 (exact values); the Gaussian generator of protocol.md 7.1 is
@@ -204,6 +210,9 @@ class IMU(Sensor[ImuConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class InuConfig(SensorConfig):
+    """An INU's settings in a robot file (protocol.md 6.3): its scan interval and the mean and sigma (rad) of the
+    Gaussian noise added to each angle."""
+
     # The old orientation sensor (protocol.md 6.3, "INU (old)"): no documented settings;
     # the sensor base ScanInterval 0.1 s (protocol.md 7.1).  Gaussian noise with the
     # generator's Mean and Sigma keys (protocol.md 7.1), exact by default.

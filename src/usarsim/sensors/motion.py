@@ -28,6 +28,10 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, kw_only=True)
 class OdometryConfig(SensorConfig):
+    """An Odometry sensor's settings in a robot file (protocol.md 6.7, 7.4): its scan interval, the encoder
+    resolution (rad) the wheel angles are quantised by, the wheels it follows (empty: the first of each side) and its
+    effective track width in metres."""
+
     # UT CONF example (protocol.md 6.7): ScanInterval 0.2, EncoderResolution 0.0099 rad.
     scan_interval_s: float = 0.2
     encoder_resolution_rad: float = 0.0099
@@ -166,6 +170,9 @@ class Odometry(Sensor[OdometryConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class EncoderConfig(SensorConfig):
+    """An Encoder's settings in a robot file (protocol.md 7.5): its scan interval, its resolution in radians per
+    tick, its relative noise and the wheel it counts (empty: the robot's first)."""
+
     # Encoder (protocol.md 7.5): Resolution 0.01745 rad per tick, Noise 0.005; the
     # sensor base ScanInterval is 0.1 s (7.1).
     scan_interval_s: float = 0.1
@@ -225,6 +232,8 @@ class Encoder(Sensor[EncoderConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class GroundTruthConfig(SensorConfig):
+    """A GroundTruth sensor's settings in a robot file (protocol.md 7.8): its scan interval."""
+
     # GroundTruth ScanInterval 0.1 (protocol.md 7.8).
     scan_interval_s: float = 0.1
 
@@ -241,6 +250,9 @@ class GroundTruth(Sensor[GroundTruthConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class InsConfig(SensorConfig):
+    """An INS's settings in a robot file (protocol.md 7.7): its scan interval, the Sigma and Mean of its noisy
+    increments, and the Precision and Drifting that set its per-axis biases."""
+
     # INS (protocol.md 7.7): ScanInterval 0.2, Sigma 0.05, Precision 1000, Drifting.
     scan_interval_s: float = 0.2
     sigma: float = 0.05

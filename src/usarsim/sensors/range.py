@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, kw_only=True)
 class RangeSensorConfig(SensorConfig):
+    """A single-beam range sensor's settings in a robot file (protocol.md 7.2): the range it reports within, in
+    metres, its relative noise and its scan interval."""
+
     # UDK RangeSensor defaults (protocol.md 7.2): MaxRange 3 m; base noise 0.001 (7.1).
     max_range_m: float = 3.0
     min_range_m: float = 0.0
@@ -72,6 +75,9 @@ class RangeSensor(Sensor[RC]):
 
 @dataclass(frozen=True, kw_only=True)
 class SonarConfig(RangeSensorConfig):
+    """A Sonar's settings in a robot file (protocol.md 7.2): its range, the full angle of its cone and the largest
+    angle of incidence an echo comes back from (rad), and how many rays trace the cone."""
+
     # SonarSensor defaults (protocol.md 7.2): MaxRange 5, MinRange 0.1, beam angle 0.349 rad
     # (20 degree full cone), maximum angle of incidence 0.1745 rad, ScanInterval 0.2.
     max_range_m: float = 5.0
@@ -189,6 +195,8 @@ class Sonar(RangeSensor[SonarConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class IRConfig(RangeSensorConfig):
+    """An IR sensor's settings in a robot file (protocol.md 7.2): a shorter range than a sonar's, in metres."""
+
     # IRSensor defaults (protocol.md 7.2): MaxRange 1.5, MinRange 0.2.
     max_range_m: float = 1.5
     min_range_m: float = 0.2

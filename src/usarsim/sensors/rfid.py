@@ -41,6 +41,9 @@ SENSING_MODES = ("Radius", "Obstacle", "Attenuation")
 
 @dataclass(frozen=True, kw_only=True)
 class RfidConfig(SensorConfig):
+    """An RFID reader's settings in a robot file (protocol.md 7.10, manual 10.9.3): its range in metres, its sensing
+    mode, the signal model (dBm, dB) of the Attenuation mode, and its scan interval."""
+
     # The reader's range was not recovered from any USARSim source (protocol.md 7.10:
     # "a few metres"); 3 m is an estimate for a passive UHF tag reader.
     max_range_m: float = 3.0

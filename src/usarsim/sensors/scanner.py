@@ -31,6 +31,9 @@ def trunc4(x: float) -> float:
 
 @dataclass(frozen=True, kw_only=True)
 class RangeScannerConfig(SensorConfig):
+    """A scanning range finder's settings in a robot file (protocol.md 7.3): its range in metres, the angle between
+    beams and the field of view of a sweep (rad), whether it sweeps in pan or tilt, and its relative noise."""
+
     # UDK RangeScanner base (protocol.md 7.3): MaxRange 4, MinRange 0.1, ScanInterval 0.2,
     # Resolution 0.157 rad, ScanFov 3.14, pan scan.
     max_range_m: float = 4.0
@@ -137,6 +140,9 @@ class RangeScanner(Sensor[RSC]):
 
 @dataclass(frozen=True, kw_only=True)
 class IRScannerConfig(RangeScannerConfig):
+    """An IRScanner's settings in a robot file (protocol.md 7.3): a longer range and coarser resolution than the
+    RangeScanner base."""
+
     # IRScanner (protocol.md 7.3): MaxRange 10, Resolution 0.087, ScanFov 3.14.
     max_range_m: float = 10.0
     resolution_rad: float = 0.087
@@ -168,6 +174,10 @@ _LONGEST_TIME = "999999999.9999"
 
 @dataclass(frozen=True, kw_only=True)
 class RangeScanner3DConfig(SensorConfig):
+    """A RangeScanner3D's settings in a robot file (protocol.md 7.3): its range in metres, its horizontal and
+    vertical field of view and resolution (rad), which make its grid of beams, and whether a sweep goes out as one
+    SEN line or one line per row."""
+
     # RangeScanner3D (protocol.md 7.3, UT Tarantula/Ardabot configs: USARBot.ini
     # [USARBot.RangeScanner3D], as the Ardabot4j project page gives it): MaxRange 1000
     # (effectively unlimited), ScanInterval 0.4, HorizontalFOV 1.0472 (60 degrees),

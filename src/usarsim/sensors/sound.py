@@ -51,6 +51,9 @@ def _victim_point(victim: Victim, local: tuple[float, float, float]) -> np.ndarr
 
 @dataclass(frozen=True, kw_only=True)
 class SoundConfig(SensorConfig):
+    """A Sound sensor's settings in a robot file (protocol.md 6.3): its scan interval, the quietest level it reports
+    and the loss through each wall (dB), and the Gaussian noise of a level (dB)."""
+
     # ScanInterval: the sensor base's 0.1 s (protocol.md 7.1).  Threshold and wall loss
     # are estimates (no USARSim figures survive): a groan is heard down to 20 dB, and a
     # partition wall takes 20 dB off.
@@ -98,6 +101,9 @@ class Sound(Sensor[SoundConfig]):
 
 @dataclass(frozen=True, kw_only=True)
 class HumanMotionConfig(SensorConfig):
+    """A HumanMotion sensor's settings in a robot file (protocol.md 6.3): its scan interval, range in metres, field
+    of view in radians, and the sigma of the Gaussian noise on the probability."""
+
     # Estimates (the v2-era sensor's settings are lost): a 60 degree cone, 10 m, noise 0.05.
     scan_interval_s: float = 0.1
     max_range_m: float = 10.0

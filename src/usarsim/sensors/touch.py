@@ -92,6 +92,9 @@ def signed_distance(gtype: int, size: np.ndarray, aabb: np.ndarray, p: np.ndarra
 
 @dataclass(frozen=True, kw_only=True)
 class TouchConfig(SensorConfig):
+    """A Touch sensor's settings in a robot file (protocol.md 7.2): its scan interval and the diameter, in metres, of
+    the sphere at its mount that feels contact."""
+
     # Touch (protocol.md 7.2): Diameter 0.01 m, ScanInterval 0.1.
     scan_interval_s: float = 0.1
     diameter_m: float = 0.01

@@ -33,6 +33,9 @@ SUBGRIDS = 4  # interleaved sub-grids, one traced per ScanInterval (protocol.md 
 
 @dataclass(frozen=True, kw_only=True)
 class VictSensorConfig(SensorConfig):
+    """A VictSensor's settings in a robot file (protocol.md 7.9): its range in metres, its field of view and the step
+    between its rays (rad) both ways, the Sigma and Mean of its noise and false-alarm test, and its scan interval."""
+
     # protocol.md 7.9: Distance/MaxRange 4 m, HorizontalFOV and VerticalFOV 0.6981 rad (40 deg),
     # HorizontalStep/VerticalStep 0.0698 rad (4 deg), Sigma 0.05, ScanInterval 0.2.
     max_range_m: float = 4.0

@@ -238,6 +238,9 @@ class Connection(ServerConnection):
 
 
 class ControlServer(TcpListener):
+    """The control port's listener (protocol.md 1, TCP 3000 by default): it admits connections up to its limits, one
+    robot each, and hands each connection the simulation's outputs for its robot as protocol lines."""
+
     def __init__(
         self,
         facade: Facade,

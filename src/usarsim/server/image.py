@@ -102,6 +102,9 @@ def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
 
 
 class ImageConnection(ServerConnection):
+    """An image client's connection (protocol.md 10): its ``OK`` and ``U`` requests are queued and answered in order,
+    one picture at a time, with the bound camera's view or the MultiView, whole or the sub-rectangle asked for."""
+
     what = "image"
     limit_option = "--max-viewers"
     max_waiting = MAX_PENDING
@@ -169,6 +172,10 @@ class ImageConnection(ServerConnection):
 
 
 class ImageServer(TcpListener):
+    """The image server's listener (protocol.md 10, TCP 5003 by default): it admits image clients up to
+    ``--max-viewers`` and lays out what each picture shows, one bound camera or the MultiView of several robots'
+    cameras (protocol.md 11)."""
+
     def __init__(
         self,
         renderer,

@@ -69,6 +69,10 @@ class SessionContext:
 
 
 class Session(Articulation, Queries):
+    """One control connection's robot, from before INIT through alive to closed (protocol.md 4): each command parsed
+    from the client's lines goes to its handler, which calls the simulation facade and answers with message objects
+    for the protocol layer to format."""
+
     def __init__(self, ctx: SessionContext, uid: int):
         self.ctx = ctx
         self.uid = uid

@@ -30,6 +30,9 @@ MAX_WAITING = 64  # requests of one connection waiting; beyond them its socket i
 
 
 class TruthConnection(ServerConnection):
+    """A ground-truth client's connection (protocol.md 12.4): its request lines are answered in order, one at a time,
+    from a snapshot the simulation thread takes, each answer ending with ``{End}``."""
+
     what = "truth"
     limit_option = "--max-viewers"
     max_waiting = MAX_WAITING
@@ -82,6 +85,9 @@ class TruthConnection(ServerConnection):
 
 
 class TruthServer(TcpListener):
+    """The ground-truth service's listener (protocol.md 12.4, TCP 3989 by default): it admits clients up to its limit
+    and asks the simulation facade for the objects a request names."""
+
     def __init__(self, facade: Facade, *, host: str = "127.0.0.1", port: int = 3989, max_connections: int = 16):
         super().__init__(host, port)
         self.facade = facade

@@ -58,12 +58,19 @@ class Tag:
 
 @dataclass(frozen=True)
 class PartHit:
+    """What a geom of a victim or a false alarm is to the victim sensor: whose part it is, which body part, and
+    whether it is a false alarm."""
+
     owner: str  # victim or false-alarm name
     part: str  # Head, Chest, ...
     false_alarm: bool
 
 
 class Entities:
+    """A world's victims, false alarms and RFID tags as the sensors meet them in the model: which geom is which body
+    part, what each kind of sensor's rays pass through (glass, mirrors, grid fenders), the waving arms, and the tags
+    with their memory, shared by every robot."""
+
     def __init__(self, world: WorldConfig):
         self.world = world
         self.tags: dict[int, Tag] = {t.tag_id: Tag(t.tag_id, tuple(t.location), t.memory) for t in world.rfid_tags}

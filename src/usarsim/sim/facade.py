@@ -43,6 +43,10 @@ RADIO_INTERVAL_S = 0.02
 
 
 class SimFacade:
+    """The simulation's door for the servers (the :class:`usarsim.sim.api.Facade` they are given): it owns the
+    world's :class:`Simulation` and the runner that paces it, queues each request for the simulation thread and hands
+    the outputs to the servers and the output watchers."""
+
     def __init__(
         self,
         world: WorldConfig,

@@ -100,6 +100,9 @@ def camera_renderer(model: mujoco.MjModel, width: int, height: int, shadows: boo
 
 @dataclass
 class CameraState:
+    """A robot camera in a snapshot: its MuJoCo camera, its current horizontal field of view in radians (the zoom),
+    and whether it is omnidirectional (rendered as a panorama)."""
+
     cam_id: int  # the MuJoCo camera
     fov_rad: float  # horizontal field of view (zoom)
     omni: bool

@@ -20,6 +20,10 @@ if TYPE_CHECKING:
 
 @dataclass(eq=False)
 class SimRobot:
+    """A robot spawned in the world: its connection's id, name and robot class, its bodies in the model, its mounted
+    items and drive model, and what every robot has whatever its drive: headlight, battery, joint orders, viewports
+    and self-righting."""
+
     uid: int
     name: str
     config: RobotConfig

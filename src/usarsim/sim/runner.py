@@ -66,6 +66,9 @@ class Request:
 
 @dataclass
 class StepRequest:
+    """A lock-step ``STEP {Time s}`` for the simulation thread (protocol.md 18): the simulated seconds to run, then
+    ``on_done(time)`` with the new simulated time, which the STEPPED reply carries."""
+
     seconds: float
     on_done: Callable[[float], None]
     # called instead of ``on_done`` with the error when the STEP will not run (the simulation

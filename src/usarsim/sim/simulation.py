@@ -85,6 +85,10 @@ __all__ = ["Output", "SimRobot", "Simulation", "describe_items"]
 
 
 class Simulation:
+    """One world in MuJoCo on a simulated clock of fixed physics steps (the world's timestep, 4 ms by default): the
+    robots spawned in it, their reports scheduled at their own periods, and the entities, ray caster, batteries and
+    cameras they use; used from the simulation thread only."""
+
     def __init__(self, world: WorldConfig, *, seed: int = 0, settings: SimSettings | None = None):
         self.world = world
         self.seed = seed

@@ -24,6 +24,9 @@ if TYPE_CHECKING:
 
 @dataclass
 class WorldView:
+    """What a sensor or effecter is handed when it measures or acts: the model and the physics state, the simulated
+    time (s), the ray caster, the world file and its entities, and for an effecter the operating robot's joints."""
+
     model: mujoco.MjModel
     data: mujoco.MjData
     time: float

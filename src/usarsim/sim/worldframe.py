@@ -46,6 +46,9 @@ class LinkFrame:
 
 @dataclass(frozen=True, slots=True)
 class WorldFrame:
+    """The world at one simulated instant (s): every robot and movable object, and the radio links when they were
+    sampled, as the recording, the score and the live views take it."""
+
     time: float
     robots: tuple[RobotFrame, ...]
     objects: tuple[ObjectFrame, ...]

@@ -154,6 +154,10 @@ class Run:
 
 @dataclass(frozen=True)
 class Experiment:
+    """An experiment file read (docs/experiments.md): its name and description, the file it came from, one
+    :class:`Run` per configuration and seed (a configuration given twice runs once), and the configuration columns
+    its runs differ in."""
+
     name: str
     path: str
     description: str

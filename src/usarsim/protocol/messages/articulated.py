@@ -29,6 +29,9 @@ class LinkGeometry:
 
 @dataclass(frozen=True, slots=True)
 class PackageGeometry:
+    """One mission package of a ``GEO {Type MisPkg}`` line (§6.8): its ``{Name P}`` and the geometry of its links,
+    numbered from 1."""
+
     name: str
     links: tuple[LinkGeometry, ...] = ()
 
@@ -58,6 +61,9 @@ class LinkConfiguration:
 
 @dataclass(frozen=True, slots=True)
 class PackageConfiguration:
+    """One mission package of a ``CONF {Type MisPkg}`` line (§6.7): its ``{Name P}`` and the joint configuration of
+    its links."""
+
     name: str
     links: tuple[LinkConfiguration, ...] = ()
 
@@ -86,6 +92,9 @@ class ActuatorLinkConfiguration:
 
 @dataclass(frozen=True, slots=True)
 class ActuatorConfig:
+    """One actuator of a ``CONF {Type Actuator}`` line (§6.7, UDK): its ``{Name arm}`` and the joint configuration of
+    its links."""
+
     name: str
     links: tuple[ActuatorLinkConfiguration, ...] = ()
 
@@ -112,6 +121,9 @@ class ActuatorLinkGeometry:
 
 @dataclass(frozen=True, slots=True)
 class ActuatorPose:
+    """One actuator of a ``GEO {Type Actuator}`` line (§6.8, UDK): its name, its base's location (m) and orientation
+    (rad) on the robot, what it is mounted on, and its links' geometry."""
+
     name: str
     location: Vec3
     orientation: Vec3

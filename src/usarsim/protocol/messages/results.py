@@ -35,6 +35,9 @@ class Result:
 
 @dataclass(frozen=True, slots=True)
 class CameraZoom:
+    """One camera of a zoom result (:class:`CameraZoomResult`, §5.4): its name, its horizontal field of view in
+    radians, and its Status (``Failed`` when the requested field of view was clamped or reset)."""
+
     name: str
     fov: float
     status: str = "OK"

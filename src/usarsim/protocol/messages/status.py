@@ -46,6 +46,9 @@ class AerialVehicleStatus:
 
 @dataclass(frozen=True, slots=True)
 class LinkState:
+    """One link of a ``MISSTA`` or ``ASTA`` line (§6.4): ``{Link n} {Value v} {Torque q}``, the joint's position
+    (rad, or m for a prismatic joint) and the torque it applies."""
+
     link: int
     value: float
     torque: float

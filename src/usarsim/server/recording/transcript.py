@@ -51,6 +51,9 @@ SCHEMA = {
 
 @dataclass(frozen=True, slots=True)
 class Chunk:
+    """One chunk of a recording's transcript (an MCAP message on :data:`TOPIC`): the bytes a connection received or
+    sent, or its opening or closing, with the simulated and wall-clock time (s) at which the server saw them."""
+
     seq: int
     conn: int
     port: str
@@ -133,6 +136,10 @@ def run_info(
 
 @dataclass(frozen=True)
 class RunInfo:
+    """A recording's run information (its :data:`METADATA_NAME` metadata record), parsed: the usarsim version and
+    world that made it, the seed, the clock (lock-step, or the speed; None: as fast as it can) and the server's
+    options, what a replay starts the same server with."""
+
     version: str
     world: str
     world_path: str
