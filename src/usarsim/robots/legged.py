@@ -61,8 +61,7 @@ class Legged(DriveModel[Velocities | WheelSpeeds]):
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
-        self.check(robot)
-        assert robot.gait is not None  # check() refuses a robot without one
+        assert robot.gait is not None  # make_drive checks the robot (check()) before building its drive
         self.gait: Gait = robot.gait
         self.walk = {"linear": 0.0, "lateral": 0.0, "rotational": 0.0}
         self.sides = [0.0, 0.0]  # the last {Left} {Right}, rad/s (or percent)

@@ -27,8 +27,7 @@ class Nautical(DriveModel[NauticalDrive]):
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
-        self.check(robot)
-        assert robot.nautical is not None  # check() refuses a vessel without them
+        assert robot.nautical is not None  # make_drive checks the robot (check()) before building its drive
         self.spec: NauticalSpec = robot.nautical
         self.sail = {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0}
 
