@@ -69,7 +69,7 @@ def test_world_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="session")
 def test_world(test_world_path: Path):
     """A flat 20 x 20 m floor with a wall face at x = 5.0 (see helpers.TEST_WORLD)."""
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     return load_world(test_world_path)
 

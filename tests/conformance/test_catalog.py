@@ -16,7 +16,7 @@ import pytest
 from helpers import drive_joint, drive_skid
 from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
-from usarsim.config.world import check_world_file, load_world
+from usarsim.config.world_file import check_world_file, load_world
 from usarsim.protocol.messages import SensorMessage, format_message, parse_message
 from usarsim.sensors import ITEMS
 from usarsim.sim.robotspec import robot_model_summary

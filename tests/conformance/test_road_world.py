@@ -23,7 +23,7 @@ import pytest
 
 from usarsim.config.catalog import WORLDS_DIR
 from usarsim.config.rndf import load_mdf, load_rndf, waypoint_to_world
-from usarsim.config.world import check_world_file
+from usarsim.config.world_file import check_world_file
 from usarsim.sim.simulation import Simulation
 
 NAME = "DM-Road_UrbanChallenge"

@@ -12,7 +12,7 @@ import pytest
 from helpers import drive_ackermann, drive_skid, drive_velocities, drive_wheels
 from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR
 from usarsim.config.robot import load_robot
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.protocol import messages as M
 from usarsim.sim.simulation import Simulation
 

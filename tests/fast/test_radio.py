@@ -7,7 +7,8 @@ import math
 
 import pytest
 
-from usarsim.config.world import WirelessConfig, load_world
+from usarsim.config.world import WirelessConfig
+from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 from usarsim.protocol.wireless import SendParser
 from usarsim.sim.radio import PRESETS, RadioModel, load_wireless_file, pair_key, resolve_model, waf_signal_dbm

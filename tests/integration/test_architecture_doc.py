@@ -127,7 +127,7 @@ def test_the_radio_example_cuts_links_beyond_its_range(doc_plugins, test_world):
 
 def test_the_element_example_lays_cones_the_world_holds_as_solids_and_landmarks(doc_plugins, tmp_path):
     from helpers import TEST_WORLD
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     p = tmp_path / "Coned.yaml"
     p.write_text(TEST_WORLD + "cones:\n  - {name: C1, location: [1.0, 2.0, 0.0]}\n")

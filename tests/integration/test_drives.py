@@ -191,7 +191,7 @@ start_poses:
 
 
 def test_a_submarine_floats_drives_turns_and_dives(server_factory, tmp_path):
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     (tmp_path / "Pool.yaml").write_text(POOL)
     srv = server_factory(world=load_world(tmp_path / "Pool.yaml"), seed=3)
@@ -218,7 +218,7 @@ def test_a_submarine_floats_drives_turns_and_dives(server_factory, tmp_path):
 
 
 def test_a_land_robot_loses_its_battery_in_water(server_factory, tmp_path):
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     (tmp_path / "Pool.yaml").write_text(POOL)
     srv = server_factory(world=load_world(tmp_path / "Pool.yaml"), seed=3)

@@ -145,7 +145,7 @@ start_poses:
 def test_the_gripper_grasps_and_lifts_a_brick(server_factory, tmp_path):
     import re
 
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     (tmp_path / "robots").mkdir()
     (tmp_path / "robots" / "TestGripper.yaml").write_text(TEST_GRIPPER)
@@ -216,7 +216,7 @@ start_poses:
 
 
 def test_the_roller_table_carries_its_load_off_the_front(server_factory, tmp_path):
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     (tmp_path / "robots").mkdir()
     (tmp_path / "robots" / "TestRoller.yaml").write_text(TEST_ROLLER)

@@ -10,7 +10,7 @@ import pytest
 
 import plugins.beacon_element  # noqa: F401  (registers the element kind "beacons")
 from helpers import TEST_WORLD, ServerThread, segments, sen_type
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 from usarsim.protocol.truth import format_truth_request, parse_truth_object
 

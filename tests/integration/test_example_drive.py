@@ -23,7 +23,7 @@ import pytest
 from helpers import Tap
 from usarsim.client import launch
 from usarsim.config.catalog import resolve_world
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "drive_p2at.py"
 WALL_FACE_X = 3.0

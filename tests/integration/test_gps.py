@@ -16,7 +16,8 @@ import pytest
 
 from usarsim.config.catalog import ROBOTS_DIR
 from usarsim.config.robot import load_robot
-from usarsim.config.world import GeoReference, load_world
+from usarsim.config.world import GeoReference
+from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 from usarsim.protocol.messages import SensorMessage, format_message, parse_message
 from usarsim.readings import GpsReading

@@ -19,7 +19,7 @@ import pytest
 
 from helpers import drive_skid
 from usarsim.config.catalog import resolve_robot
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.sim.simulation import Simulation
 
 GUIDE = Path(__file__).resolve().parents[2] / "docs" / "building-worlds.md"

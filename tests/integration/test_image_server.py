@@ -47,7 +47,7 @@ pytestmark = pytest.mark.skipif(bool(GL_PROBLEM), reason=GL_PROBLEM or "ok")
 
 @pytest.fixture(scope="module")
 def image_world(tmp_path_factory):
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     p = tmp_path_factory.mktemp("img") / "CameraRange.yaml"
     p.write_text(IMAGE_WORLD)
@@ -325,7 +325,7 @@ def test_the_stereo_robot_renders_both_eyes(server_factory, image_world):
 
 
 def test_the_headlight_lights_what_the_camera_sees(server_factory, tmp_path):
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     dim = IMAGE_WORLD.replace(
         "materials:",

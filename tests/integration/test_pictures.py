@@ -201,7 +201,7 @@ victims:
 @pytest.mark.parametrize("victim", ["Anna", "Ben", "Dora", "Lea"])
 def test_the_skin_detector_finds_a_victim_2_m_ahead(tmp_path, victim):
     """Victims of every skin tone (their names choose it), seen by a robot 2 m away."""
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
     from usarsim.sim.victims import victim_colours
 
     p = tmp_path / "VictimAhead.yaml"
@@ -379,7 +379,7 @@ def test_every_approach_to_a_crossing_has_its_stop_line_on_its_own_lane():
 def test_a_waving_victim_moves_in_the_picture(tmp_path, waving):
     """Half a wave apart (its arm at either end of its swing), the pictures of a waving victim
     2 m ahead differ over a patch of the victim's size; those of a still one do not."""
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
     from usarsim.sim.constants import WAVE_PERIOD_S
 
     p = tmp_path / "VictimAhead.yaml"

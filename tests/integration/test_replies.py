@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 from helpers import Client
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 
 WORLD = """\
 name: NodeArena

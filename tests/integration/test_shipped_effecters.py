@@ -38,7 +38,7 @@ start_poses:
 
 
 def _serve(server_factory, tmp_path, text: str, name: str):
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     path = tmp_path / f"{name}.yaml"
     path.write_text(text)

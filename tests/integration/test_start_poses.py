@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from usarsim.config.catalog import resolve_robot, resolve_world, world_files
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.sensors.scanner import RangeScanner
 from usarsim.sim import frames
 from usarsim.sim.simulation import Simulation

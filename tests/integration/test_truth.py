@@ -10,7 +10,7 @@ import socket
 import pytest
 
 from helpers import Client
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 
 WORLD = """\
 name: TruthArena

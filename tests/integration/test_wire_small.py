@@ -10,7 +10,7 @@ import pytest
 from helpers import segment_list
 from usarsim.config.catalog import ROBOTS_DIR
 from usarsim.config.robot import load_robot
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 
 TAG_WORLD = """\
 name: TagArena

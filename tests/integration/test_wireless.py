@@ -19,7 +19,7 @@ import time
 import pytest
 
 from helpers import DEFAULT_TIMEOUT, Client, ServerThread, segments, wait_for
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.sim.radio import waf_signal_dbm
 
 # The manual's constants (section 3.2.4), written out rather than taken from the code.

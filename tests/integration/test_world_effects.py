@@ -18,7 +18,7 @@ import pytest
 from helpers import drive_skid
 from usarsim.config.catalog import ROBOTS_DIR, resolve_robot
 from usarsim.config.robot import load_robot
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.readings import RangeReading, RangeScanReading
 from usarsim.sim import builder
 from usarsim.sim.entities import Entities

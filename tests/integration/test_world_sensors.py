@@ -15,7 +15,7 @@ import pytest
 
 from helpers import drive_skid, segments
 from usarsim.config.robot import load_robot
-from usarsim.config.world import load_world
+from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 from usarsim.readings import RangeReading, RangeScan3DReading, RangeScanReading, RfidReading, VictimReading
 from usarsim.sim.simulation import Simulation

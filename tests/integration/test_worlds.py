@@ -59,7 +59,7 @@ def test_paper_on_the_orange_floor_is_slippery(tmp_path):
     wheels on it: a P2AT pushing into a wall from the bare floor stalls (its wheels hold),
     from a sheet of paper its wheels spin on the paper."""
     from helpers import TEST_WORLD, WALL_FACE_X
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     paper = resolve_world("DM-USAR_orange").materials["paper"]
     assert paper.friction == pytest.approx(0.3)

@@ -15,7 +15,7 @@ from usarsim.config import world as W
 from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR, resolve_robot, resolve_world
 from usarsim.config.reader import FieldDefaults
 from usarsim.config.robot import load_robot
-from usarsim.config.world import check_world_file, load_world
+from usarsim.config.world_file import check_world_file, load_world
 from usarsim.errors import ConfigError, UsarsimError
 from usarsim.sim.simulation import describe_items
 

@@ -14,7 +14,7 @@ from usarsim.cli import check_robot_items
 from usarsim.cli import main as cli_main
 from usarsim.config.catalog import resolve_robot, robot_files, world_files
 from usarsim.config.robot import class_name_problem, load_robot
-from usarsim.config.world import check_world_file, load_world
+from usarsim.config.world_file import check_world_file, load_world
 from usarsim.errors import ConfigError
 
 WORLD = """\

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from usarsim.config import world as W
-from usarsim.config.world import GeoReference, UtmCoordinate, latlon_to_utm, load_world, utm_to_latlon
+from usarsim.config.world import GeoReference, UtmCoordinate, latlon_to_utm, utm_to_latlon
+from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 from usarsim.sim import builder, frames
 from usarsim.sim.entities import Entities

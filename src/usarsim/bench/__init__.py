@@ -4,6 +4,7 @@
   ``mj_step`` on the same model, and the simulator's memory (``--robots N``);
   :mod:`~usarsim.bench.profile`: where the time goes (``--profile``);
   :mod:`~usarsim.bench.record`: what a recording costs (``--record``);
+  :mod:`~usarsim.bench.command` picks the measurement and prints it;
 * :mod:`~usarsim.bench.cameras`: frames a second through the image server (``--cameras``);
 * :mod:`~usarsim.bench.roundtrips`: lock-step STEP/STEPPED round trips (``--round-trips``);
 * :mod:`~usarsim.bench.spots` places the robots; :mod:`~usarsim.bench.clients` are the
@@ -16,8 +17,9 @@ The learning environments' benchmark (``--env``) is :mod:`usarsim.envs.bench`.
 from __future__ import annotations
 
 from usarsim.bench.cameras import run_camera_bench
+from usarsim.bench.command import run_bench
 from usarsim.bench.roundtrips import run_round_trip_bench
-from usarsim.bench.rtf import measure_rtf, raw_mujoco_rtf, raw_mujoco_rtf_over, run_bench
+from usarsim.bench.rtf import measure_rtf, raw_mujoco_rtf, raw_mujoco_rtf_over
 from usarsim.bench.spots import Spot, free_spots, spread_spots
 
 __all__ = [

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.brains.planning import BLOCKED, SQRT2, Planner, frontier_cells, frontier_clusters, path_to, warm_up
+from usarsim.brains.planning import BLOCKED, SQRT2, Planner, frontier_cells, frontier_clusters, path_to
 from usarsim.brains.scanmatch import PRIOR_A, PRIOR_XY, ScanMatcher
 
 __all__ = [
@@ -232,3 +232,12 @@ class OccupancyGrid:
         pic.save(buf, format="PNG")
         with open(path, "wb") as f:
             f.write(buf.getvalue())
+
+
+def warm_up() -> None:
+    """Compile (or load from the disk cache) the searches now, not on the first plan."""
+    g = OccupancyGrid(Bounds(0.0, 0.0, 1.0, 1.0), 0.25)
+    g.logodds[:] = L_MIN
+    g.logodds[0, 0] = L_MAX
+    Planner().search(g, (0.6, 0.6))
+    frontier_clusters(g)

@@ -214,14 +214,3 @@ def path_to(grid: OccupancyGrid, parent: np.ndarray, goal: tuple[int, int]) -> l
         f = int(parent[f])
     cells.reverse()
     return [grid.center(c // ny, c % ny) for c in cells]
-
-
-def warm_up() -> None:
-    """Compile (or load from the disk cache) the searches now, not on the first plan."""
-    from usarsim.brains.grid import L_MAX, L_MIN, Bounds, OccupancyGrid
-
-    g = OccupancyGrid(Bounds(0.0, 0.0, 1.0, 1.0), 0.25)
-    g.logodds[:] = L_MIN
-    g.logodds[0, 0] = L_MAX
-    Planner().search(g, (0.6, 0.6))
-    frontier_clusters(g)

@@ -84,7 +84,7 @@ def cmd_validate(args) -> int:
 
             print(describe_route_file(path))
         elif kind == "world":
-            from usarsim.config.world import check_world_file
+            from usarsim.config.world_file import check_world_file
             from usarsim.sim.simulation import Simulation
 
             w = check_world_file(path)
@@ -122,7 +122,7 @@ def cmd_validate(args) -> int:
 
 def cmd_worlds(args) -> int:
     from usarsim.config.catalog import world_files
-    from usarsim.config.world import load_world
+    from usarsim.config.world_file import load_world
 
     for path in world_files().values():
         w = load_world(path)

@@ -12,7 +12,8 @@ from pathlib import Path
 from usarsim.config.reader import did_you_mean, load_yaml
 from usarsim.config.rndf import route_file_kind
 from usarsim.config.robot import RobotConfig, class_name_problem, load_robot
-from usarsim.config.world import WorldConfig, load_world
+from usarsim.config.world import WorldConfig
+from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 
 DATA_DIR = Path(__file__).resolve().parent.parent / "data"

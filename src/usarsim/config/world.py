@@ -14,11 +14,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from usarsim.config.elements import Landmark
-from usarsim.config.reader import load_yaml, name_entries
 from usarsim.config.solids import in_box, mesh_depth, to_local
 from usarsim.config.utm import UTM_FALSE_EASTING_M as UTM_FALSE_EASTING_M
 from usarsim.config.utm import UTM_FALSE_NORTHING_SOUTH_M as UTM_FALSE_NORTHING_SOUTH_M
@@ -31,7 +29,6 @@ from usarsim.config.utm import latlon_to_utm as latlon_to_utm
 from usarsim.config.utm import utm_band_limits_deg as utm_band_limits_deg
 from usarsim.config.utm import utm_central_meridian_deg as utm_central_meridian_deg
 from usarsim.config.utm import utm_to_latlon as utm_to_latlon
-from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
 
@@ -332,37 +329,3 @@ def _describe_object(obj: StaticObject) -> str:
     if obj.part_of:
         return f"ramp '{obj.part_of}'"
     return f"{obj.shape} '{obj.name}'" + (" (movable)" if obj.mass_kg > 0 else "")
-
-
-def load_world(path: str | Path) -> WorldConfig:
-    # the section readers build this module's classes: imported here, once these exist
-    from usarsim.config.world_sections import read_world
-
-    path = str(path)
-    data = load_yaml(path)
-    try:
-        return read_world(data, path)
-    except ConfigError as exc:
-        name_entries(exc, data)
-        raise
-
-
-def check_world_file(path: str | Path) -> WorldConfig:
-    """Load a world file and check what a world must have to be served (``usarsim
-    validate``): at least one start pose, none inside a solid (WorldConfig.solid_at)."""
-    cfg = load_world(path)
-    if not cfg.start_poses:
-        raise ConfigError("a world needs at least one start pose", path=str(path), key="start_poses")
-    for i, pose in enumerate(cfg.start_poses):
-        solid = cfg.solid_at(pose.location)
-        if solid is not None:
-            where = ", ".join(f"{c:g}" for c in pose.location)
-            err = ConfigError(
-                f"start pose '{pose.name}' at [{where}] lies inside {solid} (more than "
-                f"{SOLID_MARGIN_M * 100:g} cm deep): move it into free space or onto a surface (z is "
-                f"down; the floor is z = 0)",
-                path=str(path),
-                key=f"start_poses[{i}].location",
-            )
-            raise name_entries(err, load_yaml(path))
-    return cfg

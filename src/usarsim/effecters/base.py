@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from typing import TypeVar
 
-from usarsim.readings import EffecterState
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
 
 __all__ = ["EFFECTERS", "Effecter"]
@@ -24,10 +23,6 @@ class Effecter(Item[EC]):
     """Base class of every effecter plugin."""
 
     PERIODIC = False
-
-    def state(self) -> EffecterState | None:
-        """What the EFF line after an operation reports (None: this effecter sends none)."""
-        return None
 
 
 EFFECTERS = ITEMS.new("effecter")

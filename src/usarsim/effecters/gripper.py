@@ -7,12 +7,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import mujoco
+
 from usarsim.effecters.base import EFFECTERS, Effecter
 from usarsim.readings import EffecterState, ItemParams, OperationResult
 from usarsim.sensors.base import ItemConfig
 
 if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
+
+
+def grasp_name(prefix: str, gripper: str) -> str:
+    """The weld of the robot ``prefix``'s gripper ``gripper`` (:mod:`usarsim.effecters.grasps`)."""
+    return f"{prefix}/grasp/{gripper}"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -38,6 +45,17 @@ class Gripper(Effecter[GripperConfig]):
     OPEN|CLOSED}``."""
 
     ALIASES = {"Fingers": "fingers", "Open": "open_value", "Closed": "closed_value"}
+
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        """The weld that holds what the gripper grasps (:mod:`usarsim.effecters.grasps`): from
+        its first finger to the world, off until it closes on something."""
+        eq = spec.add_equality()
+        eq.name = grasp_name(prefix, self.name)
+        eq.type = mujoco.mjtEq.mjEQ_WELD
+        eq.objtype = mujoco.mjtObj.mjOBJ_BODY
+        eq.name1 = f"{prefix}/{self.config.fingers[0]}"
+        eq.name2 = "world"
+        eq.active = False
 
     def configure(self, view: WorldView) -> None:
         names = {ln.name for ln in self.robot.links}

@@ -1,6 +1,6 @@
 """The ``RollerTable`` effecter (protocol.md 5.4, 8): a conveyor on the robot's back.
 Operated with SET; it answers RES.  What lies on it is carried by a world system
-(:mod:`usarsim.sim.systems.rollers`)."""
+(:mod:`usarsim.effecters.rollers`)."""
 
 from __future__ import annotations
 

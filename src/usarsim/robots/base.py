@@ -26,8 +26,8 @@ if TYPE_CHECKING:
     import numpy as np
 
     from usarsim.config.robot import NauticalSpec
+    from usarsim.sim.context import WorldContext
     from usarsim.sim.robot import SimRobot
-    from usarsim.sim.simulation import Simulation
     from usarsim.sim.view import RobotHandle
 
 DRIVES = Registry("drive")
@@ -180,10 +180,10 @@ class DriveModel(Generic[P]):
         raise NotImplementedError
 
     # Hooks of the simulation --------------------------------------------------------------------
-    def on_spawn(self, sim: Simulation, r: SimRobot) -> None:
+    def on_spawn(self, sim: WorldContext, r: SimRobot) -> None:
         """Right after the robot was built into the world."""
 
-    def pre_step(self, sim: Simulation, r: SimRobot) -> None:
+    def pre_step(self, sim: WorldContext, r: SimRobot) -> None:
         """Before a stretch of physics steps (kinds with ``STEP_EVERY``)."""
 
 

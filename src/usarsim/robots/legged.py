@@ -22,8 +22,8 @@ from usarsim.robots.base import DRIVES, DriveModel, clamp
 from usarsim.sim import joints
 
 if TYPE_CHECKING:
+    from usarsim.sim.context import WorldContext
     from usarsim.sim.robot import SimRobot
-    from usarsim.sim.simulation import Simulation
 
 GAIT_STEPS = 5  # a walking robot's joint targets are renewed every 5 physics steps (20 ms)
 
@@ -115,7 +115,7 @@ class Legged(DriveModel[Velocities | WheelSpeeds]):
             if value is not None and math.isfinite(value):
                 self.walk[key] = clamp(value * top / 100.0 if normalized else value, top)
 
-    def pre_step(self, sim: Simulation, r: SimRobot) -> None:
+    def pre_step(self, sim: WorldContext, r: SimRobot) -> None:
         """Set the leg joints of a walking robot for this instant of its gait.  Each foot
         stands for ``duty`` of a period, staying where it was put while the body moves
         over it (the commanded speed, side speed and turn rate carry the body), then swings
@@ -238,7 +238,7 @@ class Legged(DriveModel[Velocities | WheelSpeeds]):
                 targets.append((leg.ankle_roll, -roll))
         return targets
 
-    def on_spawn(self, sim: Simulation, r: SimRobot) -> None:
+    def on_spawn(self, sim: WorldContext, r: SimRobot) -> None:
         """A walking robot is built standing: its leg joints start at their standing angles."""
         m, d = sim.model, sim.data
         for name, value in self._leg_targets(0.0, 0.0):

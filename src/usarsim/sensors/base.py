@@ -25,12 +25,14 @@ import numpy as np
 
 from usarsim.config.reader import did_you_mean
 from usarsim.errors import ConfigError, PluginNotFoundError
-from usarsim.readings import FieldValue, ItemParams, OperationResult, ZoomResult
+from usarsim.readings import EffecterState, FieldValue, ItemParams, OperationResult, ZoomResult
 from usarsim.registry import Registry
 from usarsim.sensors.noise import Noise
 from usarsim.sim.outputs import ItemDescription
 
 if TYPE_CHECKING:
+    import mujoco
+
     from usarsim.config.robot import MountedItem, RobotConfig
     from usarsim.sim.view import RobotHandle, WorldView
 
@@ -89,6 +91,7 @@ class Item(Generic[C]):
     """
 
     TYPE: ClassVar[str] = ""
+    KIND: ClassVar[str] = ""  # its registry's kind, set at registration: sensor, effecter or camera
     LIVE_CONF: ClassVar[bool] = False  # True when SET operations change what CONF reports
     PERIODIC: ClassVar[bool] = False  # True for items that send SEN lines at their ScanInterval
     Config: ClassVar[type[ItemConfig]] = ItemConfig
@@ -114,6 +117,11 @@ class Item(Generic[C]):
         self.rng = np.random.default_rng(seed)
 
     # Lifecycle -------------------------------------------------------------------
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        """Add what this item needs to its robot's part of the model (a camera, a touch probe,
+        a grasp's weld) when the robot is added to the world: ``chassis`` is the robot's
+        chassis body, ``prefix`` the robot's name in the model (its handle's prefix)."""
+
     def configure(self, view: WorldView) -> None:
         """Resolve MuJoCo ids by name; called after every model (re)build."""
 
@@ -143,6 +151,11 @@ class Item(Generic[C]):
         """What GETGEO and GETCONF report of this item (protocol.md 6.7, 6.8)."""
         i = self.item
         return ItemDescription(self.TYPE, i.name, i.location, i.orientation, self.geo_mount(), self.conf_fields())
+
+    def state(self) -> EffecterState | None:
+        """What the EFF line after an operation reports (None: this item sends none; an
+        effecter's, protocol.md 6.6)."""
+        return None
 
 
 SC = TypeVar("SC", bound=SensorConfig)
@@ -255,7 +268,9 @@ class ItemRegistry(Registry):
                         f"item type name '{n}' is registered already as a {other.kind}; choose another "
                         f"name for the {self.kind} {cls.__qualname__}"
                     )
-            return deco(cls)
+            registered = deco(cls)
+            setattr(registered, "KIND", self.kind)  # noqa: B010  (every item class has KIND)
+            return registered
 
         return checked
 

@@ -6,10 +6,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, ClassVar, TypeVar
+
+import mujoco
 
 from usarsim.readings import FieldValue, ItemParams, ZoomResult
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
+from usarsim.sim.robotspec import add_camera
 
 if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
@@ -25,7 +28,11 @@ class CameraItem(Item[IC]):
     horizontal field of view, ``fov_rad``."""
 
     PERIODIC = False
+    OMNI: ClassVar[bool] = False  # True for a camera that sees all around (the image server unrolls it)
     fov_rad: float
+
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        add_camera(spec, chassis, self.item, prefix)
 
 
 CAMERAS = ITEMS.new("camera")
@@ -117,3 +124,5 @@ class OmniCamConfig(CameraConfig):
 @CAMERAS.register("OmniCam", "OmniCamera")
 class OmniCam(Camera[OmniCamConfig]):
     """The omnidirectional camera of the OmniP2AT/OmniP2DX (protocol.md 9): no zoom."""
+
+    OMNI = True

@@ -28,6 +28,8 @@ import numpy as np
 from usarsim.readings import TouchItem, TouchReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
 from usarsim.sim import frames
+from usarsim.sim.constants import GROUP_WHEEL, SOLID_CONAFFINITY, SOLID_CONTYPE
+from usarsim.sim.robotspec import mount_body
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
@@ -51,6 +53,26 @@ PROBE_MARGIN_M = -1.0
 def probe_name(prefix: str, item_name: str) -> str:
     """The probe geom of the robot ``prefix``'s Touch item ``item_name``."""
     return f"{prefix}/touch/{item_name}"
+
+
+def add_probe(spec: mujoco.MjSpec, chassis: mujoco.MjsBody, item: MountedItem, prefix: str) -> None:
+    """A Touch sensor's probe: its sphere at its mount, whose contacts MuJoCo finds, never
+    acting on them (a far negative margin).  It collides with what a solid does; its robot's
+    own bodies are filtered out as the robot's parts are (same body, parent and child, the
+    robot's exclusions)."""
+    parent = mount_body(spec, chassis, item, prefix)
+    g = parent.add_geom()
+    g.name = probe_name(prefix, item.name)
+    g.type = mujoco.mjtGeom.mjGEOM_SPHERE
+    g.size = [PROBE_RADIUS_M, 0.0, 0.0]
+    g.pos = frames.to_mj_vec(item.location).tolist()
+    g.mass = 0.0
+    g.density = 0.0
+    g.margin = PROBE_MARGIN_M
+    g.gap = -PROBE_MARGIN_M  # detected while it overlaps: distance below margin + gap = 0
+    g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
+    g.group = GROUP_WHEEL  # not seen by range sensors
+    g.rgba = [0.0, 0.0, 0.0, 0.0]
 
 
 def _box_sd(p: np.ndarray, half: np.ndarray) -> float:
@@ -116,6 +138,9 @@ class Touch(Sensor[TouchConfig]):
     def __init__(self, item: MountedItem, config: TouchConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)
         self._radius = self.config.diameter_m / 2.0
+
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        add_probe(spec, chassis, self.item, prefix)
 
     def configure(self, view: WorldView) -> None:
         m = view.model

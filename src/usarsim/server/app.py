@@ -6,6 +6,7 @@ import asyncio
 import logging
 from collections.abc import Callable
 
+from usarsim.plugins import BUILTIN
 from usarsim.server.config import ServeConfig
 from usarsim.server.control import ControlServer
 from usarsim.server.image import CameraBindings, ImageServer
@@ -27,7 +28,7 @@ class Application:
         world = c.world
         self.world = world
         self.host = c.host
-        self.facade = SimFacade(world, seed=c.seed, speed=c.speed, lockstep=c.lockstep, settings=c.sim)
+        self.facade = SimFacade(world, seed=c.seed, speed=c.speed, lockstep=c.lockstep, settings=c.sim, plugins=BUILTIN)
         self.camera_bindings = CameraBindings()
         self.control = ControlServer(
             self.facade,

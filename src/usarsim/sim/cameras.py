@@ -5,15 +5,14 @@ which a free camera may follow)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import mujoco
 
-from usarsim.sensors import CameraItem
-from usarsim.sensors.camera import OmniCam
 from usarsim.sim import robotspec
 
 if TYPE_CHECKING:
+    from usarsim.sensors.camera import CameraItem
     from usarsim.sim.render import Snapshot
     from usarsim.sim.robot import SimRobot
     from usarsim.sim.simulation import Simulation
@@ -34,7 +33,7 @@ class Cameras:
     @staticmethod
     def cameras_of(r: SimRobot) -> list[CameraItem]:
         """The robot's cameras (items of the camera kind), in the robot file's order."""
-        return [s for s in r.sensors if isinstance(s, CameraItem)]
+        return cast("list[CameraItem]", [s for s in r.sensors if s.KIND == "camera"])
 
     @property
     def multiview_cameras(self) -> int:
@@ -106,7 +105,7 @@ class Cameras:
                     snap.cameras[(r.uid, cam.name.lower())] = CameraState(
                         cam_id=cid,
                         fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
-                        omni=isinstance(cam, OmniCam),
+                        omni=cam.OMNI,
                     )
             # the chase view behind and above the robot (robotspec.CHASE_CAMERA)
             cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.chase_camera_name(r.prefix))

@@ -18,9 +18,9 @@ from usarsim.config.robot import MissionPackage, RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
-from usarsim.robots import drive_class
 from usarsim.sim.api import RobotEntry
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, package_frames
+from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner
 from usarsim.sim.settings import SimSettings
@@ -56,9 +56,13 @@ class SimFacade:
         lockstep: bool = False,
         deliver: Callable[[list[Output]], None] | None = None,
         settings: SimSettings | None = None,
+        plugins: PluginSet | None = None,
     ):
         self.world = world
-        self.sim = Simulation(world, seed=seed, settings=settings)  # for tests and benchmarks; servers use the methods
+        self.plugins = plugins = plugins or builtin_plugins()
+        self.sim = Simulation(
+            world, seed=seed, settings=settings, plugins=plugins
+        )  # for tests and benchmarks; servers use the methods
         self.lockstep = lockstep
         self.speed = speed
         self._deliver = deliver or (lambda outs: None)
@@ -125,13 +129,13 @@ class SimFacade:
     def describe(self, robot: RobotConfig) -> list[ItemDescription]:
         d = self._descriptions.get(robot.path)
         if d is None:
-            d = describe_items(robot)
+            d = describe_items(robot, plugins=self.plugins)
             self._descriptions[robot.path] = d
         return d
 
     def drive_accepts(self, robot: RobotConfig) -> frozenset[type]:
         """The kinds of DRIVE part (:mod:`usarsim.controls`) the robot's drive applies."""
-        return drive_class(robot).ACCEPTS
+        return self.plugins.drive_class(robot).ACCEPTS
 
     @staticmethod
     def package_frames(robot: RobotConfig, package: MissionPackage) -> tuple[LinkFrame, ...]:
@@ -141,15 +145,12 @@ class SimFacade:
 
     def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
         """What GETGEO and GETCONF {Type Robot} report of the robot (its drive model's numbers)."""
-        return drive_class(robot).numbers(robot)
+        return self.plugins.drive_class(robot).numbers(robot)
 
-    @staticmethod
-    def canonical_item_type(name: str) -> str:
+    def canonical_item_type(self, name: str) -> str:
         """A mounted item's type in USARSim's spelling (``sonar`` -> ``Sonar``), among sensors,
         effecters and cameras, or ``name`` itself when no plugin has it."""
-        from usarsim.sensors import ITEMS
-
-        return ITEMS.canonical(name) or name
+        return self.plugins.canonical_item_type(name) or name
 
     def live_conf(self, uid: int, item_type: str, name: str) -> Any:
         """CONF fields of a robot's item that changed at run time, or None."""

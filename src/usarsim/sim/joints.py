@@ -20,13 +20,13 @@ from usarsim.readings import PackageState
 from usarsim.sim import robotspec
 
 if TYPE_CHECKING:
+    from usarsim.sim.context import WorldContext
     from usarsim.sim.robot import SimRobot
-    from usarsim.sim.simulation import Simulation
 
 ORDERS = (0, 1, 2, 3, 10, 11, 12)
 
 
-def order(sim: Simulation, r: SimRobot, name: str, value: float, kind: int = 0) -> bool:
+def order(sim: WorldContext, r: SimRobot, name: str, value: float, kind: int = 0) -> bool:
     """A joint order: targets are limited to the joint's range, speeds to MaxSpeed, torques
     to MaxTorque.  False when the robot has no such joint, no power, or the order is
     unknown."""

@@ -12,9 +12,8 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from usarsim.sensors import Sensor
-
 if TYPE_CHECKING:
+    from usarsim.sensors.base import Sensor
     from usarsim.sim.robot import SimRobot
 
 EPS = 1e-9

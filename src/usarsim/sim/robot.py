@@ -9,12 +9,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from usarsim.config.robot import RobotConfig
-from usarsim.sensors import Item, make_item
 from usarsim.sim.outputs import ItemDescription
+from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.view import RobotHandle
 
 if TYPE_CHECKING:
     from usarsim.robots.base import DriveModel
+    from usarsim.sensors.base import Item
     from usarsim.sim.reports import Report
 
 
@@ -70,7 +71,9 @@ class SimRobot:
         return max(0.0, self.config.battery_s - spent)
 
 
-def describe_items(robot: RobotConfig, seed: int = 0) -> list[ItemDescription]:
+def describe_items(robot: RobotConfig, seed: int = 0, plugins: PluginSet | None = None) -> list[ItemDescription]:
     """The mounted items of a robot class (sensors, effecters, cameras) as GETGEO/GETCONF
-    describe them, CONF fields typed (also validates every item's configuration)."""
+    describe them, CONF fields typed (also validates every item's configuration);
+    ``plugins``: the items to make them from (the built-in ones by default)."""
+    make_item = (plugins or builtin_plugins()).make_item
     return [make_item(item, robot, seed, "describe").describe() for item in robot.items]

@@ -5,13 +5,13 @@ while the simulation runs and removed again when its client leaves."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
-from usarsim.config.robot import RobotConfig
-from usarsim.sensors.camera import CAMERAS
-from usarsim.sensors.touch import PROBE_MARGIN_M, PROBE_RADIUS_M, probe_name
+from usarsim.config.robot import MountedItem, RobotConfig
 from usarsim.sim import frames
 from usarsim.sim.constants import (
     GROUP_ROBOT,
@@ -25,17 +25,27 @@ from usarsim.sim.constants import (
     WHEEL_CONAFFINITY,
     WHEEL_CONTYPE,
 )
+from usarsim.sim.plugins import PluginSet, builtin_plugins
+
+if TYPE_CHECKING:
+    from usarsim.robots.base import DriveModel
+    from usarsim.sensors.base import Item
 
 
-def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, rotation, drive=None) -> mujoco.MjsBody:
+def add_robot(
+    spec: mujoco.MjSpec,
+    robot: RobotConfig,
+    prefix: str,
+    location,
+    rotation,
+    drive: DriveModel[Any],
+    items: Sequence[Item[Any]] = (),
+) -> mujoco.MjsBody:
     """Add a robot's bodies, joints and actuators under ``prefix``; its chassis origin at
     ``location`` (USARSim frame) with ``rotation`` (roll, pitch, yaw).  ``drive``, the
-    robot's drive model (:mod:`usarsim.robots`; by default its class), adds what its kind
-    needs on the chassis (an aerial robot's rotors)."""
-    if drive is None:
-        from usarsim.robots import DRIVES
-
-        drive = DRIVES.get(robot.drive)
+    robot's drive model (:mod:`usarsim.robots`), adds what its kind needs on the chassis (an
+    aerial robot's rotors); each of ``items``, its mounted items, adds what it needs
+    (:meth:`usarsim.sensors.base.Item.build`)."""
     body = spec.worldbody.add_body()
     body.name = prefix
     body.pos = frames.to_mj_vec(location).tolist()
@@ -129,37 +139,13 @@ def add_robot(spec: mujoco.MjSpec, robot: RobotConfig, prefix: str, location, ro
                 continue
             ex = spec.add_exclude()
             ex.bodyname1, ex.bodyname2 = a_name, b_name
-    for item in robot.items:
-        if item.item_type in CAMERAS:
-            _add_camera(spec, body, item, prefix)
-        elif item.item_type.lower() == "touch":
-            _add_touch_probe(spec, body, item, prefix)
-        elif item.item_type.lower() == "gripper":
-            _add_grasp(spec, item, prefix)
+    for part in items:  # what each mounted item adds (a camera, a touch probe, a grasp's weld), in the file's order
+        part.build(spec, body, prefix)
     _add_chase_camera(body, robot, prefix)
     return body
 
 
-def grasp_name(prefix: str, gripper: str) -> str:
-    return f"{prefix}/grasp/{gripper}"
-
-
-def _add_grasp(spec, item, prefix: str) -> None:
-    """The weld that holds what a gripper grasps (usarsim.sim.systems.grasps): from its first
-    finger to the world until it closes on something, off until then."""
-    fingers = item.params.get("fingers") or item.params.get("Fingers") or ()
-    if not fingers:
-        return  # the Gripper's configuration says what is missing
-    eq = spec.add_equality()
-    eq.name = grasp_name(prefix, item.name)
-    eq.type = mujoco.mjtEq.mjEQ_WELD
-    eq.objtype = mujoco.mjtObj.mjOBJ_BODY
-    eq.name1 = f"{prefix}/{fingers[0]}"
-    eq.name2 = "world"
-    eq.active = False
-
-
-# Items the image server renders (the CAMERAS registry), and the MuJoCo camera each becomes: it
+# Items the image server renders (cameras), and the MuJoCo camera each becomes (add_camera): it
 # looks along the item's X axis with its Z axis (down in USARSim's frame) at the bottom of the
 # picture.
 # a MuJoCo camera looks along its -Z with +Y up and +X to the right; in an item's own
@@ -176,33 +162,21 @@ def camera_fovy_deg(hfov_rad: float, width: int, height: int) -> float:
     return math.degrees(2.0 * math.atan(math.tan(min(hfov_rad, math.radians(179.0)) / 2.0) * height / width))
 
 
-def _add_camera(spec, chassis, item, prefix: str) -> None:
-    parent = chassis if item.mount == "HARD" else (spec.body(f"{prefix}/{item.mount}") or chassis)
+def mount_body(spec: mujoco.MjSpec, chassis: mujoco.MjsBody, item: MountedItem, prefix: str) -> mujoco.MjsBody:
+    """The body an item rides on: the chassis when it is mounted ``HARD``, else its robot's part."""
+    if item.mount == "HARD":
+        return chassis
+    return spec.body(f"{prefix}/{item.mount}") or chassis
+
+
+def add_camera(spec: mujoco.MjSpec, chassis: mujoco.MjsBody, item: MountedItem, prefix: str) -> None:
+    """A camera item's MuJoCo camera at its mount, looking along the item's X axis."""
+    parent = mount_body(spec, chassis, item, prefix)
     cam = parent.add_camera()
     cam.name = camera_name(prefix, item.name)
     cam.pos = frames.to_mj_vec(item.location).tolist()
     cam.quat = frames.mat_to_quat(frames.usar_euler_to_mj_mat(item.orientation) @ _CAMERA_AXES).tolist()
     cam.fovy = camera_fovy_deg(math.radians(50.0), 4, 3)  # set from the camera's zoom at each picture
-
-
-def _add_touch_probe(spec, chassis, item, prefix: str) -> None:
-    """A Touch sensor's probe (usarsim.sensors.touch): its sphere at its mount, whose contacts
-    MuJoCo finds, never acting on them (a far negative margin).  It collides with what a
-    solid does; its robot's own bodies are filtered out as the robot's parts are (same body,
-    parent and child, the robot's exclusions)."""
-    parent = chassis if item.mount == "HARD" else (spec.body(f"{prefix}/{item.mount}") or chassis)
-    g = parent.add_geom()
-    g.name = probe_name(prefix, item.name)
-    g.type = mujoco.mjtGeom.mjGEOM_SPHERE
-    g.size = [PROBE_RADIUS_M, 0.0, 0.0]
-    g.pos = frames.to_mj_vec(item.location).tolist()
-    g.mass = 0.0
-    g.density = 0.0
-    g.margin = PROBE_MARGIN_M
-    g.gap = -PROBE_MARGIN_M  # detected while it overlaps: distance below margin + gap = 0
-    g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
-    g.group = GROUP_WHEEL  # not seen by range sensors
-    g.rgba = [0.0, 0.0, 0.0, 0.0]
 
 
 # The chase view (the spectator's view over a robot, manual 5.1: key C): a camera on the
@@ -413,12 +387,14 @@ def remove_robot(spec: mujoco.MjSpec, prefix: str) -> None:
         spec.delete(body)
 
 
-def robot_model_summary(robot: RobotConfig) -> str:
+def robot_model_summary(robot: RobotConfig, plugins: PluginSet | None = None) -> str:
     """Compile a robot alone on a plane: checks that its drive model has what it needs and that
-    MuJoCo accepts it."""
+    MuJoCo accepts it (``plugins``: the drives and items to build it from; the built-in ones
+    by default)."""
     from usarsim.config.world import Floor, Material, WorldConfig
-    from usarsim.robots import make_drive
     from usarsim.sim.builder import world_spec
+
+    plugins = plugins or builtin_plugins()
 
     world = WorldConfig(
         name="check",
@@ -430,6 +406,7 @@ def robot_model_summary(robot: RobotConfig) -> str:
         start_poses=(),
     )
     spec = world_spec(world)
-    add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0), make_drive(robot))
+    items = [plugins.make_item(item, robot, 0, "check") for item in robot.items]
+    add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0), plugins.make_drive(robot), items)
     m = spec.compile()
     return f"{m.nbody - 1} bodies, {m.njnt} joints, {m.nu} actuators, {m.ngeom - 1} geoms"

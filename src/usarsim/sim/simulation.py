@@ -19,6 +19,7 @@ import logging
 import math
 import os
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -26,11 +27,8 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.config.world import WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
-from usarsim.effecters import Effecter
 from usarsim.errors import ConfigError, SimulationError
 from usarsim.readings import CommandResult, ItemParams, Refusal, ZoomResult
-from usarsim.robots import make_drive
-from usarsim.sensors import Sensor, make_item
 from usarsim.sim import builder, frames, joints, robotspec, systems, truth
 from usarsim.sim.battery import Batteries
 from usarsim.sim.cameras import Cameras
@@ -39,6 +37,7 @@ from usarsim.sim.entities import Entities
 from usarsim.sim.health import BlowUpGuard
 from usarsim.sim.measuring import Due, Measurer, OrderedOutbox, measure_all, measure_report
 from usarsim.sim.outputs import Output
+from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.raycaster import RayCaster
 from usarsim.sim.reports import EPS, ReportSchedule
 from usarsim.sim.robot import SimRobot, describe_items
@@ -46,6 +45,9 @@ from usarsim.sim.settings import PHYSICS_THREADS_LIMIT, SimSettings
 from usarsim.sim.status import Standing
 from usarsim.sim.systems.righting import start_righting
 from usarsim.sim.view import RobotHandle, WorldView
+
+if TYPE_CHECKING:
+    from usarsim.sensors.base import Sensor
 
 log = logging.getLogger("usarsim.sim")
 
@@ -89,9 +91,18 @@ class Simulation:
     robots spawned in it, their reports scheduled at their own periods, and the entities, ray caster, batteries and
     cameras they use; used from the simulation thread only."""
 
-    def __init__(self, world: WorldConfig, *, seed: int = 0, settings: SimSettings | None = None):
+    def __init__(
+        self,
+        world: WorldConfig,
+        *,
+        seed: int = 0,
+        settings: SimSettings | None = None,
+        plugins: PluginSet | None = None,
+    ):
         self.world = world
         self.seed = seed
+        # the drives and items robots are built from (the built-in ones unless the composition root says)
+        self.plugins = plugins or builtin_plugins()
         self.settings = settings or SimSettings()
         self.dt = world.timestep_s
         self.spec = builder.world_spec(world, textures=self.settings.textures)
@@ -207,8 +218,8 @@ class Simulation:
         if not (-100.0 <= loc[2] <= 100.0):
             raise SimulationError(f"location z {loc[2]:.2f} is too far from the floor (allowed -100..100 m)")
         try:
-            drive = make_drive(robot)
-            sensors = [make_item(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
+            drive = self.plugins.make_drive(robot)
+            sensors = [self.plugins.make_item(item, robot, self.seed, f"{uid}:{name}") for item in robot.items]
         except ConfigError as exc:
             raise SimulationError(str(exc)) from exc
         level = abs(rot[0]) < 1e-6 and abs(rot[1]) < 1e-6
@@ -223,7 +234,7 @@ class Simulation:
             if ground is not None:
                 loc = (loc[0], loc[1], ground - robot.lowest_point_m - robot.spawn_clearance_m)
         prefix = f"robot{uid}"
-        robotspec.add_robot(self.spec, robot, prefix, loc, rot, drive)
+        robotspec.add_robot(self.spec, robot, prefix, loc, rot, drive, sensors)
         r = SimRobot(
             uid=uid,
             name=name,
@@ -335,7 +346,7 @@ class Simulation:
             if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
                 view = dataclasses.replace(self.view(), drive_joint=lambda n, v, o: joints.order(self, r, n, v, o))
                 result = s.operate(view, opcode, params) if opcode else None
-                state = s.state() if result is not None and isinstance(s, Effecter) else None
+                state = s.state() if result is not None else None
                 if state is not None:
                     self.outbox.append(Output(uid, self.time, state, f"EFF:{s.name}", periodic=False))
                 if s.LIVE_CONF:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, ClassVar, TypeVar
 from usarsim.registry import Registry
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 SYSTEMS = Registry("world system")
 T = TypeVar("T")
@@ -35,11 +35,11 @@ class System:
     ORDER: ClassVar[int] = 100  # systems run in increasing order
     EVERY_STEPS: ClassVar[int | None] = EXTERNAL_FORCE_STEPS
 
-    def __init__(self, sim: Simulation) -> None:
+    def __init__(self, sim: WorldContext) -> None:
         self.sim = sim
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         """Whether the world as built now needs this system."""
         return True
 
@@ -55,12 +55,12 @@ class System:
         """Set this system's forces (or motions) for the next stretch of physics steps."""
 
 
-def mounted(sim: Simulation, kind: type[T]) -> list[T]:
+def mounted(sim: WorldContext, kind: type[T]) -> list[T]:
     """Every item of class ``kind`` (a Gripper, a RollerTable) mounted on the world's robots."""
     return [s for r in sim.robots.values() for s in r.sensors if isinstance(s, kind)]
 
 
-def collect(sim: Simulation, previous: Sequence[System] = ()) -> list[System]:
+def collect(sim: WorldContext, previous: Sequence[System] = ()) -> list[System]:
     """The systems the world needs now, in order; one still wanted keeps its instance (and
     its state) from ``previous``."""
     kept = {type(s): s for s in previous}

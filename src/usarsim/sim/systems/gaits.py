@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 
 @SYSTEMS.register("gaits")
@@ -18,7 +18,7 @@ class Gaits(System):
     ORDER = 60
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return any(r.drive.STEP_EVERY is not None for r in sim.robots.values())
 
     def max_steps(self) -> int | None:

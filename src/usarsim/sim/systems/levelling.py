@@ -11,7 +11,7 @@ from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 # N m per rad of tilt per kg: hovering robots right themselves (and a vessel's hull, by
 # its weight hanging below its buoyancy, in roll: systems.water).
@@ -25,7 +25,7 @@ class Levelling(System):
     ORDER = 30
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return any(r.drive.HOVERS for r in sim.robots.values())
 
     def pre_step(self) -> None:

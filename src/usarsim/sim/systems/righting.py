@@ -19,8 +19,8 @@ from usarsim.sim.constants import UP
 from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
+    from usarsim.sim.context import WorldContext
     from usarsim.sim.robot import SimRobot
-    from usarsim.sim.simulation import Simulation
 
 log = logging.getLogger("usarsim.sim")
 
@@ -29,7 +29,7 @@ FLIP_MARGIN = 2.0
 OVERTURNED_COS = math.cos(math.radians(60.0))  # more than 60 degrees from upright
 
 
-def start_righting(sim: Simulation, r: SimRobot) -> bool:
+def start_righting(sim: WorldContext, r: SimRobot) -> bool:
     """Start righting an overturned robot; False (ignored) when it is upright or has no power."""
     if r.battery_empty:
         return False
@@ -52,7 +52,7 @@ class Righting(System):
 
     ORDER = 20
 
-    def __init__(self, sim: Simulation) -> None:
+    def __init__(self, sim: WorldContext) -> None:
         super().__init__(sim)
         # the robots being righted, by id (asked twice every stretch of steps: with hundreds
         # of robots, looking at each of them then cost more than the rest of the stretch's
@@ -60,7 +60,7 @@ class Righting(System):
         self.righting: dict[int, SimRobot] = {}
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return bool(sim.robots)
 
     def active(self) -> bool:

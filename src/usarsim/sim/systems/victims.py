@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 
 @SYSTEMS.register("victims")
@@ -19,7 +19,7 @@ class WavingVictims(System):
     EVERY_STEPS = None
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return sim.entities.has_motion
 
     def pre_step(self) -> None:

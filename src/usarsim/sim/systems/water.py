@@ -15,7 +15,7 @@ from usarsim.sim.systems.base import SYSTEMS, System
 from usarsim.sim.systems.levelling import AERIAL_LEVEL_STIFFNESS
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 log = logging.getLogger("usarsim.sim")
 
@@ -30,7 +30,7 @@ class Water(System):
     ORDER = 40
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return bool(sim.world.water and sim.robots)
 
     def pre_step(self) -> None:

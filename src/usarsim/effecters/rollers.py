@@ -7,12 +7,11 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from usarsim.effecters import RollerTable
-from usarsim.effecters.roller_table import ROLLER_FRICTION
+from usarsim.effecters.roller_table import ROLLER_FRICTION, RollerTable
 from usarsim.sim.systems.base import SYSTEMS, System, mounted
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 # How quickly the rollers bring a load to their speed: a first-order time constant (s), the
 # force capped at the rollers' grip x the load's weight.  An estimate (no roller table's
@@ -33,7 +32,7 @@ class RollerTables(System):
 
     ORDER = 50
 
-    def __init__(self, sim: Simulation) -> None:
+    def __init__(self, sim: WorldContext) -> None:
         super().__init__(sim)
         self._pushed: set[int] = set()
         self._model = sim.model  # body ids are the model's: they change with a rebuild
@@ -43,7 +42,7 @@ class RollerTables(System):
         return 1 if self._pushed else self.EVERY_STEPS
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return bool(mounted(sim, RollerTable))
 
     def pre_step(self) -> None:

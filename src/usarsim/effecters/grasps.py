@@ -20,18 +20,17 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from usarsim.effecters import Gripper
-from usarsim.sim.robotspec import grasp_name
+from usarsim.effecters.gripper import Gripper, grasp_name
 from usarsim.sim.systems.base import SYSTEMS, System, mounted
 
 if TYPE_CHECKING:
-    from usarsim.sim.simulation import Simulation
+    from usarsim.sim.context import WorldContext
 
 
 class _Hold:
     """One gripper's grasp in the current model: its weld, its fingers' bodies and what it holds."""
 
-    def __init__(self, m: mujoco.MjModel, gripper: Gripper):
+    def __init__(self, m: mujoco.MjModel, gripper: Gripper) -> None:
         prefix = gripper.handle.prefix
         self.gripper = gripper
         self.eq = m.equality(grasp_name(prefix, gripper.name)).id
@@ -48,13 +47,13 @@ class Grasps(System):
 
     ORDER = 60
 
-    def __init__(self, sim: Simulation) -> None:
+    def __init__(self, sim: WorldContext) -> None:
         super().__init__(sim)
         self._model = None
         self._holds: list[_Hold] = []
 
     @classmethod
-    def wanted(cls, sim: Simulation) -> bool:
+    def wanted(cls, sim: WorldContext) -> bool:
         return bool(mounted(sim, Gripper))
 
     def active(self) -> bool:

@@ -1,0 +1,66 @@
+"""What a drive model, a world system or a joint order sees of the simulation: its context.
+
+Plugins that act on the world between physics steps (drive models, :mod:`usarsim.robots`;
+world systems, :mod:`usarsim.sim.systems`; the systems effecters bring,
+:mod:`usarsim.effecters`) are given a :class:`WorldContext`, never the simulation itself:
+the MuJoCo model and data, the simulated clock, the world file, the robots in the world,
+the world's moving entities and systems, and writing a robot's controls.  The simulation
+(:class:`usarsim.sim.simulation.Simulation`) is one; a test may hand a plugin another.
+Sensors see less still: a :class:`usarsim.sim.view.WorldView` at one instant.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from usarsim.config.world import WorldConfig
+    from usarsim.sim.robot import SimRobot
+    from usarsim.sim.systems.base import System
+
+
+class MovingEntities(Protocol):
+    """The world's entities that move on their own (victims waving their arms)."""
+
+    @property
+    def has_motion(self) -> bool: ...
+
+    def update(self, d: mujoco.MjData, time: float) -> None: ...
+
+
+class WorldContext(Protocol):
+    """The simulation as its plugins see it (see the module's text)."""
+
+    @property
+    def model(self) -> mujoco.MjModel: ...
+
+    @property
+    def data(self) -> mujoco.MjData: ...
+
+    @property
+    def time(self) -> float: ...
+
+    @property
+    def world(self) -> WorldConfig: ...
+
+    @property
+    def robots(self) -> Mapping[int, SimRobot]: ...
+
+    @property
+    def entities(self) -> MovingEntities: ...
+
+    @property
+    def systems(self) -> Sequence[System]: ...
+
+    def apply_controls(self, r: SimRobot) -> None:
+        """Write the robot's headlight and its drive's controls into the model."""
+
+
+if TYPE_CHECKING:
+    from usarsim.sim.simulation import Simulation
+
+    def _the_simulation_is_a_context(sim: Simulation) -> WorldContext:
+        return sim  # mypy checks here that the simulation gives its plugins all of the above
