@@ -2,13 +2,14 @@
 
 They hover: gravity is compensated on their bodies, and velocity servos on a site at the
 chassis origin push along and turn about its axes (forward, left, up in MuJoCo's frame)
-with up to ``max_accel_m_s2`` x mass; roll and pitch are damped, and the levelling system
-(:mod:`usarsim.sim.systems.levelling`) keeps them upright.
+with up to ``max_accel_m_s2`` x mass; roll and pitch are damped, and their own world system,
+:class:`Levelling`, keeps them upright.
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -16,7 +17,12 @@ import numpy as np
 from usarsim.config.robot import RobotConfig
 from usarsim.controls import Velocities
 from usarsim.robots.base import DRIVES, DriveModel, clamp
+from usarsim.sim.constants import LEVEL_STIFFNESS, UP
+from usarsim.sim.systems.base import SYSTEMS, System
 from usarsim.sim.view import RobotHandle
+
+if TYPE_CHECKING:
+    from usarsim.sim.context import WorldContext
 
 AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
 
@@ -29,7 +35,6 @@ class Aerial(DriveModel[Velocities]):
 
     ACCEPTS = frozenset({Velocities})
     GRAVITY_COMPENSATED = True
-    HOVERS = True
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
@@ -92,3 +97,24 @@ class Aerial(DriveModel[Velocities]):
         ctrl[rot["vertical"]] = f["altitude"]
         ctrl[rot["yaw"]] = -f["rotational"]
         ctrl[rot["roll"]] = ctrl[rot["pitch"]] = 0.0
+
+
+@SYSTEMS.register("levelling")
+class Levelling(System):
+    """Aerial robots keep level: a restoring torque towards upright, before each stretch of
+    physics steps (their roll and pitch rates are damped by their servos)."""
+
+    ORDER = 30
+
+    @classmethod
+    def wanted(cls, sim: WorldContext) -> bool:
+        return any(isinstance(r.drive, Aerial) for r in sim.robots.values())
+
+    def pre_step(self) -> None:
+        d = self.sim.data
+        for r in self.sim.robots.values():
+            if not isinstance(r.drive, Aerial):
+                continue
+            b = r.handle.body_id
+            up = d.xmat[b].reshape(3, 3)[:, 2]
+            d.xfrc_applied[b, 3:] = np.cross(up, UP) * (LEVEL_STIFFNESS * r.config.mass_kg)

@@ -57,9 +57,9 @@ class DriveModel(Generic[P]):
     of DRIVE part it applies (the others are ignored), ``GRAVITY_COMPENSATED`` (links
     float: aerial robots), ``SET_DOWN_AT_START`` (put on the surface below a start pose;
     a vessel starts where the pose is), ``SET_DOWN_ALWAYS`` (wherever it is put: a
-    walking robot would not survive a drop), ``HOVERS`` (kept level by the levelling
-    system) and ``STEP_EVERY`` (a :meth:`pre_step` is wanted at least every that many
-    physics steps: gaits).
+    walking robot would not survive a drop).  What a kind needs done between physics steps
+    is a world system registered beside it (an aerial robot's levelling, a walking robot's
+    gait: :mod:`usarsim.sim.systems`).
     """
 
     TYPE: ClassVar[str] = ""  # the robot file's drive key (set by DRIVES.register)
@@ -67,8 +67,6 @@ class DriveModel(Generic[P]):
     GRAVITY_COMPENSATED: ClassVar[bool] = False
     SET_DOWN_AT_START: ClassVar[bool] = True
     SET_DOWN_ALWAYS: ClassVar[bool] = False
-    HOVERS: ClassVar[bool] = False
-    STEP_EVERY: ClassVar[int | None] = None
 
     def __init__(self, robot: RobotConfig) -> None:
         self.robot = robot
@@ -182,9 +180,6 @@ class DriveModel(Generic[P]):
     # Hooks of the simulation --------------------------------------------------------------------
     def on_spawn(self, sim: WorldContext, r: SimRobot) -> None:
         """Right after the robot was built into the world."""
-
-    def pre_step(self, sim: WorldContext, r: SimRobot) -> None:
-        """Before a stretch of physics steps (kinds with ``STEP_EVERY``)."""
 
 
 def drive_class(robot: RobotConfig) -> type[DriveModel[Any]]:

@@ -1,6 +1,7 @@
 """Walking robots (drive ``legged``): the AIBO (ERS) trots, the QRIO walks.
 
-A gait engine sets the leg joints' angles every GAIT_STEPS physics steps: each foot stands
+A gait engine (the world system :class:`Gaits`) sets the leg joints' angles every
+GAIT_STEPS physics steps: each foot stands
 for ``duty`` of a period, staying where it was put while the body moves over it, then
 swings forward, lifted, to where it will stand; a biped sways over its standing foot.
 DRIVE {LinearVelocity} {LateralVelocity} {RotationalVelocity} (protocol.md 5.3d) sets the
@@ -20,6 +21,7 @@ from usarsim.controls import Velocities, WheelSpeeds
 from usarsim.errors import ConfigError
 from usarsim.robots.base import DRIVES, DriveModel, clamp
 from usarsim.sim import joints
+from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
     from usarsim.sim.context import WorldContext
@@ -57,7 +59,6 @@ class Legged(DriveModel[Velocities | WheelSpeeds]):
 
     ACCEPTS = frozenset({Velocities, WheelSpeeds})
     SET_DOWN_ALWAYS = True
-    STEP_EVERY = GAIT_STEPS
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
@@ -247,3 +248,22 @@ class Legged(DriveModel[Velocities | WheelSpeeds]):
             d.act[int(m.actuator_actadr[r.handle.actuator[name]])] = value
             joints.apply(sim.model, sim.data, r, self._leg_link(name))
         mujoco.mj_forward(m, d)
+
+
+@SYSTEMS.register("gaits")
+class Gaits(System):
+    """The walking robots' gaits: each sets its leg joints' targets before a stretch of at
+    most GAIT_STEPS physics steps."""
+
+    ORDER = 60
+    EVERY_STEPS = GAIT_STEPS
+
+    @classmethod
+    def wanted(cls, sim: WorldContext) -> bool:
+        return any(isinstance(r.drive, Legged) for r in sim.robots.values())
+
+    def pre_step(self) -> None:
+        sim = self.sim
+        for r in sim.robots.values():
+            if isinstance(r.drive, Legged):
+                r.drive.pre_step(sim, r)

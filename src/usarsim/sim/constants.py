@@ -45,3 +45,8 @@ WAVE_PERIOD_S = 2.0
 
 # The world's up direction in MuJoCo's frame (Z up), for the systems that right robots.
 UP = np.array([0.0, 0.0, 1.0])
+
+# N m per rad of tilt per kg: hovering robots right themselves (usarsim.robots.aerial's
+# levelling), and a vessel's hull, by its weight hanging below its buoyancy, in roll
+# (usarsim.sim.systems.water).
+LEVEL_STIFFNESS = 20.0

@@ -10,9 +10,8 @@ import mujoco
 import numpy as np
 
 from usarsim.sim import frames
-from usarsim.sim.constants import UP
+from usarsim.sim.constants import LEVEL_STIFFNESS, UP
 from usarsim.sim.systems.base import SYSTEMS, System
-from usarsim.sim.systems.levelling import AERIAL_LEVEL_STIFFNESS
 
 if TYPE_CHECKING:
     from usarsim.sim.context import WorldContext
@@ -74,7 +73,7 @@ class Water(System):
             # gently in pitch, which the stern planes overcome
             up = rot[:, 2]
             tilt = np.cross(up, UP)
-            righting = AERIAL_LEVEL_STIFFNESS * r.config.mass_kg
+            righting = LEVEL_STIFFNESS * r.config.mass_kg
             torque += rot[:, 0] * (float(tilt @ rot[:, 0]) * righting)
             torque += rot[:, 1] * (float(tilt @ rot[:, 1]) * righting * HULL_PITCH_RIGHTING)
             d.xfrc_applied[b, :3] = force
