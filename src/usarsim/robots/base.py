@@ -25,7 +25,6 @@ if TYPE_CHECKING:
     import mujoco
     import numpy as np
 
-    from usarsim.config.robot import NauticalSpec
     from usarsim.sim.context import WorldContext
     from usarsim.sim.robot import SimRobot
     from usarsim.sim.view import RobotHandle
@@ -165,17 +164,6 @@ class DriveModel(Generic[P]):
     def steer_angles(self, data: mujoco.MjData, handle: RobotHandle) -> tuple[float, float]:
         """STA ``FrontSteer`` and ``RearSteer``: the axles' current angles (rad)."""
         return 0.0, 0.0
-
-    @property
-    def vessel(self) -> NauticalSpec | None:
-        """A vessel's hull (buoyancy, drag); None for a robot not built for water."""
-        return None
-
-    def propulsion(
-        self, rot: np.ndarray, lin: np.ndarray, frac: float
-    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
-        """A vessel's own force and torques in water (its propeller, rudder and planes)."""
-        raise NotImplementedError
 
     # Hooks of the simulation --------------------------------------------------------------------
     def on_spawn(self, sim: WorldContext, r: SimRobot) -> None:

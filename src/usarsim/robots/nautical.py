@@ -38,6 +38,7 @@ class Nautical(DriveModel[NauticalDrive]):
 
     @property
     def vessel(self) -> NauticalSpec:
+        """The hull (buoyancy, drag) the water carries (:class:`usarsim.sim.context.Vessel`)."""
         return self.spec
 
     def command(self, part: NauticalDrive, normalized: bool) -> None:

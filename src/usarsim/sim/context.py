@@ -12,11 +12,13 @@ Sensors see less still: a :class:`usarsim.sim.view.WorldView` at one instant.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     import mujoco
+    import numpy as np
 
+    from usarsim.config.robot import NauticalSpec
     from usarsim.config.world import WorldConfig
     from usarsim.sim.robot import SimRobot
     from usarsim.sim.systems.base import System
@@ -29,6 +31,21 @@ class MovingEntities(Protocol):
     def has_motion(self) -> bool: ...
 
     def update(self, d: mujoco.MjData, time: float) -> None: ...
+
+
+@runtime_checkable
+class Vessel(Protocol):
+    """A drive built for water (:mod:`usarsim.robots.nautical`), as the world's water
+    (:mod:`usarsim.sim.systems.water`) carries it: its hull, and its own propulsion."""
+
+    @property
+    def vessel(self) -> NauticalSpec: ...
+
+    def propulsion(
+        self, rot: np.ndarray, lin: np.ndarray, frac: float
+    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """Its own force and torques in water (propeller, rudder and planes), in the world frame."""
+        ...
 
 
 class WorldContext(Protocol):

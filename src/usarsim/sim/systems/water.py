@@ -11,6 +11,7 @@ import numpy as np
 
 from usarsim.sim import frames
 from usarsim.sim.constants import LEVEL_STIFFNESS, UP
+from usarsim.sim.context import Vessel
 from usarsim.sim.systems.base import SYSTEMS, System
 
 if TYPE_CHECKING:
@@ -48,12 +49,13 @@ class Water(System):
                 if was:
                     d.xfrc_applied[b] = 0.0
                 continue
-            n = r.drive.vessel
-            if n is None:
+            drive = r.drive
+            if not isinstance(drive, Vessel):  # a robot not built for water
                 if depth[0] > 0.0 and not r.battery_empty:
                     r.battery_used_s = r.config.battery_s
                     log.info("robot '%s' (id %d) went under water: its battery is gone", r.name, r.uid)
                 continue
+            n = drive.vessel
             rot = d.xmat[b].reshape(3, 3)
             vel = np.empty(6)
             mujoco.mj_objectVelocity(sim.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)  # world frame
@@ -65,7 +67,7 @@ class Water(System):
             force -= rot @ (v_body * np.array([1.0, HULL_CROSS_DRAG, HULL_CROSS_DRAG])) * (n.drag_n_per_m_s * frac)
             torque = -n.angular_drag * ang * frac
             if not r.battery_empty:
-                thrust, turns = r.drive.propulsion(rot, lin, frac)
+                thrust, turns = drive.propulsion(rot, lin, frac)
                 force += thrust
                 for t in turns:
                     torque += t
