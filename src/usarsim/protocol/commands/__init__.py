@@ -21,13 +21,17 @@ Commands are frozen, keyword-only dataclasses; the small group records inside th
 (:class:`WheelDrive`, :class:`JointDrive`, :class:`LinkCommand`) and :class:`UnknownCommand`
 also accept positional arguments.
 
-One module per family of commands holds each command's class, parser and format:
+Each command is declared once: every field of its dataclass says its key on the wire and the
+kind of its value (:mod:`.declare`), and both its parser and its format follow from that.
+One module per family of commands holds the declarations:
 
 * :mod:`.robot`: INIT, DRIVE and MULTIDRIVE (§5.1, §5.3), and :mod:`.parts`: MISPKG, CAMERA
   and ACT (§5.6 to §5.8);
 * :mod:`.queries`: GETSTARTPOSES, GETGEO, GETCONF and the path nodes (§5.2, §5.5, §5.8);
 * :mod:`.control`: SET, CONTROL, MOVE, GOTO and TEST (§5.4, §5.8);
 * :mod:`.extensions`: STEP, PING, REPORT and unknown command words (§18);
+* :mod:`.declare`: the declarations (keys, repeated groups, numbered keys, name-number pairs,
+  the segments no key took), compiled once per command into its parser and its format;
 * :mod:`.common`: what they share (the value readers, the line builder).
 
 This module dispatches on them: a line's command word to its parser, a command's class to its

@@ -1,20 +1,17 @@
 """What the parsers and formatters of every client command share (protocol.md §5): the
-readers of a key's value, which say what the key allows when the value is wrong, the table of
-a command's keys, and the builder of a line that a client sends."""
+readers of a key's value, which say what the key allows when the value is wrong, and the
+builder of a line that a client sends (the declarations that use them: :mod:`.declare`)."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from usarsim.errors import ProtocolError
 
 from ..grammar import Segment, format_segment, parse_bool, parse_float, parse_int, parse_vector
 from ..numbers import bool_str, num
-
-if TYPE_CHECKING:
-    from .parts import LinkCommand
 
 Vec3 = tuple[float, float, float]
 
@@ -101,22 +98,6 @@ def _choice(reader: _Reader, allowed: frozenset[int], text: str) -> _Reader:
     return read
 
 
-_Table = dict[str, tuple[str, _Reader]]
-
-
-def _read_fields(cmd: str, segments: tuple[Segment, ...], table: _Table) -> dict[str, Any]:
-    """Fields of a command from ``table`` (lower-case key -> (field, reader)); first wins."""
-    values: dict[str, Any] = {}
-    for seg in segments:
-        entry = table.get(seg.key.lower())
-        if entry is not None and entry[0] not in values:
-            values[entry[0]] = entry[1](cmd, seg)
-    return values
-
-
-# GETGEO, GETCONF and CONTROL: the first Type and Name
-_TYPE_NAME_KEYS: _Table = {"type": ("type", _text), "name": ("name", _text)}
-
 # --------------------------------------------------------------------------- formatting
 
 
@@ -169,12 +150,6 @@ class _Line:
     def segments(self, segments: tuple[Segment, ...]) -> _Line:
         for seg in segments:
             self.parts.append(format_segment(_word(seg.key, "key"), _check(seg.value, seg.key)))
-        return self
-
-    def links(self, links: tuple[LinkCommand, ...]) -> _Line:
-        for link in links:
-            self.integer("Link", link.link).number("Value", link.value)
-            self.integer("Order", link.order)
         return self
 
     def end(self) -> str:

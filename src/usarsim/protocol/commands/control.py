@@ -13,10 +13,9 @@ from typing import Any, ClassVar
 from usarsim.errors import ProtocolError
 
 from ..grammar import RawMessage, Segment, parse_float
-from .common import _TYPE_NAME_KEYS, _Line, _read_fields, _Table, _text, _vec2or3
+from .declare import TEXT, VEC2OR3, command, formatter, key, numbered, parser, rest
 
 _BARE_NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)\Z")
-_VIEWPORT_RE = re.compile(r"viewport([0-9]{1,3})\Z", re.IGNORECASE)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -33,16 +32,16 @@ class Set:
     """
 
     keyword: ClassVar[str] = "SET"
-    type: str | None = None
-    name: str | None = None
-    opcode: str | None = None
-    params: str | None = None
-    robot: str | None = None
-    client: str | None = None
-    config: str | None = None
-    viewports: tuple[tuple[int, str], ...] = ()
-    value: str | None = None
-    segments: tuple[Segment, ...] = ()
+    type: str | None = key("Type", TEXT)
+    name: str | None = key("Name", TEXT)
+    robot: str | None = key("Robot", TEXT)
+    client: str | None = key("Client", TEXT)
+    opcode: str | None = key("Opcode", TEXT)
+    params: str | None = key("Params", TEXT)
+    value: str | None = key("Value", TEXT)
+    config: str | None = key("Config", TEXT)
+    viewports: tuple[tuple[int, str], ...] = numbered("Viewport")
+    segments: tuple[Segment, ...] = rest()
 
     def get(self, key: str, default: str | None = None) -> str | None:
         """Value of the first item-specific segment with this key (case-insensitive)."""
@@ -72,9 +71,9 @@ class Control:
     """
 
     keyword: ClassVar[str] = "CONTROL"
-    type: str | None = None
-    name: str | None = None
-    segments: tuple[Segment, ...] = ()
+    type: str | None = key("Type", TEXT)
+    name: str | None = key("Name", TEXT)
+    segments: tuple[Segment, ...] = rest()
 
     def get(self, key: str, default: str | None = None) -> str | None:
         """Value of the first segment with this key (case-insensitive)."""
@@ -86,10 +85,10 @@ class Move:
     """``MOVE``: avatar walking (§5.8, UDK).  ``location`` has 2 (x,y) or 3 numbers."""
 
     keyword: ClassVar[str] = "MOVE"
-    type: str | None = None
-    action: str | None = None
-    location: tuple[float, ...] | None = None
-    pathnode: str | None = None
+    type: str | None = key("Type", TEXT)
+    action: str | None = key("Action", TEXT)
+    location: tuple[float, ...] | None = key("Location", VEC2OR3)
+    pathnode: str | None = key("Pathnode", TEXT)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -97,7 +96,7 @@ class Goto:
     """``GOTO {Name pathnode}`` (§5.8, UDK)."""
 
     keyword: ClassVar[str] = "GOTO"
-    name: str | None = None
+    name: str | None = key("Name", TEXT)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -105,7 +104,7 @@ class Test:
     """``TEST``: UDK test mode; every segment is kept."""
 
     keyword: ClassVar[str] = "TEST"
-    segments: tuple[Segment, ...] = ()
+    segments: tuple[Segment, ...] = rest()
 
 
 def _segment_value(segments: tuple[Segment, ...], key: str, default: str | None) -> str | None:
@@ -119,126 +118,23 @@ def _segment_value(segments: tuple[Segment, ...], key: str, default: str | None)
 ControlCommand = Set | Control | Move | Goto | Test
 
 
-# ---- parsing
+# ---- parsing and formatting, from the declarations above
 
 
-_SET_KEYS: _Table = {
-    "type": ("type", _text),
-    "name": ("name", _text),
-    "opcode": ("opcode", _text),
-    "params": ("params", _text),
-    "robot": ("robot", _text),
-    "client": ("client", _text),
-    "config": ("config", _text),
-    "value": ("value", _text),
-}
+def _bare_params(cmd: str, values: dict[str, Any], rest: list[Segment]) -> None:
+    """The Player driver's camera zoom, ``{Opcode Zoom} {0.87}``: the first bare number of the
+    segments no key took stands for Params when no Params key came."""
+    if "params" in values:
+        return
+    for seg in rest:
+        if not seg.value and _BARE_NUMBER_RE.match(seg.key):
+            values["params"] = seg.key
+            rest.remove(seg)
+            return
 
 
-def _parse_set(raw: RawMessage) -> Set:
-    values: dict[str, Any] = {}
-    viewports: list[tuple[int, str]] = []
-    rest: list[Segment] = []
-    bare_number: Segment | None = None
-    for seg in raw.segments:
-        entry = _SET_KEYS.get(seg.key.lower())
-        if entry is not None and entry[0] not in values:
-            values[entry[0]] = seg.value
-            continue
-        vm = _VIEWPORT_RE.match(seg.key)
-        if vm is not None:
-            viewports.append((int(vm.group(1)), seg.value))
-            continue
-        if bare_number is None and not seg.value and _BARE_NUMBER_RE.match(seg.key):
-            bare_number = seg
-        rest.append(seg)
-    if "params" not in values and bare_number is not None:
-        values["params"] = bare_number.key
-        rest.remove(bare_number)
-    return Set(viewports=tuple(viewports), segments=tuple(rest), **values)
+_LAYOUTS = [command(Set, _bare_params), *(command(c) for c in (Control, Move, Goto, Test))]
 
+PARSERS: dict[str, Callable[[RawMessage], ControlCommand]] = {layout.keyword: parser(layout) for layout in _LAYOUTS}
 
-def _parse_control(raw: RawMessage) -> Control:
-    values: dict[str, Any] = {}
-    rest: list[Segment] = []
-    for seg in raw.segments:
-        entry = _TYPE_NAME_KEYS.get(seg.key.lower())
-        if entry is not None and entry[0] not in values:
-            values[entry[0]] = seg.value
-        else:
-            rest.append(seg)
-    return Control(segments=tuple(rest), **values)
-
-
-_MOVE_KEYS: _Table = {
-    "type": ("type", _text),
-    "action": ("action", _text),
-    "location": ("location", _vec2or3),
-    "pathnode": ("pathnode", _text),
-}
-
-
-def _parse_move(raw: RawMessage) -> Move:
-    return Move(**_read_fields(raw.type, raw.segments, _MOVE_KEYS))
-
-
-_GOTO_KEYS: _Table = {"name": ("name", _text)}
-
-
-def _parse_goto(raw: RawMessage) -> Goto:
-    return Goto(**_read_fields(raw.type, raw.segments, _GOTO_KEYS))
-
-
-def _parse_test(raw: RawMessage) -> Test:
-    return Test(segments=raw.segments)
-
-
-# ---- formatting
-
-
-def _format_set(c: Set) -> str:
-    line = (
-        _Line("SET")
-        .text("Type", c.type)
-        .text("Name", c.name)
-        .text("Robot", c.robot)
-        .text("Client", c.client)
-        .text("Opcode", c.opcode)
-        .text("Params", c.params)
-        .text("Value", c.value)
-        .text("Config", c.config)
-    )
-    for index, camera in c.viewports:
-        line.text("Viewport%d" % index, camera)
-    return line.segments(c.segments).end()
-
-
-def _format_control(c: Control) -> str:
-    return _Line("CONTROL").text("Type", c.type).text("Name", c.name).segments(c.segments).end()
-
-
-def _format_move(c: Move) -> str:
-    return (
-        _Line("MOVE")
-        .text("Type", c.type)
-        .text("Action", c.action)
-        .vector("Location", c.location)
-        .text("Pathnode", c.pathnode)
-        .end()
-    )
-
-
-PARSERS: dict[str, Callable[[RawMessage], ControlCommand]] = {
-    "SET": _parse_set,
-    "CONTROL": _parse_control,
-    "MOVE": _parse_move,
-    "GOTO": _parse_goto,
-    "TEST": _parse_test,
-}
-
-FORMATTERS: dict[type, Callable[[Any], str]] = {
-    Set: _format_set,
-    Control: _format_control,
-    Move: _format_move,
-    Goto: lambda c: _Line("GOTO").text("Name", c.name).end(),
-    Test: lambda c: _Line("TEST").segments(c.segments).end(),
-}
+FORMATTERS: dict[type, Callable[[Any], str]] = {layout.cls: formatter(layout) for layout in _LAYOUTS}

@@ -4,6 +4,7 @@ servers ignore."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -11,7 +12,8 @@ from typing import Any, ClassVar
 from usarsim.errors import ProtocolError
 
 from ..grammar import RawMessage, Segment
-from .common import Vec3, _Line, _positive_float, _read_fields, _Table, _text, _vec3, _word
+from .common import Vec3, _Line, _word
+from .declare import POSITIVE, TEXT, VEC3, command, formatter, key, parser
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -19,7 +21,7 @@ class Step:
     """``STEP {Time s}``: advance the lock-step clock by ``time_s`` > 0 seconds (§18)."""
 
     keyword: ClassVar[str] = "STEP"
-    time_s: float
+    time_s: float = key("Time", POSITIVE, default=dataclasses.MISSING)
 
 
 @dataclass(frozen=True, slots=True)
@@ -30,7 +32,7 @@ class Ping:
     everything (usarsim.client does after INIT and after each lock-step STEP)."""
 
     keyword: ClassVar[str] = "PING"
-    id: str | None = None
+    id: str | None = key("Id", TEXT)
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,9 +43,9 @@ class Report:
     {Location x,y,z}``.  ``Victim`` is the only type."""
 
     keyword: ClassVar[str] = "REPORT"
-    type: str = "Victim"
-    location: Vec3 = (0.0, 0.0, 0.0)
-    name: str | None = None
+    type: str = key("Type", TEXT, default="Victim")
+    location: Vec3 = key("Location", VEC3, default=(0.0, 0.0, 0.0))
+    name: str | None = key("Name", TEXT)
 
 
 REPORT_TYPES = ("Victim",)
@@ -57,50 +59,42 @@ class UnknownCommand:
     segments: tuple[Segment, ...] = ()
 
 
-# ---- parsing
+# ---- parsing and formatting, from the declarations above
 
 
-_STEP_KEYS: _Table = {"time": ("time_s", _positive_float)}
-
-
-def _parse_step(raw: RawMessage) -> Step:
-    values = _read_fields(raw.type, raw.segments, _STEP_KEYS)
+def _step_time(cmd: str, values: dict[str, Any], rest: list[Segment]) -> None:
     if "time_s" not in values:
-        raise ProtocolError(f"{raw.type}: missing {{Time seconds}}: expected for example STEP {{Time 0.2}}")
-    return Step(**values)
+        raise ProtocolError(f"{cmd}: missing {{Time seconds}}: expected for example STEP {{Time 0.2}}")
 
 
-_REPORT_KEYS: _Table = {"type": ("type", _text), "location": ("location", _vec3), "name": ("name", _text)}
-
-
-def _parse_report(raw: RawMessage) -> Report:
-    values = _read_fields(raw.type, raw.segments, _REPORT_KEYS)
+def _report_checks(cmd: str, values: dict[str, Any], rest: list[Segment]) -> None:
     if "type" not in values:
-        raise ProtocolError(f"{raw.type}: missing {{Type Victim}}")
+        raise ProtocolError(f"{cmd}: missing {{Type Victim}}")
     kind = next((t for t in REPORT_TYPES if t.lower() == values["type"].lower()), None)
     if kind is None:
         raise ProtocolError(
-            f"{raw.type}: {{Type {values.get('type', '')}}} is not a kind of report: expected {{Type Victim}}"
+            f"{cmd}: {{Type {values.get('type', '')}}} is not a kind of report: expected {{Type Victim}}"
         )
     if "location" not in values:
         raise ProtocolError(
-            f"{raw.type}: missing {{Location x,y,z}}: expected for example "
-            f"REPORT {{Type Victim}} {{Location 3.1,6.0,0.1}}"
+            f"{cmd}: missing {{Location x,y,z}}: expected for example REPORT {{Type Victim}} {{Location 3.1,6.0,0.1}}"
         )
-    return Report(type=kind, location=values["location"], name=values.get("name"))
+    values["type"] = kind
 
+
+_STEP = command(Step, _step_time)
+_PING = command(Ping)
+_REPORT = command(Report, _report_checks)
 
 PARSERS: dict[str, Callable[[RawMessage], Step | Ping | Report]] = {
-    "STEP": _parse_step,
-    "PING": lambda raw: Ping(id=raw.get("Id")),
-    "REPORT": _parse_report,
+    "STEP": parser(_STEP),
+    "PING": parser(_PING),
+    "REPORT": parser(_REPORT),
 }
 
-# ---- formatting
-
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    Step: lambda c: _Line("STEP").number("Time", c.time_s).end(),
-    Ping: lambda c: _Line("PING").text("Id", c.id).end(),
-    Report: lambda c: _Line("REPORT").text("Type", c.type).vector("Location", c.location).text("Name", c.name).end(),
+    Step: formatter(_STEP),
+    Ping: formatter(_PING),
+    Report: formatter(_REPORT),
     UnknownCommand: lambda c: _Line(_word(c.type, "command word")).segments(c.segments).end(),
 }

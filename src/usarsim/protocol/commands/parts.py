@@ -4,20 +4,22 @@ actuator's ``ACT`` (§5.8, UDK)."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from usarsim.errors import ProtocolError
-
-from ..grammar import RawMessage, Segment
-from .common import Vec3, _choice, _float, _int, _Line, _read_fields, _Table, _text, _vec3
+from ..grammar import RawMessage
+from .common import Vec3
+from .declare import INTEGER, NUMBER, TEXT, VEC3, choice, command, formatter, group, key, parser
 
 LINK_ORDERS = frozenset({0, 1, 2})
 """Order codes of MISPKG/ACT link groups (§5.6): 0 position, 1 velocity, 2 torque."""
 
 
 _ORDER_TEXT_LINK = "one of 0 (position), 1 (velocity), 2 (torque)"
+_LINK_ORDER = choice(INTEGER, LINK_ORDERS, _ORDER_TEXT_LINK)
+_GRIPPER = choice(INTEGER, frozenset({0, 1}), "1 (close) or 0 (open)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -27,9 +29,10 @@ class LinkCommand:
     ``order`` is one of :data:`LINK_ORDERS` (0 when not sent).
     """
 
-    link: int
-    value: float
-    order: int = 0
+    link: int = key("Link", INTEGER, hint="n", default=dataclasses.MISSING)
+    value: float = key("Value", NUMBER, hint="v", default=dataclasses.MISSING)
+    # an Order before any Link is not a link's: MISPKG's own (the legacy Rotation form)
+    order: int = key("Order", _LINK_ORDER, default=0, hint="o", outside="ignore")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -42,11 +45,11 @@ class MisPkg:
     """
 
     keyword: ClassVar[str] = "MISPKG"
-    name: str | None = None
-    type: str | None = None
-    links: tuple[LinkCommand, ...] = ()
-    rotation: Vec3 | None = None
-    order: int | None = None
+    name: str | None = key("Name", TEXT)
+    type: str | None = key("Type", TEXT)
+    rotation: Vec3 | None = key("Rotation", VEC3)
+    order: int | None = key("Order", _LINK_ORDER)
+    links: tuple[LinkCommand, ...] = group(LinkCommand, "link")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -54,8 +57,8 @@ class Camera:
     """``CAMERA {Rotation r,p,y} {Zoom fov}``: legacy pan/tilt/zoom (§5.7)."""
 
     keyword: ClassVar[str] = "CAMERA"
-    rotation: Vec3 | None = None
-    zoom: float | None = None
+    rotation: Vec3 | None = key("Rotation", VEC3)
+    zoom: float | None = key("Zoom", NUMBER)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -66,132 +69,26 @@ class Act:
     """
 
     keyword: ClassVar[str] = "ACT"
-    name: str | None = None
-    links: tuple[LinkCommand, ...] = ()
-    gripper: int | None = None
-    sequence: int | None = None
+    name: str | None = key("Name", TEXT)
+    links: tuple[LinkCommand, ...] = group(LinkCommand, "link")
+    gripper: int | None = key("Gripper", _GRIPPER)
+    sequence: int | None = key("Sequence", INTEGER, "Seq")
 
 
-# ---- parsing
+# ---- parsing and formatting, from the declarations above
 
-
-_link_order = _choice(_int, LINK_ORDERS, _ORDER_TEXT_LINK)
-
-
-_gripper = _choice(_int, frozenset({0, 1}), "1 (close) or 0 (open)")
-
-
-def _read_links(
-    cmd: str, segments: tuple[Segment, ...], table: _Table
-) -> tuple[tuple[LinkCommand, ...], dict[str, Any]]:
-    """Link groups plus the first-wins fields of ``table``.
-
-    An ``Order`` inside a link group belongs to that link; one before any link goes to the
-    ``order`` field of ``table`` when it has one (the legacy MISPKG Rotation form).
-    """
-    values: dict[str, Any] = {}
-    links: list[LinkCommand] = []
-    group: dict[str, Any] | None = None
-
-    def close(group: dict[str, Any]) -> None:
-        if "value" not in group:
-            raise ProtocolError(
-                f"{cmd}: {{Link {group['link']}}} has no {{Value v}}: "
-                "each link group is {Link n} {Value v} [{Order o}]"
-            )
-        links.append(LinkCommand(**group))
-
-    for seg in segments:
-        key = seg.key.lower()
-        if key == "link":
-            if group is not None:
-                close(group)
-            group = {"link": _int(cmd, seg)}
-        elif key == "value":
-            if group is None:
-                raise ProtocolError(
-                    f"{cmd}: {{{seg.key} {seg.value}}} comes before any {{Link n}}: "
-                    "each link group must start with Link"
-                )
-            group["value"] = _float(cmd, seg)
-        elif key == "order" and group is not None:
-            group["order"] = _link_order(cmd, seg)
-        else:
-            entry = table.get(key)
-            if entry is not None and entry[0] not in values:
-                values[entry[0]] = entry[1](cmd, seg)
-    if group is not None:
-        close(group)
-    return tuple(links), values
-
-
-_MISPKG_KEYS: _Table = {
-    "name": ("name", _text),
-    "type": ("type", _text),
-    "rotation": ("rotation", _vec3),
-    "order": ("order", _link_order),
-}
-
-
-def _parse_mispkg(raw: RawMessage) -> MisPkg:
-    links, values = _read_links(raw.type, raw.segments, _MISPKG_KEYS)
-    return MisPkg(links=links, **values)
-
-
-_ACT_KEYS: _Table = {
-    "name": ("name", _text),
-    "gripper": ("gripper", _gripper),
-    "sequence": ("sequence", _int),
-    "seq": ("sequence", _int),
-}
-
-
-def _parse_act(raw: RawMessage) -> Act:
-    links, values = _read_links(raw.type, raw.segments, _ACT_KEYS)
-    return Act(links=links, **values)
-
-
-_CAMERA_KEYS: _Table = {"rotation": ("rotation", _vec3), "zoom": ("zoom", _float)}
-
-
-def _parse_camera(raw: RawMessage) -> Camera:
-    return Camera(**_read_fields(raw.type, raw.segments, _CAMERA_KEYS))
-
-
-# ---- formatting
-
-
-def _format_mispkg(c: MisPkg) -> str:
-    return (
-        _Line("MISPKG")
-        .text("Name", c.name)
-        .text("Type", c.type)
-        .vector("Rotation", c.rotation)
-        .integer("Order", c.order)
-        .links(c.links)
-        .end()
-    )
-
-
-def _format_act(c: Act) -> str:
-    return (
-        _Line("ACT")
-        .text("Name", c.name)
-        .links(c.links)
-        .integer("Gripper", c.gripper)
-        .integer("Sequence", c.sequence)
-        .end()
-    )
-
+_MISPKG = command(MisPkg)
+_CAMERA = command(Camera)
+_ACT = command(Act)
 
 PARSERS: dict[str, Callable[[RawMessage], MisPkg | Camera | Act]] = {
-    "MISPKG": _parse_mispkg,
-    "CAMERA": _parse_camera,
-    "ACT": _parse_act,
+    "MISPKG": parser(_MISPKG),
+    "CAMERA": parser(_CAMERA),
+    "ACT": parser(_ACT),
 }
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    MisPkg: _format_mispkg,
-    Camera: lambda c: _Line("CAMERA").vector("Rotation", c.rotation).number("Zoom", c.zoom).end(),
-    Act: _format_act,
+    MisPkg: formatter(_MISPKG),
+    Camera: formatter(_CAMERA),
+    Act: formatter(_ACT),
 }

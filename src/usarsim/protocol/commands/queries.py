@@ -9,7 +9,8 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from ..grammar import RawMessage
-from .common import _TYPE_NAME_KEYS, Vec3, _Line, _read_fields, _Table, _vec3
+from .common import Vec3
+from .declare import TEXT, VEC3, command, formatter, key, parser
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -24,8 +25,8 @@ class GetGeo:
     """``GETGEO {Type T} [{Name N}]`` (§5.5); ``Type Robot`` asks for the robot itself."""
 
     keyword: ClassVar[str] = "GETGEO"
-    type: str | None = None
-    name: str | None = None
+    type: str | None = key("Type", TEXT)
+    name: str | None = key("Name", TEXT)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -33,8 +34,8 @@ class GetConf:
     """``GETCONF {Type T} [{Name N}]`` (§5.5)."""
 
     keyword: ClassVar[str] = "GETCONF"
-    type: str | None = None
-    name: str | None = None
+    type: str | None = key("Type", TEXT)
+    name: str | None = key("Name", TEXT)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -49,52 +50,16 @@ class GetClosestPathNode:
     """``GETCLOSESTPATHNODE {Location x,y,z}`` (§5.8, UDK)."""
 
     keyword: ClassVar[str] = "GETCLOSESTPATHNODE"
-    location: Vec3 | None = None
+    location: Vec3 | None = key("Location", VEC3)
 
 
 Query = GetStartPoses | GetGeo | GetConf | GetPathNodes | GetClosestPathNode
 
 
-# ---- parsing
+# ---- parsing and formatting, from the declarations above
 
+_LAYOUTS = [command(c) for c in (GetStartPoses, GetGeo, GetConf, GetPathNodes, GetClosestPathNode)]
 
-def _parse_get_start_poses(raw: RawMessage) -> GetStartPoses:
-    return GetStartPoses()
+PARSERS: dict[str, Callable[[RawMessage], Query]] = {layout.keyword: parser(layout) for layout in _LAYOUTS}
 
-
-def _parse_getgeo(raw: RawMessage) -> GetGeo:
-    return GetGeo(**_read_fields(raw.type, raw.segments, _TYPE_NAME_KEYS))
-
-
-def _parse_getconf(raw: RawMessage) -> GetConf:
-    return GetConf(**_read_fields(raw.type, raw.segments, _TYPE_NAME_KEYS))
-
-
-def _parse_get_path_nodes(raw: RawMessage) -> GetPathNodes:
-    return GetPathNodes()
-
-
-_LOCATION_KEYS: _Table = {"location": ("location", _vec3)}
-
-
-def _parse_get_closest_path_node(raw: RawMessage) -> GetClosestPathNode:
-    return GetClosestPathNode(**_read_fields(raw.type, raw.segments, _LOCATION_KEYS))
-
-
-PARSERS: dict[str, Callable[[RawMessage], Query]] = {
-    "GETSTARTPOSES": _parse_get_start_poses,
-    "GETGEO": _parse_getgeo,
-    "GETCONF": _parse_getconf,
-    "GETPATHNODES": _parse_get_path_nodes,
-    "GETCLOSESTPATHNODE": _parse_get_closest_path_node,
-}
-
-# ---- formatting
-
-FORMATTERS: dict[type, Callable[[Any], str]] = {
-    GetStartPoses: lambda c: "GETSTARTPOSES\r\n",
-    GetGeo: lambda c: _Line("GETGEO").text("Type", c.type).text("Name", c.name).end(),
-    GetConf: lambda c: _Line("GETCONF").text("Type", c.type).text("Name", c.name).end(),
-    GetPathNodes: lambda c: "GETPATHNODES\r\n",
-    GetClosestPathNode: lambda c: _Line("GETCLOSESTPATHNODE").vector("Location", c.location).end(),
-}
+FORMATTERS: dict[type, Callable[[Any], str]] = {layout.cls: formatter(layout) for layout in _LAYOUTS}
