@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -86,7 +86,8 @@ class Brain:
             raise ValueError(f"pose_source must be odometry, ins or truth, got {pose_source!r}")
         self.robot = robot
         self.body = body
-        self.origin = tuple(float(v) for v in origin)
+        # three values in, three out
+        self.origin = cast("tuple[float, float, float]", tuple(float(v) for v in origin))
         self.pose_source = pose_source
         self.done = False  # set when the brain has finished its task
         self.time = 0.0  # control time: the sum of the dt given to step()

@@ -102,7 +102,7 @@ class FloorMap:
             floor[sel] &= ~hit
         if not math.isfinite(box[0]):
             box = [x0, y0, x0 + sx, y0 + sy]
-        return cls(x0, y0, resolution, floor, tuple(box))
+        return cls(x0, y0, resolution, floor, (box[0], box[1], box[2], box[3]))
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -34,7 +34,7 @@ import argparse
 import logging
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -184,7 +184,9 @@ class FrontierExplorer(Brain):
                 else:
                     self._lost, self._unmatched = False, 0
                     self.matched += 1
-                    self.correction = compose(better, inverse(super().pose()))
+                    # not None: self.pose() above was not, and it is None only when this is
+                    raw = cast("tuple[float, float, float]", super().pose())
+                    self.correction = compose(better, inverse(raw))
                     pose = better
             x, y, a = pose
             c, s = math.cos(a), math.sin(a)

@@ -17,6 +17,7 @@ import io
 import math
 import zlib
 from dataclasses import dataclass
+from typing import Any, overload
 
 import numpy as np
 
@@ -99,7 +100,12 @@ class OccupancyGrid:
     def inside(self, i: int, j: int) -> bool:
         return 0 <= i < self.shape[0] and 0 <= j < self.shape[1]
 
-    def center(self, i: float, j: float) -> tuple[float, float]:
+    @overload
+    def center(self, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+    @overload
+    def center(self, i: float | np.integer, j: float | np.integer) -> tuple[float, float]: ...
+    def center(self, i: Any, j: Any) -> Any:
+        """The middle of cell (i, j) (of each, for arrays of indices), in metres."""
         return (self.bounds.xmin + (i + 0.5) * self.resolution, self.bounds.ymin + (j + 0.5) * self.resolution)
 
     # states ----------------------------------------------------------------------------

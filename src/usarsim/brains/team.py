@@ -182,7 +182,7 @@ def explore(
         team = Team(explorers, radios if comserver is not None else None)
         if world.lockstep:
             world.step(period)
-        shares: dict[int, float] = {}
+        shares: dict[int, tuple[float, float]] = {}
 
         def score(t: float) -> None:
             if referee is not None:

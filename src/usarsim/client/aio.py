@@ -148,7 +148,7 @@ class Robot:
     async def scan(self, name: str | None = None) -> Scan | None:
         name = name or first_scan_name(self.readings)
         r = self.readings.get(name) if name else None
-        if r is None or not hasattr(r, "resolution_rad") or isinstance(r.resolution_rad, tuple):
+        if name is None or r is None or not hasattr(r, "resolution_rad") or isinstance(r.resolution_rad, tuple):
             return None
         if name not in self._max_ranges:
             self._max_ranges[name] = max_range_of(await self.conf(r.sensor_type, name), name)

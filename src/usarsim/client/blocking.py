@@ -102,6 +102,11 @@ class _Connection:
             pass
 
 
+def _is_pong(pid: str) -> Callable[[Any], bool]:
+    """Takes the PONG that answers the PING with id ``pid``."""
+    return lambda m: isinstance(m, M.Pong) and m.id == pid
+
+
 class World:
     """A simulator to talk to: start poses, spawning robots, lock-step STEPs, ground truth."""
 
@@ -210,9 +215,7 @@ class World:
             conn.sent = False
             pending.append((conn, pid))
         for conn, pid in pending:
-            conn.wait_for(
-                lambda m, pid=pid: isinstance(m, M.Pong) and m.id == pid, "PONG (the reply to PING)", None, timeout
-            )
+            conn.wait_for(_is_pong(pid), "PONG (the reply to PING)", None, timeout)
 
     def wait(self, seconds: float) -> None:
         """Real time: read every robot's messages for ``seconds`` of wall time."""

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -180,15 +180,27 @@ class ConnectionState:
 # Command lines ---------------------------------------------------------------------------
 
 
-def init_line(class_name: str, name: str | None, start: str | None, location, rotation) -> str:
+def _floats(values: Iterable[float]) -> C.Vec3:
+    """``values`` (x, y, z) as floats, as many as given: a location or rotation of another length
+    goes out as it is, for the server to answer."""
+    return tuple(map(float, values))  # type: ignore[return-value]  # its length is the caller's
+
+
+def init_line(
+    class_name: str,
+    name: str | None,
+    start: str | None,
+    location: Iterable[float] | None,
+    rotation: Iterable[float] | None,
+) -> str:
     cls = class_name if "." in class_name else f"USARBot.{class_name}"
     return C.format_command(
         C.Init(
             class_name=cls,
             name=name,
             start=start,
-            location=None if location is None else tuple(map(float, location)),
-            rotation=None if rotation is None else tuple(map(float, rotation)),
+            location=None if location is None else _floats(location),
+            rotation=None if rotation is None else _floats(rotation),
         )
     )
 
@@ -234,9 +246,9 @@ def mispkg_line(package: str, values: dict[int, float], order: int = 0) -> str:
     return C.format_command(C.MisPkg(name=package, links=links))
 
 
-def report_line(location, name: str | None = None) -> str:
+def report_line(location: Iterable[float], name: str | None = None) -> str:
     """``REPORT {Type Victim} {Location x,y,z} [{Name label}]`` (an extension, docs/scoring.md)."""
-    return C.format_command(C.Report(type="Victim", location=tuple(float(v) for v in location), name=name))
+    return C.format_command(C.Report(type="Victim", location=_floats(location), name=name))
 
 
 def is_report_reply(msg: Any) -> bool:
@@ -319,6 +331,8 @@ def max_range_of(conf: Any, name: str) -> float | None:
             if item.name == name:
                 for k, v in item.fields:
                     if k.lower() == "maxrange":
+                        if isinstance(v, tuple):  # not a number (float() would raise TypeError)
+                            return None
                         try:
                             return float(v)
                         except (TypeError, ValueError):

@@ -30,7 +30,6 @@ from usarsim.protocol.wireless import (
     WcsOpen,
     WcsRegister,
     WcsReply,
-    WcsRequest,
     WcsSignal,
     format_send,
     format_wcs_request,
@@ -78,7 +77,7 @@ class Radio:
             self.close()
             raise RadioError(f"REGISTER {name}: {reply}")
 
-    def ask(self, request: WcsRequest) -> WcsReply:
+    def ask(self, request: WcsRegister | WcsListen | WcsOpen | WcsGetSS) -> WcsReply:
         """Send one command, return its reply."""
         self._ctl.sendall(format_wcs_request(request).encode("ascii"))
         deadline = time.monotonic() + self.timeout
