@@ -11,11 +11,13 @@ Model (UDK ``GPSSensor``, protocol.md 7.6):
   line-of-sight ray from the sensor towards it hits nothing (walls, roofs, other robots;
   the sensor's own chassis is ignored).  A fix needs at least 4 in view; without a fix the
   reading carries only the satellite count.
-* Noise: x and y (metres) each get a Gaussian error with
+* Noise (:class:`SatelliteNoise`, the sensor's ``NOISE``, applied by the framework to what
+  it senses): with a fix, x and y (metres) each get a Gaussian error with
   sigma = (slope * n + b) / 3, slope = (maxNoise - minNoise) / -8, b = maxNoise - 4 * slope,
   n the satellites in view, before the conversion to degrees: sigma falls from maxNoise/3
   with 4 satellites to minNoise/3 with 12.  n is held within [4, 12] for the noise (beyond
-  12 the UDK line would go below minNoise and then negative).
+  12 the UDK line would go below minNoise and then negative).  Without a fix nothing is
+  drawn.
 
 The constellation (our design; UDK read recorded satellite positions from
 ``USARSatelliteTracker.ini``): 24 satellites, the size of the GPS baseline
@@ -40,13 +42,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from usarsim.config.world import GeoReference
 from usarsim.readings import FieldValue, GpsReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sensors.noise import Noise
 
 if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
@@ -118,6 +121,33 @@ def noise_sigma_m(satellites: int, max_noise_m: float, min_noise_m: float) -> fl
     slope = (max_noise_m - min_noise_m) / -8.0
     b = max_noise_m - 4.0 * slope
     return (slope * n + b) / 3.0
+
+
+@dataclass(frozen=True, slots=True)
+class GpsPosition:
+    """What a receiver senses: the satellites in view and its position in USARSim world metres
+    (``x_m`` north, ``y_m`` east), with the geographic reference that turns it into degrees."""
+
+    satellites: int
+    x_m: float
+    y_m: float
+    geo: GeoReference
+
+
+class SatelliteNoise(Noise):
+    """The GPS position error of UDK ``GPSSensor.Noise`` (protocol.md 7.6): with a fix (at least
+    4 satellites in view, UDK ``GPSSensor.GetData``), x and y each get a Gaussian error, mean 0
+    and sigma :func:`noise_sigma_m` of the satellites in view and the sensor's ``maxNoise`` and
+    ``minNoise``, drawn (x then y) from the sensor's generator; without a fix there is no
+    position to corrupt and nothing is drawn.  ``true``: a :class:`GpsPosition`."""
+
+    def apply(self, sensor: Sensor[Any], true: GpsPosition) -> GpsPosition:
+        n = true.satellites
+        if n < MIN_SATELLITES_FOR_FIX:
+            return true
+        c: GpsConfig = sensor.config
+        ex, ey = (float(e) for e in sensor.rng.normal(0.0, noise_sigma_m(n, c.max_noise_m, c.min_noise_m), size=2))
+        return GpsPosition(n, true.x_m + ex, true.y_m + ey, true.geo)
 
 
 # --------------------------------------------------------------------------- constellation
@@ -215,6 +245,7 @@ class GPS(Sensor[GpsConfig]):
     """Latitude/longitude of the sensor with satellite-dependent Gaussian noise; no fix
     with fewer than 4 satellites in view (see the module docstring)."""
 
+    NOISE = SatelliteNoise()
     ALIASES = {"maxNoise": "max_noise_m", "minNoise": "min_noise_m"}
 
     def visible_satellites(self, view: WorldView) -> tuple[int, np.ndarray]:
@@ -229,15 +260,17 @@ class GPS(Sensor[GpsConfig]):
         dist, _, _ = view.caster.cast(pos, above, LINE_OF_SIGHT_RANGE_M, self.handle.body_id)
         return int(np.count_nonzero(np.isinf(dist))), pos
 
-    def measure(self, view: WorldView) -> GpsReading:
+    def sense(self, view: WorldView) -> GpsPosition:
         n, pos = self.visible_satellites(view)
+        geo = getattr(view, "geo", None) or _DEFAULT_GEO
+        # USARSim world x (north) and y (east) of the sensor: MuJoCo (x, -y)
+        return GpsPosition(n, float(pos[0]), -float(pos[1]), geo)
+
+    def reading(self, values: GpsPosition) -> GpsReading:
+        n = values.satellites
         if n < MIN_SATELLITES_FOR_FIX:
             return GpsReading(self.name, False, n)
-        c = self.config
-        geo = getattr(view, "geo", None) or _DEFAULT_GEO
-        ex, ey = (float(e) for e in self.rng.normal(0.0, noise_sigma_m(n, c.max_noise_m, c.min_noise_m), size=2))
-        # USARSim world x (north) and y (east) of the sensor: MuJoCo (x, -y)
-        lat, lon = world_to_geographic(float(pos[0]) + ex, -float(pos[1]) + ey, geo)
+        lat, lon = world_to_geographic(values.x_m, values.y_m, values.geo)
         return GpsReading(self.name, True, n, degrees_minutes(lat, "N", "S"), degrees_minutes(lon, "E", "W"))
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:

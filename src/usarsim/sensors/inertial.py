@@ -4,20 +4,26 @@ protocol.md 6.3) and the old orientation-only INU (protocol.md 6.3).
 Frames (protocol.md section 3): every vector is reported in the USARSim frame, X forward,
 Y right, Z down, which is MuJoCo's (x, -y, -z); a positive yaw is a clockwise (right) turn
 seen from above, so a left turn has a negative yaw rate.
+
+Noise: each sensor senses the true values and declares what corrupts them (its ``NOISE``,
+applied by the framework, :mod:`usarsim.sensors.noise`): the Tachometer the relative noise
+of protocol.md 7.1 (:data:`~usarsim.sensors.noise.RELATIVE`), the IMU a Gaussian error per
+reported quantity (:class:`ImuNoise`), the INU a Gaussian error N(Mean, Sigma) on each angle
+(:class:`InuNoise`).  None of them is noisy by default.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from usarsim.readings import ImuReading, OrientationReading, TachometerReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
-from usarsim.sensors.noise import RELATIVE
+from usarsim.sensors.noise import RELATIVE, Noise
 from usarsim.sim import frames
 from usarsim.sim.frames import wrap_2pi
 
@@ -122,6 +128,40 @@ class ImuConfig(SensorConfig):
                 raise ValueError(f"{name} must be a finite number >= 0, got {v}")
 
 
+@dataclass(frozen=True, slots=True)
+class ImuValues:
+    """What an IMU senses, in the sensor's USARSim-style axes (see :class:`IMU`): acceleration
+    (m/s^2), angular velocity (rad/s), angular acceleration (rad/s^2), and the robot's roll,
+    pitch and yaw (rad, not yet wrapped)."""
+
+    acceleration: np.ndarray
+    angular_velocity: np.ndarray
+    angular_acceleration: np.ndarray
+    orientation: np.ndarray
+
+
+class ImuNoise(Noise):
+    """An IMU's Gaussian error per reported quantity (the Gaussian generator of protocol.md 7.1;
+    the UDK IMU.uc adds no noise, so every sigma defaults to 0): each component of the
+    acceleration, the angular velocity, the angular acceleration and the orientation gets an
+    error of mean 0 and the sigma its settings give that quantity (``XYZAccelerationSigma``,
+    ``AngularVelSigma``, ``AngularAccelSigma``, ``RotationSigma``), drawn from the sensor's
+    generator in that order, three at a time; a quantity whose sigma is 0 draws nothing.
+    ``true``: an :class:`ImuValues`."""
+
+    @staticmethod
+    def _gauss(sensor: Sensor[Any], sigma: float, k: int = 3) -> np.ndarray | float:
+        return sensor.rng.normal(0.0, sigma, k) if sigma > 0 else 0.0
+
+    def apply(self, sensor: Sensor[Any], true: ImuValues) -> ImuValues:
+        c: ImuConfig = sensor.config
+        acc = true.acceleration + self._gauss(sensor, c.acceleration_sigma_m_s2)
+        ang_vel = true.angular_velocity + self._gauss(sensor, c.angular_velocity_sigma_rad_s)
+        ang_acc = true.angular_acceleration + self._gauss(sensor, c.angular_acceleration_sigma_rad_s2)
+        ori = true.orientation + self._gauss(sensor, c.orientation_sigma_rad)
+        return ImuValues(acc, ang_vel, ang_acc, ori)
+
+
 @SENSORS.register("IMU")
 class IMU(Sensor[ImuConfig]):
     """UDK-style IMU: ``XYZAcceleration``, ``AngularVel``, ``AngularAccel``, ``Rotation``.
@@ -140,8 +180,10 @@ class IMU(Sensor[ImuConfig]):
       GroundTruth.
     The first measurement after spawn has no previous one: it reports zero coordinate
     and angular acceleration.
+    Each quantity may carry Gaussian noise (:class:`ImuNoise`), none by default.
     """
 
+    NOISE = ImuNoise()
     ALIASES = {
         # named after the SEN segments (protocol.md 6.3); UDK IMU.uc has no settings
         "XYZAccelerationSigma": "acceleration_sigma_m_s2",
@@ -178,10 +220,7 @@ class IMU(Sensor[ImuConfig]):
         self._last_v = v_point
         self._last_w = self._mount_mj.T @ w_body
 
-    def _gauss(self, sigma: float, k: int = 3) -> np.ndarray | float:
-        return self.rng.normal(0.0, sigma, k) if sigma > 0 else 0.0
-
-    def measure(self, view: WorldView) -> ImuReading:
+    def sense(self, view: WorldView) -> ImuValues:
         c = self.config
         v_point, rot, w_body = self._state(view)
         w_sensor = self._mount_mj.T @ w_body  # sensor axes (MuJoCo-style)
@@ -198,11 +237,17 @@ class IMU(Sensor[ImuConfig]):
         if c.include_gravity:
             acc_world = acc_world - np.asarray(view.model.opt.gravity, dtype=float)
         acc_sensor = self._mount_mj.T @ (rot.T @ acc_world)
-        acc = acc_sensor * _TO_USAR + self._gauss(c.acceleration_sigma_m_s2)
-        ang_vel = w_sensor * _TO_USAR + self._gauss(c.angular_velocity_sigma_rad_s)
-        ang_acc = ang_acc * _TO_USAR + self._gauss(c.angular_acceleration_sigma_rad_s2)
-        ori = np.array(self.handle.orientation(view.data)) + self._gauss(c.orientation_sigma_rad)
-        return ImuReading(self.name, _vec(acc), _vec(ang_vel), _vec(ang_acc), _wrapped(ori))
+        ori = np.array(self.handle.orientation(view.data))
+        return ImuValues(acc_sensor * _TO_USAR, w_sensor * _TO_USAR, ang_acc * _TO_USAR, ori)
+
+    def reading(self, values: ImuValues) -> ImuReading:
+        return ImuReading(
+            self.name,
+            _vec(values.acceleration),
+            _vec(values.angular_velocity),
+            _vec(values.angular_acceleration),
+            _wrapped(values.orientation),
+        )
 
 
 # --------------------------------------------------------------------------- INU
@@ -226,18 +271,31 @@ class InuConfig(SensorConfig):
             raise ValueError(f"sigma_rad must be a finite number >= 0, got {self.sigma_rad}")
 
 
+class InuNoise(Noise):
+    """The old orientation sensor's error (protocol.md 6.3, "INU (old)"): the Gaussian generator
+    of protocol.md 7.1 with its Mean and Sigma keys, N(Mean, Sigma) added to each angle (roll,
+    pitch, yaw, drawn in that order from the sensor's generator).  With Sigma 0 nothing is drawn:
+    a non-zero Mean is then a constant offset of every angle.  ``true``: the three angles (rad)."""
+
+    def apply(self, sensor: Sensor[Any], true: np.ndarray) -> np.ndarray:
+        c: InuConfig = sensor.config
+        if c.sigma_rad > 0:
+            return true + sensor.rng.normal(c.mean_rad, c.sigma_rad, 3)
+        if c.mean_rad != 0:
+            return true + c.mean_rad
+        return true
+
+
 @SENSORS.register("INU")
 class INU(Sensor[InuConfig]):
     """The robot's orientation (roll, pitch, yaw in the world, as GroundTruth), each angle
-    plus N(Mean, Sigma), then wrapped into [0, 2 pi)."""
+    plus N(Mean, Sigma) (:class:`InuNoise`), then wrapped into [0, 2 pi)."""
 
+    NOISE = InuNoise()
     ALIASES = {"Sigma": "sigma_rad", "Mean": "mean_rad"}
 
-    def measure(self, view: WorldView) -> OrientationReading:
-        c = self.config
-        ori = np.array(self.handle.orientation(view.data), dtype=float)
-        if c.sigma_rad > 0:
-            ori = ori + self.rng.normal(c.mean_rad, c.sigma_rad, 3)
-        elif c.mean_rad != 0:
-            ori = ori + c.mean_rad
-        return OrientationReading(self.name, _wrapped(ori))
+    def sense(self, view: WorldView) -> np.ndarray:
+        return np.array(self.handle.orientation(view.data), dtype=float)
+
+    def reading(self, values: np.ndarray) -> OrientationReading:
+        return OrientationReading(self.name, _wrapped(values))

@@ -1,11 +1,19 @@
 """Wheel-based and pose sensors: Odometry (protocol.md 7.4), Encoder (7.5),
-GroundTruth (7.8) and INS (7.7)."""
+GroundTruth (7.8) and INS (7.7).
+
+Their noise (:mod:`usarsim.sensors.noise`): the Encoder's is :class:`EncoderCountNoise`, the
+relative error of its counting, and the INS's is :class:`InsDrift`, the drift of its pose
+integrated from noisy increments; both are declared as the sensor's ``NOISE`` and applied by the
+framework to what the sensor senses, drawn from the sensor's own seeded generator.  Odometry has
+no noise (its wheel angles are quantised by its EncoderResolution, exactly), nor has
+GroundTruth.
+"""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -19,6 +27,7 @@ from usarsim.readings import (
     PoseReading,
 )
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig
+from usarsim.sensors.noise import Noise
 from usarsim.sim.frames import wrap_2pi, wrap_pi
 
 if TYPE_CHECKING:
@@ -186,15 +195,28 @@ class EncoderConfig(SensorConfig):
             raise ValueError(f"resolution_rad must be > 0, got {self.resolution_rad}")
 
 
+class EncoderCountNoise(Noise):
+    """The relative error of an encoder's counting: each reading's true change of wheel angle
+    (rad) is scaled by (1 + U(-Noise, Noise)) before it is added to the count (protocol.md 7.5
+    scales the whole angle), so that a wheel at rest keeps its count, as a real encoder does,
+    however far it has turned: a change of 0 is no draw and stays 0.  ``true``: the change
+    (a float)."""
+
+    def apply(self, sensor: Sensor[Any], true: Any) -> Any:
+        if true == 0.0:
+            return true
+        return sensor.relative_noise_scalar(true)
+
+
 @SENSORS.register("Encoder")
 class Encoder(Sensor[EncoderConfig]):
     """Tick = round(accumulated wheel angle / Resolution), forward rotation counting up;
-    the noise is the counting's: each reading's change of angle is scaled by (1 + U(-Noise,
-    Noise)) before it is added (protocol.md 7.5 scales the whole angle), so that a wheel at
-    rest keeps its count, as a real encoder does, however far it has turned."""
+    the noise is the counting's (:class:`EncoderCountNoise`): it senses the change of its
+    wheel's angle since the last reading, and counts it as corrupted."""
 
     PACKED = True
     RESETTABLE = True
+    NOISE = EncoderCountNoise()
     ALIASES = {"Resolution": "resolution_rad", "Wheel": "wheel", "Joint": "wheel"}
 
     def configure(self, view: WorldView) -> None:
@@ -206,11 +228,16 @@ class Encoder(Sensor[EncoderConfig]):
         self._last = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
         self._counted = 0.0  # the angle counted so far, with its noise (rad)
 
-    def measure(self, view: WorldView) -> EncoderItem:
+    def sense(self, view: WorldView) -> float:
+        """The wheel's true change of angle since the last reading (rad)."""
         angle = float(view.data.qpos[self.handle.joint_qpos[self._wheel]])
         step, self._last = angle - self._last, angle
-        if step != 0.0:
-            self._counted += self.relative_noise_scalar(step)
+        return step
+
+    def reading(self, values: float) -> EncoderItem:
+        """The change counted (``values``, with its noise) added to the count; the ticks."""
+        if values != 0.0:  # a wheel at rest: the count stays as it is
+            self._counted += values
         return EncoderItem(self.name, int(round(self._counted / self.config.resolution_rad)))
 
     @classmethod
@@ -266,14 +293,68 @@ class InsConfig(SensorConfig):
             raise ValueError("sigma must be >= 0 and precision > 0")
 
 
+class InsMotion(NamedTuple):
+    """What an INS senses in one tick: the true pose of its robot (location, Euler angles),
+    its change since the last tick (that of the angles wrapped to [-pi, pi)), the distance
+    moved and whether the estimate integrates yet (False until the robot has settled)."""
+
+    loc: np.ndarray
+    ori: np.ndarray
+    dloc: np.ndarray
+    dori: np.ndarray
+    moved: float
+    integrating: bool
+
+
+class InsDrift(Noise):
+    """The drift of an INS (protocol.md 7.7: Sigma, Mean, Precision, Drifting): its estimated
+    pose integrates noisy increments of the true pose.  Each tick the true change of every
+    Euler angle is scaled by (1 + N(meanRot, Sigma)), and the true displacement d is added
+    with |d| x N(meanPos, Sigma) on each axis.  The means are the configured Mean or, with
+    Drifting, per-axis biases drawn once (:meth:`draw_means`: U(-0.5, 0.5) / Precision^2 for
+    the angles, U(-0.5, 0.5) / Precision for the location), at reset and when a client sets the
+    pose.  Until the robot has settled the estimate is the true pose.  ``true``: an
+    :class:`InsMotion`; the result: the estimated location and Euler angles (arrays), kept on
+    the sensor (``est_loc``, ``est_ori``) with the drawn means (``_mean_rot``, ``_mean_pos``)."""
+
+    def draw_means(self, ins: INS) -> None:
+        """The means of the sensor's increments' noise, from its settings (drawn with Drifting)."""
+        c = ins.config
+        if c.drifting:
+            ins._mean_rot = ins.rng.uniform(-0.5, 0.5, 3) / c.precision**2
+            ins._mean_pos = ins.rng.uniform(-0.5, 0.5, 3) / c.precision
+        else:
+            ins._mean_rot = np.full(3, c.mean)
+            ins._mean_pos = np.full(3, c.mean)
+
+    def apply(self, sensor: Sensor[Any], true: Any) -> Any:
+        if not isinstance(sensor, INS):
+            raise TypeError(f"InsDrift is an INS's noise, not a {type(sensor).__name__}'s")
+        c = sensor.config
+        m: InsMotion = true
+        if not m.integrating:
+            sensor.est_loc, sensor.est_ori = m.loc.copy(), m.ori.copy()
+        else:
+            sensor.est_ori = sensor.est_ori + m.dori * (1.0 + sensor.rng.normal(sensor._mean_rot, c.sigma))
+            sensor.est_loc = sensor.est_loc + m.dloc + m.moved * sensor.rng.normal(sensor._mean_pos, c.sigma)
+        return sensor.est_loc, sensor.est_ori
+
+
+INS_DRIFT = InsDrift()
+
+
 @SENSORS.register("INS")
 class INS(Sensor[InsConfig]):
-    """Integrates noisy increments of the true pose: each tick the true change of
-    every Euler angle is scaled by (1 + N(meanRot, Sigma)) and the true displacement d
-    gets d x N(meanPos, Sigma) per axis.  With Drifting, per-axis biases are drawn
-    once.  Integration starts after the robot has been at rest for one tick."""
+    """Integrates noisy increments of the true pose (its noise, :class:`InsDrift`): it
+    senses the true pose and its change each tick.  Integration starts after the robot has
+    been at rest for one tick."""
 
     ALIASES = {"Sigma": "sigma", "Mean": "mean", "Precision": "precision", "Drifting": "drifting"}
+    NOISE = INS_DRIFT
+    est_loc: np.ndarray  # the estimated pose (InsDrift's)
+    est_ori: np.ndarray
+    _mean_rot: np.ndarray  # the means of its increments' noise (InsDrift.draw_means)
+    _mean_pos: np.ndarray
 
     def _true(self, view: WorldView) -> tuple[np.ndarray, np.ndarray]:
         d = view.data
@@ -286,36 +367,30 @@ class INS(Sensor[InsConfig]):
         self._last_loc, self._last_ori = loc, ori
         self._started = False
         self._reset_time = view.time
-        self._draw_biases()
+        INS_DRIFT.draw_means(self)
 
-    def _draw_biases(self) -> None:
-        c = self.config
-        if c.drifting:
-            self._mean_rot = self.rng.uniform(-0.5, 0.5, 3) / c.precision**2
-            self._mean_pos = self.rng.uniform(-0.5, 0.5, 3) / c.precision
-        else:
-            self._mean_rot = np.full(3, c.mean)
-            self._mean_pos = np.full(3, c.mean)
-
-    def measure(self, view: WorldView) -> PoseReading:
-        c = self.config
+    def sense(self, view: WorldView) -> InsMotion:
+        """The true pose, its change since the last tick, and whether the estimate integrates
+        yet."""
         loc, ori = self._true(view)
         dloc = loc - self._last_loc
         dori = (ori - self._last_ori + math.pi) % (2 * math.pi) - math.pi
         self._last_loc, self._last_ori = loc, ori
         moved = float(np.linalg.norm(dloc))
+        integrating = self._started
         if not self._started:
             # wait until the robot has settled (e.g. after dropping onto the floor):
             # a tick after spawn with the chassis at rest
             qv = view.data.qvel[self.handle.root_qvel : self.handle.root_qvel + 6]
             if view.time > self._reset_time and float(np.abs(qv).max()) < 0.02:
                 self._started = True
-            self.est_loc, self.est_ori = loc.copy(), ori.copy()
-        else:
-            self.est_ori = self.est_ori + dori * (1.0 + self.rng.normal(self._mean_rot, c.sigma))
-            self.est_loc = self.est_loc + dloc + moved * self.rng.normal(self._mean_pos, c.sigma)
-        o = tuple(wrap_2pi(float(a)) for a in self.est_ori)
-        x, y, z = (float(v) for v in self.est_loc)
+        return InsMotion(loc, ori, dloc, dori, moved, integrating)
+
+    def reading(self, values: tuple[np.ndarray, np.ndarray]) -> PoseReading:
+        """The estimated pose (location, Euler angles) as a reading."""
+        est_loc, est_ori = values
+        o = tuple(wrap_2pi(float(a)) for a in est_ori)
+        x, y, z = (float(v) for v in est_loc)
         roll, pitch, yaw = o
         return PoseReading("INS", self.name, (x, y, z), (roll, pitch, yaw))
 
@@ -329,5 +404,5 @@ class INS(Sensor[InsConfig]):
             return OperationResult(ok=False)
         self.est_loc = np.array(vals[:3])
         self.est_ori = np.array(vals[3:])
-        self._draw_biases()
+        INS_DRIFT.draw_means(self)
         return OperationResult(ok=True)

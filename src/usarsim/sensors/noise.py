@@ -11,9 +11,11 @@ that the same seed gives the same readings to the bit.
 * :data:`RELATIVE`: every value times 1 + u, u uniform within the configured noise (the
   ``Noise`` of protocol.md 7.1; the Tachometer).
 
-Noise that belongs to a sensor's own model (the GPS's satellites, the odometry's and the INS's
-drift, the encoder's counts, the IMU's biases) stays in that sensor's module, where its source
-is cited.
+Noise that belongs to a sensor's own model is a named :class:`Noise` declared in that
+sensor's module, where its source is cited: the GPS's error from the satellites in view
+(``SatelliteNoise``), the IMU's and the INU's Gaussian errors (``ImuNoise``, ``InuNoise``),
+the encoder's counting error and the INS's drift (``EncoderCountNoise``, ``InsDrift``,
+:mod:`usarsim.sensors.motion`).
 """
 
 from __future__ import annotations
