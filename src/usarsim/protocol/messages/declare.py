@@ -1,0 +1,221 @@
+"""Messages declared once: each field of a message's dataclass says how it is printed and read
+back, and both the format and the parser follow from that.
+
+A field is one of:
+
+* :func:`key`: one ``{Key value}`` segment of a kind of value (:class:`Kind`: its printed
+  form, 2 or 4 decimals, an integer, ``True``/``False``, text; and how it is read back).
+  Written always, or only when not None (``optional``); read from the first segment of that
+  key, or its default when the line lacks it (a field without a default is required).
+* :func:`pairs`: ``{name value}`` segments of the names no key of the message has (STA's
+  flipper angles), printed where the field stands.
+* :func:`group`: repeated groups, each opened by its first key (``{Link n} {Value v}
+  {Torque t}``), declared as a small dataclass of keys; a message may read a group's key
+  as optional (``defaults``) where its lines may lack it.
+
+``fixed`` segments (``{Type AerialVehicle}``) follow the message's word.  :func:`message`
+compiles a class's layout once: its format is one function written for it (as
+:mod:`dataclasses` writes its methods), as fast as one written by hand; its parser reads a
+:class:`~usarsim.protocol.messages.common._Reader`, whose errors name the message.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from ..grammar import RawMessage, Segment
+from ..numbers import bool_str, f2, f4
+from .common import _CRLF, _groups, _Reader
+
+WIRE = "usarsim.wire"  # the metadata key of a declared field
+
+
+@dataclass(frozen=True, slots=True)
+class Kind:
+    """A kind of value: ``spec``, its place in a ``%`` format (``%d``, ``%s``), ``fmt`` what
+    turns the value into that (None: the value itself), and ``read`` how a segment is read
+    back."""
+
+    spec: str
+    fmt: Callable[[Any], str] | None
+    read: Callable[[_Reader, Segment], Any]
+
+
+def _text(r: _Reader, seg: Segment) -> str:
+    return seg.value
+
+
+TEXT = Kind("%s", None, _text)
+F2 = Kind("%s", f2, _Reader.number)
+F4 = Kind("%s", f4, _Reader.number)
+INT = Kind("%d", None, _Reader.integer)
+BOOL = Kind("%s", bool_str, _Reader.bool)
+
+
+@dataclass(frozen=True, slots=True)
+class Key:
+    """One ``{Key value}`` segment (see the module's text)."""
+
+    wire: str
+    kind: Kind
+    optional: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class Pairs:
+    """``{name value}`` segments of names the message's keys do not have."""
+
+    kind: Kind
+
+
+@dataclass(frozen=True, slots=True)
+class Group:
+    """Repeated groups of keys, each a ``cls``; ``defaults`` of keys this message may lack."""
+
+    cls: type
+    defaults: tuple[tuple[str, Any], ...] = ()
+
+
+def key(wire: str, kind: Kind, *, default: Any = dataclasses.MISSING, optional: bool = False) -> Any:
+    """A field sent as ``{wire value}``; ``optional``: left out of the line when None."""
+    return dataclasses.field(default=default, metadata={WIRE: Key(wire, kind, optional)})
+
+
+def pairs(kind: Kind) -> Any:
+    """A field of ``(name, value)`` pairs sent as ``{name value}`` segments."""
+    return dataclasses.field(default=(), metadata={WIRE: Pairs(kind)})
+
+
+def group(cls: type, **defaults: Any) -> Any:
+    """A field of repeated groups, each a ``cls`` (a dataclass of :func:`key` fields whose first opens it)."""
+    return dataclasses.field(default=(), metadata={WIRE: Group(cls, tuple(defaults.items()))})
+
+
+def _declared(cls: type) -> list[tuple[str, Any, dataclasses.Field[Any]]]:
+    return [(f.name, f.metadata[WIRE], f) for f in dataclasses.fields(cls) if WIRE in f.metadata]
+
+
+def _read_key(r: _Reader, k: Key, f: dataclasses.Field[Any], default: Any = dataclasses.MISSING) -> Any:
+    """A key's value from the line (its first segment), else its default, else missing."""
+    wanted = k.wire.lower()
+    for seg in r.raw.segments:
+        if seg.key.lower() == wanted:
+            return k.kind.read(r, seg)
+    if default is not dataclasses.MISSING:
+        return default
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    raise r.missing(k.wire)
+
+
+class Layout:
+    """A message's declared fields, compiled once: its format and its parser."""
+
+    def __init__(self, cls: type, word: str, fixed: tuple[tuple[str, str], ...] = (), read_first: tuple[str, ...] = ()):
+        self.cls = cls
+        self.word = word
+        self.fixed = fixed
+        self.fields = _declared(cls)
+        # the order fields are read in (which error a line with several faults gets)
+        by_name = {name: (name, spec, f) for name, spec, f in self.fields}
+        self.read_order = [by_name[n] for n in read_first] + [e for e in self.fields if e[0] not in read_first]
+        self.own = frozenset(spec.wire.lower() for _, spec, _ in self.fields if isinstance(spec, Key)) | frozenset(
+            w.lower() for w, _ in fixed
+        )
+        self.format: Callable[[Any], str] = self._compile_format()
+
+    # ---- formatting
+    def _compile_format(self) -> Callable[[Any], str]:
+        env: dict[str, Any] = {}
+        lines = ["def format(m):"]
+        run: list[str] = []  # a run of segments always written: one % format
+        args: list[str] = []
+        head = self.word + "".join(" {%s %s}" % (w, v) for w, v in self.fixed)
+
+        def flush(first: bool = False) -> None:
+            text = (head if first else "") + "".join(run)
+            if args:
+                lines.append(f"    s {'=' if first else '+='} {text!r} % ({', '.join(args)},)")
+            else:
+                lines.append(f"    s {'=' if first else '+='} {text!r}")
+            run.clear()
+            args.clear()
+
+        started = False
+
+        def value_of(name: str, kind: Kind, expr: str) -> str:
+            if kind.fmt is None:
+                return expr
+            env[f"fmt_{name}"] = kind.fmt
+            return f"fmt_{name}({expr})"
+
+        for name, spec, _ in self.fields:
+            if isinstance(spec, Key) and not spec.optional:
+                run.append(" {%s %s}" % (spec.wire, spec.kind.spec))
+                args.append(value_of(name, spec.kind, f"m.{name}"))
+                continue
+            flush(first=not started)
+            started = True
+            if isinstance(spec, Key):
+                lines += [
+                    f"    if m.{name} is not None:",
+                    f"        s += ' {{{spec.wire} {spec.kind.spec}}}' % {value_of(name, spec.kind, f'm.{name}')}",
+                ]
+            elif isinstance(spec, Pairs):
+                lines += [
+                    f"    for n, v in m.{name}:",
+                    f"        s += ' {{%s {spec.kind.spec}}}' % (n, {value_of(name, spec.kind, 'v')})",
+                ]
+            else:  # a group
+                item_run, item_args = [], []
+                for sub, sk, _ in _declared(spec.cls):
+                    item_run.append(" {%s %s}" % (sk.wire, sk.kind.spec))
+                    item_args.append(value_of(f"{name}_{sub}", sk.kind, f"g.{sub}"))
+                lines += [
+                    f"    for g in m.{name}:",
+                    f"        s += {''.join(item_run)!r} % ({', '.join(item_args)},)",
+                ]
+        flush(first=not started)
+        lines.append(f"    return s + {_CRLF!r}")
+        exec("\n".join(lines), env)  # noqa: S102  (the text above, from the declarations only)
+        fn: Callable[[Any], str] = env["format"]
+        return fn
+
+    # ---- parsing
+    def parse(self, r: _Reader) -> Any:
+        """The message of a line already known to be this one's (its word checked, and its
+        variant chosen when a word has several)."""
+        values: dict[str, Any] = {}
+        for name, spec, f in self.read_order:
+            if isinstance(spec, Key):
+                values[name] = _read_key(r, spec, f)
+            elif isinstance(spec, Pairs):
+                values[name] = tuple(
+                    (s.key, spec.kind.read(r, s)) for s in r.raw.segments if s.key.lower() not in self.own
+                )
+            else:
+                values[name] = self._read_groups(r, spec)
+        return self.cls(**values)
+
+    def _read_groups(self, r: _Reader, spec: Group) -> tuple[Any, ...]:
+        keys = _declared(spec.cls)
+        defaults = dict(spec.defaults)
+        out = []
+        for segments in _groups(r.raw.segments, keys[0][1].wire):
+            gr = _Reader(RawMessage(r.raw.type, tuple(s for s in segments if s.key.lower() not in self.own)), r.what)
+            out.append(
+                spec.cls(**{name: _read_key(gr, k, f, defaults.get(name, dataclasses.MISSING)) for name, k, f in keys})
+            )
+        return tuple(out)
+
+
+def message(
+    cls: type, word: str, *, fixed: tuple[tuple[str, str], ...] = (), read_first: tuple[str, ...] = ()
+) -> Layout:
+    """The compiled layout of a declared message class, sent as ``word`` (then ``fixed``);
+    ``read_first``: fields read before the others (so that a line with several faults is
+    refused for the one clients have always been told of first)."""
+    return Layout(cls, word, fixed, read_first)
