@@ -20,6 +20,10 @@ Every class is a frozen dataclass.  ``GameInfo``, the two STA classes, ``RobotGe
 ``RobotConfiguration`` (a required field follows a defaulted one) take keyword arguments
 only; the others also accept their fields positionally, in the order listed.
 
+A message of fixed layout is declared once: every field of its dataclass says its key, how
+its value is printed and how it is read back (:mod:`.declare`), and both its format and its
+parser follow (the status messages, NFO's game and closest path node, the zoom RES, DIE,
+STEPPED, PONG and ERROR so far); the others are written and read by hand in their modules.
 One module per family of messages holds each message's class, format and parser:
 
 * :mod:`.info`: NFO, the game, start poses and path nodes (§6.1, §5.2);
@@ -28,6 +32,8 @@ One module per family of messages holds each message's class, format and parser:
 * :mod:`.geometry`: GEO and CONF of the robot and its items (§6.7, §6.8), and
   :mod:`.articulated`, those of mission packages and actuators;
 * :mod:`.results`: RES, EFF, DIE, STEPPED, PONG, ERROR and unknown lines (§6.5, §6.6, §6.9, §18);
+* :mod:`.declare`: the declarations (keys, name-value pairs, repeated groups), compiled once
+  per message into its format and its parser;
 * :mod:`.common`: what they share (the line limit, field values, the segment reader).
 
 This module dispatches on them: a message's class to its format, a line's type to its parser.

@@ -4,14 +4,14 @@ back, and both the format and the parser follow from that.
 A field is one of:
 
 * :func:`key`: one ``{Key value}`` segment of a kind of value (:class:`Kind`: its printed
-  form, 2 or 4 decimals, an integer, ``True``/``False``, text; and how it is read back).
-  Written always, or only when not None (``optional``); read from the first segment of that
-  key, or its default when the line lacks it (a field without a default is required).
+  form, 2 or 4 decimals, an integer, ``True``/``False``, text, a vector; and how it is read
+  back).  Written always, or only when not None (``optional``); read from the first segment
+  of that key, or its ``absent`` value when the line lacks it (else the line is refused).
 * :func:`pairs`: ``{name value}`` segments of the names no key of the message has (STA's
   flipper angles), printed where the field stands.
 * :func:`group`: repeated groups, each opened by its first key (``{Link n} {Value v}
-  {Torque t}``), declared as a small dataclass of keys; a message may read a group's key
-  as optional (``defaults``) where its lines may lack it.
+  {Torque t}``), declared as a small dataclass of keys, every one required of a group but
+  those the message gives a value when absent (``group(LinkState, torque=0.0)``).
 
 ``fixed`` segments (``{Type AerialVehicle}``) follow the message's word.  :func:`message`
 compiles a class's layout once: its format is one function written for it (as
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..grammar import RawMessage, Segment
-from ..numbers import bool_str, f2, f4
+from ..numbers import bool_str, f2, f4, vec2, vec4
 from .common import _CRLF, _groups, _Reader
 
 WIRE = "usarsim.wire"  # the metadata key of a declared field
@@ -41,18 +41,36 @@ class Kind:
 
     spec: str
     fmt: Callable[[Any], str] | None
-    read: Callable[[_Reader, Segment], Any]
+    read: Callable[[_Reader, Segment, str], Any]  # (reader, segment, the key as declared)
 
 
-def _text(r: _Reader, seg: Segment) -> str:
+def _text(r: _Reader, seg: Segment, wire: str) -> str:
     return seg.value
 
 
+def _number(r: _Reader, seg: Segment, wire: str) -> float:
+    return r.number(seg)
+
+
+def _integer(r: _Reader, seg: Segment, wire: str) -> int:
+    return r.integer(seg)
+
+
+def _bool(r: _Reader, seg: Segment, wire: str) -> bool:
+    return r.bool(seg)
+
+
+def _vec3(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
+    return r.vector(wire, seg.value)
+
+
 TEXT = Kind("%s", None, _text)
-F2 = Kind("%s", f2, _Reader.number)
-F4 = Kind("%s", f4, _Reader.number)
-INT = Kind("%d", None, _Reader.integer)
-BOOL = Kind("%s", bool_str, _Reader.bool)
+F2 = Kind("%s", f2, _number)
+F4 = Kind("%s", f4, _number)
+INT = Kind("%d", None, _integer)
+BOOL = Kind("%s", bool_str, _bool)
+VEC2 = Kind("%s", vec2, _vec3)  # x,y,z with 2 decimals
+VEC4 = Kind("%s", vec4, _vec3)  # x,y,z with 4 decimals
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,6 +80,8 @@ class Key:
     wire: str
     kind: Kind
     optional: bool = False
+    absent: Any = None  # the value of a line that lacks the key, when it has one (has_absent)
+    has_absent: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,9 +99,20 @@ class Group:
     defaults: tuple[tuple[str, Any], ...] = ()
 
 
-def key(wire: str, kind: Kind, *, default: Any = dataclasses.MISSING, optional: bool = False) -> Any:
-    """A field sent as ``{wire value}``; ``optional``: left out of the line when None."""
-    return dataclasses.field(default=default, metadata={WIRE: Key(wire, kind, optional)})
+def key(
+    wire: str,
+    kind: Kind,
+    *,
+    default: Any = dataclasses.MISSING,
+    optional: bool = False,
+    absent: Any = dataclasses.MISSING,
+) -> Any:
+    """A field sent as ``{wire value}``; ``optional``: left out of the line when None (and
+    None when a line lacks it); ``absent``: the value of a line that lacks it (a key without
+    either is required of a line, whatever the dataclass's ``default``)."""
+    has_absent = optional or absent is not dataclasses.MISSING
+    value = None if absent is dataclasses.MISSING else absent
+    return dataclasses.field(default=default, metadata={WIRE: Key(wire, kind, optional, value, has_absent)})
 
 
 def pairs(kind: Kind) -> Any:
@@ -98,29 +129,42 @@ def _declared(cls: type) -> list[tuple[str, Any, dataclasses.Field[Any]]]:
     return [(f.name, f.metadata[WIRE], f) for f in dataclasses.fields(cls) if WIRE in f.metadata]
 
 
-def _read_key(r: _Reader, k: Key, f: dataclasses.Field[Any], default: Any = dataclasses.MISSING) -> Any:
-    """A key's value from the line (its first segment), else its default, else missing."""
+def _read_key(r: _Reader, k: Key, absent: Any = dataclasses.MISSING) -> Any:
+    """A key's value from the line (its first segment), else its value when absent, else missing."""
     wanted = k.wire.lower()
+    may_lack = absent is not dataclasses.MISSING or k.has_absent
     for seg in r.raw.segments:
         if seg.key.lower() == wanted:
-            return k.kind.read(r, seg)
-    if default is not dataclasses.MISSING:
-        return default
-    if f.default is not dataclasses.MISSING:
-        return f.default
+            if may_lack and k.kind.read is _number:
+                # a number a line may lack is named in errors as declared (FrontSteer, not frontsteer)
+                seg = Segment(k.wire, seg.value)
+            return k.kind.read(r, seg, k.wire)
+    if absent is not dataclasses.MISSING:
+        return absent
+    if k.has_absent:
+        return k.absent
     raise r.missing(k.wire)
 
 
 class Layout:
     """A message's declared fields, compiled once: its format and its parser."""
 
-    def __init__(self, cls: type, word: str, fixed: tuple[tuple[str, str], ...] = (), read_first: tuple[str, ...] = ()):
+    def __init__(
+        self,
+        cls: type,
+        word: str,
+        fixed: tuple[tuple[str, str], ...] = (),
+        read_first: tuple[str, ...] = (),
+        wire_first: tuple[str, ...] = (),
+    ):
         self.cls = cls
         self.word = word
         self.fixed = fixed
-        self.fields = _declared(cls)
+        by_name = {name: (name, spec, f) for name, spec, f in _declared(cls)}
+        # the wire order: the field order, but for fields a positional dataclass must keep
+        # elsewhere (``wire_first``: sent first)
+        self.fields = [by_name[n] for n in wire_first] + [e for e in by_name.values() if e[0] not in wire_first]
         # the order fields are read in (which error a line with several faults gets)
-        by_name = {name: (name, spec, f) for name, spec, f in self.fields}
         self.read_order = [by_name[n] for n in read_first] + [e for e in self.fields if e[0] not in read_first]
         self.own = frozenset(spec.wire.lower() for _, spec, _ in self.fields if isinstance(spec, Key)) | frozenset(
             w.lower() for w, _ in fixed
@@ -189,12 +233,12 @@ class Layout:
         """The message of a line already known to be this one's (its word checked, and its
         variant chosen when a word has several)."""
         values: dict[str, Any] = {}
-        for name, spec, f in self.read_order:
+        for name, spec, _ in self.read_order:
             if isinstance(spec, Key):
-                values[name] = _read_key(r, spec, f)
+                values[name] = _read_key(r, spec)
             elif isinstance(spec, Pairs):
                 values[name] = tuple(
-                    (s.key, spec.kind.read(r, s)) for s in r.raw.segments if s.key.lower() not in self.own
+                    (s.key, spec.kind.read(r, s, s.key)) for s in r.raw.segments if s.key.lower() not in self.own
                 )
             else:
                 values[name] = self._read_groups(r, spec)
@@ -207,15 +251,21 @@ class Layout:
         for segments in _groups(r.raw.segments, keys[0][1].wire):
             gr = _Reader(RawMessage(r.raw.type, tuple(s for s in segments if s.key.lower() not in self.own)), r.what)
             out.append(
-                spec.cls(**{name: _read_key(gr, k, f, defaults.get(name, dataclasses.MISSING)) for name, k, f in keys})
+                spec.cls(**{name: _read_key(gr, k, defaults.get(name, dataclasses.MISSING)) for name, k, _ in keys})
             )
         return tuple(out)
 
 
 def message(
-    cls: type, word: str, *, fixed: tuple[tuple[str, str], ...] = (), read_first: tuple[str, ...] = ()
+    cls: type,
+    word: str,
+    *,
+    fixed: tuple[tuple[str, str], ...] = (),
+    read_first: tuple[str, ...] = (),
+    wire_first: tuple[str, ...] = (),
 ) -> Layout:
     """The compiled layout of a declared message class, sent as ``word`` (then ``fixed``);
     ``read_first``: fields read before the others (so that a line with several faults is
-    refused for the one clients have always been told of first)."""
-    return Layout(cls, word, fixed, read_first)
+    refused for the one clients have always been told of first); ``wire_first``: fields sent
+    first, where the dataclass's order (kept for positional arguments) is not the wire's."""
+    return Layout(cls, word, fixed, read_first, wire_first)

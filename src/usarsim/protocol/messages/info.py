@@ -10,15 +10,16 @@ from typing import Any
 from ..grammar import Segment
 from ..numbers import vec2
 from .common import Vec3, _Reader
+from .declare import INT, TEXT, VEC2, key, message
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class GameInfo:
     """``NFO {Gametype g} {Level map} {TimeLimit minutes}``, sent on connect (§6.1)."""
 
-    gametype: str = "BotDeathMatch"
-    level: str
-    time_limit: int = 0
+    gametype: str = key("Gametype", TEXT, default="BotDeathMatch")
+    level: str = key("Level", TEXT)
+    time_limit: int = key("TimeLimit", INT, default=0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,21 +49,21 @@ class PathNodes:
 class ClosestPathNode:
     """Reply to GETCLOSESTPATHNODE (UDK): ``NFO {Pathnode name} {Location x,y,z}``."""
 
-    name: str
-    location: Vec3
+    name: str = key("Pathnode", TEXT)
+    location: Vec3 = key("Location", VEC2)
 
 
 InfoMessage = GameInfo | StartPoses | PathNodes | ClosestPathNode
 
-# ---- formatting
+# ---- formatting: the game and the closest path node from their declarations above; a pose
+# list (every pose in one segment, its count before it) by hand
+
+_GAME = message(GameInfo, "NFO")
+_CLOSEST = message(ClosestPathNode, "NFO")
 
 
 def _poses(poses: tuple[StartPose, ...]) -> str:
     return " ".join("%s %s %s" % (p.name, vec2(p.location), vec2(p.rotation)) for p in poses)
-
-
-def _fmt_game_info(m: GameInfo) -> str:
-    return "NFO {Gametype %s} {Level %s} {TimeLimit %d}\r\n" % (m.gametype, m.level, m.time_limit)
 
 
 def _fmt_start_poses(m: StartPoses) -> str:
@@ -75,10 +76,6 @@ def _fmt_path_nodes(m: PathNodes) -> str:
     if not m.nodes:
         return "NFO {PathNodes 0}\r\n"
     return "NFO {PathNodes %d} {%s}\r\n" % (len(m.nodes), _poses(m.nodes))
-
-
-def _fmt_closest_path_node(m: ClosestPathNode) -> str:
-    return "NFO {Pathnode %s} {Location %s}\r\n" % (m.name, vec2(m.location))
 
 
 # ---- parsing
@@ -113,16 +110,16 @@ def _parse_nfo(r: _Reader) -> InfoMessage:
         if len(poses) != count:
             raise r.error(key, str(count), f"the number of poses listed ({len(poses)})")
         return StartPoses(poses=poses) if key == "StartPoses" else PathNodes(nodes=poses)
-    if raw.has("Pathnode"):
-        return ClosestPathNode(name=r.text("Pathnode"), location=r.req_vec3("Location"))
-    return GameInfo(gametype=r.text("Gametype"), level=r.text("Level"), time_limit=r.req_int("TimeLimit"))
+    layout = _CLOSEST if raw.has("Pathnode") else _GAME
+    info: GameInfo | ClosestPathNode = layout.parse(r)
+    return info
 
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    GameInfo: _fmt_game_info,
+    GameInfo: _GAME.format,
     StartPoses: _fmt_start_poses,
     PathNodes: _fmt_path_nodes,
-    ClosestPathNode: _fmt_closest_path_node,
+    ClosestPathNode: _CLOSEST.format,
 }
 
 PARSERS: dict[str, Callable[[_Reader], InfoMessage]] = {"NFO": _parse_nfo}

@@ -12,9 +12,10 @@ from typing import Any
 
 from usarsim.readings import FieldValue
 
-from ..grammar import RawMessage, Segment, format_segment
+from ..grammar import Segment, format_segment
 from ..numbers import f2, f4
-from .common import _CRLF, _fields, _groups, _Reader, format_value
+from .common import _CRLF, _fields, _Reader, format_value
+from .declare import F2, F4, TEXT, group, key, message
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,9 +39,9 @@ class CameraZoom:
     """One camera of a zoom result (:class:`CameraZoomResult`, §5.4): its name, its horizontal field of view in
     radians, and its Status (``Failed`` when the requested field of view was clamped or reset)."""
 
-    name: str
-    fov: float
-    status: str = "OK"
+    name: str = key("Name", TEXT)
+    fov: float = key("FOV", F4)
+    status: str = key("Status", TEXT, default="OK")
 
 
 @dataclass(frozen=True, slots=True)
@@ -51,9 +52,9 @@ class CameraZoomResult:
     (``Camera``, or ``OmniCam`` for an omnidirectional camera).
     """
 
-    time: float
-    cameras: tuple[CameraZoom, ...] = ()
-    camera_type: str = "Camera"
+    time: float = key("Time", F2)
+    cameras: tuple[CameraZoom, ...] = group(CameraZoom)
+    camera_type: str = key("Type", TEXT, default="Camera")
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,15 +95,15 @@ class EffecterStatus:
 class Die:
     """``DIE {Killer name} {DamageType type}`` (§6.9)."""
 
-    killer: str
-    damage_type: str
+    killer: str = key("Killer", TEXT)
+    damage_type: str = key("DamageType", TEXT)
 
 
 @dataclass(frozen=True, slots=True)
 class Stepped:
     """``STEPPED {Time t}``: the lock-step interval is done (§18), 4 decimals."""
 
-    time: float
+    time: float = key("Time", F4)
 
 
 @dataclass(frozen=True, slots=True)
@@ -111,8 +112,8 @@ class Pong:
     request sent before it was carried out and everything it produced was written; ``time``
     the simulated time then (4 decimals)."""
 
-    id: str | None = None
-    time: float | None = None
+    id: str | None = key("Id", TEXT, default=None, optional=True)
+    time: float | None = key("Time", F4, default=None, optional=True)
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,8 +125,8 @@ class ErrorReply:
     the problem and what is allowed; braces and line breaks in it are sent as parentheses
     and spaces (:func:`error_reply`)."""
 
-    command: str
-    reason: str
+    command: str = key("Command", TEXT)
+    reason: str = key("Reason", TEXT)
 
 
 def error_reply(command: str, reason: str) -> ErrorReply:
@@ -146,7 +147,14 @@ ResultMessage = (
     Result | CameraZoomResult | ViewportsResult | EffecterStatus | Die | Stepped | Pong | ErrorReply | UnknownMessage
 )
 
-# ---- formatting
+# ---- formatting and parsing: the messages of fixed layout from their declarations above; a
+# RES's and an EFF's item-specific segments, and the viewports' numbered keys, by hand
+
+_ZOOM = message(CameraZoomResult, "RES", wire_first=("time", "camera_type"), read_first=("time", "camera_type"))
+_DIE = message(Die, "DIE")
+_STEPPED = message(Stepped, "STEPPED")
+_PONG = message(Pong, "PONG")
+_ERROR = message(ErrorReply, "ERROR")
 
 
 def _fmt_result(m: Result) -> str:
@@ -158,11 +166,6 @@ def _fmt_result(m: Result) -> str:
     # "{Mem <data>}" with no data), which a client looking for "{Mem " still finds
     parts.extend(["{%s %s}" % (k, format_value(v)) for k, v in m.extra])
     return " ".join(parts) + _CRLF
-
-
-def _fmt_camera_zoom(m: CameraZoomResult) -> str:
-    cams = "".join(" {Name %s} {FOV %s} {Status %s}" % (c.name, f4(c.fov), c.status) for c in m.cameras)
-    return "RES {Time %s} {Type %s}%s\r\n" % (f2(m.time), m.camera_type, cams)
 
 
 def _fmt_viewports(m: ViewportsResult) -> str:
@@ -200,11 +203,8 @@ def _parse_res(r: _Reader) -> Result | CameraZoomResult | ViewportsResult:
     time = r.req_float("Time")
     item_type = r.text("Type")
     if item_type in ("Camera", "OmniCam") and raw.has("FOV"):
-        cams = []
-        for g in _groups(raw.segments, "Name"):
-            gr = _Reader(RawMessage(raw.type, tuple(g)), r.what)
-            cams.append(CameraZoom(name=g[0].value, fov=gr.req_float("FOV"), status=gr.text("Status")))
-        return CameraZoomResult(time=time, cameras=tuple(cams), camera_type=item_type)
+        zoom: CameraZoomResult = _ZOOM.parse(r)
+        return zoom
     if item_type == "Viewports":
         views = []
         segs = raw.segments
@@ -261,24 +261,21 @@ def _parse_eff(r: _Reader) -> EffecterStatus:
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
     Result: _fmt_result,
-    CameraZoomResult: _fmt_camera_zoom,
+    CameraZoomResult: _ZOOM.format,
     ViewportsResult: _fmt_viewports,
     EffecterStatus: _fmt_effecter,
-    Die: lambda m: "DIE {Killer %s} {DamageType %s}\r\n" % (m.killer, m.damage_type),
-    Stepped: lambda m: "STEPPED {Time %s}\r\n" % f4(m.time),
-    Pong: lambda m: (
-        "PONG%s%s\r\n"
-        % ("" if m.id is None else " {Id %s}" % m.id, "" if m.time is None else " {Time %s}" % f4(m.time))
-    ),
-    ErrorReply: lambda m: "ERROR {Command %s} {Reason %s}\r\n" % (m.command, m.reason),
+    Die: _DIE.format,
+    Stepped: _STEPPED.format,
+    Pong: _PONG.format,
+    ErrorReply: _ERROR.format,
     UnknownMessage: _fmt_unknown,
 }
 
 PARSERS: dict[str, Callable[[_Reader], ResultMessage]] = {
     "RES": _parse_res,
     "EFF": _parse_eff,
-    "DIE": lambda r: Die(killer=r.text("Killer"), damage_type=r.text("DamageType")),
-    "STEPPED": lambda r: Stepped(time=r.req_float("Time")),
-    "PONG": lambda r: Pong(id=r.raw.get("Id"), time=r.opt_float("Time")),
-    "ERROR": lambda r: ErrorReply(command=r.text("Command"), reason=r.text("Reason")),
+    "DIE": _DIE.parse,
+    "STEPPED": _STEPPED.parse,
+    "PONG": _PONG.parse,
+    "ERROR": _ERROR.parse,
 }

@@ -23,13 +23,13 @@ class GroundVehicleStatus:
 
     vehicle_type: str = key("Type", TEXT, default="GroundVehicle")
     time: float = key("Time", F2)
-    front_steer: float = key("FrontSteer", F4, default=0.0)
-    rear_steer: float = key("RearSteer", F4, default=0.0)
+    front_steer: float = key("FrontSteer", F4, default=0.0, absent=0.0)
+    rear_steer: float = key("RearSteer", F4, default=0.0, absent=0.0)
     joints: tuple[tuple[str, float], ...] = pairs(F4)
-    light_toggle: bool = key("LightToggle", BOOL, default=False)
-    light_intensity: int = key("LightIntensity", INT, default=0)
+    light_toggle: bool = key("LightToggle", BOOL, default=False, absent=False)
+    light_intensity: int = key("LightIntensity", INT, default=0, absent=0)
     battery_s: int = key("Battery", INT)
-    view: int = key("View", INT, default=-1)
+    view: int = key("View", INT, default=-1, absent=-1)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -37,10 +37,10 @@ class AerialVehicleStatus:
     """Periodic ``STA {Type AerialVehicle}`` of an aerial robot (§6.2)."""
 
     time: float = key("Time", F2)
-    light_toggle: bool = key("LightToggle", BOOL, default=False)
-    light_intensity: int = key("LightIntensity", INT, default=0)
+    light_toggle: bool = key("LightToggle", BOOL, default=False, absent=False)
+    light_intensity: int = key("LightIntensity", INT, default=0, absent=0)
     battery_s: int = key("Battery", INT)
-    view: int = key("View", INT, default=-1)
+    view: int = key("View", INT, default=-1, absent=-1)
 
 
 @dataclass(frozen=True, slots=True)
