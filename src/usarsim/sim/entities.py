@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import mujoco
 import numpy as np
@@ -73,7 +74,10 @@ class Entities:
 
     def __init__(self, world: WorldConfig):
         self.world = world
-        self.tags: dict[int, Tag] = {t.tag_id: Tag(t.tag_id, tuple(t.location), t.memory) for t in world.rfid_tags}
+        self.tags: dict[int, Tag] = {
+            t.tag_id: Tag(t.tag_id, cast("tuple[float, float, float]", tuple(t.location)), t.memory)
+            for t in world.rfid_tags
+        }
         self._next_id = max([RELEASED_TAG_FIRST_ID - 1, *self.tags]) + 1
         self._tag_rows: tuple[list[int], np.ndarray] | None = None  # see tag_positions
         self.parts: dict[int, PartHit] = {}
@@ -186,7 +190,7 @@ class Entities:
         return rows
 
     def release_tag(self, location: tuple[float, float, float]) -> Tag:
-        tag = Tag(self._next_id, tuple(float(v) for v in location), "")
+        tag = Tag(self._next_id, cast("tuple[float, float, float]", tuple(float(v) for v in location)), "")
         self._next_id += 1
         self.tags[tag.tag_id] = tag
         return tag

@@ -74,10 +74,10 @@ def _quat_of_rows(m: list[list[float]]) -> np.ndarray:
     else:
         s = math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2
         q = [(m[1][0] - m[0][1]) / s, (m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s]
-    q = np.array(q)
+    qa = np.array(q)
     # the numbers of q / np.linalg.norm(q) (which is sqrt(q.dot(q)) for a vector), without its
     # Python: the waving victims' arms are turned with this before every stretch of steps
-    return q / math.sqrt(q.dot(q))
+    return qa / math.sqrt(qa.dot(qa))
 
 
 def mat_to_quat(m) -> np.ndarray:

@@ -79,7 +79,7 @@ def measure_all(items: list[Due], view: WorldView, standing: Standing) -> list[O
             if o is not None:
                 out.append(o)
         else:
-            out.append(status_output(item, view.data, standing, view.time))
+            out.append(status_output(item, view.data, standing, view.time))  # type: ignore[arg-type]  # not a tuple: a Report
     return out
 
 

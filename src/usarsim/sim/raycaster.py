@@ -120,8 +120,8 @@ class RayCaster:
     def _new_grid(self) -> None:
         """No grid of geoms yet (the compiled kernel's; filed at its first cast), and the
         time, joint positions and mocap orientations it will have been filed at."""
-        self._grid = None
-        self._grid_time = None
+        self._grid: tuple | None = None
+        self._grid_time: float | None = None
         self._grid_qpos = np.empty(0)
         self._grid_mocap = np.empty(0)
         self.grid_builds = 0
@@ -350,7 +350,7 @@ class RayCaster:
                 h = (h ^ (h >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
                 h = h ^ (h >> np.uint64(31))
         u = (h >> np.uint64(11)).astype(float) * (1.0 / 2.0**53)
-        return u < self._porosity[geoms]
+        return u < self._porosity[geoms]  # type: ignore[index]  # called for porous casts: the world has grids
 
     def _cast_effects(self, origins, dirs, max_range, exclude_body, kind, reflect, porous, dist, gid, nrm) -> None:
         """Rays that may pass grids and reflect off mirrors: each ray is cast again from
@@ -386,12 +386,12 @@ class RayCaster:
             g = np.where(hit, hg, 0)
             passing = np.zeros(k, dtype=bool)
             if porous:
-                grid = hit & (self._porosity[g] > 0)
+                grid = hit & (self._porosity[g] > 0)  # type: ignore[index]  # porous: the world has grids
                 if grid.any():
                     passing[grid] = self._passes(v[active[grid]], g[grid])
             bouncing = np.zeros(k, dtype=bool)
             if reflect:
-                bouncing = hit & ~passing & self._mirror[g] & (bounces[active] < MAX_BOUNCES)
+                bouncing = hit & ~passing & self._mirror[g] & (bounces[active] < MAX_BOUNCES)  # type: ignore[index]  # reflect: the world has mirrors
             final = hit & ~passing & ~bouncing
             fi = active[final]
             dist[fi] = travelled[fi] + hd[final]

@@ -25,8 +25,10 @@ import math
 import queue
 import threading
 import time
+from collections.abc import Callable, Iterable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
+from typing import Any, cast
 
 import mujoco
 import numpy as np
@@ -138,9 +140,13 @@ class FreeView:
     follow: str | None = None
 
 
+# snapshot -> (width, height, tiles): how a picture of robot cameras is laid out
+_Layout = Callable[[Snapshot], tuple[int, int, Iterable[Any]]]
+
+
 @dataclass
 class _Job:
-    layout: object  # snapshot -> (width, height, tiles); None for a free camera
+    layout: _Layout | None  # snapshot -> (width, height, tiles); None for a free camera
     future: Future
     free: FreeView | None = None
 
@@ -197,7 +203,7 @@ class RenderService:
         vertical field of view in degrees, ``time``, the simulated time of the picture, and
         ``follow``, the robot followed or None when it is not in the world)."""
         view = FreeView(
-            lookat=tuple(float(v) for v in lookat),
+            lookat=cast("tuple[float, float, float]", tuple(float(v) for v in lookat)),  # x, y, z
             azimuth=float(azimuth),
             elevation=float(elevation),
             distance=float(distance),
@@ -302,7 +308,7 @@ class RenderService:
     def _draw(self, snap: Snapshot, job: _Job):
         if job.free is not None:
             return self._free(snap, job.free)
-        width, height, tiles = job.layout(snap)
+        width, height, tiles = cast("_Layout", job.layout)(snap)  # a job without a free camera has its layout
         if not (1 <= width <= MAX_WIDTH and 1 <= height <= MAX_HEIGHT):
             raise ValueError(f"picture {width}x{height} is outside 1x1..{MAX_WIDTH}x{MAX_HEIGHT}")
         picture = np.zeros((height, width, 3), dtype=np.uint8)

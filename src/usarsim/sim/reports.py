@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 if TYPE_CHECKING:
     from usarsim.sensors.base import Sensor
@@ -111,9 +111,10 @@ class ReportSchedule:
         for pkg in r.config.mission_packages:
             reports.append(Report(r, [], period, on_grid(period), f"MISSTA:{pkg.name}", package=pkg))
         packed: dict[str, Report] = {}
-        for s in r.sensors:
-            if not s.PERIODIC:
+        for item in r.sensors:
+            if not item.PERIODIC:
                 continue
+            s = cast("Sensor[Any]", item)  # the items that send SEN lines at their period are sensors
             if s.PACKED:
                 rep = packed.get(s.TYPE)
                 if rep is None:

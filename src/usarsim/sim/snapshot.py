@@ -41,7 +41,7 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
             r.name,
             r.config,
             r.handle.location(d),
-            tuple(frames.wrap_2pi(a) for a in r.handle.orientation(d)),
+            tuple(frames.wrap_2pi(a) for a in r.handle.orientation(d)),  # type: ignore[arg-type]  # 3 angles
             r.battery_left(),
             r.spawn_time,
             forces.get(r.uid, 0.0),
@@ -57,12 +57,12 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
                 ObjectFrame(
                     o.name,
                     frames.from_mj_vec(d.xpos[b]),
-                    tuple(frames.wrap_2pi(a) for a in frames.mj_mat_to_usar_euler(d.xmat[b])),
+                    tuple(frames.wrap_2pi(a) for a in frames.mj_mat_to_usar_euler(d.xmat[b])),  # type: ignore[arg-type]  # 3 angles
                 )
             )
-    links = None
+    links: tuple[LinkFrame, ...] | None = None
     if radio is not None:
-        links = []
+        found: list[LinkFrame] = []
         if len(robots) <= MAX_LINK_ROBOTS:
             antennas = RadioNet.antennas(sim)
             names = sorted(antennas)
@@ -71,8 +71,8 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
                     ln = radio.link(sim, a, b, antennas)
                     if ln is not None:
                         pa, pb = pair_key(a, b)
-                        links.append(LinkFrame(pa, pb, ln.signal_dbm, ln.distance_m, ln.walls, ln.holds))
-        links = tuple(links)
+                        found.append(LinkFrame(pa, pb, ln.signal_dbm, ln.distance_m, ln.walls, ln.holds))
+        links = tuple(found)
     return WorldFrame(sim.time, robots, tuple(objects), links)
 
 

@@ -368,7 +368,7 @@ def cache_dir() -> Path:
     return Path(root) / "usarsim" / "textures"
 
 
-_MEMORY: dict[tuple[str, tuple[int, int, int]], np.ndarray] = {}
+_MEMORY: dict[tuple[str, tuple[int, ...]], np.ndarray] = {}  # (name, its colour's 3 levels) -> image
 
 
 def texture_image(name: str, rgb) -> np.ndarray:

@@ -21,7 +21,9 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
     name (any case) when given."""
     now = sim.time
     m, d = sim.model, sim.data
-    rows = []
+    rows: list[tuple[str, str, tuple[float, ...], tuple[float, ...]]] = []
+    loc: tuple[float, ...]
+    rot: tuple[float, ...]
     for r in sim.robots.values():
         loc, rot = r.handle.location(d), r.handle.orientation(d)
         rows.append((r.name, r.config.class_name, loc, rot))

@@ -180,8 +180,8 @@ def through_water(rgb: np.ndarray, raw_depth: np.ndarray, glcam, box: WaterBox, 
     t = np.minimum(t_hit, t_exit)
     mu = direction[2]
     rising = np.maximum(np.float32(1.0) - mu, np.float32(1e-6))  # 1 - mu
-    k = ATTENUATION_PER_M.astype(np.float32)
-    e = np.expm1(-(rising * t)[..., None] * k)  # exp(-a t) - 1, a = K (1 - mu)
+    k_rgb = ATTENUATION_PER_M.astype(np.float32)  # K, per colour channel
+    e = np.expm1(-(rising * t)[..., None] * k_rgb)  # exp(-a t) - 1, a = K (1 - mu)
     veil = -e / rising[..., None]  # K (1 - exp(-a t)) / a: W's share along the path
     water = colour.astype(np.float32)
     x = rgb.astype(np.float32)
