@@ -13,7 +13,7 @@ from typing import Any
 from usarsim.readings import FieldValue
 
 from ..grammar import RawMessage
-from ..numbers import f4, vec4
+from ..numbers import vec4
 from .articulated import (
     CONF_PARSERS,
     GEO_PARSERS,
@@ -23,6 +23,7 @@ from .articulated import (
     MisPkgGeometry,
 )
 from .common import _CRLF, Vec3, _fields, _groups, _Reader
+from .declare import F4, TEXT, VEC4, key, message
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -32,27 +33,27 @@ class RobotGeometry:
     The wheel keys are left out when None (robots without wheels).
     """
 
-    vehicle_type: str = "GroundVehicle"
-    class_name: str
-    dimensions: Vec3
-    cog: Vec3 = (0.0, 0.0, 0.0)
-    wheel_radius: float | None = None
-    wheel_separation: float | None = None
-    wheel_base: float | None = None
+    vehicle_type: str = key("Type", TEXT, default="GroundVehicle")
+    class_name: str = key("Name", TEXT)
+    dimensions: Vec3 = key("Dimensions", VEC4)
+    cog: Vec3 = key("COG", VEC4, default=(0.0, 0.0, 0.0))
+    wheel_radius: float | None = key("WheelRadius", F4, default=None, optional=True)
+    wheel_separation: float | None = key("WheelSeparation", F4, default=None, optional=True)
+    wheel_base: float | None = key("WheelBase", F4, default=None, optional=True)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RobotConfiguration:
     """Reply to ``GETCONF {Type Robot}`` (§6.7); ``Name`` carries the robot class."""
 
-    vehicle_type: str = "GroundVehicle"
-    class_name: str
-    steering_type: str
-    mass_kg: float
-    max_speed: float
-    max_torque: float
-    max_front_steer: float = 0.0
-    max_rear_steer: float = 0.0
+    vehicle_type: str = key("Type", TEXT, default="GroundVehicle")
+    class_name: str = key("Name", TEXT)
+    steering_type: str = key("SteeringType", TEXT)
+    mass_kg: float = key("Mass", F4)
+    max_speed: float = key("MaxSpeed", F4)
+    max_torque: float = key("MaxTorque", F4)
+    max_front_steer: float = key("MaxFrontSteer", F4, default=0.0, absent=0.0)
+    max_rear_steer: float = key("MaxRearSteer", F4, default=0.0, absent=0.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,8 +78,8 @@ class ItemGeometry:
 class EmptyGeometry:
     """``GEO {Type T}`` or ``GEO {Type T} {Name N}``: nothing matched the query (§5.5)."""
 
-    item_type: str
-    name: str | None = None
+    item_type: str = key("Type", TEXT)
+    name: str | None = key("Name", TEXT, default=None, optional=True)
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,8 +108,8 @@ class ItemConfiguration:
 class EmptyConfiguration:
     """``CONF {Type T}`` or ``CONF {Type T} {Name N}``: nothing matched the query (§5.5)."""
 
-    item_type: str
-    name: str | None = None
+    item_type: str = key("Type", TEXT)
+    name: str | None = key("Name", TEXT, default=None, optional=True)
 
 
 GeometryMessage = RobotGeometry | ItemGeometry | EmptyGeometry | MisPkgGeometry | ActuatorGeometry
@@ -116,40 +117,13 @@ ConfigurationMessage = (
     RobotConfiguration | ItemConfiguration | EmptyConfiguration | MisPkgConfiguration | ActuatorConfiguration
 )
 
-# ---- formatting
+# ---- formatting: the robot's lines and the empty replies from their declarations above; the
+# items' lines (several items, each its own keys) by hand
 
-
-def _fmt_robot_geometry(m: RobotGeometry) -> str:
-    s = "GEO {Type %s} {Name %s} {Dimensions %s} {COG %s}" % (
-        m.vehicle_type,
-        m.class_name,
-        vec4(m.dimensions),
-        vec4(m.cog),
-    )
-    if m.wheel_radius is not None:
-        s += " {WheelRadius %s}" % f4(m.wheel_radius)
-    if m.wheel_separation is not None:
-        s += " {WheelSeparation %s}" % f4(m.wheel_separation)
-    if m.wheel_base is not None:
-        s += " {WheelBase %s}" % f4(m.wheel_base)
-    return s + _CRLF
-
-
-def _fmt_robot_configuration(m: RobotConfiguration) -> str:
-    return (
-        "CONF {Type %s} {Name %s} {SteeringType %s} {Mass %s} {MaxSpeed %s} {MaxTorque %s} "
-        "{MaxFrontSteer %s} {MaxRearSteer %s}\r\n"
-        % (
-            m.vehicle_type,
-            m.class_name,
-            m.steering_type,
-            f4(m.mass_kg),
-            f4(m.max_speed),
-            f4(m.max_torque),
-            f4(m.max_front_steer),
-            f4(m.max_rear_steer),
-        )
-    )
+_ROBOT_GEO = message(RobotGeometry, "GEO")
+_ROBOT_CONF = message(RobotConfiguration, "CONF")
+_EMPTY_GEO = message(EmptyGeometry, "GEO")
+_EMPTY_CONF = message(EmptyConfiguration, "CONF")
 
 
 def _fmt_item_geometry(m: ItemGeometry) -> str:
@@ -158,12 +132,6 @@ def _fmt_item_geometry(m: ItemGeometry) -> str:
         for i in m.items
     )
     return "GEO {Type %s}%s\r\n" % (m.item_type, items)
-
-
-def _type_and_name(head: str, item_type: str, name: str | None) -> str:
-    if name is None:
-        return "%s {Type %s}\r\n" % (head, item_type)
-    return "%s {Type %s} {Name %s}\r\n" % (head, item_type, name)
 
 
 def _fmt_item_configuration(m: ItemConfiguration) -> str:
@@ -188,17 +156,11 @@ def _parse_geo(r: _Reader) -> GeometryMessage:
     raw = r.raw
     item_type = r.text("Type")
     if _only_type_and_name(raw):
-        return EmptyGeometry(item_type=item_type, name=raw.get("Name"))
+        empty: EmptyGeometry = _EMPTY_GEO.parse(r)
+        return empty
     if raw.has("Dimensions"):
-        return RobotGeometry(
-            vehicle_type=item_type,
-            class_name=r.text("Name"),
-            dimensions=r.req_vec3("Dimensions"),
-            cog=r.req_vec3("COG"),
-            wheel_radius=r.opt_float("WheelRadius"),
-            wheel_separation=r.opt_float("WheelSeparation"),
-            wheel_base=r.opt_float("WheelBase"),
-        )
+        robot: RobotGeometry = _ROBOT_GEO.parse(r)
+        return robot
     articulated = GEO_PARSERS.get(item_type.lower())
     if articulated is not None:
         return articulated(r)
@@ -230,18 +192,11 @@ def _parse_conf(r: _Reader) -> ConfigurationMessage:
     raw = r.raw
     item_type = r.text("Type")
     if _only_type_and_name(raw):
-        return EmptyConfiguration(item_type=item_type, name=raw.get("Name"))
+        empty: EmptyConfiguration = _EMPTY_CONF.parse(r)
+        return empty
     if raw.has("SteeringType"):
-        return RobotConfiguration(
-            vehicle_type=item_type,
-            class_name=r.text("Name"),
-            steering_type=r.text("SteeringType"),
-            mass_kg=r.req_float("Mass"),
-            max_speed=r.req_float("MaxSpeed"),
-            max_torque=r.req_float("MaxTorque"),
-            max_front_steer=r.opt_float("MaxFrontSteer") or 0.0,
-            max_rear_steer=r.opt_float("MaxRearSteer") or 0.0,
-        )
+        robot: RobotConfiguration = _ROBOT_CONF.parse(r)
+        return robot
     articulated = CONF_PARSERS.get(item_type.lower())
     if articulated is not None:
         return articulated(r)
@@ -252,12 +207,12 @@ def _parse_conf(r: _Reader) -> ConfigurationMessage:
 
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    RobotGeometry: _fmt_robot_geometry,
-    RobotConfiguration: _fmt_robot_configuration,
+    RobotGeometry: _ROBOT_GEO.format,
+    RobotConfiguration: _ROBOT_CONF.format,
     ItemGeometry: _fmt_item_geometry,
-    EmptyGeometry: lambda m: _type_and_name("GEO", m.item_type, m.name),
+    EmptyGeometry: _EMPTY_GEO.format,
     ItemConfiguration: _fmt_item_configuration,
-    EmptyConfiguration: lambda m: _type_and_name("CONF", m.item_type, m.name),
+    EmptyConfiguration: _EMPTY_CONF.format,
 }
 
 PARSERS: dict[str, Callable[[_Reader], GeometryMessage | ConfigurationMessage]] = {
