@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -175,7 +177,8 @@ class Scorer:
             if isinstance(where, str):
                 where = tuple(float(c) for c in where.split(","))
             if where is not None:
-                self._report(name, tuple(where))
+                # a REPORT's location (usarsim.sim.facade): its three floats, or their text
+                self._report(name, cast(tuple[float, float, float], tuple(cast(Iterable[float], where))))
 
     def _scan(self, s: RobotScore, v: RangeScanReading, t: float) -> None:
         pose = _pose_at(s.poses, t)

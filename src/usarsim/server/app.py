@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from usarsim.plugins import BUILTIN
 from usarsim.server.config import ServeConfig
@@ -14,6 +15,11 @@ from usarsim.server.listener import Service
 from usarsim.server.truth import TruthServer
 from usarsim.server.wireless import WirelessServers
 from usarsim.sim.facade import SimFacade
+
+if TYPE_CHECKING:
+    from usarsim.scoring import ScoreKeeper
+    from usarsim.server.recording import Recorder
+    from usarsim.web import WebConsole
 
 log = logging.getLogger("usarsim")
 
@@ -50,7 +56,7 @@ class Application:
         )
         # the image server (protocol.md 10) and its render thread; None: not served
         self.image_settings = c.image
-        self.image = None
+        self.image: ImageServer | None = None
         if c.image_port is not None:
             renderer = self.facade.render_service(self.image_settings.max_fps)
             self.image = ImageServer(
@@ -66,14 +72,14 @@ class Application:
         self.wireless = WirelessServers(self.facade, c.wireless, host=c.host) if c.wireless is not None else None
         # the operator console in the browser (usarsim.web), a client of the listeners above;
         # None: not served
-        self.web = None
+        self.web: WebConsole | None = None
         if c.web_port is not None:
             from usarsim.web import WebConsole
 
             self.web = WebConsole(self, host=c.host, port=c.web_port, max_connections=c.max_web_connections)
         self.services = self._services()  # every listener, started and stopped alike
         # the recording (--record) and the live Foxglove view (--foxglove); None: neither
-        self.recorder = None
+        self.recorder: Recorder | None = None
         if c.record is not None or c.foxglove_port is not None:
             from usarsim import __version__
             from usarsim.server.recording import Recorder, run_info
@@ -97,16 +103,16 @@ class Application:
                 camera_size=c.record_camera_size,
             )
             self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
-            self.control.tap = self.recorder
+            self.control.tap = self.recorder  # type: ignore[assignment]  # TcpListener's tap = None types it None
             self.control.tap_name = "control"
             for service in self.services[1:]:
-                listener = getattr(service.server, "listener", service.server)
+                listener: Any = getattr(service.server, "listener", service.server)
                 if service.name != "web" and hasattr(listener, "tap_name"):
                     listener.tap, listener.tap_name = self.recorder, service.name
                     listener.tap_binary = service.name == "image"
 
         # the score (--score prints it live, --score-file writes it at the end); None: not kept
-        self.score = None
+        self.score: ScoreKeeper | None = None
         if c.score or c.score_file is not None:
             from usarsim.scoring import ScoreKeeper
             from usarsim.sim.types import resolve_model
@@ -148,7 +154,7 @@ class Application:
                 try:
                     await service.server.start()
                 except OSError as exc:
-                    exc.usarsim_listener = service.describe()  # type: ignore[attr-defined]
+                    exc.usarsim_listener = service.describe()  # type: ignore[attr-defined]  # read by the CLI
                     raise
                 started.append(service)
             if self.recorder is not None:
@@ -165,7 +171,9 @@ class Application:
         """(name, host, port) of every listener, once started."""
         out = [(s.name, self.host, s.server.port) for s in self.services]
         if self.recorder is not None and self.recorder.server is not None:
-            out.append(("foxglove", self.host, self.recorder.foxglove_port))
+            port = self.recorder.foxglove_port
+            assert port is not None  # the live server's, once started
+            out.append(("foxglove", self.host, port))
         return out
 
     async def stop(self) -> None:

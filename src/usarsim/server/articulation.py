@@ -11,15 +11,36 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, Any
 
 from usarsim.controls import JointOrder
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.readings import ItemParams
 
+if TYPE_CHECKING:
+    from usarsim.config.robot import Link, MissionPackage, RobotConfig
+    from usarsim.sim.api import Facade
+
 
 class Articulation:
     """The session's handlers of articulated parts (see the module's description)."""
+
+    if TYPE_CHECKING:  # what the session gives
+        robot: RobotConfig | None
+        uid: int
+        actuator_api: bool
+        facade: Facade
+
+        def log_once(self, kind: str, msg: str, *args: Any, level: int = logging.WARNING) -> None: ...
+        def _alive(self) -> bool: ...
+        def _answered(
+            self,
+            command: str,
+            then: Callable[[Any], None] | None = None,
+            refused: Callable[[BaseException], None] | None = None,
+        ) -> Callable[..., None]: ...
 
     def on_multidrive(self, cmd: C.MultiDrive) -> None:
         """``MULTIDRIVE {Joint angle} ...``: absolute angles (protocol.md 5.3g)."""
@@ -126,7 +147,7 @@ class Articulation:
                 "act-sequence", "ACT {Sequence %d}: no stored sequences; ignored", cmd.sequence, level=logging.INFO
             )
 
-    def _gripper_of(self, pkg) -> str | None:
+    def _gripper_of(self, pkg: MissionPackage) -> str | None:
         """The gripper whose fingers are links of ``pkg``, else the robot's only gripper."""
         assert self.robot is not None
         grippers = [it for it in self.robot.items if it.item_type.lower() == "gripper"]
@@ -136,13 +157,22 @@ class Articulation:
                 return it.name
         return grippers[0].name if len(grippers) == 1 else None
 
-    def _actuator_configuration(self, pkgs) -> M.ActuatorConfiguration:
+    def _package_links(self, p: MissionPackage) -> Iterator[Link]:
+        """The robot's links of mission package ``p``, in its order (each one a link of the
+        robot: the robot file is checked when it is read)."""
+        assert self.robot is not None
+        for n in p.links:
+            ln = self.robot.link(n)
+            assert ln is not None
+            yield ln
+
+    def _actuator_configuration(self, pkgs: list[MissionPackage]) -> M.ActuatorConfiguration:
         """CONF {Type Actuator}: each link's joint type, torque and value range (a joint
         without limits turns through -pi..pi, the range its Value is reported in)."""
         out = []
         for p in pkgs:
             links = []
-            for i, ln in enumerate(self.robot.link(n) for n in p.links):
+            for i, ln in enumerate(self._package_links(p)):
                 lo, hi = (ln.min_range, ln.max_range) if ln.limited else (-math.pi, math.pi)
                 links.append(
                     M.ActuatorLinkConfiguration(
@@ -156,33 +186,38 @@ class Articulation:
             out.append(M.ActuatorConfig(name=p.name, links=tuple(links)))
         return M.ActuatorConfiguration(actuators=tuple(out))
 
-    def _actuator_geometry(self, pkgs) -> M.ActuatorGeometry:
+    def _actuator_geometry(self, pkgs: list[MissionPackage]) -> M.ActuatorGeometry:
         """GEO {Type Actuator}: the actuator's base at the robot's origin (mounted on the
         robot, named by its class), each link's joint pose relative to its parent link;
         ``Parent`` as the UDK printed it, the parent's index plus one (0: the base)."""
+        robot = self.robot
+        assert robot is not None
         out = []
         for p in pkgs:
             links = [
                 M.ActuatorLinkGeometry(
                     link=f.link, parent=max(f.parent, 0), location=f.location, orientation=f.orientation
                 )
-                for f in self.facade.package_frames(self.robot, p)
+                for f in self.facade.package_frames(robot, p)
             ]
             out.append(
                 M.ActuatorPose(
                     name=p.name,
                     location=(0.0, 0.0, 0.0),
                     orientation=(0.0, 0.0, 0.0),
-                    mount=self.robot.class_name,
+                    mount=robot.class_name,
                     links=tuple(links),
                 )
             )
         return M.ActuatorGeometry(actuators=tuple(out))
 
-    def _packages(self, name: str | None):
+    def _packages(self, name: str | None) -> list[MissionPackage]:
+        assert self.robot is not None
         return [p for p in self.robot.mission_packages if not name or p.name.lower() == name.lower()]
 
-    def package_geometry(self, item_type: str, name: str | None):
+    def package_geometry(
+        self, item_type: str, name: str | None
+    ) -> M.EmptyGeometry | M.ActuatorGeometry | M.MisPkgGeometry:
         """GEO {Type MisPkg} or {Type Actuator} (the latter turns the actuator API on)."""
         actuator = item_type.lower() == "actuator"
         if actuator:
@@ -192,6 +227,8 @@ class Articulation:
             return M.EmptyGeometry(item_type=item_type, name=name)
         if actuator:
             return self._actuator_geometry(pkgs)
+        robot = self.robot
+        assert robot is not None
         return M.MisPkgGeometry(
             packages=tuple(
                 M.PackageGeometry(
@@ -200,14 +237,16 @@ class Articulation:
                         M.LinkGeometry(
                             link=f.link, parent_link=f.parent, location=f.location, orientation=f.orientation
                         )
-                        for f in self.facade.package_frames(self.robot, p)
+                        for f in self.facade.package_frames(robot, p)
                     ),
                 )
                 for p in pkgs
             )
         )
 
-    def package_configuration(self, item_type: str, name: str | None):
+    def package_configuration(
+        self, item_type: str, name: str | None
+    ) -> M.EmptyConfiguration | M.ActuatorConfiguration | M.MisPkgConfiguration:
         """CONF {Type MisPkg} or {Type Actuator} (the latter turns the actuator API on)."""
         if item_type.lower() == "actuator":
             self.actuator_api = True
@@ -229,7 +268,7 @@ class Articulation:
                             min_range=ln.min_range,
                             max_range=ln.max_range,
                         )
-                        for i, ln in enumerate(self.robot.link(n) for n in p.links)
+                        for i, ln in enumerate(self._package_links(p))
                     ),
                 )
                 for p in pkgs

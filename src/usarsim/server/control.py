@@ -16,6 +16,7 @@ import asyncio
 import logging
 import socket
 import time
+from asyncio.trsock import TransportSocket
 from collections import deque
 from typing import Any
 
@@ -54,8 +55,10 @@ def actuator_status(o: Output) -> M.ActuatorStatus:
     """The ASTA line of a mission package's state (UDK actuator API), sent after its MISSTA to
     clients that use that API."""
     v: PackageState = o.value
+    t = o.time
+    assert t is not None  # a package's state always has its time (its MISSTA was formatted first)
     return M.ActuatorStatus(
-        time=o.time, name=v.name, links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links)
+        time=t, name=v.name, links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links)
     )
 
 
@@ -72,7 +75,8 @@ class Connection(ServerConnection):
         self._backlog: deque[str] = deque()  # lines received, not handled yet
         self._step_out: list[bytes] = []  # outputs while a STEP runs: sent with the next reply
         self.last_read = 0.0  # time.perf_counter() of the last read (usarsim.server.ordering)
-        self._sock = None  # the socket, to acknowledge what arrives at once (TCP_QUICKACK)
+        # the socket, to acknowledge what arrives at once (TCP_QUICKACK)
+        self._sock: TransportSocket | None = None
 
     @property
     def repeats_skipped(self) -> int:
@@ -93,8 +97,10 @@ class Connection(ServerConnection):
         one for the 40 ms of a delayed acknowledgement (usarsim.server.ordering).  Linux
         leaves quick-acknowledgement mode again when the server answers soon after it read
         ("ping-pong" traffic), so this is asked again after every read and every write."""
+        sock = self._sock
+        assert sock is not None and TCP_QUICKACK is not None  # asked only where the option is
         try:
-            self._sock.setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
+            sock.setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
         except OSError:  # closed meanwhile
             self._sock = None
 
@@ -126,15 +132,18 @@ class Connection(ServerConnection):
         srv.connections[uid] = self
 
     def release(self) -> None:
+        assert self.session is not None  # registered
         self.server.connections.pop(self.session.uid, None)
 
     def opened(self) -> None:
         srv = self.server
+        assert self.session is not None  # registered
         log.info("%s: connected (robot id %d)", self.peer, self.session.uid)
         self.send_reply(M.GameInfo(level=srv.facade.world_name, time_limit=srv.facade.world.time_limit_min))
 
     def closed(self) -> None:
         s = self.session
+        assert s is not None  # registered
         if s.state != NEW:
             self.server.facade.remove(s.uid)
         s.state = CLOSED
@@ -265,7 +274,7 @@ class ControlServer(TcpListener):
         # output waiting for a slow client beyond which its sensor lines are held latest-wins
         self.max_pending_bytes = max(4096, int(max_pending_bytes))
         self.max_robots = max_connections if max_robots is None else max(0, int(max_robots))
-        self.connections: dict[int, Connection] = {}
+        self.connections: dict[int, Connection] = {}  # type: ignore[assignment]  # by robot id (TcpListener: either)
         self._uid = 0
         # lock-step: each STEP carried out after every line read before it (usarsim.server.ordering)
         self.step_order = StepOrder(self.connections.values, step_grace_s) if facade.lockstep else None

@@ -149,18 +149,20 @@ class Session(Articulation, Queries):
             self.ctx.resume()
 
     @property
-    def has_robot(self) -> bool:
+    def has_robot(self) -> bool:  # type: ignore[override]  # Queries declares what it reads as attributes
         """The robot is spawned or being spawned (its requests are carried out in order)."""
         return self.state in (SPAWNING, ALIVE)
 
     @property
-    def facade(self) -> Facade:
+    def facade(self) -> Facade:  # type: ignore[override]  # Queries declares what it reads as attributes
         return self.ctx.facade
 
     def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:
         """Log the first problem of each kind at ``level``, its repetitions at DEBUG, within
         a bound on the kinds (:class:`~usarsim.server.connection.LogOnce`)."""
-        self.ctx.log_once(kind, msg, *args, level=level)
+        log_once = self.ctx.log_once
+        assert log_once is not None  # SessionContext.__post_init__ gives one
+        log_once(kind, msg, *args, level=level)
 
     # Entry point ---------------------------------------------------------------------
     def handle_line(self, line: str) -> None:

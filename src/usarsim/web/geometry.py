@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import struct
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -131,11 +132,11 @@ def arena_box(world: WorldConfig, objects: list[dict]) -> list[float]:
 
 def world_json(world: WorldConfig) -> dict:
     """The world's static geometry, start poses, victims, tags and water, for the world view."""
-    objects = []
+    objects: list[dict[str, Any]] = []
     for o in world.objects:
         pts = shape_points(o.shape, o.size, o.radius_m, o.length_m, o.mesh_file, o.scale)
         poly, top, bottom = footprint(pts, o.center, o.rotation)
-        entry = {
+        entry: dict[str, Any] = {
             "name": o.name,
             "shape": o.shape,
             "poly": poly,

@@ -32,6 +32,7 @@ import re
 import threading
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import foxglove
 from foxglove.websocket import ServerListener
@@ -42,6 +43,9 @@ from usarsim.sim.types import Output, RadioModel, WorldFrame
 from . import channels as ch
 from .transcript import METADATA_NAME
 from .writing import RecordingWriter, Seen, Sink
+
+if TYPE_CHECKING:
+    from foxglove.mcap import MCAPWriter
 
 log = logging.getLogger("usarsim.record")
 
@@ -205,7 +209,7 @@ class Recorder(RecordingWriter):
         self._sinks: list[Sink] = []
         self._file_sink: Sink | None = None
         self._live_sink: Sink | None = None
-        self._writer = None
+        self._writer: MCAPWriter | None = None
         self.server = None  # the live WebSocket server
         self._time: Callable[[], float] = lambda: 0.0
         self._describe = None
@@ -263,7 +267,8 @@ class Recorder(RecordingWriter):
                 self._sinks.append(self._file_sink)
         except Exception as exc:
             err = OSError(0, str(exc))
-            err.usarsim_listener = f"the recording {self.path} (--record)"
+            what = f"the recording {self.path} (--record)"
+            err.usarsim_listener = what  # type: ignore[attr-defined]  # read by the CLI (names what failed)
             raise err from exc
         if self.foxglove_port is not None:
             ctx = foxglove.Context()
@@ -282,7 +287,8 @@ class Recorder(RecordingWriter):
                     self._writer.close()
                     self._writer = None
                 err = OSError(0, str(exc))
-                err.usarsim_listener = f"the Foxglove port {self.foxglove_port} (--foxglove)"
+                what = f"the Foxglove port {self.foxglove_port} (--foxglove)"
+                err.usarsim_listener = what  # type: ignore[attr-defined]  # read by the CLI (names what failed)
                 raise err from exc
             self._live_sink = Sink(ctx)
             self._sinks.append(self._live_sink)
@@ -346,7 +352,7 @@ class Recorder(RecordingWriter):
 
     # The recorder's thread -----------------------------------------------------------
     def _run(self) -> None:
-        handlers = {
+        handlers: dict[str, Callable[..., Any]] = {
             "chunk": self._write_chunk,
             "outs": self._write_outputs,
             "frame": self._write_frame,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable
-from typing import Protocol
+from typing import Protocol, cast
 
 from usarsim.server.connection import transport_peer
 
@@ -83,7 +83,9 @@ class TappedProtocol(asyncio.Protocol):
 
     def connection_made(self, transport) -> None:
         self.conn = self.sink.opened(self.port, transport_peer(transport)[2])
-        self.inner.connection_made(TappedTransport(transport, self.sink, self.conn, self.binary))
+        # a stand-in for the transport: what it does not note is the transport's own
+        noted = cast(asyncio.Transport, TappedTransport(transport, self.sink, self.conn, self.binary))
+        self.inner.connection_made(noted)
 
     def data_received(self, data: bytes) -> None:
         self.sink.note(self.conn, "in", data)

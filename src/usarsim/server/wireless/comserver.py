@@ -16,6 +16,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+from typing import cast
 
 from usarsim.errors import ProtocolError
 from usarsim.protocol.wireless import (
@@ -302,7 +303,8 @@ class ComServer(WirelessServer):
                 return FAIL_NO_CONNECTION
             if (b, pb) not in self.listening or svc.down_since(pair, t):
                 for end in ends:
-                    end.transport.close()
+                    if end.transport is not None:  # connected: always
+                        end.transport.close()
                 return WcsFail.cannot_connect(b) if svc.down_since(pair, t) else WcsFail.not_listening(b, pb)
             del self.listening[(b, pb)]
             link = WcsLink(self, ends[0], ends[1], t)
@@ -325,10 +327,11 @@ class ComServer(WirelessServer):
 
         results = await asyncio.gather(*(one(*t) for t in targets), return_exceptions=True)
         if all(isinstance(r, _LinkEnd) for r in results):
-            return tuple(results)
+            return cast(tuple[_LinkEnd, ...], tuple(results))  # every one is (checked just above)
         for r, (robot, ip, port) in zip(results, targets):
             if isinstance(r, _LinkEnd):
-                r.transport.close()
+                if r.transport is not None:  # connected: always
+                    r.transport.close()
             else:
                 self.service.event("comserver: cannot connect to %s at %s:%d: %s", robot, ip, port, r)
         return None

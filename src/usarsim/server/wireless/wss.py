@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+from typing import cast
 
 from usarsim.protocol.wireless import (
     DNS_NO_ROBOT,
@@ -95,7 +96,7 @@ class WssConnection(LineConnection):
                 return WssError(REASON_INIT_FIRST)
             if isinstance(req, WssInvalid):
                 return WssError(req.reason)
-            return self._init(req)
+            return self._init(cast(WssInit, req))  # an INIT that is not WssInvalid
         me = self.robot.name
         if isinstance(req, WssInvalid) and kind != "INIT":
             return WssError(req.reason)
