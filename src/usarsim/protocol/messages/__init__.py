@@ -22,9 +22,9 @@ only; the others also accept their fields positionally, in the order listed.
 
 A message of fixed layout is declared once: every field of its dataclass says its key, how
 its value is printed and how it is read back (:mod:`.declare`), and both its format and its
-parser follow (the status messages, the robot's GEO and CONF and the empty ones, NFO's game
-and closest path node, the zoom RES, DIE, STEPPED, PONG and ERROR so far); the others are
-written and read by hand in their modules.
+parser follow: the status messages; the GEO and CONF of the robot, of its mission packages
+and actuators, and the empty ones; NFO's game and closest path node; the zoom RES, DIE,
+STEPPED, PONG and ERROR.  The others are written and read by hand in their modules.
 One module per family of messages holds each message's class, format and parser:
 
 * :mod:`.info`: NFO, the game, start poses and path nodes (§6.1, §5.2);

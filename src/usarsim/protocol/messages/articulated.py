@@ -10,9 +10,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..grammar import RawMessage
-from ..numbers import f4, vec4, vec_t4
-from .common import _CRLF, Vec3, _groups, _Reader
+from .common import Vec3, _Reader
+from .declare import F4, INT, TEXT, VEC4, VT4, group, key, message
 
 # ---- mission packages
 
@@ -21,10 +20,10 @@ from .common import _CRLF, Vec3, _groups, _Reader
 class LinkGeometry:
     """One link of a mission package GEO: pose relative to ``parent_link`` (-1 = chassis)."""
 
-    link: int
-    parent_link: int
-    location: Vec3
-    orientation: Vec3
+    link: int = key("Link", INT)
+    parent_link: int = key("ParentLink", INT)
+    location: Vec3 = key("Location", VT4)
+    orientation: Vec3 = key("Orientation", VT4)
 
 
 @dataclass(frozen=True, slots=True)
@@ -32,8 +31,8 @@ class PackageGeometry:
     """One mission package of a ``GEO {Type MisPkg}`` line (§6.8): its ``{Name P}`` and the geometry of its links,
     numbered from 1."""
 
-    name: str
-    links: tuple[LinkGeometry, ...] = ()
+    name: str = key("Name", TEXT)
+    links: tuple[LinkGeometry, ...] = group(LinkGeometry)
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,19 +43,19 @@ class MisPkgGeometry:
     orientations are truncated to 4 decimals, as in the UT output (``3.1415``, ``1.5707``).
     """
 
-    packages: tuple[PackageGeometry, ...] = ()
+    packages: tuple[PackageGeometry, ...] = group(PackageGeometry)
 
 
 @dataclass(frozen=True, slots=True)
 class LinkConfiguration:
     """One link of a mission package CONF; ``min_range > max_range`` = unlimited joint."""
 
-    link: int
-    joint_type: str
-    max_speed: float
-    max_torque: float
-    min_range: float
-    max_range: float
+    link: int = key("Link", INT)
+    joint_type: str = key("JointType", TEXT)
+    max_speed: float = key("MaxSpeed", F4)
+    max_torque: float = key("MaxTorque", F4)
+    min_range: float = key("MinRange", F4)
+    max_range: float = key("MaxRange", F4)
 
 
 @dataclass(frozen=True, slots=True)
@@ -64,15 +63,15 @@ class PackageConfiguration:
     """One mission package of a ``CONF {Type MisPkg}`` line (§6.7): its ``{Name P}`` and the joint configuration of
     its links."""
 
-    name: str
-    links: tuple[LinkConfiguration, ...] = ()
+    name: str = key("Name", TEXT)
+    links: tuple[LinkConfiguration, ...] = group(LinkConfiguration)
 
 
 @dataclass(frozen=True, slots=True)
 class MisPkgConfiguration:
     """``CONF {Type MisPkg} {Name P} {Link 1} {JointType Revolute} {MaxSpeed ...} ...``."""
 
-    packages: tuple[PackageConfiguration, ...] = ()
+    packages: tuple[PackageConfiguration, ...] = group(PackageConfiguration)
 
 
 # ---- actuators (UDK)
@@ -83,11 +82,11 @@ class ActuatorLinkConfiguration:
     """One link of an actuator CONF (UDK API): joint type, torque limit and the range of
     its Value (rad or m)."""
 
-    link: int
-    joint_type: str
-    max_torque: float
-    min_value: float
-    max_value: float
+    link: int = key("Link", INT)
+    joint_type: str = key("JointType", TEXT)
+    max_torque: float = key("MaxTorque", F4)
+    min_value: float = key("MinValue", F4)
+    max_value: float = key("MaxValue", F4)
 
 
 @dataclass(frozen=True, slots=True)
@@ -95,8 +94,8 @@ class ActuatorConfig:
     """One actuator of a ``CONF {Type Actuator}`` line (§6.7, UDK): its ``{Name arm}`` and the joint configuration of
     its links."""
 
-    name: str
-    links: tuple[ActuatorLinkConfiguration, ...] = ()
+    name: str = key("Name", TEXT)
+    links: tuple[ActuatorLinkConfiguration, ...] = group(ActuatorLinkConfiguration)
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,7 +103,7 @@ class ActuatorConfiguration:
     """``CONF {Type Actuator} {Name arm} {Link 1} {JointType Revolute} {MaxTorque t}
     {MinValue a} {MaxValue b} ...`` (§6.7, UDK); several actuators follow each other."""
 
-    actuators: tuple[ActuatorConfig, ...] = ()
+    actuators: tuple[ActuatorConfig, ...] = group(ActuatorConfig)
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,10 +112,10 @@ class ActuatorLinkGeometry:
     the parent link's index plus one, 0 when the link sits on the actuator's base (as the UDK
     server printed it: ``{Link 2} {Parent 1}``)."""
 
-    link: int
-    parent: int
-    location: Vec3
-    orientation: Vec3
+    link: int = key("Link", INT)
+    parent: int = key("Parent", INT)
+    location: Vec3 = key("Location", VEC4)
+    orientation: Vec3 = key("Orientation", VEC4)
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,11 +123,11 @@ class ActuatorPose:
     """One actuator of a ``GEO {Type Actuator}`` line (§6.8, UDK): its name, its base's location (m) and orientation
     (rad) on the robot, what it is mounted on, and its links' geometry."""
 
-    name: str
-    location: Vec3
-    orientation: Vec3
-    mount: str
-    links: tuple[ActuatorLinkGeometry, ...] = ()
+    name: str = key("Name", TEXT)
+    location: Vec3 = key("Location", VEC4)
+    orientation: Vec3 = key("Orientation", VEC4)
+    mount: str = key("Mount", TEXT)
+    links: tuple[ActuatorLinkGeometry, ...] = group(ActuatorLinkGeometry)
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,175 +135,30 @@ class ActuatorGeometry:
     """``GEO {Type Actuator} {Name arm} {Location x,y,z} {Orientation r,p,y} {Mount Robot}
     {Link 1} {Parent -1} {Location ...} {Orientation ...} ...`` (§6.8, UDK)."""
 
-    actuators: tuple[ActuatorPose, ...] = ()
+    actuators: tuple[ActuatorPose, ...] = group(ActuatorPose)
 
 
-# ---- formatting
+# ---- formatting and parsing, from the declarations above
 
-
-def _fmt_mispkg_geometry(m: MisPkgGeometry) -> str:
-    parts = ["GEO {Type MisPkg}"]
-    for pkg in m.packages:
-        parts.append("{Name %s}" % pkg.name)
-        parts.extend(
-            "{Link %d} {ParentLink %d} {Location %s} {Orientation %s}"
-            % (k.link, k.parent_link, vec_t4(k.location), vec_t4(k.orientation))
-            for k in pkg.links
-        )
-    return " ".join(parts) + _CRLF
-
-
-def _fmt_mispkg_configuration(m: MisPkgConfiguration) -> str:
-    parts = ["CONF {Type MisPkg}"]
-    for pkg in m.packages:
-        parts.append("{Name %s}" % pkg.name)
-        parts.extend(
-            "{Link %d} {JointType %s} {MaxSpeed %s} {MaxTorque %s} {MinRange %s} {MaxRange %s}"
-            % (
-                k.link,
-                k.joint_type,
-                f4(k.max_speed),
-                f4(k.max_torque),
-                f4(k.min_range),
-                f4(k.max_range),
-            )
-            for k in pkg.links
-        )
-    return " ".join(parts) + _CRLF
-
-
-def _fmt_actuator_configuration(m: ActuatorConfiguration) -> str:
-    parts = ["CONF {Type Actuator}"]
-    for act in m.actuators:
-        parts.append("{Name %s}" % act.name)
-        parts.extend(
-            "{Link %d} {JointType %s} {MaxTorque %s} {MinValue %s} {MaxValue %s}"
-            % (k.link, k.joint_type, f4(k.max_torque), f4(k.min_value), f4(k.max_value))
-            for k in act.links
-        )
-    return " ".join(parts) + _CRLF
-
-
-def _fmt_actuator_geometry(m: ActuatorGeometry) -> str:
-    parts = ["GEO {Type Actuator}"]
-    for act in m.actuators:
-        parts.append(
-            "{Name %s} {Location %s} {Orientation %s} {Mount %s}"
-            % (act.name, vec4(act.location), vec4(act.orientation), act.mount)
-        )
-        parts.extend(
-            "{Link %d} {Parent %d} {Location %s} {Orientation %s}"
-            % (k.link, k.parent, vec4(k.location), vec4(k.orientation))
-            for k in act.links
-        )
-    return " ".join(parts) + _CRLF
-
-
-# ---- parsing
-
-
-def _parse_mispkg_geometry(r: _Reader) -> MisPkgGeometry:
-    raw = r.raw
-    packages = []
-    for group in _groups(raw.segments, "Name"):
-        links = []
-        for link in _groups(tuple(group[1:]), "Link"):
-            lr = _Reader(RawMessage(raw.type, tuple(link)), r.what)
-            links.append(
-                LinkGeometry(
-                    link=lr.req_int("Link"),
-                    parent_link=lr.req_int("ParentLink"),
-                    location=lr.req_vec3("Location"),
-                    orientation=lr.req_vec3("Orientation"),
-                )
-            )
-        packages.append(PackageGeometry(name=group[0].value, links=tuple(links)))
-    return MisPkgGeometry(packages=tuple(packages))
-
-
-def _parse_mispkg_configuration(r: _Reader) -> MisPkgConfiguration:
-    raw = r.raw
-    packages = []
-    for group in _groups(raw.segments, "Name"):
-        links = []
-        for link in _groups(tuple(group[1:]), "Link"):
-            lr = _Reader(RawMessage(raw.type, tuple(link)), r.what)
-            links.append(
-                LinkConfiguration(
-                    link=lr.req_int("Link"),
-                    joint_type=lr.text("JointType"),
-                    max_speed=lr.req_float("MaxSpeed"),
-                    max_torque=lr.req_float("MaxTorque"),
-                    min_range=lr.req_float("MinRange"),
-                    max_range=lr.req_float("MaxRange"),
-                )
-            )
-        packages.append(PackageConfiguration(name=group[0].value, links=tuple(links)))
-    return MisPkgConfiguration(packages=tuple(packages))
-
-
-def _parse_actuator_geometry(r: _Reader) -> ActuatorGeometry:
-    raw = r.raw
-    actuators = []
-    for group in _groups(raw.segments, "Name"):
-        links = _groups(tuple(group[1:]), "Link")
-        head = _Reader(RawMessage(raw.type, tuple(group[1 : len(group) - sum(len(g) for g in links)])), r.what)
-        parsed = []
-        for link in links:
-            lr = _Reader(RawMessage(raw.type, tuple(link)), r.what)
-            parsed.append(
-                ActuatorLinkGeometry(
-                    link=lr.req_int("Link"),
-                    parent=lr.req_int("Parent"),
-                    location=lr.req_vec3("Location"),
-                    orientation=lr.req_vec3("Orientation"),
-                )
-            )
-        actuators.append(
-            ActuatorPose(
-                name=group[0].value,
-                location=head.req_vec3("Location"),
-                orientation=head.req_vec3("Orientation"),
-                mount=head.text("Mount"),
-                links=tuple(parsed),
-            )
-        )
-    return ActuatorGeometry(actuators=tuple(actuators))
-
-
-def _parse_actuator_configuration(r: _Reader) -> ActuatorConfiguration:
-    actuators = []
-    for group in _groups(r.raw.segments, "Name"):
-        links = []
-        for link in _groups(tuple(group[1:]), "Link"):
-            lr = _Reader(RawMessage(r.raw.type, tuple(link)), r.what)
-            links.append(
-                ActuatorLinkConfiguration(
-                    link=lr.req_int("Link"),
-                    joint_type=lr.text("JointType"),
-                    max_torque=lr.req_float("MaxTorque"),
-                    min_value=lr.req_float("MinValue"),
-                    max_value=lr.req_float("MaxValue"),
-                )
-            )
-        actuators.append(ActuatorConfig(name=group[0].value, links=tuple(links)))
-    return ActuatorConfiguration(actuators=tuple(actuators))
-
+_MISPKG_GEO = message(MisPkgGeometry, "GEO", fixed=(("Type", "MisPkg"),))
+_MISPKG_CONF = message(MisPkgConfiguration, "CONF", fixed=(("Type", "MisPkg"),))
+_ACTUATOR_GEO = message(ActuatorGeometry, "GEO", fixed=(("Type", "Actuator"),))
+_ACTUATOR_CONF = message(ActuatorConfiguration, "CONF", fixed=(("Type", "Actuator"),))
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    MisPkgGeometry: _fmt_mispkg_geometry,
-    MisPkgConfiguration: _fmt_mispkg_configuration,
-    ActuatorConfiguration: _fmt_actuator_configuration,
-    ActuatorGeometry: _fmt_actuator_geometry,
+    MisPkgGeometry: _MISPKG_GEO.format,
+    MisPkgConfiguration: _MISPKG_CONF.format,
+    ActuatorConfiguration: _ACTUATOR_CONF.format,
+    ActuatorGeometry: _ACTUATOR_GEO.format,
 }
 
 # the GEO and CONF parsers of .geometry, by the lower-cased {Type T} of the line
 GEO_PARSERS: dict[str, Callable[[_Reader], MisPkgGeometry | ActuatorGeometry]] = {
-    "mispkg": _parse_mispkg_geometry,
-    "actuator": _parse_actuator_geometry,
+    "mispkg": _MISPKG_GEO.parse,
+    "actuator": _ACTUATOR_GEO.parse,
 }
 
 CONF_PARSERS: dict[str, Callable[[_Reader], MisPkgConfiguration | ActuatorConfiguration]] = {
-    "mispkg": _parse_mispkg_configuration,
-    "actuator": _parse_actuator_configuration,
+    "mispkg": _MISPKG_CONF.parse,
+    "actuator": _ACTUATOR_CONF.parse,
 }

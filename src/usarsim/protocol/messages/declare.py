@@ -11,7 +11,8 @@ A field is one of:
   flipper angles), printed where the field stands.
 * :func:`group`: repeated groups, each opened by its first key (``{Link n} {Value v}
   {Torque t}``), declared as a small dataclass of keys, every one required of a group but
-  those the message gives a value when absent (``group(LinkState, torque=0.0)``).
+  those the message gives a value when absent (``group(LinkState, torque=0.0)``); its last
+  field may itself be a group (a mission package's links, after its name).
 
 ``fixed`` segments (``{Type AerialVehicle}``) follow the message's word.  :func:`message`
 compiles a class's layout once: its format is one function written for it (as
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..grammar import RawMessage, Segment
-from ..numbers import bool_str, f2, f4, vec2, vec4
+from ..numbers import bool_str, f2, f4, vec2, vec4, vec_t4
 from .common import _CRLF, _groups, _Reader
 
 WIRE = "usarsim.wire"  # the metadata key of a declared field
@@ -71,6 +72,7 @@ INT = Kind("%d", None, _integer)
 BOOL = Kind("%s", bool_str, _bool)
 VEC2 = Kind("%s", vec2, _vec3)  # x,y,z with 2 decimals
 VEC4 = Kind("%s", vec4, _vec3)  # x,y,z with 4 decimals
+VT4 = Kind("%s", vec_t4, _vec3)  # x,y,z truncated to 4 decimals
 
 
 @dataclass(frozen=True, slots=True)
@@ -214,19 +216,39 @@ class Layout:
                     f"        s += ' {{%s {spec.kind.spec}}}' % (n, {value_of(name, spec.kind, 'v')})",
                 ]
             else:  # a group
-                item_run, item_args = [], []
-                for sub, sk, _ in _declared(spec.cls):
-                    item_run.append(" {%s %s}" % (sk.wire, sk.kind.spec))
-                    item_args.append(value_of(f"{name}_{sub}", sk.kind, f"g.{sub}"))
-                lines += [
-                    f"    for g in m.{name}:",
-                    f"        s += {''.join(item_run)!r} % ({', '.join(item_args)},)",
-                ]
+                self._emit_group(lines, value_of, spec, f"m.{name}", name, 1)
         flush(first=not started)
         lines.append(f"    return s + {_CRLF!r}")
         exec("\n".join(lines), env)  # noqa: S102  (the text above, from the declarations only)
         fn: Callable[[Any], str] = env["format"]
         return fn
+
+    @staticmethod
+    def _emit_group(
+        lines: list[str], value_of: Callable[[str, Kind, str], str], spec: Group, items: str, name: str, depth: int
+    ) -> None:
+        """The lines that write every group of ``items`` (a group inside runs nested)."""
+        pad = "    " * depth
+        var = f"g{depth}"
+        lines.append(f"{pad}for {var} in {items}:")
+        run: list[str] = []
+        args: list[str] = []
+
+        def flush() -> None:
+            if run:
+                fmt = "".join(run)
+                lines.append(f"{pad}    s += {fmt!r} % ({', '.join(args)},)" if args else f"{pad}    s += {fmt!r}")
+            run.clear()
+            args.clear()
+
+        for sub, sk, _ in _declared(spec.cls):
+            if isinstance(sk, Key):
+                run.append(" {%s %s}" % (sk.wire, sk.kind.spec))
+                args.append(value_of(f"{name}_{sub}", sk.kind, f"{var}.{sub}"))
+            else:
+                flush()
+                Layout._emit_group(lines, value_of, sk, f"{var}.{sub}", f"{name}_{sub}", depth + 1)
+        flush()
 
     # ---- parsing
     def parse(self, r: _Reader) -> Any:
@@ -244,15 +266,23 @@ class Layout:
                 values[name] = self._read_groups(r, spec)
         return self.cls(**values)
 
-    def _read_groups(self, r: _Reader, spec: Group) -> tuple[Any, ...]:
+    def _read_groups(self, r: _Reader, spec: Group, segments: tuple[Segment, ...] | None = None) -> tuple[Any, ...]:
+        """The groups of ``segments`` (the line's by default).  A group's keys are read from its
+        segments before a group inside it starts; the groups inside are read first."""
         keys = _declared(spec.cls)
         defaults = dict(spec.defaults)
+        inner = [(name, k) for name, k, _ in keys if isinstance(k, Group)]
+        inner_start = _declared(inner[0][1].cls)[0][1].wire.lower() if inner else None
         out = []
-        for segments in _groups(r.raw.segments, keys[0][1].wire):
-            gr = _Reader(RawMessage(r.raw.type, tuple(s for s in segments if s.key.lower() not in self.own)), r.what)
-            out.append(
-                spec.cls(**{name: _read_key(gr, k, defaults.get(name, dataclasses.MISSING)) for name, k, _ in keys})
-            )
+        for found in _groups(r.raw.segments if segments is None else segments, keys[0][1].wire):
+            own = [s for s in found if s.key.lower() not in self.own]
+            cut = next((i for i, s in enumerate(own) if i > 0 and s.key.lower() == inner_start), len(own))
+            values: dict[str, Any] = {name: self._read_groups(r, k, tuple(own[cut:])) for name, k in inner}
+            gr = _Reader(RawMessage(r.raw.type, tuple(own[:cut])), r.what)
+            for name, k, _ in keys:
+                if isinstance(k, Key):
+                    values[name] = _read_key(gr, k, defaults.get(name, dataclasses.MISSING))
+            out.append(spec.cls(**values))
         return tuple(out)
 
 
