@@ -24,7 +24,8 @@ A message of fixed layout is declared once: every field of its dataclass says it
 its value is printed and how it is read back (:mod:`.declare`), and both its format and its
 parser follow: the status messages; the GEO and CONF of the robot, of its mission packages
 and actuators, and the empty ones; NFO's game and closest path node; the zoom RES, DIE,
-STEPPED, PONG and ERROR.  The others are written and read by hand in their modules.
+STEPPED, PONG and ERROR; the SEN bodies of the readings of fixed layout.  The others are
+written and read by hand in their modules.
 One module per family of messages holds each message's class, format and parser:
 
 * :mod:`.info`: NFO, the game, start poses and path nodes (§6.1, §5.2);

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..grammar import RawMessage, Segment
-from ..numbers import bool_str, f2, f4, vec2, vec4, vec_t4
+from ..numbers import bool_str, f2, f4, t4, vec2, vec4, vec_angle4, vec_t4
 from .common import _CRLF, _groups, _Reader
 
 WIRE = "usarsim.wire"  # the metadata key of a declared field
@@ -43,6 +43,7 @@ class Kind:
     spec: str
     fmt: Callable[[Any], str] | None
     read: Callable[[_Reader, Segment, str], Any]  # (reader, segment, the key as declared)
+    empty: str | None = None  # what follows the key, for an empty value, instead of " value"
 
 
 def _text(r: _Reader, seg: Segment, wire: str) -> str:
@@ -65,6 +66,10 @@ def _vec3(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
     return r.vector(wire, seg.value)
 
 
+def _values(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
+    return r.vector(wire, seg.value, None)
+
+
 TEXT = Kind("%s", None, _text)
 F2 = Kind("%s", f2, _number)
 F4 = Kind("%s", f4, _number)
@@ -73,6 +78,10 @@ BOOL = Kind("%s", bool_str, _bool)
 VEC2 = Kind("%s", vec2, _vec3)  # x,y,z with 2 decimals
 VEC4 = Kind("%s", vec4, _vec3)  # x,y,z with 4 decimals
 VT4 = Kind("%s", vec_t4, _vec3)  # x,y,z truncated to 4 decimals
+T4 = Kind("%s", t4, _number)  # truncated to 4 decimals
+ANGLES4 = Kind("%s", vec_angle4, _vec3)  # roll,pitch,yaw in [0, 2 pi), 4 decimals
+VALUES4 = Kind("%s", vec4, _values)  # any number of values, 4 decimals
+RANGES4 = Kind("%s", vec4, _values, empty="")  # a sweep's ranges; none: a bare {Range}
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,11 +167,15 @@ class Layout:
         fixed: tuple[tuple[str, str], ...] = (),
         read_first: tuple[str, ...] = (),
         wire_first: tuple[str, ...] = (),
+        keys: dict[str, Key] | None = None,
+        end: str = _CRLF,
     ):
         self.cls = cls
         self.word = word
         self.fixed = fixed
-        by_name = {name: (name, spec, f) for name, spec, f in _declared(cls)}
+        self.end = end
+        declared = _declared(cls) if keys is None else [(name, k, None) for name, k in keys.items()]
+        by_name = {name: (name, spec, f) for name, spec, f in declared}
         # the wire order: the field order, but for fields a positional dataclass must keep
         # elsewhere (``wire_first``: sent first)
         self.fields = [by_name[n] for n in wire_first] + [e for e in by_name.values() if e[0] not in wire_first]
@@ -199,13 +212,20 @@ class Layout:
             return f"fmt_{name}({expr})"
 
         for name, spec, _ in self.fields:
-            if isinstance(spec, Key) and not spec.optional:
+            if isinstance(spec, Key) and not spec.optional and spec.kind.empty is None:
                 run.append(" {%s %s}" % (spec.wire, spec.kind.spec))
                 args.append(value_of(name, spec.kind, f"m.{name}"))
                 continue
             flush(first=not started)
             started = True
-            if isinstance(spec, Key):
+            if isinstance(spec, Key) and spec.kind.empty is not None:
+                lines += [
+                    f"    if m.{name}:",
+                    f"        s += ' {{{spec.wire} {spec.kind.spec}}}' % {value_of(name, spec.kind, f'm.{name}')}",
+                    "    else:",
+                    f"        s += {' {%s%s}' % (spec.wire, spec.kind.empty)!r}",
+                ]
+            elif isinstance(spec, Key):
                 lines += [
                     f"    if m.{name} is not None:",
                     f"        s += ' {{{spec.wire} {spec.kind.spec}}}' % {value_of(name, spec.kind, f'm.{name}')}",
@@ -218,7 +238,7 @@ class Layout:
             else:  # a group
                 self._emit_group(lines, value_of, spec, f"m.{name}", name, 1)
         flush(first=not started)
-        lines.append(f"    return s + {_CRLF!r}")
+        lines.append(f"    return s + {self.end!r}" if self.end else "    return s")
         exec("\n".join(lines), env)  # noqa: S102  (the text above, from the declarations only)
         fn: Callable[[Any], str] = env["format"]
         return fn
@@ -299,3 +319,10 @@ def message(
     refused for the one clients have always been told of first); ``wire_first``: fields sent
     first, where the dataclass's order (kept for positional arguments) is not the wire's."""
     return Layout(cls, word, fixed, read_first, wire_first)
+
+
+def reading(cls: type, *, fixed: tuple[tuple[str, str], ...] = (), **keys: Key) -> Layout:
+    """The compiled layout of a SEN body (what follows ``SEN [{Time t}]``) for a reading class
+    of :mod:`usarsim.readings`, which carries no protocol of its own: ``keys`` name its fields
+    and their keys, in the wire order (after ``fixed``)."""
+    return Layout(cls, "", fixed, keys=keys, end="")

@@ -35,8 +35,9 @@ from usarsim.readings import (
 )
 
 from ..grammar import Segment, format_segment, parse_float, parse_int
-from ..numbers import bool_str, f4, t4, vec4, vec_angle4, vec_t4
+from ..numbers import bool_str, f4, vec4, vec_t4
 from .common import _CRLF, _Reader
+from .declare import ANGLES4, F4, RANGES4, T4, TEXT, VALUES4, VEC4, Key, reading
 from .results import UnknownMessage
 
 
@@ -58,16 +59,6 @@ def _sen_range(r: RangeReading) -> str:
 
 def _range_list(values: tuple[float, ...]) -> str:
     return "{Range %s}" % vec4(values) if values else "{Range}"
-
-
-def _sen_scan(r: RangeScanReading) -> str:
-    return "{Type %s} {Name %s} {Resolution %s} {FOV %s} %s" % (
-        r.sensor_type,
-        r.name,
-        t4(r.resolution_rad),
-        t4(r.fov_rad),
-        _range_list(r.ranges_m),
-    )
 
 
 def _sen_scan3d(r: RangeScan3DReading) -> str:
@@ -121,24 +112,6 @@ def _sen_encoder(r: EncoderReading) -> str:
     return "{Type Encoder} " + body if body else "{Type Encoder}"
 
 
-def _sen_pose(r: PoseReading) -> str:
-    return "{Type %s} {Name %s} {Location %s} {Orientation %s}" % (
-        r.sensor_type,
-        r.name,
-        vec4(r.location),
-        vec_angle4(r.orientation),
-    )
-
-
-def _sen_orientation(r: OrientationReading) -> str:
-    # INU orientation: normalised into [0, 2 pi) like the other UT orientation sensors.
-    return "{Type %s} {Name %s} {Orientation %s}" % (
-        r.sensor_type,
-        r.name,
-        vec_angle4(r.orientation),
-    )
-
-
 def _sen_touch(r: TouchReading) -> str:
     body = " ".join(["{Name %s Touch %s}" % (i.name, bool_str(i.touching)) for i in r.items])
     return "{Type Touch} " + body if body else "{Type Touch}"
@@ -163,25 +136,6 @@ def _sen_gps(r: GpsReading) -> str:
     )
 
 
-def _sen_tachometer(r: TachometerReading) -> str:
-    return "{Type Tachometer} {Name %s} {Vel %s} {Pos %s}" % (
-        r.name,
-        vec4(r.velocities_rad_s),
-        vec4(r.positions_rad),
-    )
-
-
-def _sen_imu(r: ImuReading) -> str:
-    # UDK layout; the rotation is printed as measured (not normalised).
-    return "{Type IMU} {Name %s} {XYZAcceleration %s} {AngularVel %s} {AngularAccel %s} {Rotation %s}" % (
-        r.name,
-        vec4(r.acceleration),
-        vec4(r.angular_velocity),
-        vec4(r.angular_acceleration),
-        vec4(r.orientation),
-    )
-
-
 def _sen_victim(r: VictimReading) -> str:
     if not r.parts:
         return "{Type VictSensor} {Status NoVictims}"
@@ -202,30 +156,64 @@ def _sen_rfid(r: RfidReading) -> str:
     return "{Type RFID} {Name %s} %s" % (r.name, " ".join(map(_rfid_tag, r.tags)))
 
 
-def _sen_sound(r: SoundReading) -> str:
-    return "{Type Sound} {Name %s} {Loudness %s} {Duration %s}" % (r.name, f4(r.loudness_db), f4(r.duration_s))
+# the readings of fixed layout, declared: their SEN bodies and parsers follow
+_SCAN = reading(
+    RangeScanReading,
+    sensor_type=Key("Type", TEXT),
+    name=Key("Name", TEXT),
+    resolution_rad=Key("Resolution", T4),
+    fov_rad=Key("FOV", T4),
+    ranges_m=Key("Range", RANGES4),
+)
+_POSE = reading(
+    PoseReading,
+    sensor_type=Key("Type", TEXT),
+    name=Key("Name", TEXT),
+    location=Key("Location", VEC4),
+    orientation=Key("Orientation", ANGLES4),  # normalised like the other UT orientation sensors
+)
+_ORIENTATION = reading(
+    OrientationReading, sensor_type=Key("Type", TEXT), name=Key("Name", TEXT), orientation=Key("Orientation", ANGLES4)
+)
+_TACHOMETER = reading(
+    TachometerReading,
+    fixed=(("Type", "Tachometer"),),
+    name=Key("Name", TEXT),
+    velocities_rad_s=Key("Vel", VALUES4),
+    positions_rad=Key("Pos", VALUES4),
+)
+_IMU = reading(  # UDK layout; the rotation is printed as measured (not normalised)
+    ImuReading,
+    fixed=(("Type", "IMU"),),
+    name=Key("Name", TEXT),
+    acceleration=Key("XYZAcceleration", VEC4),
+    angular_velocity=Key("AngularVel", VEC4),
+    angular_acceleration=Key("AngularAccel", VEC4),
+    orientation=Key("Rotation", VEC4),
+)
+_SOUND = reading(
+    SoundReading,
+    fixed=(("Type", "Sound"),),
+    name=Key("Name", TEXT),
+    loudness_db=Key("Loudness", F4),
+    duration_s=Key("Duration", F4),
+)
+_HUMAN_MOTION = reading(
+    HumanMotionReading, fixed=(("Type", "HumanMotion"),), name=Key("Name", TEXT), probability=Key("Prob", F4)
+)
+_DECLARED = {layout.cls: layout for layout in (_SCAN, _POSE, _ORIENTATION, _TACHOMETER, _IMU, _SOUND, _HUMAN_MOTION)}
 
-
-def _sen_human_motion(r: HumanMotionReading) -> str:
-    return "{Type HumanMotion} {Name %s} {Prob %s}" % (r.name, f4(r.probability))
-
-
+# the others (packed items, a GPS with and without a fix, a victim sensor with nothing in
+# sight, tags with and without memory, a 3D sweep split into rows), by hand
 _SEN_BODIES: dict[type, Callable[[Any], str]] = {
     RangeReading: _sen_range,
-    RangeScanReading: _sen_scan,
     RangeScan3DReading: _sen_scan3d,
     OdometryReading: _sen_odometry,
     EncoderReading: _sen_encoder,
-    PoseReading: _sen_pose,
-    OrientationReading: _sen_orientation,
     TouchReading: _sen_touch,
     GpsReading: _sen_gps,
-    TachometerReading: _sen_tachometer,
-    ImuReading: _sen_imu,
     VictimReading: _sen_victim,
     RfidReading: _sen_rfid,
-    SoundReading: _sen_sound,
-    HumanMotionReading: _sen_human_motion,
 }
 
 
@@ -235,6 +223,9 @@ def format_reading(reading: Reading, time: float | None = None) -> str:
     A whole 3D sweep is one line (protocol.md 6.3) unless it asks for the split form
     (``split``): then it is written as one line per row, top row first, each with
     ``{Frames rows} {Frame k}`` after the Name and the same Time."""
+    declared = _DECLARED.get(type(reading))
+    if declared is not None:
+        return ("SEN" if time is None else "SEN {Time %s}" % f4(time)) + declared.format(reading) + _CRLF
     head = "SEN " if time is None else "SEN {Time %s} " % f4(time)
     if isinstance(reading, RangeScan3DReading) and reading.split:
         rows = _scan3d_rows(reading)
@@ -287,16 +278,6 @@ def _sen_parse_range(r: _Reader, t: str) -> Reading:
     )
 
 
-def _sen_parse_scan(r: _Reader, t: str) -> Reading:
-    return RangeScanReading(
-        sensor_type=t,
-        name=r.text("Name"),
-        resolution_rad=r.req_float("Resolution"),
-        fov_rad=r.req_float("FOV"),
-        ranges_m=r.vector("Range", r.text("Range"), None),
-    )
-
-
 def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
     frame = r.raw.get("Frame")
     return RangeScan3DReading(
@@ -318,19 +299,6 @@ def _sen_parse_odometry(r: _Reader, t: str) -> Reading:
 
 def _sen_parse_encoder(r: _Reader, t: str) -> Reading:
     return EncoderReading(items=tuple(EncoderItem(name=n, tick=r.integer(s)) for n, s in _named_values(r, "Tick")))
-
-
-def _sen_parse_pose(r: _Reader, t: str) -> Reading:
-    return PoseReading(
-        sensor_type=t,
-        name=r.text("Name"),
-        location=r.req_vec3("Location"),
-        orientation=r.req_vec3("Orientation"),
-    )
-
-
-def _sen_parse_orientation(r: _Reader, t: str) -> Reading:
-    return OrientationReading(sensor_type=t, name=r.text("Name"), orientation=r.req_vec3("Orientation"))
 
 
 def _sen_parse_touch(r: _Reader, t: str) -> Reading:
@@ -357,24 +325,6 @@ def _sen_parse_gps(r: _Reader, t: str) -> Reading:
         satellites=r.req_int("Satellites"),
         latitude=_gps_parse(r, "Latitude"),
         longitude=_gps_parse(r, "Longitude"),
-    )
-
-
-def _sen_parse_tachometer(r: _Reader, t: str) -> Reading:
-    return TachometerReading(
-        name=r.text("Name"),
-        velocities_rad_s=r.vector("Vel", r.text("Vel"), None),
-        positions_rad=r.vector("Pos", r.text("Pos"), None),
-    )
-
-
-def _sen_parse_imu(r: _Reader, t: str) -> Reading:
-    return ImuReading(
-        name=r.text("Name"),
-        acceleration=r.req_vec3("XYZAcceleration"),
-        angular_velocity=r.req_vec3("AngularVel"),
-        angular_acceleration=r.req_vec3("AngularAccel"),
-        orientation=r.req_vec3("Rotation"),
     )
 
 
@@ -419,35 +369,27 @@ def _sen_parse_rfid(r: _Reader, t: str) -> Reading:
     return RfidReading(name=r.text("Name"), tags=tuple(tags))
 
 
-def _sen_parse_sound(r: _Reader, t: str) -> Reading:
-    return SoundReading(name=r.text("Name"), loudness_db=r.req_float("Loudness"), duration_s=r.req_float("Duration"))
-
-
-def _sen_parse_human_motion(r: _Reader, t: str) -> Reading:
-    return HumanMotionReading(name=r.text("Name"), probability=r.req_float("Prob"))
-
-
 _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
     "sonar": _sen_parse_range,
     "ir": _sen_parse_range,
     "rangesensor": _sen_parse_range,
-    "rangescanner": _sen_parse_scan,
-    "irscanner": _sen_parse_scan,
+    "rangescanner": lambda r, t: _SCAN.parse(r),
+    "irscanner": lambda r, t: _SCAN.parse(r),
     "rangescanner3d": _sen_parse_scan3d,
     "3drangescanner": _sen_parse_scan3d,
     "odometry": _sen_parse_odometry,
     "encoder": _sen_parse_encoder,
-    "groundtruth": _sen_parse_pose,
-    "ins": _sen_parse_pose,
-    "inu": _sen_parse_orientation,
+    "groundtruth": lambda r, t: _POSE.parse(r),
+    "ins": lambda r, t: _POSE.parse(r),
+    "inu": lambda r, t: _ORIENTATION.parse(r),
     "touch": _sen_parse_touch,
     "gps": _sen_parse_gps,
-    "tachometer": _sen_parse_tachometer,
-    "imu": _sen_parse_imu,
+    "tachometer": lambda r, t: _TACHOMETER.parse(r),
+    "imu": lambda r, t: _IMU.parse(r),
     "victsensor": _sen_parse_victim,
     "rfid": _sen_parse_rfid,
-    "sound": _sen_parse_sound,
-    "humanmotion": _sen_parse_human_motion,
+    "sound": lambda r, t: _SOUND.parse(r),
+    "humanmotion": lambda r, t: _HUMAN_MOTION.parse(r),
 }
 
 
