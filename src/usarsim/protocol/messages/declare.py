@@ -9,6 +9,8 @@ A field is one of:
   of that key, or its ``absent`` value when the line lacks it (else the line is refused).
 * :func:`pairs`: ``{name value}`` segments of the names no key of the message has (STA's
   flipper angles), printed where the field stands.
+* :func:`packed`: items each in one segment, ``{Name F1 Range 4.2}`` (sonars, encoders,
+  touch sensors).
 * :func:`group`: repeated groups, each opened by its first key (``{Link n} {Value v}
   {Torque t}``), declared as a small dataclass of keys, every one required of a group but
   those the message gives a value when absent (``group(LinkState, torque=0.0)``); its last
@@ -103,6 +105,17 @@ class Pairs:
 
 
 @dataclass(frozen=True, slots=True)
+class Packed:
+    """Items each in one segment, ``{Name n Range v}`` (UT's packed layout); the separate
+    layout ``{Name n} {Range v}`` of UDK lines is read too.  ``cls``: an item, built from its
+    name and its value (its first two fields)."""
+
+    cls: type
+    wire: str
+    kind: Kind
+
+
+@dataclass(frozen=True, slots=True)
 class Group:
     """Repeated groups of keys, each a ``cls``; ``defaults`` of keys this message may lack."""
 
@@ -136,6 +149,32 @@ def group(cls: type, **defaults: Any) -> Any:
     return dataclasses.field(default=(), metadata={WIRE: Group(cls, tuple(defaults.items()))})
 
 
+def _packed_segment(r: _Reader, seg: Segment, field: str) -> tuple[str, str]:
+    """``{Name n Field v}`` -> (n, v)."""
+    tokens = seg.value.split()
+    if len(tokens) != 3 or tokens[1].lower() != field.lower():
+        raise r.error(seg.key, seg.value, f"'name {field} value'")
+    return tokens[0], tokens[2]
+
+
+def _named(r: _Reader, field: str) -> list[tuple[str, Segment]]:
+    """Items of packed (``{Name n Field v}``) or separate (``{Name n} {Field v}``) layout."""
+    out: list[tuple[str, Segment]] = []
+    pending: str | None = None
+    for s in r.raw.segments:
+        k = s.key.lower()
+        if k == "name":
+            if len(s.value.split()) == 1:
+                pending = s.value
+            else:
+                name, value = _packed_segment(r, s, field)
+                out.append((name, Segment(field, value)))
+        elif k == field.lower() and pending is not None:
+            out.append((pending, s))
+            pending = None
+    return out
+
+
 def _declared(cls: type) -> list[tuple[str, Any, dataclasses.Field[Any]]]:
     return [(f.name, f.metadata[WIRE], f) for f in dataclasses.fields(cls) if WIRE in f.metadata]
 
@@ -167,7 +206,7 @@ class Layout:
         fixed: tuple[tuple[str, str], ...] = (),
         read_first: tuple[str, ...] = (),
         wire_first: tuple[str, ...] = (),
-        keys: dict[str, Key] | None = None,
+        keys: dict[str, Key | Packed] | None = None,
         end: str = _CRLF,
     ):
         self.cls = cls
@@ -235,6 +274,13 @@ class Layout:
                     f"    for n, v in m.{name}:",
                     f"        s += ' {{%s {spec.kind.spec}}}' % (n, {value_of(name, spec.kind, 'v')})",
                 ]
+            elif isinstance(spec, Packed):
+                item_name, item_value = (f.name for f in dataclasses.fields(spec.cls)[:2])
+                value = value_of(name, spec.kind, f"i.{item_value}")
+                lines += [
+                    f"    for i in m.{name}:",
+                    f"        s += ' {{Name %s {spec.wire} {spec.kind.spec}}}' % (i.{item_name}, {value})",
+                ]
             else:  # a group
                 self._emit_group(lines, value_of, spec, f"m.{name}", name, 1)
         flush(first=not started)
@@ -282,6 +328,8 @@ class Layout:
                 values[name] = tuple(
                     (s.key, spec.kind.read(r, s, s.key)) for s in r.raw.segments if s.key.lower() not in self.own
                 )
+            elif isinstance(spec, Packed):
+                values[name] = tuple(spec.cls(n, spec.kind.read(r, seg, spec.wire)) for n, seg in _named(r, spec.wire))
             else:
                 values[name] = self._read_groups(r, spec)
         return self.cls(**values)
@@ -321,7 +369,12 @@ def message(
     return Layout(cls, word, fixed, read_first, wire_first)
 
 
-def reading(cls: type, *, fixed: tuple[tuple[str, str], ...] = (), **keys: Key) -> Layout:
+def packed(cls: type, wire: str, kind: Kind) -> Packed:
+    """Items of ``cls`` each in one ``{Name n wire value}`` segment."""
+    return Packed(cls, wire, kind)
+
+
+def reading(cls: type, *, fixed: tuple[tuple[str, str], ...] = (), **keys: Key | Packed) -> Layout:
     """The compiled layout of a SEN body (what follows ``SEN [{Time t}]``) for a reading class
     of :mod:`usarsim.readings`, which carries no protocol of its own: ``keys`` name its fields
     and their keys, in the wire order (after ``fixed``)."""

@@ -35,9 +35,9 @@ from usarsim.readings import (
 )
 
 from ..grammar import Segment, format_segment, parse_float, parse_int
-from ..numbers import bool_str, f4, vec4, vec_t4
+from ..numbers import f4, vec4, vec_t4
 from .common import _CRLF, _Reader
-from .declare import ANGLES4, F4, RANGES4, T4, TEXT, VALUES4, VEC4, Key, reading
+from .declare import ANGLES4, BOOL, F4, INT, RANGES4, T4, TEXT, VALUES4, VEC4, Key, packed, reading
 from .results import UnknownMessage
 
 
@@ -50,11 +50,6 @@ class SensorMessage:
 
 
 # ---- SEN bodies: everything after "{Type T}" is produced per reading type.
-
-
-def _sen_range(r: RangeReading) -> str:
-    body = " ".join(["{Name %s Range %s}" % (i.name, f4(i.range_m)) for i in r.items])
-    return "{Type %s} %s" % (r.sensor_type, body) if body else "{Type %s}" % r.sensor_type
 
 
 def _range_list(values: tuple[float, ...]) -> str:
@@ -105,16 +100,6 @@ def _sen_odometry(r: OdometryReading) -> str:
         f4(r.y_m),
         f4(r.theta_rad),
     )
-
-
-def _sen_encoder(r: EncoderReading) -> str:
-    body = " ".join(["{Name %s Tick %d}" % (i.name, i.tick) for i in r.items])
-    return "{Type Encoder} " + body if body else "{Type Encoder}"
-
-
-def _sen_touch(r: TouchReading) -> str:
-    body = " ".join(["{Name %s Touch %s}" % (i.name, bool_str(i.touching)) for i in r.items])
-    return "{Type Touch} " + body if body else "{Type Touch}"
 
 
 def _gps_coordinate(c: tuple[int, float, str]) -> str:
@@ -201,16 +186,19 @@ _SOUND = reading(
 _HUMAN_MOTION = reading(
     HumanMotionReading, fixed=(("Type", "HumanMotion"),), name=Key("Name", TEXT), probability=Key("Prob", F4)
 )
-_DECLARED = {layout.cls: layout for layout in (_SCAN, _POSE, _ORIENTATION, _TACHOMETER, _IMU, _SOUND, _HUMAN_MOTION)}
+_RANGE = reading(RangeReading, sensor_type=Key("Type", TEXT), items=packed(RangeItem, "Range", F4))
+_ENCODER = reading(EncoderReading, fixed=(("Type", "Encoder"),), items=packed(EncoderItem, "Tick", INT))
+_TOUCH = reading(TouchReading, fixed=(("Type", "Touch"),), items=packed(TouchItem, "Touch", BOOL))
+_DECLARED = {
+    layout.cls: layout
+    for layout in (_SCAN, _POSE, _ORIENTATION, _TACHOMETER, _IMU, _SOUND, _HUMAN_MOTION, _RANGE, _ENCODER, _TOUCH)
+}
 
-# the others (packed items, a GPS with and without a fix, a victim sensor with nothing in
-# sight, tags with and without memory, a 3D sweep split into rows), by hand
+# the others (a GPS with and without a fix, a victim sensor with nothing in sight, tags with
+# and without memory, a 3D sweep split into rows, the odometry's pose of three fields), by hand
 _SEN_BODIES: dict[type, Callable[[Any], str]] = {
-    RangeReading: _sen_range,
     RangeScan3DReading: _sen_scan3d,
     OdometryReading: _sen_odometry,
-    EncoderReading: _sen_encoder,
-    TouchReading: _sen_touch,
     GpsReading: _sen_gps,
     VictimReading: _sen_victim,
     RfidReading: _sen_rfid,
@@ -245,39 +233,6 @@ def _fmt_sensor(m: SensorMessage) -> str:
 # ---- parsing
 
 
-def _packed(r: _Reader, seg: Segment, field: str) -> tuple[str, str]:
-    """``{Name n Field v}`` -> (n, v)."""
-    tokens = seg.value.split()
-    if len(tokens) != 3 or tokens[1].lower() != field.lower():
-        raise r.error(seg.key, seg.value, f"'name {field} value'")
-    return tokens[0], tokens[2]
-
-
-def _named_values(r: _Reader, field: str) -> list[tuple[str, Segment]]:
-    """Items of packed (``{Name n Field v}``) or separate (``{Name n} {Field v}``) layout."""
-    out: list[tuple[str, Segment]] = []
-    pending: str | None = None
-    for s in r.raw.segments:
-        k = s.key.lower()
-        if k == "name":
-            if len(s.value.split()) == 1:
-                pending = s.value
-            else:
-                name, value = _packed(r, s, field)
-                out.append((name, Segment(field, value)))
-        elif k == field.lower() and pending is not None:
-            out.append((pending, s))
-            pending = None
-    return out
-
-
-def _sen_parse_range(r: _Reader, t: str) -> Reading:
-    return RangeReading(
-        sensor_type=t,
-        items=tuple(RangeItem(name=n, range_m=r.number(s)) for n, s in _named_values(r, "Range")),
-    )
-
-
 def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
     frame = r.raw.get("Frame")
     return RangeScan3DReading(
@@ -295,14 +250,6 @@ def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
 def _sen_parse_odometry(r: _Reader, t: str) -> Reading:
     x, y, theta = r.req_vec3("Pose")
     return OdometryReading(name=r.text("Name"), x_m=x, y_m=y, theta_rad=theta)
-
-
-def _sen_parse_encoder(r: _Reader, t: str) -> Reading:
-    return EncoderReading(items=tuple(EncoderItem(name=n, tick=r.integer(s)) for n, s in _named_values(r, "Tick")))
-
-
-def _sen_parse_touch(r: _Reader, t: str) -> Reading:
-    return TouchReading(items=tuple(TouchItem(name=n, touching=r.bool(s)) for n, s in _named_values(r, "Touch")))
 
 
 def _gps_parse(r: _Reader, key: str) -> tuple[int, float, str] | None:
@@ -370,19 +317,19 @@ def _sen_parse_rfid(r: _Reader, t: str) -> Reading:
 
 
 _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
-    "sonar": _sen_parse_range,
-    "ir": _sen_parse_range,
-    "rangesensor": _sen_parse_range,
+    "sonar": lambda r, t: _RANGE.parse(r),
+    "ir": lambda r, t: _RANGE.parse(r),
+    "rangesensor": lambda r, t: _RANGE.parse(r),
     "rangescanner": lambda r, t: _SCAN.parse(r),
     "irscanner": lambda r, t: _SCAN.parse(r),
     "rangescanner3d": _sen_parse_scan3d,
     "3drangescanner": _sen_parse_scan3d,
     "odometry": _sen_parse_odometry,
-    "encoder": _sen_parse_encoder,
+    "encoder": lambda r, t: _ENCODER.parse(r),
     "groundtruth": lambda r, t: _POSE.parse(r),
     "ins": lambda r, t: _POSE.parse(r),
     "inu": lambda r, t: _ORIENTATION.parse(r),
-    "touch": _sen_parse_touch,
+    "touch": lambda r, t: _TOUCH.parse(r),
     "gps": _sen_parse_gps,
     "tachometer": lambda r, t: _TACHOMETER.parse(r),
     "imu": lambda r, t: _IMU.parse(r),
