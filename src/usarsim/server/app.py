@@ -103,7 +103,7 @@ class Application:
                 camera_size=c.record_camera_size,
             )
             self.recorder.attach(self.facade, self.wireless.service.model if self.wireless is not None else None)
-            self.control.tap = self.recorder  # type: ignore[assignment]  # TcpListener's tap = None types it None
+            self.control.tap = self.recorder
             self.control.tap_name = "control"
             for service in self.services[1:]:
                 listener: Any = getattr(service.server, "listener", service.server)

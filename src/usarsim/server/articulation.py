@@ -31,8 +31,9 @@ class Articulation:
         robot: RobotConfig | None
         uid: int
         actuator_api: bool
-        facade: Facade
 
+        @property
+        def facade(self) -> Facade: ...
         def log_once(self, kind: str, msg: str, *args: Any, level: int = logging.WARNING) -> None: ...
         def _alive(self) -> bool: ...
         def _answered(

@@ -274,7 +274,7 @@ class ControlServer(TcpListener):
         # output waiting for a slow client beyond which its sensor lines are held latest-wins
         self.max_pending_bytes = max(4096, int(max_pending_bytes))
         self.max_robots = max_connections if max_robots is None else max(0, int(max_robots))
-        self.connections: dict[int, Connection] = {}  # type: ignore[assignment]  # by robot id (TcpListener: either)
+        self.connections: dict[int, Connection] = {}  # by robot id
         self._uid = 0
         # lock-step: each STEP carried out after every line read before it (usarsim.server.ordering)
         self.step_order = StepOrder(self.connections.values, step_grace_s) if facade.lockstep else None

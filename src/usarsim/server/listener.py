@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import asyncio
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 
 class Listening(Protocol):
@@ -56,14 +56,14 @@ class TcpListener:
 
     # A recording's tap (usarsim.server.recording): set before start() to note every
     # connection's traffic under ``tap_name``; ``tap_binary``: outputs noted by size only.
-    tap = None
+    tap: Any = None  # a Recorder; Any: the recording package sits above the servers
     tap_name = "?"
     tap_binary = False
 
     def __init__(self, host: str, port: int):
         self.host = host
         self.port = port
-        self.connections: set = set()
+        self.connections: set[Any] | dict[int, Any] = set()
         self.loop: asyncio.AbstractEventLoop | None = None
         self._server: asyncio.base_events.Server | None = None
 

@@ -54,8 +54,11 @@ class Queries:
         ctx: SessionContext
         robot: RobotConfig | None
         uid: int
-        has_robot: bool
-        facade: Facade
+
+        @property
+        def has_robot(self) -> bool: ...
+        @property
+        def facade(self) -> Facade: ...
 
         def send(self, msg: Any) -> None: ...
         def refuse(self, command: str, kind: str, reason: str, level: int = logging.WARNING) -> None: ...

@@ -149,12 +149,12 @@ class Session(Articulation, Queries):
             self.ctx.resume()
 
     @property
-    def has_robot(self) -> bool:  # type: ignore[override]  # Queries declares what it reads as attributes
+    def has_robot(self) -> bool:
         """The robot is spawned or being spawned (its requests are carried out in order)."""
         return self.state in (SPAWNING, ALIVE)
 
     @property
-    def facade(self) -> Facade:  # type: ignore[override]  # Queries declares what it reads as attributes
+    def facade(self) -> Facade:
         return self.ctx.facade
 
     def log_once(self, kind: str, msg: str, *args, level: int = logging.WARNING) -> None:
