@@ -9,6 +9,7 @@ import queue
 import statistics
 import threading
 import time
+from typing import Any
 
 from usarsim.bench.serving import ServedApp, logging_quiet
 
@@ -62,7 +63,9 @@ class _ServedCamera:
             self.close()  # the server's thread and sockets go with a failed start
             raise
         try:
-            self.viewer = socket.create_connection(("127.0.0.1", self.app.image.port), timeout=60)
+            image = self.app.image
+            assert image is not None  # image_port=0: the Application serves pictures
+            self.viewer = socket.create_connection(("127.0.0.1", image.port), timeout=60)
             self.frame()  # the first picture opens the GL context
         except BaseException:
             self.close()
@@ -99,11 +102,14 @@ class _BareRenderer:
     drawn the way the image server draws (no shadows or reflections, nearest mipmap)."""
 
     def __init__(self, served: _ServedCamera, w: int, h: int):
-        box = {}
+        box: dict[str, Any] = {}
         done = threading.Event()
-        served.app.facade.call(
-            lambda s: s.cameras.render_snapshot(), on_done=lambda r, e: (box.update(r=r), done.set())
-        )
+
+        def finished(r: Any, e: BaseException | None) -> None:
+            box.update(r=r)
+            done.set()
+
+        served.app.facade.call(lambda s: s.cameras.render_snapshot(), on_done=finished)
         done.wait(30)
         self.snap = box["r"]
         self.size = (w, h)
@@ -171,7 +177,7 @@ def camera_result(world, size: tuple[int, int], frames: int) -> dict:
     ``usarsim bench --cameras --json`` prints for it."""
     w, h = size
     frames = max(5, int(frames))
-    opened = []
+    opened: list[_ServedCamera | _BareRenderer] = []
     try:
         textured = _ServedCamera(world, w, h, textures=True)
         opened.append(textured)

@@ -164,14 +164,14 @@ def _cum(stats: pstats.Stats, keys) -> float:
     """Cumulative time of the functions ``keys`` (file, line, name); recursion counted once."""
     total = 0.0
     for k in keys:
-        entry = stats.stats.get(k)
+        entry = stats.stats.get(k)  # type: ignore[attr-defined]  # set by Stats(), not in typeshed
         if entry is not None:
             total += entry[3]
     return total
 
 
 def _matching(stats: pstats.Stats, pred) -> list[tuple]:
-    return [k for k in stats.stats if pred(k)]
+    return [k for k in stats.stats if pred(k)]  # type: ignore[attr-defined]  # set by Stats(), not in typeshed
 
 
 def _sensor_rows(s: pstats.Stats) -> tuple[list[tuple[str, float]], float]:
@@ -217,6 +217,7 @@ def breakdown(p: Profiler) -> dict:
     from usarsim.sim.simulation import Simulation
 
     s = p.sim.stats
+    assert s is not None, "the profiler has not stopped"
     rows: list[tuple[str, float]] = []
     physics = _cum(s, [_where(health.BlowUpGuard.step)])
     rows.append(("physics (MuJoCo steps)", physics))
@@ -246,6 +247,7 @@ def breakdown(p: Profiler) -> dict:
         sensors = sensor_rows + [("waiting for instants (idle)", max(0.0, p.sensors.wall_s - sensor_total))]
 
     lp = p.loop.stats
+    assert lp is not None, "the profiler has not stopped"
     from usarsim.protocol import messages
 
     loop_rows = []

@@ -225,9 +225,10 @@ def run_profile_bench(args, world, n: int, seconds: float, progress: bool) -> in
     return 0
 
 
-def snapshot_state(sim, runner=None) -> np.ndarray:
+def snapshot_state(sim, runner=None) -> np.ndarray | None:
     """The full physics state (with the controls) of the running simulation, taken
-    from its own thread so that it is consistent."""
+    from its own thread so that it is consistent (None when that thread did not take it
+    within 10 s: the bare ``mj_step`` timings then start from the initial state)."""
     import mujoco
 
     from usarsim.sim.runner import Request

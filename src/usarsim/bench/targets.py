@@ -23,6 +23,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 ROBOT_COUNTS = (16, 64, 256)
 RUNS = 3
@@ -197,7 +198,7 @@ def run_targets_bench(args) -> int:
         print("usarsim bench: --runs and --counts must be >= 1 and --seconds > 0", file=sys.stderr)
         return 2
     show = sys.stderr.isatty() and not args.json
-    kwargs = dict(
+    kwargs: dict[str, Any] = dict(
         counts=counts,
         runs=runs,
         seconds=seconds,

@@ -38,18 +38,18 @@ def bench_env(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any) 
         finally:
             env.close()
         return steps / elapsed
-    env = ExploreEnv(**kwargs)
+    single = ExploreEnv(**kwargs)
     try:
-        env.reset(seed=seed)
-        env.action_space.seed(seed)
+        single.reset(seed=seed)
+        single.action_space.seed(seed)
         elapsed = 0.0
         for _ in range(steps):
-            action = env.action_space.sample()
+            action = single.action_space.sample()
             t = time.perf_counter()
-            _, _, terminated, truncated, _ = env.step(action)
+            _, _, terminated, truncated, _ = single.step(action)
             elapsed += time.perf_counter() - t
             if terminated or truncated:
-                env.reset()
+                single.reset()
     finally:
-        env.close()
+        single.close()
     return steps / elapsed

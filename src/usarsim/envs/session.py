@@ -59,7 +59,11 @@ def flush(robots: Sequence[Robot]) -> None:
         conn.send(f"PING {{Id {pid}}}\r\n")
         pending.append((conn, pid))
     for conn, pid in pending:
-        conn.wait_for(lambda m, pid=pid: getattr(m, "id", None) == pid, "PONG (the reply to PING)", None)
+
+        def is_pong(m: object, pid: str = pid) -> bool:
+            return getattr(m, "id", None) == pid
+
+        conn.wait_for(is_pong, "PONG (the reply to PING)", None)
 
 
 class Simulator:
@@ -128,6 +132,7 @@ class Simulator:
             finally:
                 self._background(server.close)
         else:
+            assert self.port is not None  # a shared simulator: self.launches is False
             if self.world is None:
                 self.world = connect(
                     self.host, self.port, lockstep=True, truth_port=self.truth_port, timeout=self.timeout
@@ -148,6 +153,7 @@ class Simulator:
             self.server = server
             self.world = self.server.connect()
             return self.world
+        assert self.port is not None  # a shared simulator: self.launches is False
         if self.world is None:
             self.world = connect(self.host, self.port, lockstep=True, truth_port=self.truth_port, timeout=self.timeout)
             return self.world

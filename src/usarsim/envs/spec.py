@@ -200,7 +200,7 @@ def observation_space(spec: RobotSpec, keys: tuple[str, ...], laser_beams: int, 
     in radians, 0 ahead and positive to the left, and its distance in metres)."""
     xmin, ymin, xmax, ymax = world_bounds(world)
     extent = float(math.hypot(xmax - xmin, ymax - ymin))
-    out: dict[str, spaces.Box] = {}
+    out: dict[str, spaces.Space[Any]] = {}
     for key in keys:
         if key == "laser":
             assert spec.laser is not None
@@ -244,8 +244,8 @@ def side_speeds(action, discrete: bool) -> tuple[float, float]:
                 f"({', '.join(n for n, _ in DISCRETE_ACTIONS)}), got {action!r}"
             )
         return DISCRETE_ACTIONS[a][1]
-    a = np.asarray(action, dtype=float).reshape(-1)
-    if a.shape != (2,) or not np.all(np.isfinite(a)):
+    v = np.asarray(action, dtype=float).reshape(-1)
+    if v.shape != (2,) or not np.all(np.isfinite(v)):
         raise ValueError(f"a continuous action is two finite side speeds in [-1, 1], got {action!r}")
-    a = np.clip(a, -1.0, 1.0)
-    return (float(a[0]), float(a[1]))
+    v = np.clip(v, -1.0, 1.0)
+    return (float(v[0]), float(v[1]))

@@ -33,7 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from usarsim.config.reader import Section, did_you_mean, load_yaml
 from usarsim.errors import ConfigError
@@ -260,7 +260,10 @@ class Reader:
             robot = self.robot_class(s.str("robot"), f"{k}.robot")
             count = s.int("count", 1, min=1)
             start = s.raw("start", "auto")
-            location = s.vec("location", 3, None) if s.has("location") else None
+            # vec checks the length: three numbers (None when the file gives a null location)
+            location = (
+                cast("tuple[float, float, float] | None", s.vec("location", 3, None)) if s.has("location") else None
+            )
             yaw = s.float("yaw", 0.0)
             s.finish()
             if location is not None:

@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from usarsim.sweep.experiment import CONFIG_COLUMNS, varying_axes
 from usarsim.sweep.results import SCORE_COLUMNS, read_rows
@@ -97,7 +97,8 @@ class Stat:
             ci = poisson_interval(values, high=team_size if metric == "robots_lost" else None)
         else:
             ci = t_interval(values, low, high)
-        return cls(n, mean, sd, *(ci or (None, None)), method)
+        ci_low, ci_high = ci or (None, None)
+        return cls(n, mean, sd, ci_low, ci_high, method)
 
 
 @dataclass
@@ -126,7 +127,7 @@ def summarize(rows: list[dict[str, Any]]) -> list[Group]:
         if r.get("error"):
             g.failed += 1
             continue
-        g.seeds.append(r.get("seed"))
+        g.seeds.append(cast(int, r.get("seed")))  # every run has its seed (Run.seed)
         for m in METRICS:
             v = r.get(m)
             if v is not None and not (isinstance(v, float) and math.isnan(v)):
@@ -199,10 +200,12 @@ def plot(rows: list[dict[str, Any]], metric: str, axis: str | None, axes: tuple[
             vals = [float(r[metric]) for r in sel]
             sizes = [int(r["robots_n"]) for r in sel if r.get("robots_n") is not None]
             s = Stat.of(vals, metric, max(sizes) if sizes else None)
+            mean = s.mean
+            assert mean is not None  # sel is not empty
             mx.append(xi + offset)
-            my.append(s.mean)
-            lo.append(s.mean - (s.ci_low if s.ci_low is not None else s.mean))
-            hi.append((s.ci_high if s.ci_high is not None else s.mean) - s.mean)
+            my.append(mean)
+            lo.append(mean - (s.ci_low if s.ci_low is not None else mean))
+            hi.append((s.ci_high if s.ci_high is not None else mean) - mean)
             ax.scatter([xi + offset] * len(vals), vals, s=12, alpha=0.35, color=f"C{si % 10}", zorder=2)
         ax.errorbar(mx, my, yerr=[lo, hi], fmt="o", capsize=4, color=f"C{si % 10}", label=label, zorder=3)
     ax.set_xticks(range(len(xs)))
@@ -335,7 +338,7 @@ def _html(
     e = html.escape
     names = sorted({str(r.get("experiment")) for r in rows}) or [folder.name]
     failed = [r for r in rows if r.get("error")]
-    seeds = sorted({r.get("seed") for r in rows if r.get("seed") is not None})
+    seeds = sorted({r["seed"] for r in rows if r.get("seed") is not None})
     shown = [c for c in CONFIG_COLUMNS if c in axes] or list(CONFIG_COLUMNS)
     fixed = [c for c in CONFIG_COLUMNS if c not in shown]
     out = [

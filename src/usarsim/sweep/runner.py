@@ -142,7 +142,7 @@ def start_ray(workers: int | None, address: str | None) -> bool:
 
     if ray.is_initialized():
         return False
-    quiet = {"include_dashboard": False, "logging_level": logging.ERROR, "log_to_driver": False}
+    quiet: dict[str, Any] = {"include_dashboard": False, "logging_level": logging.ERROR, "log_to_driver": False}
     if address:
         _check_reachable(address)
     # ray.init makes SIGTERM exit the driver (sys.exit) after its native crash handler printed
