@@ -3,6 +3,7 @@ file, the key path, the value received and what is allowed."""
 
 from __future__ import annotations
 
+import builtins
 import dataclasses
 import difflib
 import math
@@ -11,7 +12,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-import yaml
+import yaml  # type: ignore[import-untyped]  # PyYAML ships no type information (no types-PyYAML here)
 
 from usarsim.errors import ConfigError
 
@@ -78,7 +79,11 @@ class FieldDefaults:
 
 
 class Section:
-    """A mapping being read; every key must be consumed or it is reported as unknown."""
+    """A mapping being read; every key must be consumed or it is reported as unknown.
+
+    Its readers are named after the types they return (``str``, ``float``, ``int``, ``bool``,
+    ``list``), which hide those types inside the class body: its annotations spell them
+    ``builtins.str`` and so on."""
 
     def __init__(self, data: Any, *, path: str, key: str = ""):
         self.path = path
@@ -132,19 +137,19 @@ class Section:
 
     def float(
         self,
-        name: str,
+        name: builtins.str,
         default: Any = ...,
         *,
-        min: float | None = None,
-        max: float | None = None,
-        min_exclusive: bool = False,
-    ) -> float:
+        min: builtins.float | None = None,
+        max: builtins.float | None = None,
+        min_exclusive: builtins.bool = False,
+    ) -> builtins.float:
         v = self.raw(name, default)
         if v is default and default is not ...:
             return v
         return check_float(v, self.path, self._k(name), min=min, max=max, min_exclusive=min_exclusive)
 
-    def int(self, name: str, default: Any = ..., *, min: int | None = None) -> int:
+    def int(self, name: builtins.str, default: Any = ..., *, min: builtins.int | None = None) -> builtins.int:
         v = self.raw(name, default)
         if v is default and default is not ...:
             return v
@@ -154,23 +159,25 @@ class Section:
             raise self.error(name, f"must be >= {min}, got {v}")
         return v
 
-    def bool(self, name: str, default: Any = ...) -> bool:
+    def bool(self, name: builtins.str, default: Any = ...) -> builtins.bool:
         v = self.raw(name, default)
         if not isinstance(v, bool):
             raise self.error(name, f"expected true or false, got {v!r}")
         return v
 
-    def vec(self, name: str, n: int = 3, default: Any = ..., *, positive: bool = False) -> tuple[float, ...]:
+    def vec(
+        self, name: builtins.str, n: builtins.int = 3, default: Any = ..., *, positive: builtins.bool = False
+    ) -> tuple[builtins.float, ...]:
         v = self.raw(name, default)
         if v is default and default is not ...:
             return v
         return check_vec(v, n, self.path, self._k(name), positive=positive)
 
-    def section(self, name: str, default: Any = ...) -> Section:
+    def section(self, name: builtins.str, default: Any = ...) -> Section:
         v = self.raw(name, default)
         return Section(v if v is not None else {}, path=self.path, key=self._k(name))
 
-    def list(self, name: str, default: Any = ...) -> list:
+    def list(self, name: builtins.str, default: Any = ...) -> builtins.list[Any]:
         v = self.raw(name, default)
         if v is None:
             return []
@@ -178,7 +185,7 @@ class Section:
             raise self.error(name, f"expected a list, got {type(v).__name__}")
         return v
 
-    def entries(self, name: str, *, required: bool = False) -> Iterator[Section]:
+    def entries(self, name: builtins.str, *, required: builtins.bool = False) -> Iterator[Section]:
         """Each mapping of the list ``name`` (none when the key is missing, unless
         ``required``) as a Section keyed ``name[i]``; its unknown keys are refused once the
         loop's body has read it."""
@@ -187,7 +194,7 @@ class Section:
             yield s
             s.finish()
 
-    def finish(self, allowed_extra: Iterable[str] = ()) -> None:
+    def finish(self, allowed_extra: Iterable[builtins.str] = ()) -> None:
         """Fail on the first key that nothing read."""
         known = self._used | set(allowed_extra)
         for k in self.data:
@@ -290,5 +297,5 @@ def name_entries(err: ConfigError, data: Any) -> ConfigError:
     if named:
         text += " (" + "; ".join(f"{p} is {d}" for p, d in named) + ")"
     err.args = (text,)
-    err.entries_named = True
+    err.entries_named = True  # type: ignore[attr-defined]  # a mark set here only, read back above
     return err

@@ -65,7 +65,7 @@ import difflib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from usarsim.errors import ConfigError
 
@@ -459,6 +459,7 @@ class _RndfParser:
         num_segments = r.integer(ns_line, ns_line.tokens[1], "num_segments", min=1)
         nz_line = r.expect("num_zones")
         num_zones = r.integer(nz_line, nz_line.tokens[1], "num_zones", min=0)
+        line: _Line | None  # the line being read; None past the end of the file
         info: dict[str, str] = {}
         while r.peek_word() in ("format_version", "creation_date"):
             line = r.check_values(r.take(), None)
@@ -575,7 +576,7 @@ class _RndfParser:
         lane_id = f"{sid}.{lid}"
         nw_line = r.expect("num_waypoints")
         count = r.integer(nw_line, nw_line.tokens[1], "num_waypoints", min=1)
-        opts: dict[str, object] = {}
+        opts: dict[str, Any] = {}  # width_ft: feet (a float); left_boundary, right_boundary: a word
         checkpoints: list[tuple[Checkpoint, _Line]] = []
         stops: list[tuple[str, _Line]] = []
         exits: list[tuple[Exit, _Line]] = []
@@ -665,7 +666,7 @@ class _RndfParser:
                 f"expected spot {zid}.{sid} (spots of zone {zid} are numbered {zid}.1, {zid}.2, ... "
                 f"in order), got {head.tokens[1]}",
             )
-        opts: dict[str, object] = {}
+        opts: dict[str, Any] = {}  # width_ft: feet (a float)
         checkpoints: list[tuple[Checkpoint, _Line]] = []
         while r.peek_word() in ("spot_width", "checkpoint"):
             line = r.take()
@@ -808,6 +809,7 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     r = _Reader(text, path, MDF_KEYWORDS)
     name = r.text(r.expect("MDF_name", None))
     rndf_line = r.expect("RNDF", None)
+    line: _Line | None  # the line being read; None past the end of the file
     info: dict[str, str] = {}
     while r.peek_word() in ("format_version", "creation_date"):
         line = r.check_values(r.take(), None)
@@ -820,7 +822,7 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     count = r.integer(nc_line, nc_line.tokens[1], "num_checkpoints", min=1)
     checkpoints: list[int] = []
     cp_lines: list[int] = []
-    while r.peek() is not None and _looks_like_id(r.peek_word()):
+    while r.peek() is not None and _looks_like_id(cast(str, r.peek_word())):  # a line: peek_word is its word
         line = r.take()
         if len(checkpoints) >= count:
             raise r.error(
@@ -847,7 +849,7 @@ def parse_mdf(text: str, path: str = "<mdf>", rndf: Rndf | None = None) -> Mdf:
     limits: list[SpeedLimit] = []
     sl_lines: list[int] = []
     seen: dict[int, int] = {}
-    while r.peek() is not None and _looks_like_id(r.peek_word()):
+    while r.peek() is not None and _looks_like_id(cast(str, r.peek_word())):  # a line: peek_word is its word
         line = r.take()
         if len(limits) >= count:
             raise r.error(

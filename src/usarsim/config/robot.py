@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 from usarsim.config.drive_settings import AerialLimits as AerialLimits
 from usarsim.config.drive_settings import Gait as Gait
@@ -137,11 +138,12 @@ class RobotConfig:
                 low.append(p.center[2] + p.length_m / 2.0 * axis_z + extra)
         if self.gait is not None:  # standing on its legs: hip, leg, foot (a ball or a sole)
             for leg in self.gait.legs:
+                # a leg's joints are links of the robot (checked when the file is read)
                 if leg.ankle_pitch is None:
-                    knee = self.link(leg.knee)
+                    knee = cast(Link, self.link(leg.knee))
                     foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
                 else:
-                    sole = self.link(leg.ankle_roll or leg.ankle_pitch)
+                    sole = cast(Link, self.link(leg.ankle_roll or leg.ankle_pitch))
                     foot = max((p.center[2] + p.size[2] / 2.0 for p in sole.shapes if p.shape == "box"), default=0.0)
                 low.append(self.link_origin(leg.hip_pitch)[2] + self.gait.stand_height_m + foot)
         return max(low) if low else 0.0
@@ -174,8 +176,8 @@ def _geometry(g: Section) -> RobotGeometryConfig:
     """The ``geometry`` section; its wheel keys lack the ``_m`` of the fields they fill."""
     d = FieldDefaults(RobotGeometryConfig)
     out = RobotGeometryConfig(
-        dimensions=g.vec("dimensions", positive=True),
-        cog=g.vec("cog", 3, d.cog),
+        dimensions=cast(Vec3, g.vec("dimensions", positive=True)),  # vec reads 3 numbers unless told otherwise
+        cog=cast(Vec3, g.vec("cog", 3, d.cog)),
         wheel_radius_m=g.float("wheel_radius", d.wheel_radius_m, min=0.0),
         wheel_separation_m=g.float("wheel_separation", d.wheel_separation_m, min=0.0),
         wheel_base_m=g.float("wheel_base", d.wheel_base_m, min=0.0),
@@ -327,7 +329,7 @@ def _robot(data: dict, path: str) -> RobotConfig:
         status_joints=status_joints,
         nautical=nautical,
         gait=gait,
-        color=tuple(float(c) for c in color),
+        color=cast(Vec3, tuple(float(c) for c in color)),  # read as 3 numbers
     )
 
 

@@ -335,7 +335,7 @@ def _add_tread(spec, wheel_body, w, robot, prefix: str, treads) -> None:
     p.friction = [mu * treads.lateral_ratio, mu, SPIN_FRICTION, ROLL_FRICTION, ROLL_FRICTION]
 
 
-def _add_piece(body, name: str, piece, robot) -> None:
+def _add_piece(body, name: str, piece, robot) -> mujoco.MjsGeom:
     g = body.add_geom()
     g.name = name
     g.pos = frames.to_mj_vec(piece.center).tolist()

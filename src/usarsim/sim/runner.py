@@ -257,6 +257,7 @@ class SimulationRunner:
         if self._stopping.is_set():
             self._refuse(req)  # shutting down: not run (see stop), but answered
             return
+        error: Exception | None
         result, error = None, None
         if not req.concurrent:
             self.sim.settle()
@@ -353,7 +354,8 @@ class SimulationRunner:
             if self._rate_model is not self.sim.model:
                 self._rate_model, self._wall_per_s = self.sim.model, took
             else:  # a running mean: one slow STEP (a stall) does not keep the next ones off
-                self._wall_per_s = 0.8 * self._wall_per_s + 0.2 * took
+                # set with _rate_model above: a float here (no cast on the STEP's path)
+                self._wall_per_s = 0.8 * self._wall_per_s + 0.2 * took  # type: ignore[operator]
         self._interpreter.tick()
         on_done(self.sim.time)
 

@@ -19,7 +19,7 @@ import logging
 import math
 import os
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 import mujoco
 import numpy as np
@@ -355,8 +355,9 @@ class Simulation:
                     return CommandResult(s.TYPE, s.name, ok=False)
                 if isinstance(result, ZoomResult):
                     return result  # a camera's RES of its own
-                if result.ok and opcode.upper() == "SCAN" and s.PERIODIC:
-                    self._emit(r, [s], f"SEN:{s.TYPE}:{s.name}")
+                if result.ok and opcode is not None and opcode.upper() == "SCAN" and s.PERIODIC:
+                    # the items that send SEN lines at their period are sensors
+                    self._emit(r, [cast("Sensor[Any]", s)], f"SEN:{s.TYPE}:{s.name}")
                 return CommandResult(s.TYPE, s.name, result.ok, result.extra)
         return CommandResult(t, name or "", ok=False)
 
