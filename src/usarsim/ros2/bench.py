@@ -206,6 +206,7 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
                 text=True,
             )
             procs.append(bridge)
+            assert bridge.stdout is not None  # stdout=PIPE
             line = bridge.stdout.readline()
             if not line.startswith("usarsim ros2:"):
                 why = bridge.communicate(timeout=30)[1][-2000:]
@@ -241,6 +242,7 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
                 text=True,
             )
             procs.append(sub)
+            assert sub.stdout is not None  # stdout=PIPE
             sub.stdout.readline()  # up
         time.sleep(SETTLE_S)
         sim0, wall0, cpu0 = sim.time, time.perf_counter(), time.process_time()

@@ -180,15 +180,14 @@ class Bridge:
         from geometry_msgs.msg import PointStamped
         from sensor_msgs.msg import JointState
 
-        self.node.create_subscription(
-            JointState, f"{rb.ns}/joint_commands", lambda m: rb.on_joints(list(m.name), list(m.position)), self.qos
-        )
-        self.node.create_subscription(
-            PointStamped,
-            f"{rb.ns}/report_victim",
-            lambda m: rb.on_report(m.point.x, m.point.y, m.point.z, m.header.frame_id),
-            self.qos,
-        )
+        def joints(m: Any) -> None:
+            rb.on_joints(list(m.name), list(m.position))
+
+        def report(m: Any) -> None:
+            rb.on_report(m.point.x, m.point.y, m.point.z, m.header.frame_id)
+
+        self.node.create_subscription(JointState, f"{rb.ns}/joint_commands", joints, self.qos)
+        self.node.create_subscription(PointStamped, f"{rb.ns}/report_victim", report, self.qos)
 
     def publish_static(self) -> None:
         from tf2_msgs.msg import TFMessage
@@ -305,14 +304,14 @@ class Bridge:
                     selector = selectors.DefaultSelector()
                     for rb in self.robots.values():
                         selector.register(rb.robot.fileno(), selectors.EVENT_READ, rb)
-                ready = [key.data for key, _ in selector.select(0.01)]
-                for rb in ready:
+                readable = [key.data for key, _ in selector.select(0.01)]
+                for rb in readable:
                     rb.robot.update(0.0)  # ClientError when the simulator closed it: the bridge stops
                     self._dispatch([rb])
                     t = rb.robot.time
                     if t is not None and t > self.sim_time:
                         self.publish_clock(t)
-                if not ready:
+                if not readable:
                     self._dispatch([])
 
     def stop(self) -> None:

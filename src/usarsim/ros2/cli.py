@@ -145,7 +145,7 @@ def robot_specs(args: argparse.Namespace) -> list[Any]:
 
     specs = [RobotSpec.parse(text) for text in args.robot]
     if args.robots:
-        import yaml
+        import yaml  # type: ignore[import-untyped]  # PyYAML ships no type information (no types-PyYAML here)
 
         path = Path(args.robots)
         try:
@@ -165,7 +165,8 @@ def robot_specs(args: argparse.Namespace) -> list[Any]:
                     entry["class"],
                     entry.get("start"),
                     entry.get("name"),
-                    None if loc is None else tuple(float(v) for v in loc),
+                    # the file's numbers as written (x, y, z by --robots' help): their count is not checked here
+                    None if loc is None else tuple(float(v) for v in loc),  # type: ignore[arg-type]
                     float(entry.get("yaw", 0.0)),
                 )
             )

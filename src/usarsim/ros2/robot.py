@@ -344,16 +344,16 @@ class RobotBridge(SensorTopics):
 
     def camera_wanted(self) -> list[tuple[str, bool, bool, bool]]:
         """The cameras with a subscriber (or a recording): (camera, compressed, raw, info)."""
-        out = []
+        out: list[tuple[str, bool, bool, bool]] = []
         recording = self.bridge.recorder is not None
         for cam in self.cameras:
             base = f"{self.ns}/{'camera' if cam == self.cameras[0] else f'camera/{cam}'}"
-            counts = [
+            compressed, raw, info = (
                 recording or self.bridge.node.count_subscribers(f"{base}/{t}") > 0
                 for t in ("image_raw/compressed", "image_raw", "camera_info")
-            ]
-            if any(counts):
-                out.append((cam, *counts))
+            )
+            if compressed or raw or info:
+                out.append((cam, compressed, raw, info))
         return out
 
     def publish_battery(self, stamp: float, seconds: int) -> None:
