@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 from usarsim.errors import ProtocolError
 
 from ..grammar import RawMessage, Segment, parse_float
-from .declare import TEXT, VEC2OR3, command, formatter, key, numbered, parser, rest
+from .declare import TEXT, VEC2OR3, command, key, numbered, rest
 
 _BARE_NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)\Z")
 
@@ -135,6 +135,6 @@ def _bare_params(cmd: str, values: dict[str, Any], rest: list[Segment]) -> None:
 
 _LAYOUTS = [command(Set, _bare_params), *(command(c) for c in (Control, Move, Goto, Test))]
 
-PARSERS: dict[str, Callable[[RawMessage], ControlCommand]] = {layout.keyword: parser(layout) for layout in _LAYOUTS}
+PARSERS: dict[str, Callable[[RawMessage], ControlCommand]] = {layout.keyword: layout.parse for layout in _LAYOUTS}
 
-FORMATTERS: dict[type, Callable[[Any], str]] = {layout.cls: formatter(layout) for layout in _LAYOUTS}
+FORMATTERS: dict[type, Callable[[Any], str]] = {layout.cls: layout.format for layout in _LAYOUTS}

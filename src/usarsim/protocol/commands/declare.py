@@ -18,8 +18,8 @@ A field is one of:
 * :func:`pairs`: every segment a name and a number (MULTIDRIVE).
 * :func:`rest`: the segments no field took, in order (SET's item-specific keys, CONTROL).
 
-The wire order is the field order.  :func:`command` compiles a class's layout once;
-:func:`parser` and :func:`formatter` give the functions the dispatch tables hold.  A command
+The wire order is the field order.  :func:`command` compiles a class's layout once; its
+``parse`` and ``format`` are what the dispatch tables hold.  A command
 whose rules go beyond this (a bare number standing for SET's Params, REPORT's checks) adds a
 ``finish`` step, which gets the values read and may check or complete them.
 """
@@ -168,7 +168,7 @@ class _GroupLayout:
         for f in dataclasses.fields(spec.cls):
             k = f.metadata[WIRE]
             text = "{%s %s}" % (k.wire, k.hint)
-            optional = f.default is not dataclasses.MISSING and f.name not in (self.start[0],)
+            optional = f.default is not dataclasses.MISSING and f.name != self.start[0]
             parts.append("[%s]" % text if optional else text)
         self.grammar = " ".join(parts)
 
@@ -327,13 +327,3 @@ class Layout:
 def command(cls: type, finish: Callable[[str, dict[str, Any], list[Segment]], None] | None = None) -> Layout:
     """The compiled layout of a declared command class."""
     return Layout(cls, finish)
-
-
-def parser(layout: Layout) -> Callable[[RawMessage], Any]:
-    """The function a parse table holds for ``layout``'s command."""
-    return layout.parse
-
-
-def formatter(layout: Layout) -> Callable[[Any], str]:
-    """The function a format table holds for ``layout``'s command."""
-    return layout.format

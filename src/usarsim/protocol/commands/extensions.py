@@ -13,7 +13,7 @@ from usarsim.errors import ProtocolError
 
 from ..grammar import RawMessage, Segment
 from .common import Vec3, _Line, _word
-from .declare import POSITIVE, TEXT, VEC3, command, formatter, key, parser
+from .declare import POSITIVE, TEXT, VEC3, command, key
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -87,14 +87,14 @@ _PING = command(Ping)
 _REPORT = command(Report, _report_checks)
 
 PARSERS: dict[str, Callable[[RawMessage], Step | Ping | Report]] = {
-    "STEP": parser(_STEP),
-    "PING": parser(_PING),
-    "REPORT": parser(_REPORT),
+    "STEP": _STEP.parse,
+    "PING": _PING.parse,
+    "REPORT": _REPORT.parse,
 }
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    Step: formatter(_STEP),
-    Ping: formatter(_PING),
-    Report: formatter(_REPORT),
+    Step: _STEP.format,
+    Ping: _PING.format,
+    Report: _REPORT.format,
     UnknownCommand: lambda c: _Line(_word(c.type, "command word")).segments(c.segments).end(),
 }

@@ -11,7 +11,7 @@ from typing import Any, ClassVar
 
 from ..grammar import RawMessage
 from .common import Vec3
-from .declare import INTEGER, NUMBER, TEXT, VEC3, choice, command, formatter, group, key, parser
+from .declare import INTEGER, NUMBER, TEXT, VEC3, choice, command, group, key
 
 LINK_ORDERS = frozenset({0, 1, 2})
 """Order codes of MISPKG/ACT link groups (§5.6): 0 position, 1 velocity, 2 torque."""
@@ -82,13 +82,13 @@ _CAMERA = command(Camera)
 _ACT = command(Act)
 
 PARSERS: dict[str, Callable[[RawMessage], MisPkg | Camera | Act]] = {
-    "MISPKG": parser(_MISPKG),
-    "CAMERA": parser(_CAMERA),
-    "ACT": parser(_ACT),
+    "MISPKG": _MISPKG.parse,
+    "CAMERA": _CAMERA.parse,
+    "ACT": _ACT.parse,
 }
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    MisPkg: formatter(_MISPKG),
-    Camera: formatter(_CAMERA),
-    Act: formatter(_ACT),
+    MisPkg: _MISPKG.format,
+    Camera: _CAMERA.format,
+    Act: _ACT.format,
 }

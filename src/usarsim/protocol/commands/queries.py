@@ -10,7 +10,7 @@ from typing import Any, ClassVar
 
 from ..grammar import RawMessage
 from .common import Vec3
-from .declare import TEXT, VEC3, command, formatter, key, parser
+from .declare import TEXT, VEC3, command, key
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -60,6 +60,6 @@ Query = GetStartPoses | GetGeo | GetConf | GetPathNodes | GetClosestPathNode
 
 _LAYOUTS = [command(c) for c in (GetStartPoses, GetGeo, GetConf, GetPathNodes, GetClosestPathNode)]
 
-PARSERS: dict[str, Callable[[RawMessage], Query]] = {layout.keyword: parser(layout) for layout in _LAYOUTS}
+PARSERS: dict[str, Callable[[RawMessage], Query]] = {layout.keyword: layout.parse for layout in _LAYOUTS}
 
-FORMATTERS: dict[type, Callable[[Any], str]] = {layout.cls: formatter(layout) for layout in _LAYOUTS}
+FORMATTERS: dict[type, Callable[[Any], str]] = {layout.cls: layout.format for layout in _LAYOUTS}

@@ -23,11 +23,9 @@ from .declare import (
     VEC3,
     choice,
     command,
-    formatter,
     group,
     key,
     pairs,
-    parser,
 )
 
 JOINT_ORDERS = frozenset({0, 1, 2, 3, 10, 11, 12})
@@ -159,13 +157,13 @@ _DRIVE = command(Drive)
 _MULTIDRIVE = command(MultiDrive)
 
 PARSERS: dict[str, Callable[[RawMessage], Init | Drive | MultiDrive]] = {
-    "INIT": parser(_INIT),
-    "DRIVE": parser(_DRIVE),
-    "MULTIDRIVE": parser(_MULTIDRIVE),
+    "INIT": _INIT.parse,
+    "DRIVE": _DRIVE.parse,
+    "MULTIDRIVE": _MULTIDRIVE.parse,
 }
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    Init: formatter(_INIT),
-    Drive: formatter(_DRIVE),
-    MultiDrive: formatter(_MULTIDRIVE),
+    Init: _INIT.format,
+    Drive: _DRIVE.format,
+    MultiDrive: _MULTIDRIVE.format,
 }

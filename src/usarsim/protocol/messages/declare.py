@@ -25,6 +25,7 @@ compiles a class's layout once: its format is one function written for it (as
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -175,6 +176,7 @@ def _named(r: _Reader, field: str) -> list[tuple[str, Segment]]:
     return out
 
 
+@functools.cache  # a class's declarations do not change: read once, not at every line parsed
 def _declared(cls: type) -> list[tuple[str, Any, dataclasses.Field[Any]]]:
     return [(f.name, f.metadata[WIRE], f) for f in dataclasses.fields(cls) if WIRE in f.metadata]
 
