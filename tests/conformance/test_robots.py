@@ -14,6 +14,7 @@ from usarsim.config.catalog import ROBOTS_DIR, WORLDS_DIR
 from usarsim.config.robot import load_robot
 from usarsim.config.world_file import load_world
 from usarsim.protocol import messages as M
+from usarsim.robots.base import drive_class
 from usarsim.sim.simulation import Simulation
 
 ROBOT_FILES = sorted(ROBOTS_DIR.glob("*.yaml"))
@@ -31,9 +32,9 @@ def rest_z(robot, spawn_z: float, ground_z: float = 0.0) -> float:
     """Where the chassis origin rests: its lowest wheel, ball or box touches the surface at
     ``ground_z`` (Z down); an aerial robot hovers where it was put."""
     if robot.drive == "aerial":  # set down at a start pose, it hovers there
-        return ground_z - robot.lowest_point_m - robot.spawn_clearance_m
+        return ground_z - drive_class(robot).lowest_point_m(robot) - robot.spawn_clearance_m
     if robot.drive == "legged":
-        return ground_z - robot.lowest_point_m
+        return ground_z - drive_class(robot).lowest_point_m(robot)
     low = [w.position[2] + w.radius_m for w in robot.wheels if w.parent == "chassis"]
     low += [p.center[2] + p.radius_m for p in robot.chassis if p.shape == "sphere"]
     if robot.drive == "static" or not low:
@@ -156,11 +157,12 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
         pytest.skip(f"{robot.class_name} moves in water only (tests/integration/test_drives.py)")
     spin = 0.5 * robot.max_speed_rad_s
     radius = robot.geometry.wheel_radius_m
+    settings = drive_class(robot).settings_of(robot)  # an aerial robot's limits, a walking robot's gait
     if robot.drive == "aerial":  # m/s: "spin" x "radius" is the linear speed
-        spin, radius = 0.5 * robot.aerial.max_linear_m_s, 1.0
+        spin, radius = 0.5 * settings.max_linear_m_s, 1.0
         drive_velocities(sim, 1, None, spin, None, None)
     elif robot.drive == "legged":
-        spin, radius = 0.5 * robot.gait.max_linear_m_s, 1.0
+        spin, radius = 0.5 * settings.max_linear_m_s, 1.0
         drive_velocities(sim, 1, None, spin, None, None)
     elif robot.drive == "skid":
         drive_skid(sim, 1, spin, spin)
@@ -180,9 +182,9 @@ def test_robot_drives_the_right_way_at_its_promised_speed(path: Path, open_world
     if robot.drive == "skid":
         drive_skid(sim, 1, -0.3 * robot.max_speed_rad_s, 0.3 * robot.max_speed_rad_s)
     elif robot.drive == "aerial":
-        drive_velocities(sim, 1, None, None, None, -0.5 * robot.aerial.max_yaw_rate_rad_s)
+        drive_velocities(sim, 1, None, None, None, -0.5 * settings.max_yaw_rate_rad_s)
     elif robot.drive == "legged":
-        drive_velocities(sim, 1, None, 0.0, None, -0.5 * robot.gait.max_yaw_rate_rad_s)
+        drive_velocities(sim, 1, None, 0.0, None, -0.5 * settings.max_yaw_rate_rad_s)
     elif robot.drive == "ackermann":
         drive_ackermann(sim, 1, None, -0.5 * robot.max_front_steer_rad, None)
     else:

@@ -19,7 +19,7 @@ from usarsim.controls import DriveCommand, JointOrder, WheelSpeeds
 from usarsim.errors import UsarsimError
 from usarsim.readings import CommandResult
 from usarsim.sim.api import Done, OutputsHandler, RobotEntry
-from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers
+from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits
 
 
 @dataclass
@@ -118,6 +118,12 @@ class FakeFacade:
 
     def package_frames(self, robot: RobotConfig, package: MissionPackage) -> tuple[LinkFrame, ...]:
         return ()
+
+    def lowest_point_m(self, robot: RobotConfig) -> float:
+        return robot.body_lowest_point_m  # the fake's robots stand on their bodies
+
+    def velocity_limits(self, robot: RobotConfig) -> VelocityLimits | None:
+        return None
 
     def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
         if self.numbers is not None:

@@ -92,7 +92,9 @@ def test_a_world_with_nothing_on_its_floor_frames_the_floor(tmp_path):
 def test_a_robot_class_as_json():
     from usarsim.config.catalog import resolve_robot
 
-    p2at = robot_class_json(resolve_robot("P2AT"))
+    robot = resolve_robot("P2AT")
+    p2at = robot_class_json(robot, robot.body_lowest_point_m)
     assert p2at["drive"] == "skid" and p2at["cameras"] == ["Camera"] and p2at["max_speed"] == pytest.approx(5.385)
     assert -0.3 < p2at["spawn_z"] < -0.1  # stands on a floor at z = 0 (Z down)
-    assert robot_class_json(resolve_robot("StereoP2AT"))["cameras"] == ["CameraLeft", "CameraRight"]
+    stereo = resolve_robot("StereoP2AT")
+    assert robot_class_json(stereo, stereo.body_lowest_point_m)["cameras"] == ["CameraLeft", "CameraRight"]

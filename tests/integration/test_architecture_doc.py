@@ -54,6 +54,29 @@ def test_the_drive_example_drives_a_p2at_in_metres_per_second(doc_plugins, test_
     assert (x1 - x0) / 2.0 == pytest.approx(0.3, rel=0.1)
 
 
+def test_the_drive_examples_own_section_limits_its_rim_speed(doc_plugins, test_world):
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.errors import SimulationError
+    from usarsim.sim.simulation import Simulation
+
+    p2at = resolve_robot("P2AT")
+    robot = dataclasses.replace(p2at, drive="metric_skid", drive_sections={"metric_skid": {"max_rim_m_s": 0.15}})
+    sim = Simulation(test_world, seed=1)
+    sim.spawn(1, robot, "R", (-6.0, 0.0, -0.3), (0.0, 0.0, 0.0))
+    sim.advance(0.5)
+    drive_skid(sim, 1, 0.3, 0.3)  # asked for 0.3 m/s, held to the section's 0.15
+    sim.advance(1.0)
+    (x0, _, _), _ = sim.pose_of(1)
+    sim.advance(2.0)
+    (x1, _, _), _ = sim.pose_of(1)
+    assert (x1 - x0) / 2.0 == pytest.approx(0.15, rel=0.1)
+    typo = dataclasses.replace(p2at, drive="metric_skid", drive_sections={"metric_skid": {"max_rim": 0.15}})
+    with pytest.raises(
+        SimulationError, match=r"metric_skid\.max_rim: unknown key 'max_rim' \(did you mean 'max_rim_m_s'\?\)"
+    ):
+        sim.spawn(2, typo, "T", (-6.0, 2.0, -0.3), (0.0, 0.0, 0.0))
+
+
 def test_the_system_example_blows_robots_along_in_a_windy_world_only(doc_plugins, test_world):
     from usarsim.config.catalog import resolve_robot
     from usarsim.sim.simulation import Simulation

@@ -52,8 +52,9 @@ def test_the_iridium_stop_line_stops_every_kind_of_robot(server_factory, test_wo
 
 def test_a_walking_robot_walks_and_turns_on_left_and_right(server_factory, test_world):
     from usarsim.config.catalog import resolve_robot
+    from usarsim.robots.legged import Legged
 
-    gait = resolve_robot("ERS").gait
+    gait = Legged.settings_of(resolve_robot("ERS"))
     srv = server_factory(world=test_world, seed=3)
     c = srv.connect()
     c.nfo()

@@ -25,7 +25,7 @@ STANDING_M = 1.0  # a pose less than this above the ground stands on it; a highe
 P2AT = resolve_robot("P2AT")
 SCANNER = next(i for i in P2AT.items if i.item_type == "RangeScanner")
 # The laser's height above the ground the P2AT stands on, and its beams (SICK LMS200 preset)
-LASER_HEIGHT_M = P2AT.lowest_point_m - SCANNER.location[2]
+LASER_HEIGHT_M = P2AT.body_lowest_point_m - SCANNER.location[2]  # a skid-steered robot stands on its body
 LASER_AHEAD_M = SCANNER.location[0]
 PRESET = RangeScanner.PRESETS[SCANNER.params["preset"]]
 BEAMS = int(round(PRESET["fov_rad"] / PRESET["resolution_rad"])) + 1

@@ -17,6 +17,10 @@ from usarsim.config.reader import FieldDefaults
 from usarsim.config.robot import load_robot
 from usarsim.config.world_file import check_world_file, load_world
 from usarsim.errors import ConfigError, UsarsimError
+from usarsim.robots.aerial import AerialLimits
+from usarsim.robots.base import drive_class, make_drive
+from usarsim.robots.legged import Gait, Leg
+from usarsim.robots.nautical import NauticalSpec
 from usarsim.sim.simulation import describe_items
 
 WORLD_OK = """\
@@ -214,14 +218,13 @@ def test_a_bare_robot_file_gets_the_dataclass_defaults(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "head, attribute, expected",
+    "head, expected",
     [
-        ("vehicle_type: AerialVehicle\ndrive: aerial\naerial: {}\n", "aerial", R.AerialLimits()),
-        ("vehicle_type: AerialVehicle\ndrive: aerial\n", "aerial", R.AerialLimits()),
+        ("vehicle_type: AerialVehicle\ndrive: aerial\naerial: {}\n", AerialLimits()),
+        ("vehicle_type: AerialVehicle\ndrive: aerial\n", AerialLimits()),
         (
             "vehicle_type: NauticalVehicle\ndrive: nautical\nnautical: {volume_m3: 0.01}\n",
-            "nautical",
-            R.NauticalSpec(volume_m3=0.01),
+            NauticalSpec(volume_m3=0.01),
         ),
         (
             (
@@ -231,16 +234,13 @@ def test_a_bare_robot_file_gets_the_dataclass_defaults(tmp_path):
                 "  - {name: kn, parent: hr, max_speed: 1.0, max_torque: 2.0}\n"
                 "gait:\n  stand_height_m: 0.2\n  legs: [{hip_pitch: hp, hip_roll: hr, knee: kn, upper_m: 0.1, lower_m: 0.1}]\n"
             ),
-            "gait",
-            R.Gait(
-                legs=(R.Leg(hip_pitch="hp", hip_roll="hr", knee="kn", upper_m=0.1, lower_m=0.1),), stand_height_m=0.2
-            ),
+            Gait(legs=(Leg(hip_pitch="hp", hip_roll="hr", knee="kn", upper_m=0.1, lower_m=0.1),), stand_height_m=0.2),
         ),
     ],
 )
-def test_a_bare_drive_section_gets_the_dataclass_defaults(tmp_path, head, attribute, expected):
+def test_a_bare_drive_section_gets_the_dataclass_defaults(tmp_path, head, expected):
     r = load_robot(write(tmp_path, f"class_name: Bare\nsteering_type: None\n{head}{BARE_BODY}"))
-    assert getattr(r, attribute) == expected
+    assert drive_class(r).settings_of(r) == expected
 
 
 def test_a_bare_world_file_gets_the_dataclass_defaults(tmp_path):
@@ -584,7 +584,7 @@ def test_robot_only_a_biped_sways(tmp_path):
     f = tmp_path / "Q.yaml"
     f.write_text(text)
     with pytest.raises(ConfigError, match=r"gait\.sway_m: only a biped sways"):
-        load_robot(f)
+        make_drive(load_robot(f))  # the walking robot's drive reads its gait
 
 
 def test_a_robot_files_colour_is_its_body_colour_in_pictures(tmp_path):
@@ -595,3 +595,24 @@ def test_a_robot_files_colour_is_its_body_colour_in_pictures(tmp_path):
     bad.write_text(text.replace("vehicle_type:", "color: [1.5, 0, 0]\nvehicle_type:", 1))
     with pytest.raises(Exception, match="color"):
         load_robot(bad)
+
+
+def test_a_drive_section_belongs_to_its_drive_alone(tmp_path):
+    """A kind's settings are read and checked by its drive model: another kind's section, or
+    one no kind has, is refused when the robot is checked (usarsim validate, INIT)."""
+    text = (ROBOTS_DIR / "P2AT.yaml").read_text()
+    cases = {
+        "aerial: {max_linear_m_s: 1.0}\n": r"aerial: the 'aerial' section is for robots of drive: aerial; this robot's drive is skid",
+        "gaet: {period_s: 0.4}\n": r"gaet: unknown section 'gaet' \(did you mean 'gait'\?\)",
+    }
+    for extra, message in cases.items():
+        f = tmp_path / "P2AT.yaml"
+        f.write_text(extra + text)
+        robot = load_robot(f)  # the loader keeps the section for the drive
+        with pytest.raises(ConfigError, match=message):
+            make_drive(robot)
+    sub = (ROBOTS_DIR / "Submarine.yaml").read_text()
+    f = tmp_path / "Submarine.yaml"
+    f.write_text(sub.replace("nautical:", "nautical_x:", 1))
+    with pytest.raises(ConfigError, match=r"nautical_x: unknown section 'nautical_x' \(did you mean 'nautical'\?\)"):
+        make_drive(load_robot(f))

@@ -127,3 +127,21 @@ def test_the_command_box_sends_a_line_and_the_log_shows_sen_lines(console_page, 
     assert page.is_visible("#message-dialog")
     assert page.text_content("#message-text").startswith(("SEN ", "STA ", "MISSTA "))
     assert console_page.errors == []
+
+
+def test_the_robot_classes_say_where_each_stands_and_how_fast_velocities_may_take_it(console_server):
+    """/api/classes asks each robot's drive: an aerial robot's velocity limits are its file's
+    ``aerial`` section (the stick is scaled by them), a wheeled robot has none, and a walking
+    robot stands on its legs, below its body."""
+    import json
+    import urllib.request
+
+    from usarsim.config.catalog import resolve_robot
+
+    with urllib.request.urlopen(f"http://127.0.0.1:{console_server.app.web.port}/api/classes", timeout=30) as r:
+        classes = {c["name"]: c for c in json.load(r)}
+    assert classes["AirRobot"]["velocities"] == {"linear": 2.0, "lateral": 2.0, "vertical": 2.0, "yaw_rate": 1.7453}
+    assert classes["Helicopter"]["velocities"]["linear"] == 5.0
+    assert classes["P2AT"]["velocities"] is None
+    ers = resolve_robot("ERS")
+    assert classes["ERS"]["spawn_z"] < -(ers.body_lowest_point_m + ers.spawn_clearance_m) - 0.05

@@ -113,6 +113,10 @@ class Section:
             raise self.error(name, "required key is missing")
         return default
 
+    def has_read(self, name: str) -> bool:
+        """Whether a key of this name was read (by any of the readers below)."""
+        return name in self._used
+
     def misspelling_of(self, name: str) -> str | None:
         """The key of this mapping that looks like a misspelling of the missing key ``name``:
         one nothing has read yet, as close to it as difflib finds 'centre' to 'center'."""

@@ -4,21 +4,18 @@ of drive.  Coordinates are in the robot's USARSim frame (X forward, Y right,
 Z down) relative to the chassis origin; metres, radians, kilograms.
 
 This module holds the robot as a whole and :func:`load_robot`; its parts and their sections
-(chassis, wheels, links, sensors) are in usarsim.config.robot_parts, the settings of the
-aerial, nautical and legged drives in usarsim.config.drive_settings.
+(chassis, wheels, links, sensors) are in usarsim.config.robot_parts.  A kind of drive's own
+section (an aerial robot's ``aerial`` limits, a vessel's ``nautical`` hull, a walking robot's
+``gait``) is kept as written, in ``drive_sections``, for the drive model to read and check,
+as a mounted item's settings are (the drive's module declares them: usarsim.robots).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import cast
+from typing import Any, cast
 
-from usarsim.config.drive_settings import AerialLimits as AerialLimits
-from usarsim.config.drive_settings import Gait as Gait
-from usarsim.config.drive_settings import Leg as Leg
-from usarsim.config.drive_settings import NauticalSpec as NauticalSpec
-from usarsim.config.drive_settings import read_aerial, read_gait, read_nautical
 from usarsim.config.reader import FieldDefaults, Section, did_you_mean, load_yaml, name_entries
 from usarsim.config.robot_parts import JOINT_TYPES as JOINT_TYPES
 from usarsim.config.robot_parts import SHAPES as SHAPES
@@ -92,17 +89,16 @@ class RobotConfig:
     wheel_gain: float = 20.0
     wheel_torque_nm: float | None = None
     steer_torque_nm: float = 50.0  # steering servo torque of each steered wheel
-    aerial: AerialLimits = field(default_factory=AerialLimits)
     status_joints: tuple[str, ...] = ()  # links whose angles STA reports (TeleMax flippers, protocol.md 6.2)
-    nautical: NauticalSpec | None = None
-    gait: Gait | None = None
+    # the sections of the file the loader does not know, as written (name -> mapping): the
+    # drive's own settings, read and checked by its drive model (usarsim.robots.base)
+    drive_sections: dict[str, Any] = field(default_factory=dict)
     # how far above the surface below a start pose the robot's lowest point is set (the
     # per-robot Z of USARSim's start poses; manual section 5.3)
     spawn_clearance_m: float = 0.02
     # the body's colour (red, green, blue from 0 to 1) in camera pictures only: the Pioneers'
     # red aluminium by default
     color: tuple[float, float, float] = (0.75, 0.10, 0.10)
-    extra: dict = field(default_factory=dict)
 
     @property
     def wheel_torque_limit_nm(self) -> float:
@@ -119,9 +115,11 @@ class RobotConfig:
         )
 
     @property
-    def lowest_point_m(self) -> float:
-        """How far below its origin the robot reaches when level (its wheels, balls, boxes
-        and capsules on the chassis): where it stands on a floor (Z down, positive)."""
+    def body_lowest_point_m(self) -> float:
+        """How far below its origin the robot's body reaches when level (its wheels, balls,
+        boxes and capsules on the chassis; Z down, positive).  Where the robot stands is its
+        drive's to say (a walking robot stands on its legs): the drive model's
+        ``lowest_point_m``."""
         low = [w.position[2] + w.radius_m for w in self.wheels if w.parent == "chassis"]
         for p in self.chassis:
             if p.shape == "box":
@@ -136,16 +134,6 @@ class RobotConfig:
                 lean = math.sqrt(max(0.0, 1.0 - axis_z**2))
                 extra = p.radius_m if p.shape == "capsule" else p.radius_m * lean
                 low.append(p.center[2] + p.length_m / 2.0 * axis_z + extra)
-        if self.gait is not None:  # standing on its legs: hip, leg, foot (a ball or a sole)
-            for leg in self.gait.legs:
-                # a leg's joints are links of the robot (checked when the file is read)
-                if leg.ankle_pitch is None:
-                    knee = cast(Link, self.link(leg.knee))
-                    foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
-                else:
-                    sole = cast(Link, self.link(leg.ankle_roll or leg.ankle_pitch))
-                    foot = max((p.center[2] + p.size[2] / 2.0 for p in sole.shapes if p.shape == "box"), default=0.0)
-                low.append(self.link_origin(leg.hip_pitch)[2] + self.gait.stand_height_m + foot)
         return max(low) if low else 0.0
 
     def link(self, name: str) -> Link | None:
@@ -224,20 +212,6 @@ def _robot(data: dict, path: str) -> RobotConfig:
     wheel_gain = top.float("wheel_gain", d.wheel_gain, min=0.0, min_exclusive=True)
     wheel_torque = top.float("wheel_torque_nm", d.wheel_torque_nm, min=0.0, min_exclusive=True)
     steer_torque = top.float("steer_torque_nm", d.steer_torque_nm, min=0.0, min_exclusive=True)
-    aerial = read_aerial(top.section("aerial", {}))
-    nautical = d.nautical
-    if drive == "nautical" or top.has("nautical"):
-        if drive != "nautical":
-            raise top.error("nautical", "only a vessel (drive: nautical) has nautical settings")
-        nautical = read_nautical(top.section("nautical"))
-    gait = d.gait
-    if drive == "legged" or top.has("gait"):
-        if drive != "legged":
-            raise top.error("gait", "only a walking robot (drive: legged) has a gait")
-        gait = read_gait(top.section("gait"))
-    if top.has("aerial") and drive != "aerial":
-        raise top.error("aerial", "only an aerial robot (drive: aerial) has aerial limits")
-
     geometry = _geometry(top.section("geometry"))
 
     chassis = [read_shape(s) for s in top.entries("chassis", required=True)]
@@ -261,14 +235,6 @@ def _robot(data: dict, path: str) -> RobotConfig:
             raise ConfigError("a steered wheel must sit on the chassis", path=path, key=f"wheels[{i}].steer")
     # what a kind of drive needs of the wheels (sides, steered axles, numbers) is checked by
     # its drive model (usarsim.robots), when the robot is validated or spawned
-    if gait is not None:
-        two_legs_apart = len(gait.legs) == 2 and abs(abs(gait.legs[0].phase - gait.legs[1].phase) - 0.5) <= 1e-6
-        if gait.sway_m > 0.0 and not two_legs_apart:
-            raise top.error("gait.sway_m", "only a biped sways: two legs half a period apart (phase 0 and 0.5)")
-        for leg in gait.legs:
-            for j in leg.joints:
-                if j not in lnames:
-                    raise top.error("gait", f"unknown leg joint '{j}'{did_you_mean(j, lnames)}")
     status_joints = tuple(str(x) for x in top.list("status_joints", []))
     for j in status_joints:
         if j not in lnames:
@@ -286,7 +252,10 @@ def _robot(data: dict, path: str) -> RobotConfig:
         packages.append(MissionPackage(name=pname, links=tuple(str(x) for x in plinks)))
 
     items = read_items(top, [*wnames, *lnames])
-    top.finish()
+    # a section (a mapping) no key above took belongs to the drive (its model checks it);
+    # anything else unread is a mistake
+    drive_sections = {str(k): v for k, v in top.data.items() if isinstance(v, dict) and not top.has_read(str(k))}
+    top.finish(allowed_extra=drive_sections)
 
     total = (
         sum(c.mass_kg for c in chassis)
@@ -325,10 +294,8 @@ def _robot(data: dict, path: str) -> RobotConfig:
         steer_torque_nm=steer_torque,
         links=tuple(links),
         mission_packages=tuple(packages),
-        aerial=aerial,
         status_joints=status_joints,
-        nautical=nautical,
-        gait=gait,
+        drive_sections=drive_sections,
         color=cast(Vec3, tuple(float(c) for c in color)),  # read as 3 numbers
     )
 

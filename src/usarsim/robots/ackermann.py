@@ -15,7 +15,7 @@ from usarsim.sim.view import RobotHandle
 
 
 @DRIVES.register("ackermann")
-class Ackermann(DriveModel[AckermannDrive]):
+class Ackermann(DriveModel[AckermannDrive, None]):
     """``DRIVE {Speed} {FrontSteer} {RearSteer}``: the driven wheels' spin speed (rad/s within
     MaxSpeed) and the axles' angles (rad within MaxFrontSteer/MaxRearSteer, positive right);
     what is not sent keeps its value; percentages of the maxima when Normalized."""

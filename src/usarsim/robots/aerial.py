@@ -9,15 +9,18 @@ with up to ``max_accel_m_s2`` x mass; roll and pitch are damped, and their own w
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
+from usarsim.config.reader import FieldDefaults, Section
 from usarsim.config.robot import RobotConfig
 from usarsim.controls import Velocities
 from usarsim.robots.base import DRIVES, DriveModel, clamp
 from usarsim.sim.constants import LEVEL_STIFFNESS, UP
+from usarsim.sim.outputs import VelocityLimits
 from usarsim.sim.systems.base import SYSTEMS, System
 from usarsim.sim.view import RobotHandle
 
@@ -27,14 +30,46 @@ if TYPE_CHECKING:
 AERIAL_AXES = ("linear", "lateral", "vertical", "roll", "pitch", "yaw")
 
 
+@dataclass(frozen=True, kw_only=True)
+class AerialLimits:
+    """Speed limits of an aerial robot (protocol.md 5.3d; UDK AirRobot: 2 m/s linear, lateral
+    and vertical, 100 degrees/s of yaw) and how hard its rotors can push: the robot file's
+    ``aerial`` section."""
+
+    max_linear_m_s: float = 2.0
+    max_lateral_m_s: float = 2.0
+    max_vertical_m_s: float = 2.0
+    max_yaw_rate_rad_s: float = 1.7453
+    max_accel_m_s2: float = 4.0
+
+
 @DRIVES.register("aerial")
-class Aerial(DriveModel[Velocities]):
+class Aerial(DriveModel[Velocities, AerialLimits]):
     """``DRIVE {AltitudeVelocity} {LinearVelocity} {LateralVelocity} {RotationalVelocity}``:
     m/s up, forward, right and rad/s clockwise; unsent ones keep their value; limited to
     the robot's maxima (percentages of them when Normalized); all zero: hover."""
 
     ACCEPTS = frozenset({Velocities})
     GRAVITY_COMPENSATED = True
+    SETTINGS = "aerial"
+
+    @classmethod
+    def read_settings(cls, section: Section, robot: RobotConfig) -> AerialLimits:
+        d = FieldDefaults(AerialLimits)
+        out = AerialLimits(
+            **{
+                name: section.float(name, getattr(d, name), min=0.0, min_exclusive=True)
+                for name in ("max_linear_m_s", "max_lateral_m_s", "max_vertical_m_s", "max_yaw_rate_rad_s")
+            },
+            max_accel_m_s2=section.float("max_accel_m_s2", d.max_accel_m_s2, min=0.0, min_exclusive=True),
+        )
+        section.finish()
+        return out
+
+    @classmethod
+    def velocity_limits(cls, robot: RobotConfig) -> VelocityLimits:
+        lim = cls.settings_of(robot)
+        return VelocityLimits(lim.max_linear_m_s, lim.max_lateral_m_s, lim.max_vertical_m_s, lim.max_yaw_rate_rad_s)
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
@@ -46,7 +81,8 @@ class Aerial(DriveModel[Velocities]):
         chassis.gravcomp = 1.0
         site = chassis.add_site()
         site.name = f"{prefix}/rotors"
-        force = robot.aerial.max_accel_m_s2 * robot.mass_kg
+        lim = cls.settings_of(robot)
+        force = lim.max_accel_m_s2 * robot.mass_kg
         dims = robot.geometry.dimensions
         inertia = robot.mass_kg * (dims[0] ** 2 + dims[1] ** 2) / 12.0
         for i, axis in enumerate(AERIAL_AXES):
@@ -57,8 +93,8 @@ class Aerial(DriveModel[Velocities]):
             gear = [0.0] * 6
             gear[i] = 1.0
             a.gear = gear
-            limit = force if i < 3 else 4.0 * inertia * robot.aerial.max_yaw_rate_rad_s / 0.25
-            kv = limit / (0.25 * (robot.aerial.max_linear_m_s if i < 3 else robot.aerial.max_yaw_rate_rad_s))
+            limit = force if i < 3 else 4.0 * inertia * lim.max_yaw_rate_rad_s / 0.25
+            kv = limit / (0.25 * (lim.max_linear_m_s if i < 3 else lim.max_yaw_rate_rad_s))
             a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
             a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
             a.gainprm[0] = kv
@@ -70,14 +106,14 @@ class Aerial(DriveModel[Velocities]):
         self.rotor = {axis: model.actuator(f"{handle.prefix}/{axis}").id for axis in AERIAL_AXES}
 
     def own_actuators(self) -> list[tuple[int, float]]:
-        lim, mass = self.robot.aerial, self.robot.mass_kg
+        lim, mass = self.settings, self.robot.mass_kg
         return [
             (a, lim.max_accel_m_s2 * mass * lim.max_linear_m_s if axis in ("linear", "lateral", "vertical") else 0.0)
             for axis, a in self.rotor.items()
         ]
 
     def command(self, part: Velocities, normalized: bool) -> None:
-        lim = self.robot.aerial
+        lim = self.settings
         for key, value, top in (
             ("altitude", part.altitude, lim.max_vertical_m_s),
             ("linear", part.linear, lim.max_linear_m_s),

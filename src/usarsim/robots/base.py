@@ -13,13 +13,14 @@ with ``@DRIVES.register("name")``, plus robot files that say ``drive: name``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
 
+from usarsim.config.reader import Section, did_you_mean
 from usarsim.config.robot import RobotConfig, Wheel
 from usarsim.controls import DrivePart
 from usarsim.errors import ConfigError, PluginNotFoundError
 from usarsim.registry import Registry
-from usarsim.sim.outputs import RobotNumbers
+from usarsim.sim.outputs import RobotNumbers, VelocityLimits
 
 if TYPE_CHECKING:
     import mujoco
@@ -47,9 +48,10 @@ class Treads:
 
 
 P = TypeVar("P", bound=DrivePart)  # the kind of DRIVE part a drive applies
+S = TypeVar("S")  # a kind's settings (its own section of the robot file); None for a kind without
 
 
-class DriveModel(Generic[P]):
+class DriveModel(Generic[P, S]):
     """One robot's drive: its kind's commands, state and controls.
 
     Class attributes say what the simulation must do for the kind: ``ACCEPTS`` the kinds
@@ -59,6 +61,13 @@ class DriveModel(Generic[P]):
     walking robot would not survive a drop).  What a kind needs done between physics steps
     is a world system registered beside it (an aerial robot's levelling, a walking robot's
     gait: :mod:`usarsim.sim.systems`).
+
+    A kind with settings of its own declares them in its module, as a sensor declares its
+    Config: their type as the second type argument (``DriveModel[Velocities, AerialLimits]``),
+    the robot file's section that holds them (``SETTINGS = "aerial"``; ``SETTINGS_REQUIRED``
+    when a robot of the kind cannot do without), and :meth:`read_settings`, which reads that
+    section with the loader every robot file is read by (:class:`usarsim.config.reader.Section`).
+    ``self.settings`` holds them.
     """
 
     TYPE: ClassVar[str] = ""  # the robot file's drive key (set by DRIVES.register)
@@ -66,17 +75,67 @@ class DriveModel(Generic[P]):
     GRAVITY_COMPENSATED: ClassVar[bool] = False
     SET_DOWN_AT_START: ClassVar[bool] = True
     SET_DOWN_ALWAYS: ClassVar[bool] = False
+    SETTINGS: ClassVar[str] = ""  # the robot file's section of this kind's settings ("": it has none)
+    SETTINGS_REQUIRED: ClassVar[bool] = False
+    settings: S
 
     def __init__(self, robot: RobotConfig) -> None:
         self.robot = robot
+        self.settings = self.settings_of(robot)
         # driven wheels whose speed a joint order (or a holonomic DRIVE) set, rad/s: they
         # keep it until the kind's own wheel command takes them back
         self.wheel_speed: dict[str, float] = {}
 
     # The robot file and the model ---------------------------------------------------------
     @classmethod
+    def read_settings(cls, section: Section, robot: RobotConfig) -> S:
+        """This kind's settings from its section of ``robot``'s file (an empty section when
+        the file has none); ConfigError naming the key when a value is wrong."""
+        section.finish()
+        return cast(S, None)  # a kind without settings of its own
+
+    @classmethod
+    def settings_of(cls, robot: RobotConfig) -> S:
+        """This kind's settings as ``robot``'s file gives them (defaults where it is silent)."""
+        raw = robot.drive_sections.get(cls.SETTINGS, {}) if cls.SETTINGS else {}
+        return cls.read_settings(Section(raw, path=robot.path, key=cls.SETTINGS), robot)
+
+    @classmethod
+    def check_sections(cls, robot: RobotConfig) -> None:
+        """The drive's sections of the robot file: only this kind's own (a section of another
+        kind, or one no kind has, is a mistake), there when required, and right."""
+        kinds = {name: cast("type[DriveModel[Any, Any]]", DRIVES.get(name)) for name in DRIVES.names()}
+        owners = {k.SETTINGS: name for name, k in kinds.items() if k.SETTINGS}
+        for key in robot.drive_sections:
+            if key == cls.SETTINGS:
+                continue
+            if key in owners:
+                msg = f"the '{key}' section is for robots of drive: {owners[key]}; this robot's drive is {cls.TYPE}"
+            else:  # no key of a robot file, nor any drive's section
+                msg = f"unknown section '{key}'{did_you_mean(key, owners)}"
+            raise ConfigError(msg, path=robot.path, key=key)
+        if cls.SETTINGS_REQUIRED and cls.SETTINGS not in robot.drive_sections:
+            raise ConfigError(
+                f"a robot of drive: {cls.TYPE} needs its '{cls.SETTINGS}' section", path=robot.path, key=cls.SETTINGS
+            )
+        cls.settings_of(robot)
+
+    @classmethod
     def check(cls, robot: RobotConfig) -> None:
         """Raise ConfigError when the robot file lacks what this kind needs."""
+
+    @classmethod
+    def lowest_point_m(cls, robot: RobotConfig) -> float:
+        """How far below its origin the robot reaches when level: where it stands on a floor
+        (Z down, positive).  Its body's lowest point, unless the kind stands on something
+        else (a walking robot on its legs)."""
+        return robot.body_lowest_point_m
+
+    @classmethod
+    def velocity_limits(cls, robot: RobotConfig) -> VelocityLimits | None:
+        """The velocities a DRIVE of velocities may ask of the robot (the console scales its
+        stick by them); None for a kind not driven by velocities."""
+        return None
 
     @classmethod
     def build(cls, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, robot: RobotConfig, prefix: str) -> None:
@@ -170,7 +229,7 @@ class DriveModel(Generic[P]):
         """Right after the robot was built into the world."""
 
 
-def drive_class(robot: RobotConfig) -> type[DriveModel[Any]]:
+def drive_class(robot: RobotConfig) -> type[DriveModel[Any, Any]]:
     """The drive model class a robot file names (ConfigError naming the file when unknown)."""
     try:
         return DRIVES.get(robot.drive)
@@ -178,9 +237,10 @@ def drive_class(robot: RobotConfig) -> type[DriveModel[Any]]:
         raise ConfigError(str(exc), path=robot.path, key="drive") from None
 
 
-def make_drive(robot: RobotConfig) -> DriveModel[Any]:
+def make_drive(robot: RobotConfig) -> DriveModel[Any, Any]:
     """A new drive model for one robot (its file checked for what the kind needs)."""
     cls = drive_class(robot)
+    cls.check_sections(robot)
     cls.check(robot)
     return cls(robot)
 

@@ -12,7 +12,7 @@ from usarsim.robots.base import DRIVES, DriveModel, clamp
 
 
 @DRIVES.register("holonomic")
-class Holonomic(DriveModel[SteeredWheels]):
+class Holonomic(DriveModel[SteeredWheels, None]):
     """``DRIVE {WheelNumber n} {WheelSpeed v} {WheelSteer a} ...``: each numbered steered
     wheel's spin speed (rad/s within MaxSpeed, percent of it when Normalized) and angle
     (rad, 0 straight ahead); either may be left out per wheel."""

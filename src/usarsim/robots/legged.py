@@ -12,11 +12,13 @@ mean the forward speed, their difference the turn rate.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import mujoco
 
-from usarsim.config.robot import Gait, Link, RobotConfig
+from usarsim.config.reader import FieldDefaults, Section, did_you_mean
+from usarsim.config.robot import Link, RobotConfig
 from usarsim.controls import Velocities, WheelSpeeds
 from usarsim.errors import ConfigError
 from usarsim.robots.base import DRIVES, DriveModel, clamp
@@ -28,6 +30,92 @@ if TYPE_CHECKING:
     from usarsim.sim.robot import SimRobot
 
 GAIT_STEPS = 5  # a walking robot's joint targets are renewed every 5 physics steps (20 ms)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Leg:
+    """One leg of a walking robot: its hip pitch, hip roll and knee links, the lengths of
+    its upper and lower segments, and its phase in the gait (0..1).  A biped's leg also
+    has a hip yaw (it turns the foot) and ankle pitch and roll links (they keep the sole
+    flat); its chain then runs yaw, roll, pitch, knee, ankle pitch, ankle roll, and
+    ``knee_forward`` bends its knee forward, as a person's does."""
+
+    hip_pitch: str
+    hip_roll: str
+    knee: str
+    upper_m: float
+    lower_m: float
+    phase: float = 0.0
+    hip_yaw: str | None = None
+    ankle_pitch: str | None = None
+    ankle_roll: str | None = None
+    knee_forward: bool = False
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        return tuple(
+            j
+            for j in (self.hip_yaw, self.hip_roll, self.hip_pitch, self.knee, self.ankle_pitch, self.ankle_roll)
+            if j is not None
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Gait:
+    """A walking robot's gait (DRIVE {LinearVelocity} {LateralVelocity} {RotationalVelocity}):
+    the robot file's ``gait`` section."""
+
+    legs: tuple[Leg, ...]
+    stand_height_m: float  # hip to foot, standing
+    step_height_m: float = 0.02
+    period_s: float = 0.5
+    max_linear_m_s: float = 0.2
+    max_lateral_m_s: float = 0.1
+    max_yaw_rate_rad_s: float = 0.8
+    # fraction of a period each foot stands: 0.5 trots; above it every step begins and
+    # ends with both feet down (a biped's double support)
+    duty: float = 0.5
+    sway_m: float = 0.0  # how far the body shifts sideways over the standing foot
+
+
+def read_gait(gs: Section, links: set[str]) -> Gait:
+    """A robot file's ``gait`` section; every leg joint it names is one of ``links``."""
+    ld = FieldDefaults(Leg)
+    legs = []
+    for ls in gs.entries("legs", required=True):
+        leg = Leg(
+            hip_pitch=ls.str("hip_pitch"),
+            hip_roll=ls.str("hip_roll"),
+            knee=ls.str("knee"),
+            upper_m=ls.float("upper_m", min=0.001),
+            lower_m=ls.float("lower_m", min=0.001),
+            phase=ls.float("phase", ld.phase, min=0.0, max=1.0),
+            hip_yaw=ls.str("hip_yaw", ld.hip_yaw),
+            ankle_pitch=ls.str("ankle_pitch", ld.ankle_pitch),
+            ankle_roll=ls.str("ankle_roll", ld.ankle_roll),
+            knee_forward=ls.bool("knee_forward", ld.knee_forward),
+        )
+        for j in leg.joints:
+            if j not in links:
+                raise ConfigError(f"unknown leg joint '{j}'{did_you_mean(j, links)}", path=gs.path, key=gs.key)
+        legs.append(leg)
+    d = FieldDefaults(Gait)
+    out = Gait(
+        legs=tuple(legs),
+        stand_height_m=gs.float("stand_height_m", min=0.001),
+        step_height_m=gs.float("step_height_m", d.step_height_m, min=0.0),
+        period_s=gs.float("period_s", d.period_s, min=0.05),
+        max_linear_m_s=gs.float("max_linear_m_s", d.max_linear_m_s, min=0.0, min_exclusive=True),
+        max_lateral_m_s=gs.float("max_lateral_m_s", d.max_lateral_m_s, min=0.0, min_exclusive=True),
+        max_yaw_rate_rad_s=gs.float("max_yaw_rate_rad_s", d.max_yaw_rate_rad_s, min=0.0, min_exclusive=True),
+        duty=gs.float("duty", d.duty, min=0.5, max=0.95),
+        sway_m=gs.float("sway_m", d.sway_m, min=0.0),
+    )
+    gs.finish()
+    two_legs_apart = len(out.legs) == 2 and abs(abs(out.legs[0].phase - out.legs[1].phase) - 0.5) <= 1e-6
+    if out.sway_m > 0.0 and not two_legs_apart:
+        raise gs.error("sway_m", "only a biped sways: two legs half a period apart (phase 0 and 0.5)")
+    return out
 
 
 def leg_ik(
@@ -54,16 +142,17 @@ def _smooth(x: float) -> float:
 
 
 @DRIVES.register("legged")
-class Legged(DriveModel[Velocities | WheelSpeeds]):
+class Legged(DriveModel[Velocities | WheelSpeeds, Gait]):
     """The gait of a walking robot, and the velocities it walks at."""
 
     ACCEPTS = frozenset({Velocities, WheelSpeeds})
     SET_DOWN_ALWAYS = True
+    SETTINGS = "gait"
+    SETTINGS_REQUIRED = True
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
-        assert robot.gait is not None  # make_drive checks the robot (check()) before building its drive
-        self.gait: Gait = robot.gait
+        self.gait: Gait = self.settings
         self.walk = {"linear": 0.0, "lateral": 0.0, "rotational": 0.0}
         self.sides = [0.0, 0.0]  # the last {Left} {Right}, rad/s (or percent)
         # the gait's clock; how far it has set off (0 standing, 1 walking; it fades in over
@@ -90,9 +179,24 @@ class Legged(DriveModel[Velocities | WheelSpeeds]):
         return link
 
     @classmethod
-    def check(cls, robot: RobotConfig) -> None:
-        if robot.gait is None:
-            raise ConfigError("a walking robot (drive: legged) needs its gait", path=robot.path, key="gait")
+    def read_settings(cls, section: Section, robot: RobotConfig) -> Gait:
+        return read_gait(section, {ln.name for ln in robot.links})
+
+    @classmethod
+    def lowest_point_m(cls, robot: RobotConfig) -> float:
+        """Standing on its legs: hip, leg and foot (a ball or a sole), or its body if lower."""
+        low = [robot.body_lowest_point_m]
+        gait = cls.settings_of(robot)
+        for leg in gait.legs:
+            # a leg's joints are links of the robot (checked when the gait is read)
+            if leg.ankle_pitch is None:
+                knee = cast(Link, robot.link(leg.knee))
+                foot = max((p.radius_m for p in knee.shapes if p.shape == "sphere"), default=0.0)
+            else:
+                sole = cast(Link, robot.link(leg.ankle_roll or leg.ankle_pitch))
+                foot = max((p.center[2] + p.size[2] / 2.0 for p in sole.shapes if p.shape == "box"), default=0.0)
+            low.append(robot.link_origin(leg.hip_pitch)[2] + gait.stand_height_m + foot)
+        return max(low)
 
     def command(self, part: Velocities | WheelSpeeds, normalized: bool) -> None:
         g = self.gait

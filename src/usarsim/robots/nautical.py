@@ -5,36 +5,64 @@ the propeller, the rudder and the stern planes."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.config.robot import NauticalSpec, RobotConfig
+from usarsim.config.reader import FieldDefaults, Section
+from usarsim.config.robot import RobotConfig
 from usarsim.controls import NauticalDrive
-from usarsim.errors import ConfigError
 from usarsim.robots.base import DRIVES, DriveModel, clamp
 
 DOWN = np.array([0.0, 0.0, -1.0])  # MuJoCo: a clockwise turn seen from above is about -z
 
 
+@dataclass(frozen=True, kw_only=True)
+class NauticalSpec:
+    """A vessel (protocol.md 5.3e): its displaced volume (buoyancy), its propeller's thrust,
+    and how its rudder and stern planes turn it: the robot file's ``nautical`` section."""
+
+    volume_m3: float = 0.0
+    max_thrust_n: float = 50.0
+    max_rudder_rad: float = 0.5
+    max_stern_plane_rad: float = 0.5
+    rudder_gain: float = 20.0  # N m of yaw torque per rad of rudder per m/s of speed
+    stern_plane_gain: float = 20.0  # N m of pitch torque per rad of plane per m/s
+    drag_n_per_m_s: float = 40.0  # linear drag in water
+    angular_drag: float = 20.0  # N m per rad/s
+
+
 @DRIVES.register("nautical")
-class Nautical(DriveModel[NauticalDrive]):
+class Nautical(DriveModel[NauticalDrive, NauticalSpec]):
     """``DRIVE {Propeller} {Rudder} {SternPlane}``: the propeller as a fraction of full thrust,
     -1..1 (percent when Normalized); rudder and stern planes in radians (positive: turn
     right, rise), within the vessel's limits.  Unsent values are kept."""
 
     ACCEPTS = frozenset({NauticalDrive})
     SET_DOWN_AT_START = False  # a vessel starts where the pose is: in water
+    SETTINGS = "nautical"
+    SETTINGS_REQUIRED = True
 
     def __init__(self, robot: RobotConfig) -> None:
         super().__init__(robot)
-        assert robot.nautical is not None  # make_drive checks the robot (check()) before building its drive
-        self.spec: NauticalSpec = robot.nautical
+        self.spec: NauticalSpec = self.settings
         self.sail = {"propeller": 0.0, "rudder": 0.0, "stern_plane": 0.0}
 
     @classmethod
-    def check(cls, robot: RobotConfig) -> None:
-        if robot.nautical is None:
-            raise ConfigError("a vessel (drive: nautical) needs its nautical settings", path=robot.path, key="nautical")
+    def read_settings(cls, section: Section, robot: RobotConfig) -> NauticalSpec:
+        n, d = section, FieldDefaults(NauticalSpec)
+        out = NauticalSpec(
+            volume_m3=n.float("volume_m3", min=0.0, min_exclusive=True),  # required in a file
+            max_thrust_n=n.float("max_thrust_n", d.max_thrust_n, min=0.0, min_exclusive=True),
+            max_rudder_rad=n.float("max_rudder_rad", d.max_rudder_rad, min=0.0, max=1.6),
+            max_stern_plane_rad=n.float("max_stern_plane_rad", d.max_stern_plane_rad, min=0.0, max=1.6),
+            rudder_gain=n.float("rudder_gain", d.rudder_gain, min=0.0),
+            stern_plane_gain=n.float("stern_plane_gain", d.stern_plane_gain, min=0.0),
+            drag_n_per_m_s=n.float("drag_n_per_m_s", d.drag_n_per_m_s, min=0.0),
+            angular_drag=n.float("angular_drag", d.angular_drag, min=0.0),
+        )
+        n.finish()
+        return out
 
     @property
     def vessel(self) -> NauticalSpec:

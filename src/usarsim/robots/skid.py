@@ -116,7 +116,7 @@ def lateral_friction_ratio(robot: RobotConfig) -> float:
 
 
 @DRIVES.register("skid")
-class Skid(DriveModel[WheelSpeeds]):
+class Skid(DriveModel[WheelSpeeds, None]):
     """``DRIVE {Left} {Right}``: each side's wheels (tracks) spin at its speed, rad/s within
     the robot's MaxSpeed (percent of it when Normalized); a side not sent keeps its speed.
     On a chained side every wheel runs at the same rim speed: the speed is that of a wheel

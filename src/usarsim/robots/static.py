@@ -7,5 +7,5 @@ from usarsim.robots.base import DRIVES, DriveModel
 
 
 @DRIVES.register("static")
-class Static(DriveModel[DrivePart]):
+class Static(DriveModel[DrivePart, None]):
     """No drive part applies; Light, Flip and joint orders still do."""

@@ -304,8 +304,9 @@ class Session(Articulation, Queries):
         (as the simulation does when it spawns), so only what is there counts."""
         x, y, z = location
         level = abs(rotation[0]) < 1e-6 and abs(rotation[1]) < 1e-6
-        if level and z > -robot.lowest_point_m:
-            z = -robot.lowest_point_m - 0.005
+        lowest = self.facade.lowest_point_m(robot)
+        if level and z > -lowest:
+            z = -lowest - 0.005
         return self.facade.world.solid_at((x, y, z), movable=False)
 
     def spawn_done(self, result, error) -> None:

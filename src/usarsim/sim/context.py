@@ -18,7 +18,6 @@ if TYPE_CHECKING:
     import mujoco
     import numpy as np
 
-    from usarsim.config.robot import NauticalSpec
     from usarsim.config.world import WorldConfig
     from usarsim.sim.robot import SimRobot
     from usarsim.sim.systems.base import System
@@ -33,13 +32,25 @@ class MovingEntities(Protocol):
     def update(self, d: mujoco.MjData, time: float) -> None: ...
 
 
+class Hull(Protocol):
+    """What the water needs of a vessel's hull: the volume it displaces (m^3), its drag along
+    its length (N per m/s) and against turning (N m per rad/s)."""
+
+    @property
+    def volume_m3(self) -> float: ...
+    @property
+    def drag_n_per_m_s(self) -> float: ...
+    @property
+    def angular_drag(self) -> float: ...
+
+
 @runtime_checkable
 class Vessel(Protocol):
     """A drive built for water (:mod:`usarsim.robots.nautical`), as the world's water
     (:mod:`usarsim.sim.systems.water`) carries it: its hull, and its own propulsion."""
 
     @property
-    def vessel(self) -> NauticalSpec: ...
+    def vessel(self) -> Hull: ...
 
     def propulsion(
         self, rot: np.ndarray, lin: np.ndarray, frac: float

@@ -19,7 +19,7 @@ from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
 from usarsim.sim.api import RobotEntry
-from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, package_frames
+from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits, package_frames
 from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
 from usarsim.sim.runner import Request, SimulationRunner
@@ -146,6 +146,15 @@ class SimFacade:
     def robot_numbers(self, robot: RobotConfig) -> RobotNumbers:
         """What GETGEO and GETCONF {Type Robot} report of the robot (its drive model's numbers)."""
         return self.plugins.drive_class(robot).numbers(robot)
+
+    def lowest_point_m(self, robot: RobotConfig) -> float:
+        """How far below its origin the robot reaches when level, by its drive (a walking
+        robot stands on its legs): where it stands on a floor (Z down, positive)."""
+        return self.plugins.drive_class(robot).lowest_point_m(robot)
+
+    def velocity_limits(self, robot: RobotConfig) -> VelocityLimits | None:
+        """How fast a robot driven by velocities may go (None: its drive takes none)."""
+        return self.plugins.drive_class(robot).velocity_limits(robot)
 
     def canonical_item_type(self, name: str) -> str:
         """A mounted item's type in USARSim's spelling (``sonar`` -> ``Sonar``), among sensors,

@@ -57,6 +57,17 @@ class RobotNumbers:
 
 
 @dataclass(frozen=True)
+class VelocityLimits:
+    """How fast a robot driven by velocities may go (m/s forward, sideways and up; rad/s of
+    yaw): its drive model's (:meth:`usarsim.robots.DriveModel.velocity_limits`)."""
+
+    linear: float
+    lateral: float
+    vertical: float
+    yaw_rate: float
+
+
+@dataclass(frozen=True)
 class LinkFrame:
     """What ``GETGEO {Type MisPkg}`` and ``{Type Actuator}`` report of one link of a mission
     package: its number (from 1), its parent's (``-1``: the chassis, or a link of no package

@@ -32,8 +32,8 @@ class PluginSet:
     (what it accepts, the numbers GETGEO reports), a mounted item for a robot file's entry,
     and an item type's canonical spelling."""
 
-    drive_class: Callable[[RobotConfig], type[DriveModel[Any]]]
-    make_drive: Callable[[RobotConfig], DriveModel[Any]]
+    drive_class: Callable[[RobotConfig], type[DriveModel[Any, Any]]]
+    make_drive: Callable[[RobotConfig], DriveModel[Any, Any]]
     make_item: Callable[[MountedItem, RobotConfig, int, str], Item[Any]]
     canonical_item_type: Callable[[str], str | None]
 

@@ -38,7 +38,7 @@ def add_robot(
     prefix: str,
     location,
     rotation,
-    drive: DriveModel[Any],
+    drive: DriveModel[Any, Any],
     items: Sequence[Item[Any]] = (),
 ) -> mujoco.MjsBody:
     """Add a robot's bodies, joints and actuators under ``prefix``; its chassis origin at

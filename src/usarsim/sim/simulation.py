@@ -223,16 +223,17 @@ class Simulation:
         except ConfigError as exc:
             raise SimulationError(str(exc)) from exc
         level = abs(rot[0]) < 1e-6 and abs(rot[1]) < 1e-6
+        lowest = drive.lowest_point_m(robot)
         # a level robot put lower than it stands (its wheels in the floor) is lifted onto it
-        if level and loc[2] > -robot.lowest_point_m:
-            loc = (loc[0], loc[1], -robot.lowest_point_m - 0.005)
+        if level and loc[2] > -lowest:
+            loc = (loc[0], loc[1], -lowest - 0.005)
         # a robot at a start pose is set down on what lies below it (a vessel starts where
         # the pose is: in water), and a walking robot wherever it is put (a standing biped
         # would not survive a drop)
         if level and ((set_down and drive.SET_DOWN_AT_START) or drive.SET_DOWN_ALWAYS):
             ground = self._ground_below(loc)
             if ground is not None:
-                loc = (loc[0], loc[1], ground - robot.lowest_point_m - robot.spawn_clearance_m)
+                loc = (loc[0], loc[1], ground - lowest - robot.spawn_clearance_m)
         prefix = f"robot{uid}"
         robotspec.add_robot(self.spec, robot, prefix, loc, rot, drive, sensors)
         r = SimRobot(

@@ -8,7 +8,7 @@ rotation of a USARSim roll, pitch and yaw, for drawing the world).
 from __future__ import annotations
 
 from usarsim.sim.frames import euler_to_mat
-from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers
+from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers, VelocityLimits
 from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_model
 from usarsim.sim.tiles import Tile, grid_tiles
 from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
@@ -24,6 +24,7 @@ __all__ = [
     "RobotFrame",
     "RobotNumbers",
     "Tile",
+    "VelocityLimits",
     "WorldFrame",
     "euler_to_mat",
     "grid_tiles",

@@ -267,7 +267,9 @@ class WebConsole(BridgeRoutes, WatchRoutes):
         out = []
         for name in robot_files(dirs):
             try:
-                out.append(robot_class_json(resolve_robot(name, extra_dirs=dirs)))
+                robot = resolve_robot(name, extra_dirs=dirs)
+                facade = self.app.facade
+                out.append(robot_class_json(robot, facade.lowest_point_m(robot), facade.velocity_limits(robot)))
             except UsarsimError as exc:
                 log.warning("console: robot class %s left out: %s", name, exc)
         return out

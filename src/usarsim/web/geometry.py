@@ -11,15 +11,19 @@ left out (what the 3-D view frames).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import struct
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from usarsim.config.world import WorldConfig
 from usarsim.sim.types import euler_to_mat
+
+if TYPE_CHECKING:
+    from usarsim.sim.types import VelocityLimits
 
 CIRCLE_POINTS = 24  # points around a cylinder's end when its outline is drawn
 
@@ -191,9 +195,10 @@ def world_json(world: WorldConfig) -> dict:
     }
 
 
-def robot_class_json(robot) -> dict:
-    """What the console needs to know of a robot class: how it is driven, its size, its
-    cameras, mission packages and range sensors."""
+def robot_class_json(robot, lowest_point_m: float, velocities: VelocityLimits | None = None) -> dict:
+    """What the console needs to know of a robot class: how it is driven (``velocities``: how
+    fast a robot driven by velocities may go), its size, where it stands (``lowest_point_m``
+    below its origin, by its drive), its cameras and mission packages."""
     cameras = [i.name for i in robot.items if i.item_type in ("Camera", "OmniCam", "OmniCamera")]
     return {
         "name": robot.class_name,
@@ -204,13 +209,9 @@ def robot_class_json(robot) -> dict:
         "dimensions": _r(robot.geometry.dimensions),
         "max_speed": round(robot.max_speed_rad_s, 4),
         "max_front_steer": round(robot.max_front_steer_rad, 4),
-        "aerial": {
-            "linear": robot.aerial.max_linear_m_s,
-            "vertical": robot.aerial.max_vertical_m_s,
-            "yaw_rate": robot.aerial.max_yaw_rate_rad_s,
-        },
+        "velocities": None if velocities is None else dataclasses.asdict(velocities),
         # the Z (down) of a location where the robot stands on a floor at z = 0
-        "spawn_z": round(-(robot.lowest_point_m + robot.spawn_clearance_m), 3),
+        "spawn_z": round(-(lowest_point_m + robot.spawn_clearance_m), 3),
         "cameras": cameras,
         "packages": [{"name": p.name, "links": list(p.links)} for p in robot.mission_packages],
     }

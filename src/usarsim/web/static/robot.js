@@ -267,7 +267,7 @@ export class RobotSession {
         return `DRIVE {Speed ${r(v * s)}} {FrontSteer ${r(w * steer)}}`;
       }
       case "aerial": {
-        const ae = c.aerial || { linear: 2, vertical: 2, yaw_rate: 1.7 };
+        const ae = c.velocities || { linear: 2, vertical: 2, yaw_rate: 1.7 };
         return `DRIVE {AltitudeVelocity ${r(a * this.speed * ae.vertical)}} {LinearVelocity ${r(v * this.speed * ae.linear)}} ` +
           `{LateralVelocity 0} {RotationalVelocity ${r(w * this.speed * ae.yaw_rate)}}`;
       }
