@@ -66,6 +66,16 @@ def broken_advance(seconds: float, *, waited: bool = False) -> None:
     raise RuntimeError("a physics bug")
 
 
+def settled(value):
+    """A future already settled with ``value`` (what the facade returns for a request it has
+    carried out)."""
+    from concurrent.futures import Future
+
+    future = Future()
+    future.set_result(value)
+    return future
+
+
 def segments(text: str) -> dict[str, str]:
     """``{Key Value}`` segments of a line as a dict (first occurrence of a key wins)."""
     out: dict[str, str] = {}
@@ -334,19 +344,12 @@ class ServerThread:
 
     def on_sim(self, fn: Callable[[Any], Any]) -> Any:
         """Run ``fn(sim)`` on the simulation thread (at once, also in lock-step) and return its result."""
-        done = threading.Event()
-        box: dict[str, Any] = {}
+        from concurrent.futures import TimeoutError as FutureTimeout
 
-        def on_done(result, error):
-            box["result"], box["error"] = result, error
-            done.set()
-
-        self.app.facade.call(fn, on_done=on_done, immediate=True)
-        if not done.wait(DEFAULT_TIMEOUT):
-            raise WaitTimeout("the simulation thread did not answer")
-        if box["error"] is not None:
-            raise box["error"]
-        return box["result"]
+        try:
+            return self.app.facade.call(fn, immediate=True).result(DEFAULT_TIMEOUT)
+        except FutureTimeout:
+            raise WaitTimeout("the simulation thread did not answer") from None
 
     def robot_count(self) -> int:
         return self.on_sim(lambda sim: len(sim.robots))

@@ -10,6 +10,7 @@ items' descriptions) is given by the test, or a plain default.
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,7 +19,7 @@ from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder, WheelSpeeds
 from usarsim.errors import UsarsimError
 from usarsim.readings import CommandResult
-from usarsim.sim.api import Done, OutputsHandler, RobotEntry
+from usarsim.sim.api import OutputsHandler, RobotEntry
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits
 
 
@@ -65,11 +66,14 @@ class FakeFacade:
         """The simulation stops on ``error``: every request after it is refused."""
         self._failure = error
 
-    def _refuse(self, on_done: Done | None) -> bool:
-        if self._failure is not None and on_done is not None:
-            on_done(None, UsarsimError(f"the simulation has stopped: {self._failure}"))
-            return True
-        return False
+    def _answer(self, result: Any) -> Future[Any]:
+        """A request answered at once (refused when the simulation has stopped)."""
+        future: Future[Any] = Future()
+        if self._failure is not None:
+            future.set_exception(UsarsimError(f"the simulation has stopped: {self._failure}"))
+        else:
+            future.set_result(result)
+        return future
 
     # lifecycle and delivery ------------------------------------------------------------
     def set_deliver(self, deliver: OutputsHandler) -> None:
@@ -158,24 +162,23 @@ class FakeFacade:
         name: str,
         location: Any,
         rotation: Any,
-        on_done: Done,
         set_down: bool = False,
         controller: str = "",
-    ) -> None:
+    ) -> Future[object]:
         self.calls.append(("spawn", (uid, robot.class_name, name, tuple(location), tuple(rotation), set_down)))
-        if self._refuse(on_done):
-            return
+        if self._failure is not None:
+            return self._answer(None)
         if self.spawn_error is not None:
             error, self.spawn_error = self.spawn_error, None
-            on_done(None, UsarsimError(error))
-            return
+            refused: Future[object] = Future()
+            refused.set_exception(UsarsimError(error))
+            return refused
         self.spawned[uid] = Spawned(uid, robot, name, tuple(location), tuple(rotation), set_down)
         self.directory[uid] = RobotEntry(uid, name, robot, controller)
-        on_done(uid, None)
+        return self._answer(uid)
 
-    def barrier(self, on_done: Done) -> None:
-        if not self._refuse(on_done):
-            on_done(self.now, None)
+    def barrier(self) -> Future[float]:
+        return self._answer(self.now)
 
     def remove(self, uid: int) -> None:
         self.calls.append(("remove", (uid,)))
@@ -198,40 +201,27 @@ class FakeFacade:
     def drive_joints(self, uid: int, orders: list[JointOrder]) -> None:
         self.calls.append(("drive_joints", (uid, list(orders))))
 
-    def operate(
-        self, uid: int, item_type: Any, name: Any, opcode: Any, params: Any, on_done: Done | None = None
-    ) -> None:
+    def operate(self, uid: int, item_type: Any, name: Any, opcode: Any, params: Any) -> Future[object]:
         self.calls.append(("operate", (uid, item_type, name, opcode, params)))
-        if not self._refuse(on_done) and on_done is not None:
-            on_done(CommandResult(str(item_type), str(name or ""), ok=False), None)
+        return self._answer(CommandResult(str(item_type), str(name or ""), ok=False))
 
-    def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
+    def set_viewports(self, uid: int, names: list[str | None]) -> Future[tuple[float, list[tuple[str, str]]]]:
         self.calls.append(("set_viewports", (uid, list(names))))
-        if not self._refuse(on_done):
-            on_done((self.now, [(n, "OK" if n else "Failed") for n in names]), None)
+        return self._answer((self.now, [(n, "OK" if n else "Failed") for n in names]))
 
-    def report_victim(self, uid: int, name: str, location: Any, on_done: Done | None = None) -> None:
+    def report_victim(self, uid: int, name: str, location: Any) -> Future[None]:
         self.calls.append(("report_victim", (uid, name, tuple(location))))
-        if not self._refuse(on_done) and on_done is not None:
-            on_done(None, None)
+        return self._answer(None)
 
-    def step(
-        self,
-        seconds: float,
-        on_done: Callable[[float], None],
-        on_refused: Callable[[BaseException], None] | None = None,
-    ) -> None:
+    def step(self, seconds: float) -> Future[float]:
         self.calls.append(("step", (seconds,)))
-        if self._failure is not None:
-            if on_refused is not None:
-                on_refused(UsarsimError(f"the simulation has stopped: {self._failure}"))
-            return
-        self.now = round(self.now + seconds, 9)
-        on_done(self.now)
+        if self._failure is None:
+            self.now = round(self.now + seconds, 9)
+        return self._answer(self.now)
 
     # ground truth and pictures -------------------------------------------------------------
-    def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
-        on_done([], None)
+    def truth(self, class_name: str | None, name: str | None) -> Future[list[tuple[Any, ...]]]:
+        return self._answer([])
 
     def set_multiview_cameras(self, count: int) -> None:
         self.calls.append(("set_multiview_cameras", (count,)))
@@ -246,20 +236,20 @@ class FakeFacade:
     def radio_watch(self, pairs: frozenset[Any]) -> None:
         self.calls.append(("radio_watch", (pairs,)))
 
-    def radio_check(self, a: str, b: str, on_done: Done) -> None:
-        on_done((self.now, None), None)
+    def radio_check(self, a: str, b: str) -> Future[tuple[float, Any]]:
+        return self._answer((self.now, None))
 
-    def radio_link(self, a: str, b: str, on_done: Done) -> None:
-        on_done(None, None)
+    def radio_link(self, a: str, b: str) -> Future[Any]:
+        return self._answer(None)
 
-    def robot_positions(self, on_done: Done) -> None:
-        on_done([(s.name, s.location, False) for s in self.spawned.values()], None)
+    def robot_positions(self) -> Future[list[Any]]:
+        return self._answer([(s.name, s.location, False) for s in self.spawned.values()])
 
-    def walls_between_robots(self, a: str, b: str, on_done: Done) -> None:
-        on_done(0, None)
+    def walls_between_robots(self, a: str, b: str) -> Future[int]:
+        return self._answer(0)
 
-    def walls_between(self, start: Any, end: Any, on_done: Done) -> None:
-        on_done(0, None)
+    def walls_between(self, start: Any, end: Any) -> Future[int]:
+        return self._answer(0)
 
     def watch_frames(
         self, period_s: float, on_frame: Callable[[Any], None], *, radio_model: Any = None, links_period_s: float = 1.0

@@ -55,3 +55,25 @@ def test_the_fast_tier_cannot_load_mujoco():
         pytest.skip("the guard is on in the fast tier's own run (USARSIM_FAST_TIER=1)")
     with pytest.raises(ImportError, match="the fast test tier"):
         import mujoco  # noqa: F401
+
+
+def test_an_answer_is_a_typed_future_and_when_done_hands_it_on_once_settled():
+    """The facade answers with futures; ``when_done`` calls back with (result, None) or
+    (None, error): at once for a future already settled, else when it is settled."""
+    from concurrent.futures import Future
+
+    from usarsim.sim.api import when_done
+
+    seen: list = []
+    pending: Future[float] = Future()
+    when_done(pending, lambda r, e: seen.append((r, e)))
+    assert seen == []  # not settled yet: nothing called
+    pending.set_result(1.5)
+    assert seen == [(1.5, None)]
+    refused: Future[float] = Future()
+    error = RuntimeError("stopped")
+    refused.set_exception(error)
+    when_done(refused, lambda r, e: seen.append((r, e)))  # settled already: called at once
+    assert seen[-1] == (None, error)
+    hints = inspect.get_annotations(Facade.step, eval_str=False)
+    assert hints["return"] == "Future[float]"  # typed, as the server reads it

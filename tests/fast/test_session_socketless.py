@@ -5,6 +5,7 @@ machine, its refusals, what it asks of the simulation and the exact lines it ans
 from __future__ import annotations
 
 import logging
+from concurrent.futures import Future
 
 import pytest
 from fakes import FakeFacade
@@ -193,14 +194,14 @@ def test_the_session_holds_its_lines_while_the_spawn_is_under_way(yellow_world):
     """A spawn not answered yet (the simulation thread is busy) holds the lines after it."""
     pending = []
     facade = FakeFacade(yellow_world)
-    facade.spawn = lambda uid, robot, name, loc, rot, on_done, **kw: pending.append(on_done)
+    facade.spawn = lambda uid, robot, name, loc, rot, **kw: pending.append(Future()) or pending[-1]
     sent: list = []
     session = Session(
         SessionContext(facade=facade, peer="t", emit=sent.append, threadsafe=lambda fn: fn, admit=lambda: None), uid=1
     )
     session.handle_line("INIT {ClassName USARBot.P2AT} {Start PlayerStart1}")
     assert session.state == SPAWNING and session.holding
-    pending[0](1, None)
+    pending[0].set_result(1)
     assert session.state == ALIVE and not session.holding
 
 

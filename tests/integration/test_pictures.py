@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import gl_problem
+from helpers import gl_problem, settled
 
 GL_PROBLEM = gl_problem()
 pytestmark = pytest.mark.skipif(bool(GL_PROBLEM), reason=GL_PROBLEM or "ok")
@@ -102,7 +102,7 @@ class Camera:
         for k, (location, rotation) in enumerate(poses, start=1):
             self.sim.spawn(k, robot, f"R{k}", location, rotation, set_down=True)
         self.sim.advance(0.5)  # every robot landed
-        self.service = RenderService(lambda reuse, done: done(self.sim.cameras.render_snapshot(reuse), None), max_fps=0)
+        self.service = RenderService(lambda reuse: settled(self.sim.cameras.render_snapshot(reuse)), max_fps=0)
 
     def picture(self, uid: int) -> np.ndarray:
         from usarsim.sim.tiles import Tile

@@ -12,6 +12,7 @@ import pytest
 
 from helpers import broken_advance
 from usarsim.errors import SimulationStopped
+from usarsim.sim.api import when_done
 from usarsim.sim.facade import SimFacade
 
 WAIT_S = 10.0
@@ -21,7 +22,7 @@ def answer(facade: SimFacade, fn, immediate: bool = True):
     """Ask ``fn`` of the simulation; its (result, error), or fail if none comes."""
     done = threading.Event()
     box: list = []
-    facade.call(fn, on_done=lambda r, e: (box.append((r, e)), done.set()), immediate=immediate)
+    when_done(facade.call(fn, immediate=immediate), lambda r, e: (box.append((r, e)), done.set()))
     assert done.wait(WAIT_S), "the request was never answered"
     return box[0]
 
@@ -45,10 +46,9 @@ def test_requests_waiting_for_a_step_that_never_comes_are_answered_at_the_stop(y
     answers: list = []
     done = threading.Event()
     for _ in range(3):  # lock-step: these wait for the next STEP
-        facade.call(
-            lambda sim: sim.time,
-            immediate=False,
-            on_done=lambda r, e: (answers.append((r, e)), len(answers) == 3 and done.set()),
+        when_done(
+            facade.call(lambda sim: sim.time, immediate=False),
+            lambda r, e: (answers.append((r, e)), len(answers) == 3 and done.set()),
         )
     time.sleep(0.1)
     assert answers == []  # no STEP yet: nothing ran
@@ -68,10 +68,10 @@ def test_requests_queued_behind_a_long_one_are_answered_when_the_stop_drops_them
         time.sleep(0.5)
         return "slow"
 
-    facade.call(slow, on_done=lambda r, e: answers.append(("slow", r, e)))
+    when_done(facade.call(slow), lambda r, e: answers.append(("slow", r, e)))
     assert started.wait(WAIT_S)
     for k in range(5):  # queued behind it; the stop comes before they run
-        facade.call(lambda sim, k=k: k, on_done=lambda r, e, k=k: answers.append((k, r, e)))
+        when_done(facade.call(lambda sim, k=k: k), lambda r, e, k=k: answers.append((k, r, e)))
     facade.stop()
     assert answers[0] == ("slow", "slow", None)  # the one running finishes
     assert sorted(a[0] for a in answers[1:]) == [0, 1, 2, 3, 4]
@@ -95,8 +95,9 @@ def step(facade: SimFacade, seconds: float) -> tuple[str, object]:
     """A lock-step STEP: ("stepped", time) or ("refused", error); fail if neither comes."""
     done = threading.Event()
     box: list = []
-    facade.step(
-        seconds, lambda t: (box.append(("stepped", t)), done.set()), lambda e: (box.append(("refused", e)), done.set())
+    when_done(
+        facade.step(seconds),
+        lambda t, e: (box.append(("stepped", t) if e is None else ("refused", e)), done.set()),
     )
     assert done.wait(WAIT_S), "the STEP was never answered"
     return box[0]

@@ -51,11 +51,7 @@ class Harness:
         self.wait(M.Stepped)
 
     def pose(self):
-        box = {}
-        done = threading.Event()
-        self.facade.call(lambda sim: sim.pose_of(1), on_done=lambda r, e: (box.update(r=r), done.set()))
-        done.wait(10)
-        return box["r"]
+        return self.facade.call(lambda sim: sim.pose_of(1)).result(10)
 
     def close(self):
         self.facade.stop()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from test_image_server import Viewer
 
-from helpers import gl_problem
+from helpers import gl_problem, settled
 
 GL_PROBLEM = gl_problem()
 pytestmark = pytest.mark.skipif(bool(GL_PROBLEM), reason=GL_PROBLEM or "ok")
@@ -119,7 +119,7 @@ def test_a_wall_1_m_away_under_water_keeps_most_of_its_colours(harbour, monkeypa
     sim.spawn(1, resolve_robot("Submarine"), "Nemo", (13.25, 6.0, -1.75), (0.0, 0.0, 0.0), set_down=False)
 
     def picture():
-        service = render.RenderService(lambda reuse, done: done(sim.cameras.render_snapshot(reuse), None), max_fps=0)
+        service = render.RenderService(lambda reuse: settled(sim.cameras.render_snapshot(reuse)), max_fps=0)
         try:
             return service.render(WIDTH, HEIGHT, [Tile(1, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=120)
         finally:

@@ -9,7 +9,6 @@ import queue
 import statistics
 import threading
 import time
-from typing import Any
 
 from usarsim.bench.serving import ServedApp, logging_quiet
 
@@ -102,16 +101,7 @@ class _BareRenderer:
     drawn the way the image server draws (no shadows or reflections, nearest mipmap)."""
 
     def __init__(self, served: _ServedCamera, w: int, h: int):
-        box: dict[str, Any] = {}
-        done = threading.Event()
-
-        def finished(r: Any, e: BaseException | None) -> None:
-            box.update(r=r)
-            done.set()
-
-        served.app.facade.call(lambda s: s.cameras.render_snapshot(), on_done=finished)
-        done.wait(30)
-        self.snap = box["r"]
+        self.snap = served.app.facade.call(lambda s: s.cameras.render_snapshot()).result(30)
         self.size = (w, h)
         self.jobs: queue.Queue[int | None] = queue.Queue()
         self.times: queue.Queue[float] = queue.Queue()

@@ -19,6 +19,7 @@ rest (mostly waiting).
 
 from __future__ import annotations
 
+import concurrent.futures
 import cProfile
 import inspect
 import pstats
@@ -90,9 +91,7 @@ class Profiler:
         self.contacts: tuple[int, int, int] | None = None  # contacts, constraint rows, islands at the end
 
     def _on_sim(self, fn) -> None:
-        done = threading.Event()
-        self._facade.call(lambda sim: fn(), on_done=lambda r, e: done.set())
-        done.wait(60)
+        concurrent.futures.wait([self._facade.call(lambda sim: fn())], timeout=60)
 
     def _on_loop(self, app, fn) -> None:
         done = threading.Event()

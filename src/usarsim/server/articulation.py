@@ -18,6 +18,7 @@ from usarsim.controls import JointOrder
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.readings import ItemParams
+from usarsim.sim.api import when_done
 
 if TYPE_CHECKING:
     from usarsim.config.robot import Link, MissionPackage, RobotConfig
@@ -84,9 +85,8 @@ class Articulation:
             _, tilt, pan = cmd.rotation
             self.facade.drive_joints(self.uid, [JointOrder(pkg.links[0], pan, 0), JointOrder(pkg.links[1], tilt, 0)])
         if cmd.zoom is not None:
-            self.facade.operate(
-                self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)), on_done=self._answered("CAMERA")
-            )
+            zoomed = self.facade.operate(self.uid, "Camera", None, "Zoom", ItemParams(values=(cmd.zoom,)))
+            when_done(zoomed, self._answered("CAMERA"))
 
     def on_act(self, cmd: C.Act) -> None:
         """``ACT {Name arm} {Link k} {Value v} [{Order o}] ...`` and ``ACT {Name arm} {Gripper 1|0}``
@@ -135,14 +135,10 @@ class Articulation:
                     pkg.name,
                     level=logging.INFO,
                 )
-            self.facade.operate(
-                self.uid,
-                "Gripper",
-                gripper or pkg.name,
-                "Close" if cmd.gripper else "Open",
-                ItemParams(),
-                on_done=self._answered("ACT"),
+            gripped = self.facade.operate(
+                self.uid, "Gripper", gripper or pkg.name, "Close" if cmd.gripper else "Open", ItemParams()
             )
+            when_done(gripped, self._answered("ACT"))
         if cmd.sequence is not None:
             self.log_once(
                 "act-sequence", "ACT {Sequence %d}: no stored sequences; ignored", cmd.sequence, level=logging.INFO

@@ -18,6 +18,7 @@ from usarsim.controls import JointOrder
 from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.readings import ItemParams
+from usarsim.sim.api import when_done
 
 if TYPE_CHECKING:
     from usarsim.config.robot import RobotConfig
@@ -219,14 +220,10 @@ class Queries:
         if t == "viewports":
             self.on_viewports(cmd)
             return
-        self.facade.operate(
-            self.uid,
-            cmd.type,
-            cmd.name,
-            cmd.opcode,
-            ItemParams(values=cmd.values, text=cmd.params),
-            on_done=self._answered("SET"),
+        done = self.facade.operate(
+            self.uid, cmd.type, cmd.name, cmd.opcode, ItemParams(values=cmd.values, text=cmd.params)
         )
+        when_done(done, self._answered("SET"))
 
     def on_bind_camera(self, cmd: C.Set) -> None:
         """``SET {Type Camera} {Robot r} {Name cam} {Client ip}``: the image server shows that
@@ -279,4 +276,4 @@ class Queries:
                 )
             )
 
-        self.facade.set_viewports(self.uid, names, on_done=self._answered("SET", answer))
+        when_done(self.facade.set_viewports(self.uid, names), self._answered("SET", answer))

@@ -21,7 +21,7 @@ from usarsim.protocol import messages as M
 from usarsim.server.articulation import Articulation
 from usarsim.server.connection import LogOnce
 from usarsim.server.queries import NO_ROBOT, Queries
-from usarsim.sim.api import Facade
+from usarsim.sim.api import Facade, when_done
 
 log = logging.getLogger("usarsim.server")
 
@@ -287,16 +287,10 @@ class Session(Articulation, Queries):
         self.robot = robot
         self.robot_name = cmd.name or f"Robot{self.uid}"
         self.state = SPAWNING
-        self.facade.spawn(
-            self.uid,
-            robot,
-            self.robot_name,
-            location,
-            rotation,
-            self._spawn_done,
-            set_down=set_down,
-            controller=self.ctx.peer,
+        spawned = self.facade.spawn(
+            self.uid, robot, self.robot_name, location, rotation, set_down=set_down, controller=self.ctx.peer
         )
+        when_done(spawned, self._spawn_done)
 
     def _solid_at(self, robot: RobotConfig, location, rotation) -> str | None:
         """The solid of the world (not a movable object, which may have been pushed away) that
@@ -325,12 +319,13 @@ class Session(Articulation, Queries):
         """``PING [{Id x}]`` -> ``PONG [{Id x}] {Time t}`` (an extension) once the simulation has
         carried out every request sent before it (an INIT's spawn, or its ERROR) and every
         message it produced so far is written to this connection."""
-        self.facade.barrier(
+        when_done(
+            self.facade.barrier(),
             self._answered(
                 "PING",
                 then=lambda t: self.send(M.Pong(id=cmd.id, time=t)),
                 refused=lambda error: self.send(M.Pong(id=cmd.id, time=None)),
-            )
+            ),
         )
 
     def on_report(self, cmd: C.Report) -> None:
@@ -341,9 +336,8 @@ class Session(Articulation, Queries):
             self.refuse("REPORT", "before-init-query", NO_ROBOT, level=logging.INFO)
             return
         self.reports += 1
-        self.facade.report_victim(
-            self.uid, cmd.name or f"Victim{self.reports}", cmd.location, on_done=self._answered("REPORT")
-        )
+        reported = self.facade.report_victim(self.uid, cmd.name or f"Victim{self.reports}", cmd.location)
+        when_done(reported, self._answered("REPORT"))
 
     def on_drive(self, cmd: C.Drive) -> None:
         # SPAWNING too: the spawn request is ahead of this one in the simulation's queue
@@ -384,15 +378,23 @@ class Session(Articulation, Queries):
         self.steps_waiting += 1
         order = self.ctx.step_order
         if order is None or order.at_once(self.ctx.reader):
-            self.facade.step(seconds, self._stepped, self._step_refused)
+            when_done(self.facade.step(seconds), self._step_answered)
             return
         self.step_held = True
 
         def carry_out() -> None:
             self.step_held = False
-            self.facade.step(seconds, self._stepped, self._step_refused)
+            when_done(self.facade.step(seconds), self._step_answered)
 
         order.submit(self.ctx.reader, carry_out)
+
+    def _step_answered(self, time_s: float, error: BaseException | None) -> None:
+        """A STEP's answer (on the thread that carried it out): STEPPED on the event loop, or
+        an ERROR when it was refused."""
+        if error is not None:
+            self._step_refused(error)
+        else:
+            self._stepped(time_s)
 
     def _step_done(self, time_s: float) -> None:
         self.steps_waiting -= 1

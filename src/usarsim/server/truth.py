@@ -22,7 +22,7 @@ from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.truth import END, TruthObject, format_truth_object, parse_truth_request
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
-from usarsim.sim.api import Facade
+from usarsim.sim.api import Facade, when_done
 
 log = logging.getLogger("usarsim.server")
 
@@ -74,7 +74,7 @@ class TruthConnection(ServerConnection):
                 self.write_text(END)
                 continue
             self._busy = True
-            self.server.facade.truth(request.class_name, request.name, on_done=self._answer_threadsafe)
+            when_done(self.server.facade.truth(request.class_name, request.name), self._answer_threadsafe)
 
     def _answer(self, rows, error) -> None:
         self._busy = False

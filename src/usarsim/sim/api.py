@@ -6,15 +6,21 @@ real one (:class:`usarsim.sim.facade.SimFacade`), and the fast test tier a fake 
 MuJoCo model.  This module imports no physics: a server module that needs nothing else of the
 simulation layer than this and :mod:`usarsim.sim.types` loads without MuJoCo.
 
-Results come back through callbacks ``on_done(result, error)``, called on the thread that ran
-the request (the simulation's, or the caller's for a short lock-step STEP).
+A request that has an answer returns it as a typed future (:class:`concurrent.futures.Future`:
+``Future[float]`` for a barrier's time); it is settled on the thread that ran the request (the
+simulation's, or the caller's for a short lock-step STEP), after every message the request
+produced was handed to the servers, and a callback added once it is settled runs at once on the
+thread that adds it.  A server therefore hands the answer to its event loop
+(:func:`when_done` with a thread-safe callback, or :func:`asyncio.wrap_future`), behind those
+messages.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MissionPackage, RobotConfig
@@ -30,6 +36,31 @@ T = TypeVar("T")
 # ``on_done(result, error)``: the request's result (its type given, Done[float]) or the error it
 # was refused with
 Done = Callable[[T, BaseException | None], None]
+
+
+def when_done(future: Future[T], on_done: Done[T]) -> None:
+    """``on_done(result, None)``, or ``on_done(None, error)`` when the request was refused or
+    failed, once ``future`` is settled (at once when it is)."""
+
+    def call(f: Future[T]) -> None:
+        error = f.exception()
+        on_done(cast(T, None) if error is not None else f.result(), error)
+
+    future.add_done_callback(call)
+
+
+def settle(future: Future[T]) -> Done[T]:
+    """An ``on_done(result, error)`` that settles ``future`` with what it is given."""
+
+    def done(result: T, error: BaseException | None) -> None:
+        if error is not None:
+            future.set_exception(error)
+        else:
+            future.set_result(result)
+
+    return done
+
+
 Position = tuple[str, tuple[float, float, float], bool]  # a robot's name, where it is, its battery empty
 
 
@@ -90,11 +121,10 @@ class Facade(Protocol):
         name: str,
         location: Sequence[float],
         rotation: Sequence[float],
-        on_done: Done[object],
         set_down: bool = False,
         controller: str = "",
-    ) -> None: ...
-    def barrier(self, on_done: Done[float]) -> None: ...
+    ) -> Future[object]: ...
+    def barrier(self) -> Future[float]: ...
     def remove(self, uid: int) -> None: ...
     def robots(self) -> tuple[RobotEntry, ...]: ...
     def robot(self, uid: int) -> RobotEntry | None: ...
@@ -108,34 +138,24 @@ class Facade(Protocol):
         name: str | None,
         opcode: str | None,
         params: ItemParams,
-        on_done: Done[object] | None = None,
-    ) -> None: ...
-    def set_viewports(
-        self, uid: int, names: list[str | None], on_done: Done[tuple[float, list[tuple[str, str]]]]
-    ) -> None: ...
-    def report_victim(
-        self, uid: int, name: str, location: Sequence[float], on_done: Done[None] | None = None
-    ) -> None: ...
-    def step(
-        self,
-        seconds: float,
-        on_done: Callable[[float], None],
-        on_refused: Callable[[BaseException], None] | None = None,
-    ) -> None: ...
+    ) -> Future[object]: ...
+    def set_viewports(self, uid: int, names: list[str | None]) -> Future[tuple[float, list[tuple[str, str]]]]: ...
+    def report_victim(self, uid: int, name: str, location: Sequence[float]) -> Future[None]: ...
+    def step(self, seconds: float) -> Future[float]: ...
 
     # ground truth and pictures
-    def truth(self, class_name: str | None, name: str | None, on_done: Done[list[tuple[Any, ...]]]) -> None: ...
+    def truth(self, class_name: str | None, name: str | None) -> Future[list[tuple[Any, ...]]]: ...
     def set_multiview_cameras(self, count: int) -> None: ...
     def render_service(self, max_fps: float) -> RenderService: ...
 
     # the radio (protocol.md 12)
     def open_radio(self, model: RadioModel, on_change: Callable[[float, list[tuple[Any, bool]]], None]) -> None: ...
     def radio_watch(self, pairs: frozenset[Any]) -> None: ...
-    def radio_check(self, a: str, b: str, on_done: Done[tuple[float, Link | None]]) -> None: ...
-    def radio_link(self, a: str, b: str, on_done: Done[Link | None]) -> None: ...
-    def robot_positions(self, on_done: Done[list[Position]]) -> None: ...
-    def walls_between_robots(self, a: str, b: str, on_done: Done[int]) -> None: ...
-    def walls_between(self, start: Sequence[float], end: Sequence[float], on_done: Done[int]) -> None: ...
+    def radio_check(self, a: str, b: str) -> Future[tuple[float, Link | None]]: ...
+    def radio_link(self, a: str, b: str) -> Future[Link | None]: ...
+    def robot_positions(self) -> Future[list[Position]]: ...
+    def walls_between_robots(self, a: str, b: str) -> Future[int]: ...
+    def walls_between(self, start: Sequence[float], end: Sequence[float]) -> Future[int]: ...
 
     # recording and live views
     def watch_frames(

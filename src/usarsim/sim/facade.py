@@ -3,8 +3,9 @@
 Servers (asyncio) call these named, typed methods from their own thread; every change of
 the world runs on the simulation thread, one at a time, in the order the calls were made (a
 short lock-step STEP, and the requests that waited for it, run on the thread that asked for
-it when the simulation thread has nothing to do: :mod:`usarsim.sim.runner`).  Results come
-back through callbacks ``on_done(result, error)``, called on the thread that ran the request.
+it when the simulation thread has nothing to do: :mod:`usarsim.sim.runner`).  A request with
+an answer returns it as a typed future, settled on the thread that ran the request
+(:mod:`usarsim.sim.api`).
 The servers import nothing else from the simulation layer but :mod:`usarsim.sim.types`.
 """
 
@@ -12,13 +13,14 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from concurrent.futures import Future
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from usarsim.config.robot import MissionPackage, RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
-from usarsim.sim.api import RobotEntry
+from usarsim.sim.api import Position, RobotEntry, settle
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits, package_frames
 from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
@@ -33,10 +35,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("usarsim.sim")
 
-Done = Callable[[Any, BaseException | None], None]
-
-
-Position = tuple[str, tuple[float, float, float], bool]
+T = TypeVar("T")
 
 # Outside lock-step the radio links are evaluated at most this often (simulated seconds).
 RADIO_INTERVAL_S = 0.02
@@ -173,30 +172,39 @@ class SimFacade:
         name: str,
         location: Sequence[float],
         rotation: Sequence[float],
-        on_done: Done,
         set_down: bool = False,
         controller: str = "",
-    ) -> None:
+    ) -> Future[object]:
         """Spawn a robot; once it stands in the world it is in the robot directory
         (:meth:`robots`) under ``name``, driven by ``controller`` (its client, as logs name it)."""
         entry = RobotEntry(uid, name, robot, controller)
+        future: Future[object] = Future()
+        answer = settle(future)
 
         def spawned(result: Any, error: BaseException | None) -> None:
             if error is None:
                 self._directory = {**self._directory, uid: entry}
-            on_done(result, error)
+            answer(result, error)
 
         self.runner.submit(
             Request(
                 lambda sim: sim.spawn(uid, robot, name, location, rotation, set_down), immediate=True, on_done=spawned
             )
         )
+        return future
 
-    def barrier(self, on_done: Done) -> None:
-        """``on_done(simulated time, None)`` once every request submitted before it has been
-        carried out and its outputs handed to the server (an immediate request: in lock-step
-        it does not wait for a STEP)."""
-        self.runner.submit(Request(lambda sim: sim.time, immediate=True, on_done=on_done))
+    def barrier(self) -> Future[float]:
+        """The simulated time, once every request submitted before it has been carried out
+        and its outputs handed to the server (an immediate request: in lock-step it does not
+        wait for a STEP)."""
+        return self._ask(lambda sim: sim.time)
+
+    def _ask(self, action: Callable[[Simulation], T], concurrent: bool = False) -> Future[T]:
+        """``action(sim)`` at once on the simulation thread; its result, or the error it was
+        refused with, settles the future returned."""
+        future: Future[T] = Future()
+        self.runner.submit(Request(action, immediate=True, on_done=settle(future), concurrent=concurrent))
+        return future
 
     def remove(self, uid: int) -> None:
         if uid in self._directory:
@@ -234,61 +242,49 @@ class SimFacade:
         name: str | None,
         opcode: str | None,
         params: ItemParams,
-        on_done: Done | None = None,
-    ) -> None:
+    ) -> Future[object]:
         """``SET`` on a mounted item: the RES, then whatever the operation reported (EFF),
-        handed to the server before ``on_done(result, error)``; ``error`` when it was not
+        handed to the server before the future is settled; with an error when it was not
         carried out (the simulation has stopped, or the operation failed on an unexpected
         error).  In lock-step it is carried out at once, at the current simulated time, as
         INIT and REPORT are: a request with a reply is answered without a STEP (a PING after it
         is answered after its RES), and what it changes acts from the next STEP on, as a
         DRIVE's speeds do."""
-        self.runner.submit(
-            Request(lambda sim: sim.operate(uid, item_type, name, opcode, params), immediate=True, on_done=on_done)
-        )
+        return self._ask(lambda sim: sim.operate(uid, item_type, name, opcode, params))
 
-    def set_viewports(self, uid: int, names: list[str | None], on_done: Done) -> None:
-        """SET {Type Viewports}: ``on_done((time, [(camera, status), ...]), error)``."""
-        self.runner.submit(
-            Request(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)), immediate=True, on_done=on_done)
-        )
+    def set_viewports(self, uid: int, names: list[str | None]) -> Future[tuple[float, list[tuple[str, str]]]]:
+        """SET {Type Viewports}: (time, [(camera, status), ...])."""
+        return self._ask(lambda sim: (sim.time, sim.cameras.set_viewports(uid, names)))
 
-    def report_victim(self, uid: int, name: str, location: Sequence[float], on_done: Done | None = None) -> None:
+    def report_victim(self, uid: int, name: str, location: Sequence[float]) -> Future[None]:
         """``REPORT {Type Victim}``: recorded at the simulated instant it is carried out, as a
         RES output for the robot's client (observers such as the score see it too), handed to
-        the server before ``on_done(result, error)``; ``error`` when it was not (the
+        the server before the future is settled; with an error when it was not (the
         simulation has stopped)."""
         result = CommandResult("Victim", name, True, (("Location", tuple(float(v) for v in location)),))
-        self.runner.submit(Request(lambda sim: sim.report(uid, result), immediate=True, on_done=on_done))
+        return self._ask(lambda sim: sim.report(uid, result))
 
-    def step(
-        self,
-        seconds: float,
-        on_done: Callable[[float], None],
-        on_refused: Callable[[BaseException], None] | None = None,
-    ) -> None:
-        """Lock-step STEP: ``on_done(time)`` once ``seconds`` more have run (at once, on the
-        calling thread, when it is short and the simulation has nothing else to do), or
-        ``on_refused(error)`` when they will not (the simulation has stopped)."""
-        self.runner.step(seconds, on_done, on_refused)
+    def step(self, seconds: float) -> Future[float]:
+        """Lock-step STEP: the simulated time once ``seconds`` more have run (settled at once,
+        on the calling thread, when it is short and the simulation has nothing else to do), or
+        the error it is refused with (the simulation has stopped)."""
+        future: Future[float] = Future()
+        self.runner.step(seconds, future.set_result, future.set_exception)
+        return future
 
     # Ground truth and pictures -----------------------------------------------------
-    def truth(self, class_name: str | None, name: str | None, on_done: Done) -> None:
+    def truth(self, class_name: str | None, name: str | None) -> Future[list[tuple[Any, ...]]]:
         """Everything the ground-truth service knows now (rows of
         :func:`usarsim.sim.truth.truth_rows`), filtered by class and name."""
-        self.runner.submit(
-            Request(lambda sim: sim.truth(class_name, name), immediate=True, on_done=on_done, concurrent=True)
-        )
+        return self._ask(lambda sim: sim.truth(class_name, name), concurrent=True)
 
     def set_multiview_cameras(self, count: int) -> None:
         """How many robot cameras the MultiView shows at most (before the simulation starts)."""
         self.sim.cameras.multiview_cameras = count
 
-    def render_snapshot(self, reuse: Snapshot | None, on_done: Done) -> None:
+    def render_snapshot(self, reuse: Snapshot | None) -> Future[Snapshot]:
         """A copy of the state for the render thread (``reuse``: the previous one)."""
-        self.runner.submit(
-            Request(lambda sim: sim.cameras.render_snapshot(reuse), immediate=True, on_done=on_done, concurrent=True)
-        )
+        return self._ask(lambda sim: sim.cameras.render_snapshot(reuse), concurrent=True)
 
     def render_service(self, max_fps: float) -> RenderService:
         """The render thread of the image server, fed with snapshots of this simulation."""
@@ -312,32 +308,28 @@ class SimFacade:
         """The pairs whose links are evaluated after every advance (replaced as a whole)."""
         self._net().watched = frozenset(pairs)
 
-    def radio_check(self, a: str, b: str, on_done: Done) -> None:
-        """``on_done((time, Link | None))`` for a link about to be opened; a state that differs
-        from the one last reported is reported at once."""
+    def radio_check(self, a: str, b: str) -> Future[tuple[float, Link | None]]:
+        """(time, Link | None) for a link about to be opened; a state that differs from the
+        one last reported is reported at once."""
         net = self._net()
-        self.runner.submit(Request(lambda sim: (sim.time, net.check(sim, a, b)), immediate=True, on_done=on_done))
+        return self._ask(lambda sim: (sim.time, net.check(sim, a, b)))
 
-    def radio_link(self, a: str, b: str, on_done: Done) -> None:
-        """``on_done(Link | None)``: the link between two robots now."""
+    def radio_link(self, a: str, b: str) -> Future[Link | None]:
+        """The link between two robots now (None: either is not in the simulation)."""
         net = self._net()
-        self.runner.submit(Request(lambda sim: net.link(sim, a, b), immediate=True, on_done=on_done))
+        return self._ask(lambda sim: net.link(sim, a, b))
 
-    def robot_positions(self, on_done: Done) -> None:
-        """``on_done([(name, location, battery empty), ...])`` for every robot."""
-        self.runner.submit(Request(RadioNet.positions, immediate=True, on_done=on_done))
+    def robot_positions(self) -> Future[list[Position]]:
+        """[(name, location, battery empty), ...] for every robot."""
+        return self._ask(RadioNet.positions)
 
-    def walls_between_robots(self, a: str, b: str, on_done: Done) -> None:
-        """``on_done(n)``: walls between two robots (-1: either is unknown)."""
-        self.runner.submit(
-            Request(lambda sim: RadioNet.walls_between_robots(sim, a, b), immediate=True, on_done=on_done)
-        )
+    def walls_between_robots(self, a: str, b: str) -> Future[int]:
+        """Walls between two robots (-1: either is unknown)."""
+        return self._ask(lambda sim: RadioNet.walls_between_robots(sim, a, b))
 
-    def walls_between(self, start: Sequence[float], end: Sequence[float], on_done: Done) -> None:
-        """``on_done(n)``: walls between two points of the world (USARSim frame)."""
-        self.runner.submit(
-            Request(lambda sim: RadioNet.walls_between(sim, start, end), immediate=True, on_done=on_done)
-        )
+    def walls_between(self, start: Sequence[float], end: Sequence[float]) -> Future[int]:
+        """Walls between two points of the world (USARSim frame)."""
+        return self._ask(lambda sim: RadioNet.walls_between(sim, start, end))
 
     @property
     def radio_net(self) -> RadioNet | None:
@@ -374,10 +366,12 @@ class SimFacade:
         return self.robot_numbers(robot), self.describe(robot)
 
     # Tools, tests and benchmarks ---------------------------------------------------
-    def call(self, fn: Callable[[Simulation], Any], on_done: Done | None = None, immediate: bool = True) -> None:
+    def call(self, fn: Callable[[Simulation], T], immediate: bool = True) -> Future[T]:
         """Run ``fn(sim)`` in the simulation (tools, tests, benchmarks; not servers): at once
         on the simulation thread, or (``immediate=False`` in lock-step) at the next STEP."""
-        self.runner.submit(Request(fn, immediate=immediate, on_done=on_done))
+        future: Future[T] = Future()
+        self.runner.submit(Request(fn, immediate=immediate, on_done=settle(future)))
+        return future
 
 
 __all__ = ["Link", "SimFacade"]

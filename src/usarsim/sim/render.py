@@ -152,9 +152,9 @@ class _Job:
 
 
 class RenderService:
-    """The render thread.  ``take_snapshot(reuse, on_done)`` must run a snapshot on the
-    simulation thread and call ``on_done(snapshot, error)``; ``render`` returns a Future
-    of an RGB picture (height x width x 3, uint8, rows top to bottom)."""
+    """The render thread.  ``take_snapshot(reuse)`` must run a snapshot on the simulation
+    thread and return a future of it; ``render`` returns a Future of an RGB picture (height x
+    width x 3, uint8, rows top to bottom)."""
 
     def __init__(self, take_snapshot, max_fps: float = 30.0, shadows: bool = False):
         """``shadows``: the lights that cast shadows do (SimSettings.shadows): each draws the
@@ -269,19 +269,11 @@ class RenderService:
         self._next_frame = now + 1.0 / self.max_fps
 
     def _snapshot_now(self) -> Snapshot:
-        done = threading.Event()
-        box: dict = {}
-
-        def on_done(result, error):
-            box["result"], box["error"] = result, error
-            done.set()
-
-        self._take_snapshot(self._snapshot, on_done)
-        if not done.wait(30.0):
-            raise TimeoutError("the simulation did not answer a snapshot request within 30 s")
-        if box["error"] is not None:
-            raise box["error"]
-        self._snapshot = box["result"]
+        future = self._take_snapshot(self._snapshot)
+        try:
+            self._snapshot = future.result(30.0)
+        except TimeoutError:
+            raise TimeoutError("the simulation did not answer a snapshot request within 30 s") from None
         return self._snapshot
 
     def _renderer(self, model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:

@@ -18,8 +18,9 @@ import asyncio
 import collections
 import logging
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 from usarsim.config.world import WirelessConfig
 from usarsim.errors import ProtocolError
@@ -29,6 +30,8 @@ from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener, call_on_loop
 from usarsim.sim.api import Facade
 from usarsim.sim.types import Link, Pair, RadioModel
+
+T = TypeVar("T")
 
 log = logging.getLogger("usarsim.wireless")
 
@@ -121,21 +124,10 @@ class WirelessService:
         return st is not None and st[0] >= time and not st[1]
 
     # the simulation ----------------------------------------------------------------------
-    async def ask(self, method: Callable[..., None], *args) -> Any:
-        """The result of ``method(*args, on_done=...)``, a facade method that answers on the
+    async def ask(self, method: Callable[..., Future[T]], *args) -> T:
+        """The result of ``method(*args)``, a facade method whose future is settled on the
         simulation thread (at once, also in lock-step), awaited on the event loop."""
-        loop = asyncio.get_running_loop()
-        fut = loop.create_future()
-
-        def settle(result, error):
-            if not fut.done():
-                if error is not None:
-                    fut.set_exception(error)
-                else:
-                    fut.set_result(result)
-
-        method(*args, on_done=lambda result, error: call_on_loop(loop, settle, result, error))
-        return await fut
+        return await asyncio.wrap_future(method(*args))
 
     async def check(self, a: str, b: str) -> tuple[float, Link | None]:
         """(simulated time, link) for a link about to be opened; its state is reported."""
