@@ -77,6 +77,24 @@ class RangeScan3DReading:
 
 
 @dataclass(frozen=True, slots=True)
+class RangeImageReading:
+    """A depth picture of a range imager (the UDK KinectDepth, protocol.md 6.3): ``pixels``
+    (columns, rows), ``fov_rad`` (horizontal, vertical), ``ranges_m`` each pixel's depth (m
+    along the optical axis) row by row, the top row first, each row left to right.
+
+    On the wire a picture is ``frames`` lines, each holding ``rows / frames`` whole rows: a
+    whole picture has ``frame`` None; a value read back from one line holds that line's rows
+    only, the ``frame``-th (from 0) of ``frames``."""
+
+    name: str
+    pixels: tuple[int, int]
+    fov_rad: tuple[float, float]
+    ranges_m: tuple[float, ...]
+    frames: int = 1
+    frame: int | None = None
+
+
+@dataclass(frozen=True, slots=True)
 class OdometryReading:
     """``SEN {Type Odometry} {Pose x,y,theta}`` (protocol.md 6.3, 7.4): the pose dead-reckoned from the wheels, x and
     y in metres and theta in radians, relative to the pose at spawn or at the last reset."""
@@ -231,6 +249,7 @@ Reading = (
     RangeReading
     | RangeScanReading
     | RangeScan3DReading
+    | RangeImageReading
     | OdometryReading
     | EncoderReading
     | PoseReading

@@ -111,6 +111,8 @@ def _probe_run(tmp_path, sensor_type: str, seed: int, seconds: float):
     p2at = (ROBOTS_DIR / "P2AT.yaml").read_text()
     head = p2at.split("\nsensors:")[0].replace("class_name: P2AT", "class_name: Probe")
     extra = ", fingers: [CameraPanTilt_Link2]" if sensor_type == "Gripper" else ""  # a gripper needs finger links
+    if getattr(ITEMS.get(sensor_type), "ON_REQUEST", False):  # silent until asked: asked to send unasked
+        extra += ", continuous: true"
     text = head + f"\nsensors:\n  - {{type: {sensor_type}, name: Probe1, location: [0.1, 0.0, -0.1]{extra}}}\n"
     path = tmp_path / f"Probe{seed}.yaml"
     path.write_text(text)

@@ -38,7 +38,9 @@ __all__ = [
     "int_str",
     "num",
     "t4",
+    "ints",
     "vec2",
+    "vec3d",
     "vec4",
     "vec_angle4",
     "vec_t4",
@@ -47,11 +49,13 @@ __all__ = [
 TAU = 2.0 * math.pi
 
 _NEG_ZERO_2 = "-0.00"
+_NEG_ZERO_3 = "-0.000"
 _NEG_ZERO_4 = "-0.0000"
 _FULL_TURN_4 = "%.4f" % TAU  # "6.2832": an angle that rounds up to a full turn
 
 # Format strings for comma-joined sequences, cached per length.
 _FMT2: dict[int, str] = {}
+_FMT3: dict[int, str] = {}
 _FMT4: dict[int, str] = {}
 
 
@@ -105,6 +109,17 @@ def vec2(v: Sequence[float]) -> str:
     """Comma-joined values with 2 decimals: ``1.00,-2.50,0.00``."""
     s = _fmt(_FMT2, "%.2f", len(v)) % tuple(v)
     return s.replace(_NEG_ZERO_2, "0.00") if _NEG_ZERO_2 in s else s
+
+
+def vec3d(v: Sequence[float]) -> str:
+    """Comma-joined values with 3 decimals (millimetres of a depth picture): ``1.250,0.800``."""
+    s = _fmt(_FMT3, "%.3f", len(v)) % tuple(v)
+    return s.replace(_NEG_ZERO_3, "0.000") if _NEG_ZERO_3 in s else s
+
+
+def ints(v: Iterable[int]) -> str:
+    """Comma-joined integers: ``320,240``."""
+    return ",".join(["%d" % x for x in v])
 
 
 def vec4(v: Sequence[float]) -> str:

@@ -6,7 +6,19 @@ three kinds (:data:`ITEMS`): :data:`SENSORS`, :data:`CAMERAS` and ``EFFECTERS``.
 """
 
 import usarsim.effecters  # noqa: F401  (registration; it imports this package's base only)
-from usarsim.sensors import camera, gps, inertial, motion, range, rfid, scanner, sound, touch, victim  # noqa: F401
+from usarsim.sensors import (  # noqa: F401  (registration)
+    camera,
+    gps,
+    imager,
+    inertial,
+    motion,
+    range,
+    rfid,
+    scanner,
+    sound,
+    touch,
+    victim,
+)
 from usarsim.sensors.base import ITEMS, SENSORS, Item, ItemConfig, Sensor, SensorConfig, make_item
 from usarsim.sensors.camera import CAMERAS, CameraItem
 

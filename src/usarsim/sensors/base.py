@@ -173,6 +173,9 @@ class Sensor(Item[SC]):
     PERIODIC: ClassVar[bool] = True
     RESETTABLE: ClassVar[bool] = False  # {Opcode RESET} starts it over (Odometry, Encoder, Tachometer)
     SCANNABLE: ClassVar[bool] = False  # {Opcode SCAN} makes it scan at once (the range scanners)
+    # it measures only when asked ({Opcode SCAN}), unless its settings say ``continuous``
+    # (the range imager, as USARSim's KinectDepth)
+    ON_REQUEST: ClassVar[bool] = False
     Config: ClassVar[type[ItemConfig]] = SensorConfig
     NOISE: ClassVar[Noise | None] = None  # what corrupts what it senses (usarsim.sensors.noise)
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..grammar import RawMessage, Segment
-from ..numbers import bool_str, f2, f4, t4, vec2, vec4, vec_angle4, vec_t4
+from ..numbers import bool_str, f2, f4, ints, t4, vec2, vec3d, vec4, vec_angle4, vec_t4
 from .common import _CRLF, _groups, _Reader
 
 WIRE = "usarsim.wire"  # the metadata key of a declared field
@@ -85,6 +85,22 @@ T4 = Kind("%s", t4, _number)  # truncated to 4 decimals
 ANGLES4 = Kind("%s", vec_angle4, _vec3)  # roll,pitch,yaw in [0, 2 pi), 4 decimals
 VALUES4 = Kind("%s", vec4, _values)  # any number of values, 4 decimals
 RANGES4 = Kind("%s", vec4, _values, empty="")  # a sweep's ranges; none: a bare {Range}
+RANGES3 = Kind("%s", vec3d, _values, empty="")  # a depth picture's ranges, in millimetres
+
+
+def _ints(r: _Reader, seg: Segment, wire: str) -> tuple[int, ...]:
+    values = r.vector(wire, seg.value, None)
+    if not all(v == int(v) for v in values):
+        raise r.error(wire, seg.value, "whole numbers such as 320,240")
+    return tuple(int(v) for v in values)
+
+
+def _pair(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
+    return r.vector(wire, seg.value, 2)
+
+
+PAIR_T4 = Kind("%s", vec_t4, _pair)  # two values truncated to 4 decimals (a picture's FOV)
+INTS = Kind("%s", ints, _ints)  # whole numbers, comma-joined (a picture's columns and rows)
 
 
 @dataclass(frozen=True, slots=True)

@@ -19,6 +19,7 @@ from usarsim.readings import (
     OdometryReading,
     OrientationReading,
     PoseReading,
+    RangeImageReading,
     RangeItem,
     RangeReading,
     RangeScan3DReading,
@@ -37,7 +38,23 @@ from usarsim.readings import (
 from ..grammar import Segment, format_segment, parse_float, parse_int
 from ..numbers import f4, vec4, vec_t4
 from .common import _CRLF, _Reader
-from .declare import ANGLES4, BOOL, F4, INT, RANGES4, T4, TEXT, VALUES4, VEC4, Key, packed, reading
+from .declare import (
+    ANGLES4,
+    BOOL,
+    F4,
+    INT,
+    INTS,
+    PAIR_T4,
+    RANGES3,
+    RANGES4,
+    T4,
+    TEXT,
+    VALUES4,
+    VEC4,
+    Key,
+    packed,
+    reading,
+)
 from .results import UnknownMessage
 
 
@@ -89,6 +106,20 @@ def _scan3d_rows(r: RangeScan3DReading) -> list[RangeScan3DReading] | None:
             split=True,
         )
         for k in range(rows)
+    ]
+
+
+def image_frames(r: RangeImageReading) -> list[RangeImageReading]:
+    """The lines of a whole depth picture (protocol.md 6.3: ``Frames`` lines, ``Frame`` from
+    0, rows top to bottom), each a reading of its rows; the picture's rows must divide into
+    its frames."""
+    cols, rows = r.pixels
+    if r.frames < 1 or rows % r.frames or len(r.ranges_m) != cols * rows:
+        raise ValueError(f"a {cols}x{rows} picture of {len(r.ranges_m)} ranges does not split into {r.frames} frames")
+    n = cols * rows // r.frames
+    return [
+        RangeImageReading(r.name, r.pixels, r.fov_rad, r.ranges_m[k * n : (k + 1) * n], frames=r.frames, frame=k)
+        for k in range(r.frames)
     ]
 
 
@@ -186,12 +217,35 @@ _SOUND = reading(
 _HUMAN_MOTION = reading(
     HumanMotionReading, fixed=(("Type", "HumanMotion"),), name=Key("Name", TEXT), probability=Key("Prob", F4)
 )
+# a depth picture (the UDK KinectDepth), one line per frame of whole rows (split below)
+_IMAGE = reading(
+    RangeImageReading,
+    fixed=(("Type", "RangeImager"),),
+    name=Key("Name", TEXT),
+    frames=Key("Frames", INT),
+    frame=Key("Frame", INT),
+    pixels=Key("Resolution", INTS),
+    fov_rad=Key("FOV", PAIR_T4),
+    ranges_m=Key("Range", RANGES3),
+)
 _RANGE = reading(RangeReading, sensor_type=Key("Type", TEXT), items=packed(RangeItem, "Range", F4))
 _ENCODER = reading(EncoderReading, fixed=(("Type", "Encoder"),), items=packed(EncoderItem, "Tick", INT))
 _TOUCH = reading(TouchReading, fixed=(("Type", "Touch"),), items=packed(TouchItem, "Touch", BOOL))
 _DECLARED = {
     layout.cls: layout
-    for layout in (_SCAN, _POSE, _ORIENTATION, _TACHOMETER, _IMU, _SOUND, _HUMAN_MOTION, _RANGE, _ENCODER, _TOUCH)
+    for layout in (
+        _SCAN,
+        _POSE,
+        _ORIENTATION,
+        _TACHOMETER,
+        _IMU,
+        _SOUND,
+        _HUMAN_MOTION,
+        _RANGE,
+        _ENCODER,
+        _TOUCH,
+        _IMAGE,
+    )
 }
 
 # the others (a GPS with and without a fix, a victim sensor with nothing in sight, tags with
@@ -211,6 +265,9 @@ def format_reading(reading: Reading, time: float | None = None) -> str:
     A whole 3D sweep is one line (protocol.md 6.3) unless it asks for the split form
     (``split``): then it is written as one line per row, top row first, each with
     ``{Frames rows} {Frame k}`` after the Name and the same Time."""
+    if isinstance(reading, RangeImageReading) and reading.frame is None:
+        head = "SEN" if time is None else "SEN {Time %s}" % f4(time)
+        return "".join([head + _IMAGE.format(part) + _CRLF for part in image_frames(reading)])
     declared = _DECLARED.get(type(reading))
     if declared is not None:
         return ("SEN" if time is None else "SEN {Time %s}" % f4(time)) + declared.format(reading) + _CRLF
@@ -322,6 +379,7 @@ _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
     "rangesensor": lambda r, t: _RANGE.parse(r),
     "rangescanner": lambda r, t: _SCAN.parse(r),
     "irscanner": lambda r, t: _SCAN.parse(r),
+    "rangeimager": lambda r, t: _IMAGE.parse(r),
     "rangescanner3d": _sen_parse_scan3d,
     "3drangescanner": _sen_parse_scan3d,
     "odometry": _sen_parse_odometry,
