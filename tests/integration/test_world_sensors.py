@@ -418,9 +418,12 @@ def test_camera_zoom_is_clamped_and_answered(server_factory, world):
     c.nfo()
     c.send("INIT {ClassName USARBot.P2AT} {Name R1} {Start Glass}")
     c.step(0.5)
+    # USARSim's keys, then the pinhole's intrinsics for its 320 x 240 pictures (an extension):
+    # focal length 160 / tan(FOV / 2) pixels both ways, principal point the picture's centre
     assert c.ask("GETCONF {Type Camera}", "CONF").text == (
         "CONF {Type Camera} {Name Camera} {CameraDefFov 0.8727} {CameraMinFov 0.3491} {CameraMaxFov 1.5708} "
-        "{CameraFov 0.8727}"
+        "{CameraFov 0.8727} {FocalLength %.4f,%.4f} {PrincipalPoint 160.0000,120.0000}"
+        % (160 / math.tan(0.8727 / 2), 160 / math.tan(0.8727 / 2))
     )
     assert c.ask("GETGEO {Type Camera}", "GEO").text == (
         "GEO {Type Camera} {Name Camera Location 0.0820,0.0002,0.0613 Orientation 0.0000,0.0000,0.0000 "
@@ -441,7 +444,10 @@ def test_camera_zoom_is_clamped_and_answered(server_factory, world):
             res,
         ), (params, res)
     set_res(c, "SET {Type Camera} {Name Camera} {Opcode Zoom} {Params 0.7}")
-    assert c.ask("GETCONF {Type Camera} {Name Camera}", "CONF").text.endswith("{CameraFov 0.7000}")
+    zoomed = 160 / math.tan(0.7 / 2)  # zoom changes the intrinsics
+    assert c.ask("GETCONF {Type Camera} {Name Camera}", "CONF").text.endswith(
+        "{CameraFov 0.7000} {FocalLength %.4f,%.4f} {PrincipalPoint 160.0000,120.0000}" % (zoomed, zoomed)
+    )
     # cameras send no SEN on the control port
     assert not [ln for ln in c.step(1.0) if "{Type Camera}" in ln.text]
 

@@ -102,6 +102,13 @@ class Camera(CameraItem[CC]):
         return ZoomResult(((self.name, value, ok),), self.TYPE)
 
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
+        """USARSim's keys (protocol.md 6.7), then the pinhole's intrinsics at the current zoom
+        for a picture of ``width_px`` x ``height_px`` (extensions old clients skip): the focal
+        lengths in pixels (square pixels: the same both ways) and the principal point, the
+        picture's centre."""
+        return (*self.fov_fields(), *self.intrinsics())
+
+    def fov_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
         return (
             ("CameraDefFov", c.def_fov_rad),
@@ -109,6 +116,17 @@ class Camera(CameraItem[CC]):
             ("CameraMaxFov", c.max_fov_rad),
             ("CameraFov", getattr(self, "fov_rad", c.def_fov_rad)),
         )
+
+    def intrinsics(self) -> tuple[tuple[str, FieldValue], ...]:
+        c = self.config
+        f = focal_length_px(getattr(self, "fov_rad", c.def_fov_rad), c.width_px)
+        return (("FocalLength", (f, f)), ("PrincipalPoint", (c.width_px / 2.0, c.height_px / 2.0)))
+
+
+def focal_length_px(hfov_rad: float, width_px: int) -> float:
+    """A pinhole's focal length in pixels for a picture ``width_px`` wide that spans ``hfov_rad``
+    (the image server draws with square pixels: the vertical field of view follows from it)."""
+    return width_px / 2.0 / math.tan(hfov_rad / 2.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -126,3 +144,7 @@ class OmniCam(Camera[OmniCamConfig]):
     """The omnidirectional camera of the OmniP2AT/OmniP2DX (protocol.md 9): no zoom."""
 
     OMNI = True
+
+    def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
+        """USARSim's keys only: an all-round picture is no pinhole's (no intrinsics)."""
+        return self.fov_fields()
