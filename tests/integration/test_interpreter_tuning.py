@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import gc
 import sys
-import threading
 import weakref
+from concurrent.futures import Future
 
 from helpers import wait_for
 from usarsim.config.catalog import resolve_robot
@@ -18,14 +18,9 @@ from usarsim.sim.interpreter import SWITCH_INTERVAL_S, InterpreterTuning
 WAIT_S = 60.0
 
 
-def _wait(facade: SimFacade, submit) -> object:
-    done = threading.Event()
-    got = []
-    submit(lambda result, error: (got.append((result, error)), done.set()))
-    assert done.wait(WAIT_S)
-    result, error = got[0]
-    assert error is None
-    return result
+def _wait(answer: Future) -> object:
+    """The facade's answer (it raises the error the request was refused with)."""
+    return answer.result(WAIT_S)
 
 
 def test_the_heap_is_frozen_while_it_runs_a_removed_robot_is_collected_and_all_is_given_back(yellow_world):
@@ -37,12 +32,7 @@ def test_the_heap_is_frozen_while_it_runs_a_removed_robot_is_collected_and_all_i
     try:
         p2at = resolve_robot("USARBot.P2AT")
         for uid, x in ((1, 0.0), (2, 2.0)):
-            _wait(
-                facade,
-                lambda done, uid=uid, x=x: facade.spawn(
-                    uid, p2at, f"R{uid}", (x, 0.0, 0.5), (0, 0, 0), done, set_down=True
-                ),
-            )
+            _wait(facade.spawn(uid, p2at, f"R{uid}", (x, 0.0, 0.5), (0, 0, 0), set_down=True))
         assert sys.getswitchinterval() == SWITCH_INTERVAL_S
         # once the model has stood still: the world, both robots and everything imported
         wait_for(lambda: gc.get_freeze_count() > 10_000, timeout=10 * InterpreterTuning.SETTLE_S)
@@ -55,12 +45,12 @@ def test_the_heap_is_frozen_while_it_runs_a_removed_robot_is_collected_and_all_i
         del robot
         frozen_with_two = gc.get_freeze_count()
         facade.remove(2)
-        _wait(facade, facade.barrier)
+        _wait(facade.barrier())
         assert gc.get_freeze_count() == 0  # thawed at once
         wait_for(lambda: gone() is None, timeout=10 * InterpreterTuning.SETTLE_S)
         wait_for(lambda: 10_000 < gc.get_freeze_count() < frozen_with_two, timeout=10 * InterpreterTuning.SETTLE_S)
         assert 1 in facade.sim.robots
-        t = _wait(facade, facade.barrier)
+        t = _wait(facade.barrier())
         assert t > 0.0  # it runs on
     finally:
         facade.stop()

@@ -7,6 +7,7 @@ import threading
 
 import pytest
 
+from usarsim.sim.api import when_done
 from usarsim.sim.facade import SimFacade
 from usarsim.sim.runner import SimulationRunner
 
@@ -25,7 +26,7 @@ def step(facade: SimFacade, seconds: float) -> float:
     """STEP and wait for its STEPPED time."""
     done = threading.Event()
     got: list[float] = []
-    facade.step(seconds, lambda t: (got.append(t), done.set()))
+    when_done(facade.step(seconds), lambda t, e: (got.append(t), done.set()))
     assert done.wait(WAIT_S), "no STEPPED"
     return got[0]
 
@@ -71,9 +72,9 @@ def test_a_request_after_a_queued_step_waits_for_the_next_one(facade):
     facade.call(lambda sim: gate.wait(WAIT_S), immediate=True)  # the simulation thread is busy
     seen: list[float] = []
     first, second = threading.Event(), threading.Event()
-    facade.step(0.004, lambda t: first.set())  # queued behind the busy request
+    when_done(facade.step(0.004), lambda t, e: first.set())  # queued behind the busy request
     facade.call(lambda sim: seen.append(round(sim.time, 6)), immediate=False)  # after that STEP
-    facade.step(0.004, lambda t: second.set())
+    when_done(facade.step(0.004), lambda t, e: second.set())
     gate.set()
     assert first.wait(WAIT_S) and second.wait(WAIT_S)
     assert seen == [0.012]  # at the start of the second STEP, not the first
