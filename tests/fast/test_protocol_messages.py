@@ -132,6 +132,21 @@ GOLDEN = [
         "SEN {Time 2.0000} {Type RangeScanner3D} {Name Scanner} {Resolution 0.0174,0.0174} "
         "{FOV 0.5000,3.1415} {Range 1.0000,2.0000,3.5000}",
     ),
+    (  # one frame (line) of a depth picture of 2 x 4 pixels in 2 frames (protocol.md 6.3)
+        m.SensorMessage(
+            time=3.5,
+            reading=r.RangeImageReading(
+                name="KinectDepth",
+                pixels=(2, 4),
+                fov_rad=(1.0122, 0.7854),
+                ranges_m=(1.838, 4.0, 0.8, 2.25),
+                frames=2,
+                frame=1,
+            ),
+        ),
+        "SEN {Time 3.5000} {Type RangeImager} {Name KinectDepth} {Frames 2} {Frame 1} {Resolution 2,4} "
+        "{FOV 1.0122,0.7854} {Range 1.838,4.000,0.800,2.250}",
+    ),
     (
         m.SensorMessage(
             time=44.5467,
@@ -697,6 +712,15 @@ READINGS = st.one_of(
         fov_rad=st.tuples(_positive4, _positive4),
         ranges_m=_tuples(_f4, 0, 50),
         sensor_type=st.sampled_from(["RangeScanner3D", "3DRangeScanner"]),
+    ),
+    st.builds(
+        r.RangeImageReading,
+        name=_names,
+        pixels=st.tuples(st.integers(1, 640), st.integers(1, 480)),
+        fov_rad=st.tuples(_positive4, _positive4),
+        ranges_m=_tuples(_dec(3), 0, 50),
+        frames=st.just(4),
+        frame=st.integers(0, 3),
     ),
     st.builds(r.OdometryReading, name=_names, x_m=_f4, y_m=_f4, theta_rad=_f4),
     st.builds(r.EncoderReading, items=_tuples(st.builds(r.EncoderItem, name=_names, tick=_ints), 1)),

@@ -104,6 +104,8 @@ class Material:
     # how many of its tiles cover a metre along its width and height (None: its natural size)
     texture: str = ""
     texture_scale: tuple[float, float] | None = None
+    # what a thermal camera sees of it (degrees Celsius; None: the room's, AMBIENT_C)
+    temperature_c: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -202,6 +204,9 @@ class FalseAlarm:
     rotation: Vec3 = (0.0, 0.0, 0.0)
     part: str = "Head"
     material: str = "default"
+    # what a thermal camera sees (degrees Celsius): warmer than the room, as a false alarm
+    # placed to fool detectors of warm bodies is, and cooler than skin (an estimate)
+    temperature_c: float = 28.0
 
 
 @dataclass(frozen=True, kw_only=True)

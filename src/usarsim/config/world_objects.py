@@ -90,6 +90,7 @@ def read_materials(top: Section) -> dict[str, Material]:
             porosity=porosity,
             texture=texture,
             texture_scale=scale,
+            temperature_c=ms.float("temperature_c", md.temperature_c, min=-50.0, max=500.0),
         )
         ms.finish()
     return materials

@@ -177,6 +177,7 @@ def _false_alarms(top: Section, names: set[str], materials: dict[str, Any]) -> l
                 rotation=as_vec3(s.vec("rotation", 3, fd.rotation)),
                 part=s.str("part", fd.part, choices=VICTIM_PARTS),
                 material=material,
+                temperature_c=s.float("temperature_c", fd.temperature_c, min=-50.0, max=500.0),
             )
         )
     return alarms

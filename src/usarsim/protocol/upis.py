@@ -20,6 +20,9 @@ HEADER = struct.Struct(">BI")  # a frame's type byte and payload length
 RAW_SIZE = struct.Struct(">HH")  # a raw picture's width and height
 _RECT = struct.Struct(">IIII")
 RAW = 0  # the type byte of a raw picture; 1..5 are JPEG levels
+# (an extension) a PNG file: the pictures of depth, thermal and label cameras, which JPEG would
+# spoil (docs/protocol.md, "Pictures beyond colour")
+PNG = 6
 MAX_FRAME_BYTES = 64 << 20  # a frame longer than this is not a picture of this server
 
 
@@ -111,6 +114,7 @@ class FrameReader:
 
 __all__ = [
     "HEADER",
+    "PNG",
     "RAW",
     "FrameReader",
     "Rect",

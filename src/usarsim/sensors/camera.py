@@ -10,8 +10,9 @@ from typing import TYPE_CHECKING, ClassVar, TypeVar
 
 import mujoco
 
-from usarsim.readings import FieldValue, ItemParams, ZoomResult
+from usarsim.readings import FieldValue, ItemParams, OperationResult, ZoomResult
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
+from usarsim.sim.pictures import PICTURES
 from usarsim.sim.robotspec import add_camera
 
 if TYPE_CHECKING:
@@ -50,9 +51,16 @@ class CameraConfig(ItemConfig):
     max_fov_rad: float = 1.5708
     width_px: int = 320  # RoboCup Rescue image tiles were 320 x 240 (protocol.md 7.11)
     height_px: int = 240
+    # what its pictures show (usarsim.sim.pictures): colour, depth, thermal or label
+    picture: str = "colour"
+    max_depth_m: float = 10.0  # a depth picture's reach: farther reads 0
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if self.picture not in PICTURES:
+            raise ValueError(f"picture must be one of {', '.join(PICTURES)}, got {self.picture!r}")
+        if not (0.0 < self.max_depth_m <= 65.535):
+            raise ValueError(f"max_depth_m must be within (0, 65.535] (16-bit millimetres), got {self.max_depth_m}")
         if not (0.0 < self.min_fov_rad <= self.def_fov_rad <= self.max_fov_rad < math.pi * 2):
             raise ValueError(
                 f"need 0 < min_fov <= def_fov <= max_fov, got {self.min_fov_rad}, {self.def_fov_rad}, "
@@ -76,9 +84,11 @@ class Camera(CameraItem[CC]):
         "Width": "width_px",
         "Height": "height_px",
     }
+    picture: str  # what its pictures show now (SET {Opcode Picture} changes it)
 
     def reset(self, view: WorldView) -> None:
         self.fov_rad = self.config.def_fov_rad
+        self.picture = self.config.picture
 
     def zoom(self, fov: float) -> tuple[float, bool]:
         """Set the field of view: 0 restores the default, others are clamped to
@@ -91,9 +101,13 @@ class Camera(CameraItem[CC]):
         self.fov_rad = clamped
         return clamped, clamped == fov
 
-    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> ZoomResult | None:
+    def operate(self, view: WorldView, opcode: str, params: ItemParams) -> ZoomResult | OperationResult | None:
         """``{Opcode Zoom}`` (UDK also ``FOV``), Params the new field of view in rad: a
-        missing, negative or non-numeric value fails and keeps the current one."""
+        missing, negative or non-numeric value fails and keeps the current one.  ``{Opcode
+        Picture} {Params depth}`` (an extension) makes its pictures colour, depth, thermal or
+        label ones: RES OK, or Failed for another word."""
+        if opcode.lower() == "picture":
+            return self.set_picture(params.text)
         if opcode.lower() not in ("zoom", "fov"):
             return None
         if not params.values or params.values[0] < 0:
@@ -101,12 +115,23 @@ class Camera(CameraItem[CC]):
         value, ok = self.zoom(params.values[0])
         return ZoomResult(((self.name, value, ok),), self.TYPE)
 
+    def set_picture(self, text: str | None) -> OperationResult:
+        word = (text or "").strip().lower()
+        word = "colour" if word == "color" else word
+        if word not in PICTURES:
+            return OperationResult(ok=False)
+        self.picture = word
+        return OperationResult(ok=True)
+
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         """USARSim's keys (protocol.md 6.7), then the pinhole's intrinsics at the current zoom
         for a picture of ``width_px`` x ``height_px`` (extensions old clients skip): the focal
         lengths in pixels (square pixels: the same both ways) and the principal point, the
-        picture's centre."""
-        return (*self.fov_fields(), *self.intrinsics())
+        picture's centre; and, for a camera whose pictures are not colour ones, what they are
+        (``{Picture depth}``)."""
+        picture = getattr(self, "picture", self.config.picture)
+        extra: tuple[tuple[str, FieldValue], ...] = () if picture == "colour" else (("Picture", picture),)
+        return (*self.fov_fields(), *self.intrinsics(), *extra)
 
     def fov_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         c = self.config
@@ -148,3 +173,45 @@ class OmniCam(Camera[OmniCamConfig]):
     def conf_fields(self) -> tuple[tuple[str, FieldValue], ...]:
         """USARSim's keys only: an all-round picture is no pinhole's (no intrinsics)."""
         return self.fov_fields()
+
+
+@dataclass(frozen=True, kw_only=True)
+class DepthCameraConfig(CameraConfig):
+    """A depth camera's settings: a camera whose pictures are depths (16-bit millimetres)."""
+
+    picture: str = "depth"
+
+
+@CAMERAS.register("DepthCamera")
+class DepthCamera(Camera[DepthCameraConfig]):
+    """A camera whose pictures are depths along its axis in millimetres (usarsim.sim.pictures)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class ThermalCameraConfig(CameraConfig):
+    """A thermal camera's settings: the league's thermal camera, 160 x 120 pixels (FLIR Lepton
+    3.5 data sheet: 160 x 120, 57 degrees across), without zoom."""
+
+    picture: str = "thermal"
+    width_px: int = 160
+    height_px: int = 120
+    def_fov_rad: float = 0.9948  # 57 degrees
+    min_fov_rad: float = 0.9948
+    max_fov_rad: float = 0.9948
+
+
+@CAMERAS.register("ThermalCamera")
+class ThermalCamera(Camera[ThermalCameraConfig]):
+    """A camera whose pictures are temperatures as 8-bit intensity (usarsim.sim.pictures)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class LabelCameraConfig(CameraConfig):
+    """A label camera's settings: a camera whose pictures give each pixel's class and instance."""
+
+    picture: str = "label"
+
+
+@CAMERAS.register("LabelCamera")
+class LabelCamera(Camera[LabelCameraConfig]):
+    """The ground truth of a picture: each pixel's class and instance (usarsim.sim.pictures)."""

@@ -87,8 +87,11 @@ class CameraBindings:
 
 
 def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
-    """One UPIS frame (:func:`usarsim.protocol.upis.frame`) of an RGB picture."""
+    """One UPIS frame (:func:`usarsim.protocol.upis.frame`) of an RGB picture, or, whatever
+    ``image_type`` says, a PNG frame of a picture beyond colour (:func:`beyond_colour_png`)."""
     h, w = rgb.shape[:2]
+    if (rgb.ndim == 2 or rgb.shape[2] == 2) and w > 0 and h > 0:
+        return upis.frame(upis.PNG, beyond_colour_png(rgb))
     if image_type == upis.RAW or w == 0 or h == 0:  # an empty rectangle goes back as an empty raw picture
         image_type = upis.RAW
         payload = upis.raw_payload(w, h, np.ascontiguousarray(rgb[:, :, ::-1]).tobytes())
@@ -99,6 +102,25 @@ def encode_picture(rgb: np.ndarray, image_type: int) -> bytes:
         Image.fromarray(np.ascontiguousarray(rgb)).save(buf, "JPEG", quality=JPEG_QUALITY[image_type])
         payload = buf.getvalue()
     return upis.frame(image_type, payload)
+
+
+def beyond_colour_png(picture: np.ndarray) -> bytes:
+    """A depth picture (16-bit millimetres) as a 16-bit grey PNG, a thermal one (8-bit) as an
+    8-bit grey PNG, a label picture (class, instance) as an RGB PNG: red the class, green and
+    blue the instance's high and low byte (usarsim.sim.pictures)."""
+    from PIL import Image
+
+    if picture.ndim == 3:
+        cls, inst = picture[..., 0], picture[..., 1]
+        rgb = np.stack([cls, inst >> 8, inst & 0xFF], axis=-1).astype(np.uint8)
+        image = Image.fromarray(rgb)
+    elif picture.dtype == np.uint16:
+        image = Image.fromarray(np.ascontiguousarray(picture))  # mode I;16
+    else:
+        image = Image.fromarray(np.ascontiguousarray(picture))  # mode L
+    buf = io.BytesIO()
+    image.save(buf, "PNG", compress_level=1)  # fast: a picture a frame
+    return buf.getvalue()
 
 
 class ImageConnection(ServerConnection):

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, cast
 import mujoco
 
 from usarsim.sim import robotspec
+from usarsim.sim.pictures import SceneTables, scene_tables
 
 if TYPE_CHECKING:
     from usarsim.sensors.camera import CameraItem
@@ -29,6 +30,7 @@ class Cameras:
         # the model the MultiView was chosen in: robots come and go only with a new model
         # (a spawn or a removal builds it again), so a new model is when to choose again
         self._multiview_model = None
+        self._tables: tuple[object, SceneTables] | None = None  # the model's, once a camera needs them
 
     @staticmethod
     def cameras_of(r: SimRobot) -> list[CameraItem]:
@@ -98,14 +100,19 @@ class Cameras:
         snap.robots = {r.name.lower(): r.uid for r in self.sim.robots.values()}
         snap.bodies = {r.name.lower(): r.handle.body_id for r in self.sim.robots.values()}  # a free camera follows one
         snap.multiview = list(self.multiview())
+        beyond_colour = False
         for r in self.sim.robots.values():
             for cam in self.cameras_of(r):
                 cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.camera_name(r.prefix, cam.name))
                 if cid >= 0:
+                    picture = getattr(cam, "picture", "colour")
+                    beyond_colour = beyond_colour or picture != "colour"
                     snap.cameras[(r.uid, cam.name.lower())] = CameraState(
                         cam_id=cid,
                         fov_rad=float(getattr(cam, "fov_rad", cam.config.def_fov_rad)),
                         omni=cam.OMNI,
+                        picture=picture,
+                        max_depth_m=float(getattr(cam.config, "max_depth_m", 10.0)),
                     )
             # the chase view behind and above the robot (robotspec.CHASE_CAMERA)
             cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.chase_camera_name(r.prefix))
@@ -114,4 +121,14 @@ class Cameras:
                     (r.uid, robotspec.CHASE_CAMERA.lower()),
                     CameraState(cam_id=cid, fov_rad=robotspec.CHASE_FOV_RAD, omni=False),
                 )
+        snap.tables = self.scene_tables() if beyond_colour else None
+        snap.cold_robots = frozenset(r.uid for r in self.sim.robots.values() if r.battery_empty)
         return snap
+
+    def scene_tables(self) -> SceneTables:
+        """What thermal and label cameras see of each geom of the model (built once per model)."""
+        m = self.sim.model
+        if self._tables is None or self._tables[0] is not m:
+            wheels = {r.uid: frozenset(w.name for w in r.config.wheels) for r in self.sim.robots.values()}
+            self._tables = (m, scene_tables(m, self.sim.world, wheels))
+        return self._tables[1]

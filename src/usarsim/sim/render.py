@@ -33,8 +33,10 @@ from typing import Any, cast
 import mujoco
 import numpy as np
 
+from usarsim.sim import pictures
 from usarsim.sim.builder import MAX_PICTURE_HEIGHT as MAX_HEIGHT
 from usarsim.sim.builder import MAX_PICTURE_WIDTH as MAX_WIDTH
+from usarsim.sim.pictures import SceneTables
 from usarsim.sim.robotspec import camera_fovy_deg
 from usarsim.sim.underwater import Water, through_water, water_of
 
@@ -108,6 +110,8 @@ class CameraState:
     cam_id: int  # the MuJoCo camera
     fov_rad: float  # horizontal field of view (zoom)
     omni: bool
+    picture: str = "colour"  # what it sees (usarsim.sim.pictures.PICTURES)
+    max_depth_m: float = 10.0  # a depth camera's reach
 
 
 @dataclass
@@ -122,6 +126,8 @@ class Snapshot:
     robots: dict[str, int] = field(default_factory=dict)  # robot id by its name, in lower case
     multiview: list[tuple[int, str]] = field(default_factory=list)  # what the MultiView shows
     bodies: dict[str, int] = field(default_factory=dict)  # each robot's chassis body, by its name in lower case
+    tables: SceneTables | None = None  # what thermal and label cameras see of each geom
+    cold_robots: frozenset[int] = frozenset()  # robots whose battery is empty (cold to a thermal camera)
 
 
 @dataclass(frozen=True)
@@ -303,6 +309,11 @@ class RenderService:
         width, height, tiles = cast("_Layout", job.layout)(snap)  # a job without a free camera has its layout
         if not (1 <= width <= MAX_WIDTH and 1 <= height <= MAX_HEIGHT):
             raise ValueError(f"picture {width}x{height} is outside 1x1..{MAX_WIDTH}x{MAX_HEIGHT}")
+        tiles = list(tiles)
+        if len(tiles) == 1 and (tiles[0].x, tiles[0].y, tiles[0].width, tiles[0].height) == (0, 0, width, height):
+            cam = snap.cameras.get((tiles[0].uid, tiles[0].camera.lower()))
+            if cam is not None and cam.picture != "colour":  # one camera's own picture: depth, thermal or labels
+                return self._view(snap, cam, width, height)
         picture = np.zeros((height, width, 3), dtype=np.uint8)
         for t in tiles:
             cam = snap.cameras.get((t.uid, t.camera.lower()))
@@ -310,7 +321,8 @@ class RenderService:
             h = min(t.height, height - t.y)
             if cam is None or w <= 0 or h <= 0:
                 continue
-            picture[t.y : t.y + h, t.x : t.x + w] = self._view(snap, cam, t.width, t.height)[:h, :w]
+            view = pictures.as_colour(self._view(snap, cam, t.width, t.height))
+            picture[t.y : t.y + h, t.x : t.x + w] = view[:h, :w]
         return picture
 
     def _view(self, snap: Snapshot, cam: CameraState, width: int, height: int) -> np.ndarray:
@@ -320,6 +332,8 @@ class RenderService:
             model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, width, height)
             r = self._renderer(model, width, height)
             r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
+            if cam.picture != "colour":
+                return self._beyond_colour(r, snap, cam)
             return self._shoot(r, snap)
         # a panorama: four quarter views, each turned about the camera's own up axis
         edges = [round(k * width / 4) for k in range(5)]
@@ -339,6 +353,21 @@ class RenderService:
         finally:
             data.cam_xmat[cam.cam_id] = base.ravel()
         return out
+
+    @staticmethod
+    def _beyond_colour(r: mujoco.Renderer, snap: Snapshot, cam: CameraState) -> np.ndarray:
+        """A depth, thermal or label picture of ``r``'s scene (usarsim.sim.pictures)."""
+        if cam.picture == "depth":
+            return pictures.depth_picture(r, cam.max_depth_m)
+        tables = snap.tables
+        if tables is None:
+            raise ValueError(f"no scene tables for a {cam.picture} picture")
+        ids = pictures.geoms_seen(r)
+        if cam.picture == "label":
+            return pictures.label_picture(ids, tables)
+        # the sensor's noise, drawn the same for the same instant and camera
+        rng = np.random.default_rng([round(snap.time * 1e4), cam.cam_id])
+        return pictures.thermal_picture(ids, tables.temperatures(snap.cold_robots), rng)
 
     def _shoot(self, r: mujoco.Renderer, snap: Snapshot) -> np.ndarray:
         """The picture of ``r``'s scene (its camera placed by ``update_scene``): as MuJoCo
