@@ -300,6 +300,8 @@ def test_the_camera_bench_reports_served_and_bare_frame_rates():
     assert row["textures_cost_percent"] == pytest.approx(
         100 * (1 - row["served_fps"] / row["served_plain_fps"]), abs=0.2
     )
+    # and the same camera's depth, thermal and label pictures (PNG frames)
+    assert all(row[f"served_{k}_fps"] > 0 for k in ("depth", "thermal", "label"))
 
 
 def test_the_stereo_robot_renders_both_eyes(server_factory, image_world):

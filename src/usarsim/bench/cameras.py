@@ -14,6 +14,8 @@ from usarsim.bench.serving import ServedApp, logging_quiet
 
 ROUNDS = 5  # the camera bench alternates this many served and bare runs and takes the medians
 
+BEYOND_COLOUR = ("depth", "thermal", "label")  # the pictures beyond colour (usarsim.sim.pictures)
+
 
 class _ServedCamera:
     """A P2AT's camera (its physics running in real time) served by the image server of an
@@ -88,6 +90,12 @@ class _ServedCamera:
             self.frame()
         return count / (time.perf_counter() - t0)
 
+    def picture_kind(self, kind: str) -> None:
+        """Make the camera's pictures colour, depth, thermal or label ones (SET {Opcode Picture})."""
+        self.ctl.sendall(f"SET {{Type Camera}} {{Name Camera}} {{Opcode Picture}} {{Params {kind}}}\r\n".encode())
+        time.sleep(0.2)  # carried out (real time); the next picture is of that kind
+        self.frame()
+
     def close(self) -> None:
         for s in (getattr(self, "viewer", None), getattr(self, "ctl", None)):
             if s is not None:
@@ -155,7 +163,9 @@ def run_camera_bench(args) -> int:
                 f"camera {row['size']}: served {row['served_fps']:.1f} frames/s through the image server; bare "
                 f"MuJoCo render + JPEG {row['bare_render_jpeg_fps']:.1f} frames/s; ratio {row['ratio']:.2f}; "
                 f"plain colours served {row['served_plain_fps']:.1f} frames/s, textures cost "
-                f"{row['textures_cost_percent']:.1f} %"
+                f"{row['textures_cost_percent']:.1f} %; the same camera's depth, thermal and label pictures served "
+                f"{row['served_depth_fps']:.1f}, {row['served_thermal_fps']:.1f} and {row['served_label_fps']:.1f} "
+                "frames/s"
             )
     if args.json:
         print(json.dumps(results))
@@ -176,11 +186,16 @@ def camera_result(world, size: tuple[int, int], frames: int) -> dict:
         bare = _BareRenderer(textured, w, h)
         opened.append(bare)
         served_runs, plain_runs, bare_runs = [], [], []
+        kind_runs: dict[str, list[float]] = {k: [] for k in BEYOND_COLOUR}
         per_round = max(5, frames // ROUNDS)
         for _ in range(ROUNDS):
             served_runs.append(textured.fps(per_round))
             plain_runs.append(plain.fps(per_round))
             bare_runs.append(bare.fps(per_round))
+            for kind in BEYOND_COLOUR:  # the same camera's pictures of the other kinds (PNG frames)
+                textured.picture_kind(kind)
+                kind_runs[kind].append(textured.fps(per_round))
+            textured.picture_kind("colour")
     finally:
         for o in reversed(opened):
             o.close()
@@ -195,6 +210,7 @@ def camera_result(world, size: tuple[int, int], frames: int) -> dict:
         "ratio": round(served / bare_fps, 3),
         "served_plain_fps": round(plain_fps, 2),
         "textures_cost_percent": round(cost, 1),
+        **{f"served_{k}_fps": round(statistics.median(kind_runs[k]), 2) for k in BEYOND_COLOUR},
         "frames": frames,
         "world": world.name,
         "cpu_count": os.cpu_count(),

@@ -352,7 +352,20 @@ def picture_size(header: bytes) -> tuple[int, int]:
 
 def decode_picture(image_type: int, payload: bytes) -> np.ndarray:
     """A picture as an (height, width, 3) uint8 RGB array: raw (type 0: 16-bit width and
-    height, then B, G, R rows top to bottom) or JPEG (types 1 to 5)."""
+    height, then B, G, R rows top to bottom) or JPEG (types 1 to 5).  A PNG (type 6, the
+    pictures of depth, thermal and label cameras) as what it holds: depths in millimetres
+    (height, width) uint16, temperatures (height, width) uint8 at 0.2 degrees a level, or each
+    pixel's class and instance (height, width, 2) uint16."""
+    if image_type == 6:
+        import io
+
+        from PIL import Image
+
+        with Image.open(io.BytesIO(payload)) as im:
+            a = np.asarray(im)
+        if a.ndim == 3:  # labels: red the class, green and blue the instance's high and low byte
+            return np.stack([a[..., 0], (a[..., 1].astype(np.uint16) << 8) | a[..., 2]], axis=-1).astype(np.uint16)
+        return a.astype(np.uint16 if a.dtype != np.uint8 else np.uint8).copy()
     if image_type == 0:
         w, h = int.from_bytes(payload[0:2], "big"), int.from_bytes(payload[2:4], "big")
         bgr = np.frombuffer(payload, dtype=np.uint8, count=w * h * 3, offset=4).reshape(h, w, 3)
