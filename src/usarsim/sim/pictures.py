@@ -46,7 +46,7 @@ SHOES_C = 26.0
 MOTOR_C = 45.0
 ROBOT_BODY_C = 28.0
 SKY_C = 0.0
-SKIN_PARTS = ("Head", "Hand", "eye0", "eye1", "mouth", "nose", "brow0", "brow1")
+SKIN_PARTS = ("Head", "Hand", "face")
 SHOE_PARTS = ("Foot",)
 # Thermal pictures: 8-bit intensity, 0.2 degrees a level from 0 (a FLIR Lepton's radiometric
 # output in 8 bits would span a similar window); the sensor's noise: its thermal sensitivity,

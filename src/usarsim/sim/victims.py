@@ -10,6 +10,7 @@ import numpy as np
 
 from usarsim.sim import frames
 from usarsim.sim.constants import GROUP_STATIC, SOLID_CONAFFINITY, SOLID_CONTYPE
+from usarsim.sim.faces import FACE_SIZE_M, face_picture
 
 # A victim's body, lying on its back along its own +X axis (head forward), in its own
 # USARSim frame (X forward, Y right, Z down) with the origin at the pelvis centre.
@@ -80,7 +81,7 @@ def part_colour(part: str, colours: dict) -> list[float]:
     return [*rgb, 1.0]
 
 
-def _look(body, name: str, kind, pos, size, rgb) -> None:
+def _look(body, name: str, kind, pos, size, rgb) -> mujoco.MjsGeom:
     g = body.add_geom()
     g.name = name
     g.type = kind
@@ -91,11 +92,13 @@ def _look(body, name: str, kind, pos, size, rgb) -> None:
     g.contype = g.conaffinity = 0
     g.mass = 0.0
     g.density = 0.0
+    return g
 
 
-def add_face(body, victim, colours) -> None:
-    """Eyes, a mouth and hair on the victim's head (victim frame; lying: the face up,
-    sitting: the face forward)."""
+def add_face(spec: mujoco.MjSpec, body, victim, colours) -> None:
+    """A face and hair on the victim's head (victim frame; lying: the face up, sitting: the
+    face forward): a thin plate just in front of the head showing the picture of a face
+    (:mod:`usarsim.sim.faces`), and a cap of hair over the crown and the back of the head."""
     (hx, hy, hz), _ = victim_part_pose(victim.posture, VICTIM_LYING[0][2], None, None)
     r = VICTIM_LYING[0][3][0]
     if victim.posture == "sitting":
@@ -108,12 +111,37 @@ def add_face(body, victim, colours) -> None:
             return (hx + up, hy + side, hz - fwd)
 
     prefix = f"look/victim/{victim.name}"
-    sphere, box, ellipsoid = mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_ELLIPSOID
-    for k, side in enumerate((-0.035, 0.035)):
-        _look(body, f"{prefix}/eye{k}", sphere, at(0.93 * r, side, 0.025), (0.014, 0, 0), EYE)
-    _look(body, f"{prefix}/mouth", box, at(0.94 * r, 0.0, -0.045), (0.008, 0.025, 0.006), MOUTH)
+    box, ellipsoid = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_ELLIPSOID
+    # the face: a plate 1 cm in front of the head's surface, its picture upright (the crown up)
+    width, height = FACE_SIZE_M
+    plate = (0.004, width / 2.0, height / 2.0)
+    face = _look(body, f"{prefix}/face", box, at(r + 0.005, 0.0, 0.0), plate, (1.0, 1.0, 1.0))
+    face.material = face_material(spec, colours["skin"], colours["hair"])
+    if victim.posture != "sitting":  # lying: the plate's outside up, its picture's top towards the crown
+        face.quat = [0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)]
     # hair: a cap over the crown and the back of the head
     _look(body, f"{prefix}/hair", ellipsoid, at(-0.02, 0.0, 0.02), (r * 1.02, r * 1.03, r * 0.98), colours["hair"])
+
+
+def face_material(spec: mujoco.MjSpec, skin: tuple[float, float, float], hair: tuple[float, float, float]) -> str:
+    """The material showing the face of a victim of ``skin`` and ``hair`` (made once a model)."""
+    key = "%.2f,%.2f,%.2f/%.2f,%.2f,%.2f" % (*skin, *hair)
+    name = f"material/face/{key}"
+    if spec.material(name) is None:
+        img = face_picture(skin, hair)
+        t = spec.add_texture()
+        t.name = f"texture/face/{key}"
+        t.type = mujoco.mjtTexture.mjTEXTURE_2D
+        t.height, t.width = img.shape[0], img.shape[1]
+        t.nchannel = 3
+        t.data = img.tobytes()
+        m = spec.add_material()
+        m.name = name
+        m.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = t.name
+        m.texrepeat = [1.0, 1.0]
+        m.texuniform = False
+        m.specular = 0.1  # skin is matt
+    return name
 
 
 def victim_part_pose(posture: str, centre, size, shape):
@@ -170,4 +198,4 @@ def add_victim(spec: mujoco.MjSpec, victim) -> None:
         g.rgba = part_colour(part, colours)
         g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
-    add_face(body, victim, colours)
+    add_face(spec, body, victim, colours)
