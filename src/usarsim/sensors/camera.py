@@ -13,7 +13,7 @@ import mujoco
 from usarsim.readings import FieldValue, ItemParams, OperationResult, ZoomResult
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
 from usarsim.sim.pictures import PICTURES
-from usarsim.sim.robotspec import add_camera
+from usarsim.sim.robotspec import add_camera, add_housing
 
 if TYPE_CHECKING:
     from usarsim.sim.view import WorldView
@@ -33,7 +33,14 @@ class CameraItem(Item[IC]):
     fov_rad: float
 
     def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        """Its MuJoCo camera, and what other cameras see of it: a small dark case behind the
+        lens (60 x 40 x 45 mm, an estimate for a robot's colour camera; none for an all-round
+        camera, whose mirror stands free)."""
         add_camera(spec, chassis, self.item, prefix)
+        if not self.OMNI:
+            add_housing(
+                spec, chassis, self.item, prefix, box=(0.04, 0.06, 0.045), rgb=(0.15, 0.15, 0.16), offset=(-0.022, 0, 0)
+            )
 
 
 CAMERAS = ITEMS.new("camera")

@@ -24,6 +24,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+import mujoco
 import numpy as np
 
 from usarsim.errors import ConfigError
@@ -31,6 +32,7 @@ from usarsim.readings import FieldValue, ItemParams, OperationResult, RangeImage
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sensors.noise import Noise
 from usarsim.sensors.scanner import LINE_LIMIT, trunc4
+from usarsim.sim.robotspec import add_housing
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
@@ -188,6 +190,13 @@ class RangeImager(Sensor[RangeImagerConfig]):
         self._cos = 1.0 / norm  # depth per unit of range along each ray
         self._reach = c.max_range_m * float(norm.max())  # a corner ray's range at MaxRange depth
         self._scan = False  # a SCAN asked for a picture
+
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        """What cameras see of it: a Kinect's bar, 279 x 63 x 38 mm, black (Kinect for Windows),
+        its lenses on the front face."""
+        add_housing(
+            spec, chassis, self.item, prefix, box=(0.063, 0.279, 0.038), rgb=(0.05, 0.05, 0.05), offset=(-0.033, 0, 0)
+        )
 
     def operate(self, view: WorldView, opcode: str, params: ItemParams) -> OperationResult | None:
         result = super().operate(view, opcode, params)

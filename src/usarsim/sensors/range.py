@@ -8,12 +8,14 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Self, TypeVar
 
+import mujoco
 import numpy as np
 
 from usarsim.readings import FieldValue, RangeItem, RangeReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sensors.noise import RANGES
 from usarsim.sim import frames
+from usarsim.sim.robotspec import add_housing
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
 if TYPE_CHECKING:
@@ -113,6 +115,14 @@ class Sonar(RangeSensor[SonarConfig]):
         "numberOfCones": "number_of_cones",
         "tracesPerCone": "traces_per_cone",
     }
+
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        """What cameras see of it: a Polaroid 600 series transducer's gold foil, 38.5 mm across
+        (Polaroid 600 Series Instrument Grade Electrostatic Transducer data sheet), its face at
+        the sensor."""
+        add_housing(
+            spec, chassis, self.item, prefix, disc=(0.019, 0.006), rgb=(0.72, 0.62, 0.35), offset=(-0.004, 0, 0)
+        )
 
     def __init__(self, item: MountedItem, config: SonarConfig, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)

@@ -8,17 +8,22 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, TypeVar
 
+import mujoco
 import numpy as np
 
 from usarsim.errors import ConfigError
 from usarsim.readings import FieldValue, ItemParams, OperationResult, RangeScan3DReading, RangeScanReading
 from usarsim.sensors.base import SENSORS, Sensor, SensorConfig, check_range
 from usarsim.sensors.noise import RANGES
+from usarsim.sim.robotspec import add_housing
 from usarsim.sim.view import unit_dirs_yaw_pitch
 
 if TYPE_CHECKING:
     from usarsim.config.robot import MountedItem, RobotConfig
     from usarsim.sim.view import WorldView
+
+
+LMS200_BLUE = (0.16, 0.33, 0.62)  # the SICK blue of an LMS200's housing
 
 
 def trunc4(x: float) -> float:
@@ -103,6 +108,28 @@ class RangeScanner(Sensor[RSC]):
             "scan_interval_s": 0.3,
         },
     }
+
+    def build(self, spec: mujoco.MjSpec, chassis: mujoco.MjsBody, prefix: str) -> None:
+        """What cameras see of a laser: a SICK LMS200's housing (155 x 156 x 210 mm, SICK's blue;
+        LMS200 Technical Description, 2003) for one that reaches beyond 6 m, else a Hokuyo
+        URG-04LX's (50 x 50 x 70 mm, black; Hokuyo URG-04LX specification); the scan plane in
+        its upper part (an estimate, from photographs).  An IR scanner shows none."""
+        if self.TYPE != "RangeScanner":
+            return
+        if self.config.max_range_m > 6.0:
+            add_housing(
+                spec, chassis, self.item, prefix, box=(0.156, 0.155, 0.21), rgb=LMS200_BLUE, offset=(-0.04, 0, 0.045)
+            )
+        else:
+            add_housing(
+                spec,
+                chassis,
+                self.item,
+                prefix,
+                box=(0.05, 0.05, 0.07),
+                rgb=(0.08, 0.08, 0.08),
+                offset=(-0.01, 0, 0.015),
+            )
 
     def __init__(self, item: MountedItem, config: RSC, robot: RobotConfig, seed: int) -> None:
         super().__init__(item, config, robot, seed)

@@ -12,6 +12,7 @@ GROUP_MOVABLE = 2  # movable obstacles
 GROUP_WHEEL = 3  # wheels and other small moving parts: not seen by range sensors
 RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
 GROUP_WATER = 4  # water volumes: seen by cameras only
+GROUP_LOOK = GROUP_WATER  # what only cameras see: water, victims' faces, sensors' housings
 # What a robot set down at a start pose lands on: everything but water
 GROUND_GROUPS = np.array([1, 1, 1, 1, 0, 1], dtype=np.uint8)
 

@@ -14,6 +14,7 @@ import numpy as np
 from usarsim.config.robot import MountedItem, RobotConfig
 from usarsim.sim import frames
 from usarsim.sim.constants import (
+    GROUP_LOOK,
     GROUP_ROBOT,
     GROUP_WHEEL,
     ROLL_FRICTION,
@@ -167,6 +168,43 @@ def mount_body(spec: mujoco.MjSpec, chassis: mujoco.MjsBody, item: MountedItem, 
     if item.mount == "HARD":
         return chassis
     return spec.body(f"{prefix}/{item.mount}") or chassis
+
+
+def add_housing(
+    spec: mujoco.MjSpec,
+    chassis: mujoco.MjsBody,
+    item: MountedItem,
+    prefix: str,
+    *,
+    box: tuple[float, float, float] | None = None,
+    disc: tuple[float, float] | None = None,
+    rgb: tuple[float, float, float],
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> None:
+    """What cameras see of a mounted item's own body (a laser's housing, a camera's case): a
+    ``box`` (full extents along the item's X, Y, Z) or a ``disc`` (radius, thickness, facing
+    along the item's X) at the item's place and turned as it is, its centre ``offset`` in the
+    item's frame (USARSim, metres), on the item's mount.  Cameras only: it has no mass and no
+    contacts, and range sensors' rays and the victim sensor pass through it."""
+    parent = mount_body(spec, chassis, item, prefix)
+    rot = frames.usar_euler_to_mj_mat(item.orientation)
+    g = parent.add_geom()
+    g.name = f"{prefix}/housing/{item.name}"
+    g.pos = (frames.to_mj_vec(item.location) + rot @ frames.to_mj_vec(offset)).tolist()
+    if box is not None:
+        g.type = mujoco.mjtGeom.mjGEOM_BOX
+        g.size = [box[0] / 2.0, box[1] / 2.0, box[2] / 2.0]
+        g.quat = frames.mat_to_quat(rot).tolist()
+    elif disc is not None:
+        g.type = mujoco.mjtGeom.mjGEOM_CYLINDER  # along its own Z: turned onto the item's X
+        g.size = [disc[0], disc[1] / 2.0, 0.0]
+        along_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+        g.quat = frames.mat_to_quat(rot @ along_x).tolist()
+    g.rgba = [*rgb, 1.0]
+    g.group = GROUP_LOOK
+    g.contype = g.conaffinity = 0
+    g.mass = 0.0
+    g.density = 0.0
 
 
 def add_camera(spec: mujoco.MjSpec, chassis: mujoco.MjsBody, item: MountedItem, prefix: str) -> None:
