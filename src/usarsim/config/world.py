@@ -67,7 +67,9 @@ MAX_SLOPE_DEG = 60.0
 RAMP_FOOT_SINK_M = 0.005
 # Body parts a victim is made of (protocol.md 7.9: the UT2004 victim model's collision boxes).
 VICTIM_PARTS = ("Head", "Chest", "Pelvis", "Arm", "Hand", "Leg", "Foot")
-VICTIM_POSTURES = ("lying", "sitting")
+# lying, sitting (the upper body upright), or trapped: lying with debris across the legs
+VICTIM_POSTURES = ("lying", "sitting", "trapped")
+VICTIM_BUILDS = ("average", "slim", "heavy", "child")  # body builds (usarsim.sim.victims.BUILDS)
 # Radio propagation models of the wireless simulation (usarsim.sim.radio; manual 3.2.4,
 # protocol.md 12.2): the Wall Attenuation Factor model with the manual's constants, the
 # same with the later USARSim code's, distance only, a perfect link.
@@ -188,6 +190,7 @@ class Victim:
     location: Vec3  # the pelvis, on the floor: z is the height of the body's centre line
     rotation: Vec3 = (0.0, 0.0, 0.0)
     posture: str = "lying"
+    build: str = "average"
     waving: bool = False
     sound_loudness_db: float = 0.0  # 0: silent
     sound_period_s: float = 5.0

@@ -16,6 +16,7 @@ from usarsim.config.reader import FieldDefaults, Section
 from usarsim.config.utm import UTM_LETTERS, UtmCoordinate, utm_band_limits_deg, utm_to_latlon
 from usarsim.config.world import (
     LIGHT_TYPES,
+    VICTIM_BUILDS,
     VICTIM_PARTS,
     VICTIM_POSTURES,
     WIRELESS_MODELS,
@@ -152,6 +153,7 @@ def _victims(top: Section, names: set[str]) -> list[Victim]:
                 location=as_vec3(s.vec("location")),
                 rotation=as_vec3(s.vec("rotation", 3, vd.rotation)),
                 posture=s.str("posture", vd.posture, choices=VICTIM_POSTURES),
+                build=s.str("build", vd.build, choices=VICTIM_BUILDS),
                 waving=s.bool("waving", vd.waving),
                 sound_loudness_db=sound.float("loudness_db", vd.sound_loudness_db, min=0.0, max=200.0),
                 sound_period_s=sound.float("period_s", vd.sound_period_s, min=0.1),

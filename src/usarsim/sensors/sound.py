@@ -134,7 +134,7 @@ class HumanMotion(Sensor[HumanMotionConfig]):
             for v in world.victims:
                 if not v.waving:
                     continue
-                arm = _victim_point(v, victims.SHOULDER)
+                arm = _victim_point(v, victims.shoulder_of(v))
                 delta = arm - pos
                 d = float(np.linalg.norm(delta))
                 if d > c.max_range_m or d < 1e-6:

@@ -121,6 +121,8 @@ def scene_tables(model: mujoco.MjModel, world: WorldConfig, wheels: dict[int, fr
             part = name[m.end() :].split("/")[0]
             temperature[row] = MOTOR_C if part in wheels.get(uid, ()) else ROBOT_BODY_C
             robot_rows.setdefault(uid, []).append(row)
+        elif parts[0] == "debris":  # on a trapped victim
+            classes[row] = OBSTACLE
         elif parts[0] == "world" and len(parts) > 1:
             k, obj = objects.get(parts[1], (0, None))
             classes[row], instances[row] = (WALL if obj is not None and is_wall(obj, world) else OBSTACLE), k

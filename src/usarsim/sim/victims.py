@@ -34,6 +34,44 @@ VICTIM_LYING = (
 # The waving arm (the right one) swings about the shoulder (constants.WAVE_AMPLITUDE_RAD,
 # WAVE_PERIOD_S).
 SHOULDER = (0.62, 0.24, 0.0)  # the right shoulder, victim frame
+# Body builds, as (length, girth) factors of the adult above: a child of six is 1.15 m tall
+# (the median stature at 6 years, CDC growth charts, 2000) against the adult's 1.75 m, and
+# slighter (0.75, an estimate); a heavy adult as tall, 1.3 times as broad and deep (an
+# estimate: the waist of a body mass index of 35 against 22); a slim one 0.85.
+BUILDS = {"average": (1.0, 1.0), "slim": (1.0, 0.85), "heavy": (1.0, 1.3), "child": (0.66, 0.75)}
+# What lies on a trapped victim (victim frame, lying): a slab of concrete across the legs and
+# a board across the hips, resting on them, each (centre, full size, rotation), the heights
+# above the body's top (estimates: a 0.9 x 0.6 m piece of a 8 cm floor slab, a 2 x 6 in
+# board 1.2 m long)
+DEBRIS = (
+    ("slab", (-0.5, 0.0, -0.06), (0.6, 0.9, 0.08), (0.12, 0.0, 0.1), (0.62, 0.61, 0.58)),
+    ("board", (0.0, 0.05, -0.03), (0.14, 1.2, 0.04), (0.0, 0.0, 0.35), (0.78, 0.64, 0.44)),
+)
+
+
+def victim_parts(build: str = "average") -> tuple:
+    """VICTIM_LYING for a body build: part centres and sizes scaled along the body (length)
+    and across it (girth)."""
+    length, girth = BUILDS[build]
+    out = []
+    for part, shape, (x, y, z), raw in VICTIM_LYING:
+        size: tuple[float, ...] = raw
+        if shape == "sphere":
+            scaled: tuple[float, ...] = (size[0] * girth,)
+        elif shape == "capsule":
+            scaled = (size[0] * girth, size[1] * length)
+        else:
+            scaled = (size[0] * length, size[1] * girth, size[2] * girth)
+        out.append((part, shape, (x * length, y * girth, z * girth), scaled))
+    return tuple(out)
+
+
+def shoulder_of(victim) -> tuple[float, float, float]:
+    """The right shoulder of ``victim`` (victim frame, its build)."""
+    length, girth = BUILDS[getattr(victim, "build", "average")]
+    return (SHOULDER[0] * length, SHOULDER[1] * girth, SHOULDER[2] * girth)
+
+
 VICTIM_RGBA = [0.87, 0.68, 0.55, 1.0]
 
 # What cameras see of a victim: skin on the head and hands, clothes on the body, shoes, and
@@ -99,8 +137,10 @@ def add_face(spec: mujoco.MjSpec, body, victim, colours) -> None:
     """A face and hair on the victim's head (victim frame; lying: the face up, sitting: the
     face forward): a thin plate just in front of the head showing the picture of a face
     (:mod:`usarsim.sim.faces`), and a cap of hair over the crown and the back of the head."""
-    (hx, hy, hz), _ = victim_part_pose(victim.posture, VICTIM_LYING[0][2], None, None)
-    r = VICTIM_LYING[0][3][0]
+    head = victim_parts(victim.build)[0]
+    (hx, hy, hz), _ = victim_part_pose(victim.posture, head[2], None, None)
+    r = head[3][0]
+    scale = BUILDS[victim.build][1]
     if victim.posture == "sitting":
 
         def at(fwd, side, up):  # a point on the head: towards the face, the right, the crown
@@ -114,7 +154,7 @@ def add_face(spec: mujoco.MjSpec, body, victim, colours) -> None:
     box, ellipsoid = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_ELLIPSOID
     # the face: a plate 1 cm in front of the head's surface, its picture upright (the crown up)
     width, height = FACE_SIZE_M
-    plate = (0.004, width / 2.0, height / 2.0)
+    plate = (0.004, scale * width / 2.0, scale * height / 2.0)
     face = _look(body, f"{prefix}/face", box, at(r + 0.005, 0.0, 0.0), plate, (1.0, 1.0, 1.0))
     face.material = face_material(spec, colours["skin"], colours["hair"])
     if victim.posture != "sitting":  # lying: the plate's outside up, its picture's top towards the crown
@@ -160,7 +200,8 @@ def add_victim(spec: mujoco.MjSpec, victim) -> None:
     body.name = f"victim/{victim.name}"
     body.pos = frames.to_mj_vec(victim.location).tolist()
     body.quat = frames.usar_euler_to_mj_quat(victim.rotation).tolist()
-    for i, (part, shape, centre, size) in enumerate(VICTIM_LYING):
+    shoulder_at = shoulder_of(victim)
+    for i, (part, shape, centre, size) in enumerate(victim_parts(victim.build)):
         waving = victim.waving and part in ("Arm", "Hand") and centre[1] > 0
         parent = body
         c, rot = victim_part_pose(victim.posture, centre, size, shape)
@@ -173,11 +214,11 @@ def add_victim(spec: mujoco.MjSpec, victim) -> None:
                 shoulder.mocap = True
                 loc = np.array(victim.location, dtype=float)
                 rot_v = frames.euler_to_mat(*victim.rotation)
-                sh = victim_part_pose(victim.posture, SHOULDER, None, None)[0]
+                sh = victim_part_pose(victim.posture, shoulder_at, None, None)[0]
                 shoulder.pos = frames.to_mj_vec(loc + rot_v @ np.array(sh)).tolist()
                 shoulder.quat = frames.usar_euler_to_mj_quat(victim.rotation).tolist()
             parent = shoulder
-            sh = victim_part_pose(victim.posture, SHOULDER, None, None)[0]
+            sh = victim_part_pose(victim.posture, shoulder_at, None, None)[0]
             c = tuple(np.array(c) - np.array(sh))
         g = parent.add_geom()
         g.name = f"victim/{victim.name}/{part}/{i}"
@@ -199,3 +240,26 @@ def add_victim(spec: mujoco.MjSpec, victim) -> None:
         g.group = GROUP_STATIC
         g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
     add_face(spec, body, victim, colours)
+    if victim.posture == "trapped":
+        add_debris(spec, victim)
+
+
+def add_debris(spec: mujoco.MjSpec, victim) -> None:
+    """What lies on a trapped victim (DEBRIS): solid pieces of the world on its legs and hips,
+    which lasers see and robots meet, named ``debris/<victim>/<piece>``."""
+    length, girth = BUILDS[victim.build]
+    top = 0.10 * girth  # the body's top, above its centre line (the chest's half depth)
+    loc = np.array(victim.location, dtype=float)
+    rot = frames.euler_to_mat(*victim.rotation)
+    for piece, (x, y, z), size, rpy, rgb in DEBRIS:
+        centre = loc + rot @ np.array([x * length, y, z - top - size[2] / 2.0])
+        g = spec.worldbody.add_geom()
+        g.name = f"debris/{victim.name}/{piece}"
+        g.type = mujoco.mjtGeom.mjGEOM_BOX
+        g.size = [size[0] / 2.0, size[1] / 2.0, size[2] / 2.0]
+        g.pos = frames.to_mj_vec(tuple(centre)).tolist()
+        turned = frames.mat_to_euler(rot @ frames.euler_to_mat(*rpy))  # the victim's turn, then the piece's
+        g.quat = frames.usar_euler_to_mj_quat(turned).tolist()
+        g.rgba = [*rgb, 1.0]
+        g.group = GROUP_STATIC
+        g.contype, g.conaffinity = SOLID_CONTYPE, SOLID_CONAFFINITY
