@@ -26,7 +26,9 @@ KINDS = ("colour", "depth", "thermal", "label")
 LOCATION, ROTATION = (2.1, 4.37, -0.3), (0.0, 0.0, 1.0472)
 STEP_C = 0.2  # a thermal level, degrees Celsius (docs/protocol.md, "Pictures beyond colour")
 # labels: nothing, floor, wall, obstacle, victim, false alarm, robot
-PALETTE = np.array([[0, 0, 0], [90, 90, 90], [230, 200, 80], [150, 100, 60], [230, 40, 40], [60, 120, 230], [60, 200, 90]])
+PALETTE = np.array(
+    [[0, 0, 0], [90, 90, 90], [230, 200, 80], [150, 100, 60], [230, 40, 40], [60, 120, 230], [60, 200, 90]]
+)
 CLASS_NAMES = ("nothing", "floor", "wall", "obstacle", "victim", "false alarm", "robot")
 
 
@@ -83,7 +85,9 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"thermal: {picture.min() * STEP_C:.1f} to {picture.max() * STEP_C:.1f} degrees Celsius")
                 elif kind == "label":
                     classes, counts = np.unique(picture[..., 0], return_counts=True)
-                    share = ", ".join(f"{CLASS_NAMES[c]} {n / picture[..., 0].size:.0%}" for c, n in zip(classes, counts))
+                    share = ", ".join(
+                        f"{CLASS_NAMES[c]} {n / picture[..., 0].size:.0%}" for c, n in zip(classes, counts)
+                    )
                     print(f"labels: {share}")
             robot.send("SET {Type Camera} {Name Camera} {Opcode Picture} {Params colour}")
     except ClientError as exc:
