@@ -146,3 +146,30 @@ def test_camera_kinds_from_the_robot_file(tmp_path):
         assert (item.config.width_px, item.config.height_px) == size
     with pytest.raises(Exception, match="picture must be one of colour, depth, thermal, label"):
         make_item(dataclasses.replace(cam, params={"picture": "xray"}), p2at, 0, "t")
+
+
+def test_a_thermal_camera_of_the_robot_file_is_served_at_its_own_size(server_factory, room, tmp_path):
+    """The league's thermal camera: 160 x 120 pictures, whatever size the server gives colour ones."""
+    from usarsim.config.catalog import ROBOTS_DIR
+    from usarsim.server.image import ImageSettings
+
+    text = (ROBOTS_DIR / "P2AT.yaml").read_text().replace("class_name: P2AT", "class_name: ThermalP2AT")
+    text += "  - {type: ThermalCamera, name: Thermal, location: [0.082, 0.0, 0.04], mount: CameraPanTilt_Link2}\n"
+    (tmp_path / "ThermalP2AT.yaml").write_text(text)
+    srv = server_factory(world=room, robot_dirs=(str(tmp_path),), image=ImageSettings(width=640, height=480))
+    c = srv.connect()
+    c.nfo()
+    c.send("INIT {ClassName USARBot.ThermalP2AT} {Name R1} {Start Start}")
+    c.step(1.0)
+    c.send("SET {Type Camera} {Robot R1} {Name Thermal} {Client 127.0.0.1}")
+    c.step(0.1)
+    viewer = Viewer(srv.app.image.port)
+    try:
+        thermal = png_picture(viewer)
+        assert thermal.shape == (120, 160) and thermal.dtype == np.uint8
+        assert thermal.max() * pictures.THERMAL_STEP_C == pytest.approx(pictures.SKIN_C, abs=0.5)  # the victim ahead
+        c.send("GETCONF {Type ThermalCamera} {Name Thermal}")
+        conf = next(ln.text for ln in c.step(0.01) if ln.text.startswith("CONF"))
+        assert "{CameraFov 0.9948}" in conf and conf.endswith("{PrincipalPoint 80.0000,60.0000} {Picture thermal}")
+    finally:
+        viewer.close()

@@ -218,14 +218,19 @@ class ImageServer(TcpListener):
         return ImageConnection(self)
 
     def layout(self, snap, binding) -> tuple[int, int, list[Tile]]:
-        """What a picture shows: the bound robot camera over the whole picture, or the
-        MultiView (black where a robot or camera is missing)."""
+        """What a picture shows: the bound robot camera over the whole picture (the server's
+        picture size; a depth, thermal or label camera's own), or the MultiView (black where a
+        robot or camera is missing)."""
         s = self.settings
         if binding is not None:
             robot, camera = binding
             uid = snap.robots.get(robot.lower())
-            tiles = [Tile(uid, camera, 0, 0, s.width, s.height)] if uid is not None else []
-            return s.width, s.height, tiles
+            width, height = s.width, s.height
+            cam = snap.cameras.get((uid, camera.lower())) if uid is not None else None
+            if cam is not None and cam.picture != "colour":  # a depth, thermal or label camera: its own size
+                width, height = cam.size
+            tiles = [Tile(uid, camera, 0, 0, width, height)] if uid is not None else []
+            return width, height, tiles
         tiles, width, height = grid_tiles(snap.multiview, s.camera_num, s.wide_mode, s.tile_width, s.tile_height)
         return width, height, tiles
 

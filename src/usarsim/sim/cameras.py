@@ -113,6 +113,7 @@ class Cameras:
                         omni=cam.OMNI,
                         picture=picture,
                         max_depth_m=float(getattr(cam.config, "max_depth_m", 10.0)),
+                        size=(int(cam.config.width_px), int(cam.config.height_px)),
                     )
             # the chase view behind and above the robot (robotspec.CHASE_CAMERA)
             cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, robotspec.chase_camera_name(r.prefix))

@@ -112,6 +112,7 @@ class CameraState:
     omni: bool
     picture: str = "colour"  # what it sees (usarsim.sim.pictures.PICTURES)
     max_depth_m: float = 10.0  # a depth camera's reach
+    size: tuple[int, int] = (320, 240)  # its own pictures' width and height (those beyond colour are served so)
 
 
 @dataclass
