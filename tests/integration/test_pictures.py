@@ -109,30 +109,9 @@ class Camera:
 
         return self.service.render(WIDTH, HEIGHT, [Tile(uid, "Camera", 0, 0, WIDTH, HEIGHT)]).result(timeout=60)
 
-    def sees_victim(self, uid: int) -> bool:
-        """Whether any victim or false alarm is in the robot camera's view (a segmentation
-        picture of the same view)."""
-        import mujoco
-
-        from usarsim.sim.robotspec import camera_fovy_deg, camera_name
-
-        snap = self.sim.cameras.render_snapshot()
-        m = snap.model
-        cam = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, camera_name(f"robot{uid}", "Camera"))
-        m.cam_fovy[cam] = camera_fovy_deg(math.radians(50.0), WIDTH, HEIGHT)
-        r = mujoco.Renderer(m, HEIGHT, WIDTH)
-        try:
-            r.enable_segmentation_rendering()
-            r.update_scene(snap.data, camera=cam)
-            seg = r.render()
-        finally:
-            r.close()
-        ids = np.unique(seg[..., 0][seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)])
-        names = [m.geom(int(g)).name for g in ids if g >= 0]
-        return any(n.startswith(("victim/", "falsealarm/", "look/")) for n in names)
-
-    def geom_at(self, uid: int, u: int, v: int) -> str:
-        """The name of the geom the robot camera's pixel (u, v) shows ('' for none)."""
+    def segmentation(self, uid: int, every_group: bool = False):
+        """(model, each pixel's object id and type) of the robot camera's view: MuJoCo's default
+        geom groups, or (``every_group``) what cameras see, victims' faces too."""
         import mujoco
 
         from usarsim.sim.render import SEEN
@@ -145,10 +124,26 @@ class Camera:
         r = mujoco.Renderer(m, HEIGHT, WIDTH)
         try:
             r.enable_segmentation_rendering()
-            r.update_scene(snap.data, camera=cam, scene_option=SEEN)  # what cameras see (faces too)
-            seg = r.render()
+            r.update_scene(snap.data, camera=cam, scene_option=SEEN if every_group else None)
+            return m, r.render()
         finally:
             r.close()
+
+    def sees_victim(self, uid: int) -> bool:
+        """Whether any victim or false alarm is in the robot camera's view (a segmentation
+        picture of the same view)."""
+        import mujoco
+
+        m, seg = self.segmentation(uid)
+        ids = np.unique(seg[..., 0][seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)])
+        names = [m.geom(int(g)).name for g in ids if g >= 0]
+        return any(n.startswith(("victim/", "falsealarm/", "look/")) for n in names)
+
+    def geom_at(self, uid: int, u: int, v: int) -> str:
+        """The name of the geom the robot camera's pixel (u, v) shows ('' for none)."""
+        import mujoco
+
+        m, seg = self.segmentation(uid, every_group=True)
         gid, kind = seg[v, u]
         return m.geom(int(gid)).name if gid >= 0 and kind == int(mujoco.mjtObj.mjOBJ_GEOM) else ""
 
