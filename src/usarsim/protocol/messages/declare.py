@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -90,7 +91,7 @@ RANGES3 = Kind("%s", vec3d, _values, empty="")  # a depth picture's ranges, in m
 
 def _ints(r: _Reader, seg: Segment, wire: str) -> tuple[int, ...]:
     values = r.vector(wire, seg.value, None)
-    if not all(v == int(v) for v in values):
+    if not all(math.isfinite(v) and v == int(v) for v in values):
         raise r.error(wire, seg.value, "whole numbers such as 320,240")
     return tuple(int(v) for v in values)
 
