@@ -15,6 +15,8 @@ from usarsim.bench.serving import ServedApp, logging_quiet
 ROUNDS = 5  # the camera bench alternates this many served and bare runs and takes the medians
 
 BEYOND_COLOUR = ("depth", "thermal", "label")  # the pictures beyond colour (usarsim.sim.pictures)
+# Robots in view: what robots' looks (tracks, hubs, pieces) cost a picture of a row of them
+LINEUP = ("P2AT", "Kenaf", "Talon", "Kurt3D", "TeleMax", "P3AT")
 
 
 class _ServedCamera:
@@ -165,11 +167,60 @@ def run_camera_bench(args) -> int:
                 f"plain colours served {row['served_plain_fps']:.1f} frames/s, textures cost "
                 f"{row['textures_cost_percent']:.1f} %; the same camera's depth, thermal and label pictures served "
                 f"{row['served_depth_fps']:.1f}, {row['served_thermal_fps']:.1f} and {row['served_label_fps']:.1f} "
-                "frames/s"
+                f"frames/s; {len(LINEUP)} robots in view {row['robots_look_fps']:.1f} frames/s with their looks, "
+                f"{row['robots_plain_fps']:.1f} as solid pieces only (looks cost {row['look_cost_percent']:.1f} %)"
             )
     if args.json:
         print(json.dumps(results))
     return 0
+
+
+def look_cost(w: int, h: int, frames: int) -> dict:
+    """Render plus JPEG frames a second of a picture of LINEUP's robots in a row, filling it,
+    drawn with their looks and as their solid pieces only (alternately, ROUNDS times; medians),
+    the way the image server draws (no shadows)."""
+    from usarsim.config.catalog import robot_files
+    from usarsim.config.robot import load_robot
+    from usarsim.server.image import encode_picture
+    from usarsim.sim.gallery import robots_scene
+    from usarsim.sim.render import SEEN, camera_renderer
+
+    files = robot_files()
+    robots = [load_robot(files[name]) for name in LINEUP]
+    per_round = max(5, frames // ROUNDS)
+    views = []
+    for look in (True, False):
+        m, d, middle = robots_scene(robots, look=look)
+        cam = mujoco_camera(middle, distance=4.0)
+        views.append((camera_renderer(m, w, h, shadows=False), d, cam))
+    runs: list[list[float]] = [[], []]
+    try:
+        for _ in range(ROUNDS):
+            for k, (r, d, cam) in enumerate(views):
+                t = time.perf_counter()
+                for _ in range(per_round):
+                    r.update_scene(d, cam, SEEN)
+                    encode_picture(r.render(), 3)
+                runs[k].append(per_round / (time.perf_counter() - t))
+    finally:
+        for r, _, _ in views:
+            r.close()
+    dressed, plain = statistics.median(runs[0]), statistics.median(runs[1])
+    return {
+        "robots_look_fps": round(dressed, 2),
+        "robots_plain_fps": round(plain, 2),
+        "look_cost_percent": round(100.0 * (1.0 - dressed / plain), 1),
+    }
+
+
+def mujoco_camera(lookat, distance: float):
+    """A free camera ``distance`` from ``lookat``, ahead of the row and a little above."""
+    import mujoco
+
+    cam = mujoco.MjvCamera()
+    cam.lookat[:] = lookat
+    cam.distance, cam.azimuth, cam.elevation = distance, 180.0, -15.0
+    return cam
 
 
 def camera_result(world, size: tuple[int, int], frames: int) -> dict:
@@ -211,6 +262,7 @@ def camera_result(world, size: tuple[int, int], frames: int) -> dict:
         "served_plain_fps": round(plain_fps, 2),
         "textures_cost_percent": round(cost, 1),
         **{f"served_{k}_fps": round(statistics.median(kind_runs[k]), 2) for k in BEYOND_COLOUR},
+        **look_cost(w, h, frames),
         "frames": frames,
         "world": world.name,
         "cpu_count": os.cpu_count(),

@@ -134,11 +134,51 @@ def cmd_robots(args) -> int:
     from usarsim.config.catalog import robot_files
     from usarsim.config.robot import load_robot
 
-    for path in robot_files().values():
+    files = robot_files([args.robot_dir] if getattr(args, "robot_dir", None) else [])
+    if getattr(args, "picture", None):
+        return _robot_picture(args, files)
+    for path in files.values():
         r = load_robot(path)
         kit = ", ".join(sorted({i.item_type for i in r.items}))
         drive = r.drive if r.steering_type in ("", "None") else f"{r.drive} ({r.steering_type})"
         print(f"{r.class_name:<11} {drive:<27} {r.description}\n{'':<11} {'':<27} kit: {kit}")
+    return 0
+
+
+# The tiles of ``usarsim robots --picture``: each robot's portrait with its name below
+TILE_W, TILE_H, LABEL_H, COLUMNS = 320, 240, 22, 4
+
+
+def _robot_picture(args, files) -> int:
+    """Draw the robot classes (``--robot``, or all of ``files``) in a grid of portraits."""
+    import numpy as np
+    from PIL import Image, ImageDraw
+
+    from usarsim.config.robot import load_robot
+    from usarsim.errors import ConfigError
+    from usarsim.sim.gallery import robot_portrait
+
+    names = args.robot or list(files)
+    unknown = [n for n in names if n not in files]
+    if unknown:
+        print(f"usarsim: error: unknown robot class {unknown[0]!r} (usarsim robots lists them)", file=sys.stderr)
+        return 1
+    columns = min(COLUMNS, len(names))
+    rows = -(-len(names) // columns)
+    sheet = Image.new("RGB", (columns * TILE_W, rows * (TILE_H + LABEL_H)), (255, 255, 255))
+    draw = ImageDraw.Draw(sheet)
+    for k, name in enumerate(names):
+        try:
+            robot = load_robot(files[name])
+        except ConfigError as exc:
+            print(f"usarsim: error: {exc}", file=sys.stderr)
+            return 1
+        x, y = (k % columns) * TILE_W, (k // columns) * (TILE_H + LABEL_H)
+        sheet.paste(Image.fromarray(np.asarray(robot_portrait(robot, TILE_W, TILE_H))), (x, y))
+        draw.text((x + 8, y + TILE_H + 5), robot.class_name, fill=(20, 20, 20))
+        print(f"drew {robot.class_name}", file=sys.stderr)
+    sheet.save(args.picture)
+    print(f"wrote {args.picture}: {len(names)} robot(s), {sheet.width}x{sheet.height}")
     return 0
 
 

@@ -45,7 +45,25 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     w = sub.add_parser("worlds", help="list the worlds that come with usarsim")
-    r = sub.add_parser("robots", help="list the robot classes that come with usarsim")
+    r = sub.add_parser(
+        "robots",
+        help="list the robot classes that come with usarsim (or draw them: --picture)",
+        description="List the robot classes that come with usarsim, their drives and sensor kits; "
+        "with --picture, draw each one as cameras see it (its body, tracks or wheels, arms and "
+        "sensors' housings in its colours) in one PNG.",
+    )
+    r.add_argument(
+        "--picture",
+        metavar="PNG",
+        help="write a picture of the robots, one tile each with its name, to this PNG file",
+    )
+    r.add_argument(
+        "--robot",
+        action="append",
+        metavar="CLASS",
+        help="with --picture: draw this class only (repeat for several; default: every shipped class)",
+    )
+    r.add_argument("--robot-dir", metavar="DIR", help="also take robot files from this folder (one file per class)")
 
     b = sub.add_parser(
         "bench",
@@ -63,7 +81,9 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="measure the image server instead: frames per second a client gets of a P2AT's camera, "
         "beside bare MuJoCo rendering plus JPEG encoding of the same view, and their ratio; and "
-        "what textures cost: the same camera served from the world in plain colours",
+        "what textures cost: the same camera served from the world in plain colours; the same "
+        "camera's depth, thermal and label pictures; and what robots' looks cost: a row of six "
+        "robots in view drawn with their looks and as their solid pieces only",
     )
     b.add_argument(
         "--sizes",

@@ -22,10 +22,12 @@ from usarsim.config.robot_parts import SHAPES as SHAPES
 from usarsim.config.robot_parts import STEER_GROUPS as STEER_GROUPS
 from usarsim.config.robot_parts import ChassisBox as ChassisBox
 from usarsim.config.robot_parts import Link as Link
+from usarsim.config.robot_parts import Look as Look
+from usarsim.config.robot_parts import LookPiece as LookPiece
 from usarsim.config.robot_parts import MountedItem as MountedItem
 from usarsim.config.robot_parts import Shape as Shape
 from usarsim.config.robot_parts import Wheel as Wheel
-from usarsim.config.robot_parts import read_items, read_links, read_shape, read_wheels
+from usarsim.config.robot_parts import read_items, read_links, read_look, read_shape, read_wheels
 from usarsim.errors import ConfigError
 
 Vec3 = tuple[float, float, float]
@@ -99,6 +101,7 @@ class RobotConfig:
     # the body's colour (red, green, blue from 0 to 1) in camera pictures only: the Pioneers'
     # red aluminium by default
     color: tuple[float, float, float] = (0.75, 0.10, 0.10)
+    look: Look = Look()  # what cameras see beyond the solid pieces (tracks, hubs, bumpers)
 
     @property
     def wheel_torque_limit_nm(self) -> float:
@@ -252,6 +255,7 @@ def _robot(data: dict, path: str) -> RobotConfig:
         packages.append(MissionPackage(name=pname, links=tuple(str(x) for x in plinks)))
 
     items = read_items(top, [*wnames, *lnames])
+    look = read_look(top, ["chassis", *lnames], cast(Vec3, tuple(float(c) for c in color)))
     # a section (a mapping) no key above took belongs to the drive (its model checks it);
     # anything else unread is a mistake
     drive_sections = {str(k): v for k, v in top.data.items() if isinstance(v, dict) and not top.has_read(str(k))}
@@ -297,6 +301,7 @@ def _robot(data: dict, path: str) -> RobotConfig:
         status_joints=status_joints,
         drive_sections=drive_sections,
         color=cast(Vec3, tuple(float(c) for c in color)),  # read as 3 numbers
+        look=look,
     )
 
 

@@ -1,6 +1,8 @@
 """The parts a robot file builds a robot from, with the readers of their sections: solid
 pieces (the ``chassis`` boxes and the ``shapes`` of links), ``wheels``, ``links`` (articulated
-parts on revolute or prismatic joints) and the sensors and effecters of ``sensors``.
+parts on revolute or prismatic joints), the sensors and effecters of ``sensors``, and the
+``look``: what cameras see of the robot beyond its solid pieces (tracks, tyres and hubs,
+bumpers, decks, masts, in the real robot's colours; no mass, no contacts).
 
 Coordinates are in the robot's USARSim frame (X forward, Y right, Z down) relative to the
 chassis origin; metres, radians, kilograms.
@@ -111,13 +113,14 @@ def _vec3_or_none(v: tuple[float, ...] | None) -> Vec3 | None:
     return None if v is None else _vec3(v)
 
 
-def read_shape(s: Section) -> ChassisBox:
+def read_shape(s: Section, *, solid: bool = True) -> ChassisBox:
     """One solid piece: ``{shape: box, center, size, mass_kg}``, ``{shape: sphere, center,
-    radius, mass_kg}``, ``{shape: cylinder|capsule, center, radius, length, rotation, mass_kg}``."""
+    radius, mass_kg}``, ``{shape: cylinder|capsule, center, radius, length, rotation, mass_kg}``
+    (``solid`` False: a piece of the look, without ``mass_kg``)."""
     d = FieldDefaults(ChassisBox)
     shape = s.str("shape", d.shape, choices=SHAPES)
     center = _vec3(s.vec("center", 3, d.center))
-    mass = s.float("mass_kg", min=0.001)
+    mass = s.float("mass_kg", min=0.001) if solid else 0.0
     rotation = _vec3(s.vec("rotation", 3, d.rotation))
     friction = s.float("friction", d.friction, min=0.0, max=10.0)
     if shape == "box":
@@ -137,6 +140,72 @@ def read_shape(s: Section) -> ChassisBox:
         rotation=rotation,
         friction=friction,
     )
+
+
+# The look's default colours: rubber tyres and tracks nearly black, hubs and rims grey
+# aluminium (estimates from photographs of the robots; colours in pictures only).
+RUBBER = (0.10, 0.10, 0.10)
+ALUMINIUM = (0.62, 0.62, 0.64)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LookPiece:
+    """A piece of a robot's look: a shape (as a solid piece, without mass) on the chassis or a
+    link, in a colour."""
+
+    body: str = "chassis"  # or a link name: the piece moves with it
+    shape: ChassisBox
+    color: Vec3
+
+
+@dataclass(frozen=True, kw_only=True)
+class Look:
+    """What cameras see of a robot beyond its solid pieces.  ``tracks``: a belt is drawn round
+    the wheels of each side of the chassis and of each link (a flipper's), in ``track_color``;
+    otherwise each wheel shows a tyre (``tyre_color``) and, with ``hub_color``, a hub on its
+    outer face ``hub_ratio`` of its radius across, with a spoke that shows it turning."""
+
+    tracks: bool = False
+    track_color: Vec3 = RUBBER
+    tyre_color: Vec3 = RUBBER
+    hub_color: Vec3 | None = ALUMINIUM
+    hub_ratio: float = 0.6
+    pieces: tuple[LookPiece, ...] = ()
+
+
+def _colour(s: Section, name: str, default: Any) -> Any:
+    v = s.vec(name, 3, default)
+    if v is not None and not all(0.0 <= c <= 1.0 for c in v):
+        raise s.error(name, f"a colour is red, green, blue from 0 to 1, got {list(v)}")
+    return _vec3_or_none(v)
+
+
+def read_look(top: Section, bodies: list[str], body_color: Vec3) -> Look:
+    """The ``look`` section: ``{tracks, track_color, tyre_color, hub_color (or null),
+    hub_ratio, pieces: [{body, shape, center, size | radius, length, rotation, color}]}``; a
+    piece's colour is the robot's ``color`` unless it gives its own."""
+    d = FieldDefaults(Look)
+    if not top.has("look"):
+        return Look()
+    s = top.section("look")
+    hub = s.raw("hub_color", d.hub_color)
+    look = Look(
+        tracks=s.bool("tracks", d.tracks),
+        track_color=_colour(s, "track_color", d.track_color),
+        tyre_color=_colour(s, "tyre_color", d.tyre_color),
+        hub_color=None if hub is None else _colour(s, "hub_color", d.hub_color),
+        hub_ratio=s.float("hub_ratio", d.hub_ratio, min=0.05, max=1.0),
+        pieces=tuple(_read_look_piece(p, bodies, body_color) for p in s.entries("pieces")),
+    )
+    s.finish()
+    return look
+
+
+def _read_look_piece(s: Section, bodies: list[str], body_color: Vec3) -> LookPiece:
+    body = s.str("body", "chassis")
+    if body not in bodies:
+        raise s.error("body", f"unknown body '{body}'{did_you_mean(body, bodies)}")
+    return LookPiece(body=body, shape=read_shape(s, solid=False), color=_colour(s, "color", body_color))
 
 
 def read_wheels(top: Section) -> list[Wheel]:

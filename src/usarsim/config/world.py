@@ -337,3 +337,19 @@ def _describe_object(obj: StaticObject) -> str:
     if obj.part_of:
         return f"ramp '{obj.part_of}'"
     return f"{obj.shape} '{obj.name}'" + (" (movable)" if obj.mass_kg > 0 else "")
+
+
+def bare_world(
+    name: str, size_m: float = 10.0, rgba: tuple[float, float, float, float] = (0.7, 0.7, 0.7, 1.0)
+) -> WorldConfig:
+    """A world of a floor alone, ``size_m`` square and coloured ``rgba`` (robots checked or
+    drawn on their own)."""
+    return WorldConfig(
+        name=name,
+        description="",
+        path="",
+        floor=Floor(center=(0, 0), size=(size_m, size_m)),
+        materials={"floor": Material(name="floor", rgba=rgba)},
+        objects=(),
+        start_poses=(),
+    )

@@ -14,7 +14,6 @@ import numpy as np
 from usarsim.config.robot import MountedItem, RobotConfig
 from usarsim.sim import frames
 from usarsim.sim.constants import (
-    GROUP_LOOK,
     GROUP_ROBOT,
     GROUP_WHEEL,
     ROLL_FRICTION,
@@ -27,6 +26,7 @@ from usarsim.sim.constants import (
     WHEEL_CONTYPE,
 )
 from usarsim.sim.plugins import PluginSet, builtin_plugins
+from usarsim.sim.robotlook import add_look, cameras_only_geom, set_shape, wheel_rgba
 
 if TYPE_CHECKING:
     from usarsim.robots.base import DriveModel
@@ -118,6 +118,7 @@ def add_robot(
     for w in robot.wheels:
         if w.parent != "chassis":
             _add_wheel(spec, bodies[w.parent], w, robot, prefix, treads)
+    add_look(spec, bodies, robot, prefix)
     # a robot's parts do not collide with each other (MuJoCo filters parent and child only)
     # parent -> child pairs are filtered by MuJoCo already; every other pair of the robot's
     # jointed bodies (chassis, links, wheels on links) is excluded
@@ -188,8 +189,7 @@ def add_housing(
     contacts, and range sensors' rays and the victim sensor pass through it."""
     parent = mount_body(spec, chassis, item, prefix)
     rot = frames.usar_euler_to_mj_mat(item.orientation)
-    g = parent.add_geom()
-    g.name = f"{prefix}/housing/{item.name}"
+    g = cameras_only_geom(parent, f"{prefix}/housing/{item.name}", rgb)
     g.pos = (frames.to_mj_vec(item.location) + rot @ frames.to_mj_vec(offset)).tolist()
     if box is not None:
         g.type = mujoco.mjtGeom.mjGEOM_BOX
@@ -200,11 +200,6 @@ def add_housing(
         g.size = [disc[0], disc[1] / 2.0, 0.0]
         along_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
         g.quat = frames.mat_to_quat(rot @ along_x).tolist()
-    g.rgba = [*rgb, 1.0]
-    g.group = GROUP_LOOK
-    g.contype = g.conaffinity = 0
-    g.mass = 0.0
-    g.density = 0.0
 
 
 def add_camera(spec: mujoco.MjSpec, chassis: mujoco.MjsBody, item: MountedItem, prefix: str) -> None:
@@ -323,7 +318,7 @@ def _add_wheel(spec, parent, w, robot, prefix: str, treads=None) -> None:
     g.quat = axle_quat
     g.mass = w.mass_kg
     g.friction = [robot.wheel_friction, SPIN_FRICTION, ROLL_FRICTION]
-    g.rgba = [0.1, 0.1, 0.1, 1.0]
+    g.rgba = wheel_rgba(robot)
     g.group = GROUP_WHEEL
     g.contype, g.conaffinity = WHEEL_CONTYPE, WHEEL_CONAFFINITY
     if treads is not None:
@@ -376,20 +371,7 @@ def _add_tread(spec, wheel_body, w, robot, prefix: str, treads) -> None:
 def _add_piece(body, name: str, piece, robot) -> mujoco.MjsGeom:
     g = body.add_geom()
     g.name = name
-    g.pos = frames.to_mj_vec(piece.center).tolist()
-    if piece.shape == "box":
-        g.type = mujoco.mjtGeom.mjGEOM_BOX
-        g.size = [piece.size[0] / 2.0, piece.size[1] / 2.0, piece.size[2] / 2.0]
-    elif piece.shape == "sphere":
-        g.type = mujoco.mjtGeom.mjGEOM_SPHERE
-        g.size = [piece.radius_m, 0.0, 0.0]
-    elif piece.shape == "cylinder":
-        g.type = mujoco.mjtGeom.mjGEOM_CYLINDER
-        g.size = [piece.radius_m, piece.length_m / 2.0, 0.0]
-    else:
-        g.type = mujoco.mjtGeom.mjGEOM_CAPSULE
-        g.size = [piece.radius_m, piece.length_m / 2.0, 0.0]
-    g.quat = frames.usar_euler_to_mj_quat(piece.rotation).tolist()
+    set_shape(g, piece)
     g.mass = piece.mass_kg
     if piece.friction is not None:
         # its own friction wins over the surface's (MuJoCo otherwise takes the larger one):
@@ -429,20 +411,11 @@ def robot_model_summary(robot: RobotConfig, plugins: PluginSet | None = None) ->
     """Compile a robot alone on a plane: checks that its drive model has what it needs and that
     MuJoCo accepts it (``plugins``: the drives and items to build it from; the built-in ones
     by default)."""
-    from usarsim.config.world import Floor, Material, WorldConfig
+    from usarsim.config.world import bare_world
     from usarsim.sim.builder import world_spec
 
     plugins = plugins or builtin_plugins()
-
-    world = WorldConfig(
-        name="check",
-        description="",
-        path="",
-        floor=Floor(center=(0, 0), size=(10, 10)),
-        materials={"floor": Material(name="floor")},
-        objects=(),
-        start_poses=(),
-    )
+    world = bare_world("check")
     spec = world_spec(world)
     items = [plugins.make_item(item, robot, 0, "check") for item in robot.items]
     add_robot(spec, robot, "r", (0.0, 0.0, -1.0), (0.0, 0.0, 0.0), plugins.make_drive(robot), items)

@@ -11,6 +11,7 @@ import numpy as np
 from usarsim.sim import frames
 from usarsim.sim.constants import GROUP_STATIC, SOLID_CONAFFINITY, SOLID_CONTYPE
 from usarsim.sim.faces import FACE_SIZE_M, face_picture
+from usarsim.sim.robotlook import cameras_only_geom
 
 # A victim's body, lying on its back along its own +X axis (head forward), in its own
 # USARSim frame (X forward, Y right, Z down) with the origin at the pelvis centre.
@@ -120,16 +121,10 @@ def part_colour(part: str, colours: dict) -> list[float]:
 
 
 def _look(body, name: str, kind, pos, size, rgb) -> mujoco.MjsGeom:
-    g = body.add_geom()
-    g.name = name
+    g = cameras_only_geom(body, name, rgb)
     g.type = kind
     g.pos = frames.to_mj_vec(pos).tolist()
     g.size = list(size)
-    g.rgba = [*rgb, 1.0]
-    g.group = LOOK_GROUP
-    g.contype = g.conaffinity = 0
-    g.mass = 0.0
-    g.density = 0.0
     return g
 
 
