@@ -230,7 +230,13 @@ class FakeFacade:
         raise NotImplementedError("the fake facade renders no pictures")
 
     # the radio -------------------------------------------------------------------------------
-    def open_radio(self, model: Any, on_change: Callable[[float, list[tuple[Any, bool]]], None]) -> None:
+    def open_radio(
+        self,
+        model: Any,
+        on_change: Callable[[float, list[tuple[Any, bool]]], None],
+        channel: Any = None,
+        on_deliver: Any = None,
+    ) -> None:
         self.calls.append(("open_radio", (model,)))
 
     def radio_watch(self, pairs: frozenset[Any]) -> None:
@@ -241,6 +247,13 @@ class FakeFacade:
 
     def radio_link(self, a: str, b: str) -> Future[Any]:
         return self._answer(None)
+
+    def radio_send(self, src: str, dst: str, payload: bytes, token: object = None) -> Future[Any]:
+        self.calls.append(("radio_send", (src, dst, payload)))
+        return self._answer(None)
+
+    def radio_counts(self) -> Future[dict[Any, Any]]:
+        return self._answer({})
 
     def robot_positions(self) -> Future[list[Any]]:
         return self._answer([(s.name, s.location, False) for s in self.spawned.values()])

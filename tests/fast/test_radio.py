@@ -11,7 +11,8 @@ from usarsim.config.world import WirelessConfig
 from usarsim.config.world_file import load_world
 from usarsim.errors import ConfigError
 from usarsim.protocol.wireless import SendParser
-from usarsim.sim.radio import PRESETS, RadioModel, load_wireless_file, pair_key, resolve_model, waf_signal_dbm
+from usarsim.sim.radio import PRESETS, RadioModel, pair_key, resolve_model, waf_signal_dbm
+from usarsim.sim.wireless_file import load_wireless_file
 
 MANUAL = dict(pd0_dbm=-49.67, d0_m=2.0, path_loss_exponent=1.09, wall_db=6.625, max_walls=5)
 

@@ -85,7 +85,8 @@ def cmd_serve(args) -> int:
     )
     wireless = wfile = None
     if not args.no_wireless:
-        from usarsim.sim.radio import load_wireless_file, resolve_model
+        from usarsim.sim.radio import resolve_model
+        from usarsim.sim.wireless_file import load_wireless_file
 
         try:
             wfile = load_wireless_file(args.wireless_config) if args.wireless_config else None

@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from usarsim.config.channel import ChannelConfig
 from usarsim.config.elements import Landmark
 from usarsim.config.solids import in_box, mesh_depth, to_local
 from usarsim.config.utm import UTM_FALSE_EASTING_M as UTM_FALSE_EASTING_M
@@ -256,6 +257,7 @@ class WirelessConfig:
     max_walls: int | None = None
     wall_db: float | None = None
     cache_distance_m: float | None = None
+    channel: ChannelConfig | None = None  # the channel beyond the path loss (usarsim.config.channel)
 
 
 @dataclass(frozen=True, kw_only=True)

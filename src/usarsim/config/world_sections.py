@@ -12,6 +12,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from usarsim.config.channel import read_channel
 from usarsim.config.reader import FieldDefaults, Section
 from usarsim.config.utm import UTM_LETTERS, UtmCoordinate, utm_band_limits_deg, utm_to_latlon
 from usarsim.config.world import (
@@ -79,7 +80,7 @@ def read_world(data: dict[Any, Any], path: str) -> WorldConfig:
     if ambient is not None and any(c < 0 or c > 1 for c in ambient):
         raise top.error("ambient_light", f"each colour component must be within [0, 1], got {list(ambient)}")
 
-    wireless = _wireless(top.section("wireless")) if top.has("wireless") else d.wireless
+    wireless = read_wireless(top.section("wireless")) if top.has("wireless") else d.wireless
 
     top.finish()
     return WorldConfig(
@@ -237,10 +238,11 @@ def _named_poses(top: Section, key: str, what: str) -> tuple[StartPose, ...]:
     return tuple(poses)
 
 
-def _wireless(s: Section) -> WirelessConfig:
+def read_wireless(s: Section) -> WirelessConfig:
     """The ``wireless`` section: ``model`` (a radio model's name: the built-in WIRELESS_MODELS or
     a plugin's, checked against the registry of usarsim.sim.radio when the server starts), the
-    ini keys of WIRELESS_KEYS and ``cache_distance_m``."""
+    ini keys of WIRELESS_KEYS, ``cache_distance_m`` and the ``channel``
+    (:func:`usarsim.config.channel.read_channel`)."""
     d = FieldDefaults(WirelessConfig)
     model = s.str("model", d.model)
     if model is not None and (not model.isidentifier() or model != model.lower()):
@@ -255,6 +257,7 @@ def _wireless(s: Section) -> WirelessConfig:
     if max_obs is None and s.data.get("eMaxObs", 0) is None:
         max_obs = -1  # eMaxObs: null, no cap
     cache = s.float("cache_distance_m", d.cache_distance_m, min=0.0)
+    channel = read_channel(s.section("channel")) if s.has("channel") else None
     cfg = WirelessConfig(
         model=model,
         pd0_dbm=s.float("ePdo", d.pd0_dbm, min=-300.0, max=100.0),
@@ -264,6 +267,7 @@ def _wireless(s: Section) -> WirelessConfig:
         max_walls=max_obs,
         wall_db=waf,
         cache_distance_m=cache,
+        channel=channel,
     )
     s.finish()
     return cfg

@@ -11,16 +11,19 @@ The servers import nothing else from the simulation layer but :mod:`usarsim.sim.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from usarsim.config.channel import ChannelConfig
 from usarsim.config.robot import MissionPackage, RobotConfig
 from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
 from usarsim.sim.api import Position, RobotEntry, settle
+from usarsim.sim.channel import Delivery, Drop, LinkCounts
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits, package_frames
 from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
@@ -293,14 +296,23 @@ class SimFacade:
         return RenderService(self.render_snapshot, max_fps=max_fps, shadows=self.sim.settings.shadows)
 
     # The radio (protocol.md 12) ----------------------------------------------------
-    def open_radio(self, model: RadioModel, on_change: Callable[[float, list[tuple[Pair, bool]]], None]) -> None:
+    def open_radio(
+        self,
+        model: RadioModel,
+        on_change: Callable[[float, list[tuple[Pair, bool]]], None],
+        channel: ChannelConfig | None = None,
+        on_deliver: Callable[[float, list[Delivery], list[Drop]], None] | None = None,
+    ) -> None:
         """Compute radio links with ``model`` after every advance of the clock (every STEP in
         lock-step, else at most every RADIO_INTERVAL_S); ``on_change(time, [(pair, holds)])``
-        is called on the simulation thread for the watched pairs whose state changed.  Call
-        before :meth:`start`."""
-        net = RadioNet(model)
+        is called on the simulation thread for the watched pairs whose state changed.  With a
+        ``channel`` that is not ideal, messages go through it (:meth:`radio_send`) and
+        ``on_deliver(time, deliveries, drops)`` is called on the simulation thread after each
+        advance with what arrived and what was lost.  Call before :meth:`start`."""
+        net = RadioNet(model, channel, seed=self.sim.seed)
         net.min_interval_s = 0.0 if self.lockstep else RADIO_INTERVAL_S
         net.on_change = on_change
+        net.on_deliver = on_deliver
         self._radio = net
         self.sim.on_advance(net.evaluate)
 
@@ -313,6 +325,23 @@ class SimFacade:
         one last reported is reported at once."""
         net = self._net()
         return self._ask(lambda sim: (sim.time, net.check(sim, a, b)))
+
+    def radio_send(self, src: str, dst: str, payload: bytes, token: object = None) -> Future[Drop | None]:
+        """Hand a message to the channel at the simulated instant it reaches the simulation
+        thread (a Drop at once when the sender's queue is full)."""
+        net = self._net()
+        return self._ask(lambda sim: net.send(sim, src, dst, payload, token))
+
+    def radio_counts(self) -> Future[dict[tuple[str, str], LinkCounts]]:
+        """What each link carried through the channel (sender, receiver): delivered, dropped by
+        cause, delays."""
+        net = self._net()
+        return self._ask(
+            lambda sim: {
+                k: dataclasses.replace(c, dropped=dict(c.dropped), dropped_bytes=dict(c.dropped_bytes))
+                for k, c in net.counts().items()
+            }
+        )
 
     def radio_link(self, a: str, b: str) -> Future[Link | None]:
         """The link between two robots now (None: either is not in the simulation)."""

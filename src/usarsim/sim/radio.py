@@ -29,19 +29,19 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+from usarsim.config.channel import ChannelConfig
 from usarsim.config.reader import did_you_mean
-from usarsim.config.world import WIRELESS_KEYS, WIRELESS_MODELS, WirelessConfig
+from usarsim.config.world import WIRELESS_MODELS, WirelessConfig
 from usarsim.errors import ConfigError
 from usarsim.registry import Registry
 from usarsim.sim import frames
+from usarsim.sim.channel import Channel, Delivery, Drop, LinkCounts, LinkView, Shadowing, check_channel
 
 if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
@@ -196,7 +196,7 @@ def resolve_model(*layers: WirelessConfig | None, model: str | None = None) -> R
         given = {
             f.name: getattr(ly, f.name)
             for f in dataclasses.fields(ly)
-            if f.name != "model" and getattr(ly, f.name) is not None
+            if f.name not in ("model", "channel") and getattr(ly, f.name) is not None
         }
         if "max_walls" in given and given["max_walls"] < 0:
             given["max_walls"] = None
@@ -204,90 +204,13 @@ def resolve_model(*layers: WirelessConfig | None, model: str | None = None) -> R
     return out
 
 
-# --------------------------------------------------------------------------- the ini file
-
-# Extensions of this project accepted beside the ComConnection keys of WIRELESS_KEYS.
-_INI_EXTRA = {"Model": "model", "CacheDistance": "cache_distance_m", "maxcachedist": "cache_distance_m"}
-_INI_SERVER = ("ListenPort", "iListenPort", "bDebug")
-_SECTION_RE = re.compile(r"\[([^\]]*)\]\Z")
-
-
-@dataclass(frozen=True)
-class WirelessFile:
-    """What a USARComServer.ini-style file sets: the radio model (its constants as a
-    :class:`WirelessConfig` layer), the ComServer's ``ListenPort``, the ComServerInterface's
-    ``iListenPort`` and whether any ``bDebug`` is on."""
-
-    radio: WirelessConfig
-    listen_port: int | None = None
-    interface_port: int | None = None
-    debug: bool = False
-
-
-def load_wireless_file(path: str | Path) -> WirelessFile:
-    """Read an ini-style file as USARSim's USARComServer.ini (manual 3.2.4.2): ``[Section]``
-    headers (any, or none), ``Key=Value`` lines, ``;`` and ``#`` comments; keys in any case.
-    Keys: ListenPort, bDebug, ePdo, eDo, eN, eCutoff, eMaxObs, eAttenFac, plus ``Model``
-    (waf, waf2009, distance, perfect), ``CacheDistance`` (alias ``maxcachedist``, metres)
-    and ``iListenPort`` (the ComServerInterface's port).  An unknown key, or a value that
-    is not a number where one is needed, is an error naming the file, the line and the key."""
-    path = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise ConfigError(f"cannot read the wireless configuration: {exc.strerror}", path=path) from None
-    known = {k.lower(): k for k in (*WIRELESS_KEYS, *_INI_EXTRA, *_INI_SERVER)}
-    values: dict[str, object] = {}
-    listen = interface = None
-    debug = False
-    for no, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line[0] in ";#" or _SECTION_RE.match(line):
-            continue
-        where = f"line {no}"
-        if "=" not in line:
-            raise ConfigError(f"expected 'Key=Value', got {line[:80]!r}", path=path, key=where)
-        key, _, value = (p.strip() for p in line.partition("="))
-        name = known.get(key.lower())
-        if name is None:
-            raise ConfigError(f"unknown key '{key}'{did_you_mean(key, known.values())}", path=path, key=where)
-        where = f"{where}: {name}"
-        if name == "Model":
-            if value.lower() not in RADIO_MODELS:
-                raise ConfigError(
-                    f"'{value}' is not a radio model{did_you_mean(value.lower(), model_names())}",
-                    path=path,
-                    key=where,
-                )
-            values["model"] = value.lower()
-        elif name == "bDebug":
-            if value.lower() not in ("true", "false", "1", "0"):
-                raise ConfigError(f"expected True or False, got {value!r}", path=path, key=where)
-            debug = debug or value.lower() in ("true", "1")
-        elif name in ("ListenPort", "iListenPort"):
-            if not value.isdigit() or not 0 <= int(value) <= 65535:
-                raise ConfigError(f"expected a port number 0..65535, got {value!r}", path=path, key=where)
-            if name == "ListenPort":
-                listen = int(value)
-            else:
-                interface = int(value)
-        else:
-            field = WIRELESS_KEYS.get(name) or _INI_EXTRA[name]
-            try:
-                number = float(value)
-            except ValueError:
-                number = math.nan
-            if field == "max_walls" and value.lower() in ("none", ""):
-                number = -1.0
-            if not math.isfinite(number):
-                raise ConfigError(f"expected a number, got {value!r}", path=path, key=where)
-            values[field] = int(number) if field == "max_walls" else number
-    layer = WirelessConfig(**values)  # type: ignore[arg-type]  # each value read for its field above
-    try:  # the constants' ranges, as RadioModel checks them
-        resolve_model(layer)
-    except (ValueError, ConfigError) as exc:
-        raise ConfigError(str(exc), path=path) from None
-    return WirelessFile(layer, listen, interface, debug)
+def resolve_channel(*layers: WirelessConfig | None) -> ChannelConfig:
+    """The channel beyond the path loss: that of the last layer giving one (the world's, then
+    the configuration file's), else the ideal channel (USARSim's)."""
+    chosen = next((ly.channel for ly in reversed(layers) if ly is not None and ly.channel is not None), None)
+    out = chosen if chosen is not None else ChannelConfig()
+    check_channel(out)
+    return out
 
 
 # --------------------------------------------------------------------------- links
@@ -324,10 +247,16 @@ class RadioNet:
     ``min_interval_s`` spaces the evaluations out (0 in lock-step: every STEP).
     """
 
-    def __init__(self, model: RadioModel):
+    def __init__(self, model: RadioModel, channel: ChannelConfig | None = None, seed: int = 0):
         self.model = model
+        cfg = channel if channel is not None else ChannelConfig()
+        self.shadowing = Shadowing(cfg, cfg.seed if cfg.seed is not None else seed)
+        # the messages under way (None: the ideal channel, servers relay at once)
+        self.channel: Channel | None = None if cfg.ideal else Channel(cfg, seed)
         self.watched: frozenset[Pair] = frozenset()
         self.on_change: Callable[[float, list[tuple[Pair, bool]]], None] | None = None
+        # what arrived and what was dropped, after each advance: on_deliver(time, deliveries, drops)
+        self.on_deliver: Callable[[float, list[Delivery], list[Drop]], None] | None = None
         self.min_interval_s = 0.0
         self._reported: dict[Pair, bool] = {}
         self._walls: dict[Pair, tuple[Point, Point, int]] = {}
@@ -384,8 +313,12 @@ class RadioNet:
 
     def _signal(self, sim: Simulation, pair: Pair, pa: Point, pb: Point) -> tuple[float, int]:
         m = self.model
-        walls = self._cached_walls(sim, pair, pa, pb) if m.counts_walls else 0
-        return m.signal_dbm(math.dist(pa, pb), walls), walls
+        shadow = self.shadowing
+        walls = self._cached_walls(sim, pair, pa, pb) if m.counts_walls or shadow.cfg.shadowing_wall_db else 0
+        s = m.signal_dbm(math.dist(pa, pb), walls)
+        if shadow.active:
+            s += shadow.offset_db(pair, pa, pb, walls)
+        return s, walls
 
     def link(self, sim: Simulation, a: str, b: str, antennas: dict[str, Point] | None = None) -> Link | None:
         """The link between the robots named ``a`` and ``b`` now; None when either is not
@@ -411,9 +344,42 @@ class RadioNet:
                 self.on_change(sim.time, [(pair, up)])
         return ln
 
+    # messages ---------------------------------------------------------------------------
+    def send(self, sim: Simulation, src: str, dst: str, payload: bytes, token: object = None) -> Drop | None:
+        """Hand a message from robot ``src`` to robot ``dst`` to the channel now; a Drop when
+        the sending radio's queue has no room for it, else None (what becomes of it is told to
+        ``on_deliver`` after the advance at which it arrives or is lost)."""
+        if self.channel is None:
+            raise RuntimeError("the ideal channel carries no messages: servers relay them at once")
+        return self.channel.submit(sim.time, src, dst, payload, token)
+
+    def counts(self) -> dict[tuple[str, str], LinkCounts]:
+        """What each link (sender, receiver) carried through the channel so far."""
+        return self.channel.counts() if self.channel is not None else {}
+
+    def _deliver(self, sim: Simulation) -> None:
+        ch = self.channel
+        if ch is None or not ch.pending:
+            return
+        antennas = self.antennas(sim)
+        cutoff, holds = self.model.cutoff_dbm, self.model.holds
+
+        def view(src: str, dst: str) -> LinkView | None:
+            pair = pair_key(src, dst)
+            pa, pb = antennas.get(pair[0]), antennas.get(pair[1])
+            if pa is None or pb is None:
+                return None
+            signal, _ = self._signal(sim, pair, pa, pb)
+            return LinkView(signal, cutoff, math.dist(pa, pb), holds(signal))
+
+        deliveries, drops = ch.due(sim.time, view)
+        if (deliveries or drops) and self.on_deliver is not None:
+            self.on_deliver(sim.time, deliveries, drops)
+
     def evaluate(self, sim: Simulation) -> None:
-        """Run after every advance of the clock (``Simulation.on_advance``): every watched pair's link,
-        changes reported."""
+        """Run after every advance of the clock (``Simulation.on_advance``): what the channel
+        delivers by now, then every watched pair's link, changes reported."""
+        self._deliver(sim)
         watched = self.watched
         if not watched and not self._reported:
             return

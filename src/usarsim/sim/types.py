@@ -7,15 +7,19 @@ rotation of a USARSim roll, pitch and yaw, for drawing the world).
 
 from __future__ import annotations
 
+from usarsim.sim.channel import Delivery, Drop, LinkCounts, describe_channel
 from usarsim.sim.frames import euler_to_mat
 from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers, VelocityLimits
-from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_model
+from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_channel, resolve_model
 from usarsim.sim.tiles import Tile, grid_tiles
 from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
 
 __all__ = [
+    "Delivery",
+    "Drop",
     "ItemDescription",
     "Link",
+    "LinkCounts",
     "LinkFrame",
     "ObjectFrame",
     "Output",
@@ -26,8 +30,10 @@ __all__ = [
     "Tile",
     "VelocityLimits",
     "WorldFrame",
+    "describe_channel",
     "euler_to_mat",
     "grid_tiles",
     "pair_key",
+    "resolve_channel",
     "resolve_model",
 ]

@@ -25,7 +25,7 @@ import logging
 from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT, SendParser
 from usarsim.server.listener import Service
 from usarsim.sim.api import Facade
-from usarsim.sim.types import resolve_model
+from usarsim.sim.types import describe_channel, resolve_channel, resolve_model
 
 from .comserver import MAX_LINKS, MAX_LISTENING, MAX_REGISTERED, ComServer
 from .interface import ComInterfaceServer
@@ -59,12 +59,15 @@ class WirelessServers:
 
     def __init__(self, facade: Facade, options: WirelessOptions, *, host: str = "127.0.0.1"):
         model = resolve_model(facade.world.wireless, options.config, model=options.model)
-        self.service = WirelessService(facade, model, debug=options.debug)
+        channel = resolve_channel(facade.world.wireless, options.config)
+        self.service = WirelessService(facade, model, channel=channel, debug=options.debug)
         limit = options.max_connections
         self.comserver = ComServer(self.service, host=host, port=options.wcs_port, max_connections=limit)
         self.wss = WssServer(self.service, host=host, port=options.wss_port, max_connections=limit)
         self.interface = ComInterfaceServer(self.service, host=host, port=options.interface_port, max_connections=limit)
         log.info("wireless: radio model %s", model.describe())
+        if not channel.ideal:
+            log.info("wireless: channel %s", describe_channel(channel))
 
     def servers(self) -> list[Service]:
         """The three listeners, as the server starts and names them."""

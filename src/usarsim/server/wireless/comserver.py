@@ -131,7 +131,19 @@ class WcsLink:
         return self.ends[1] if end is self.ends[0] else self.ends[0]
 
     def relay(self, src: _LinkEnd, payload: bytes) -> None:
-        if self.open and write_open(self.other(src).transport, payload):
+        """What ``src`` SENDs: to the other end at once on the ideal channel, else when the
+        channel delivers it (never, if it is lost on the way)."""
+        if not self.open:
+            return
+        dst = self.other(src)
+        svc = self.server.service
+        if svc.ideal:
+            self._arrived(dst, payload)
+        else:
+            svc.send(src.robot, dst.robot, payload, lambda data: self._arrived(dst, data))
+
+    def _arrived(self, dst: _LinkEnd, payload: bytes) -> None:
+        if self.open and write_open(dst.transport, payload):
             self.relayed += 1
 
     def close(self, why: str) -> None:

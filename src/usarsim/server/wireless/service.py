@@ -16,12 +16,14 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import itertools
 import logging
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
+from usarsim.config.channel import ChannelConfig
 from usarsim.config.world import WirelessConfig
 from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
@@ -29,7 +31,7 @@ from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener, call_on_loop
 from usarsim.sim.api import Facade
-from usarsim.sim.types import Link, Pair, RadioModel
+from usarsim.sim.types import Delivery, Drop, Link, LinkCounts, Pair, RadioModel
 
 T = TypeVar("T")
 
@@ -73,11 +75,21 @@ class WirelessService:
     simulation thread), the pairs the servers depend on, the latest state reported for
     each pair, and the servers that follow the changes (``subscribers``)."""
 
-    def __init__(self, facade: Facade, model: RadioModel, *, debug: bool = False):
+    def __init__(self, facade: Facade, model: RadioModel, *, channel: ChannelConfig | None = None, debug: bool = False):
         self.facade = facade
         self.model = model
         self.debug = debug
-        facade.open_radio(model, self._changes_threadsafe)  # before the simulation thread starts
+        self.channel = channel if channel is not None else ChannelConfig()
+        # the ideal channel (USARSim's): servers relay what robots send at once, while the link holds
+        self.ideal = self.channel.ideal
+        facade.open_radio(  # before the simulation thread starts
+            model,
+            self._changes_threadsafe,
+            channel=self.channel,
+            on_deliver=None if self.ideal else self._deliveries_threadsafe,
+        )
+        self._arrivals: dict[int, Callable[[bytes], None]] = {}  # a message under way -> what delivers it
+        self._tokens = itertools.count(1)
         self.loop: asyncio.AbstractEventLoop | None = None
         self.state: dict[Pair, tuple[float, bool]] = {}  # pair -> (simulated time, holds)
         self.subscribers: list[Callable[[Pair, bool, float], None]] = []
@@ -117,6 +129,47 @@ class WirelessService:
                     fn(pair, up, time)
                 except Exception:
                     log.exception("wireless: error while applying a link change")
+
+    # messages ---------------------------------------------------------------------------
+    def send(self, src: str, dst: str, payload: bytes, deliver: Callable[[bytes], None]) -> None:
+        """Carry ``payload`` from robot ``src`` to robot ``dst`` through the channel (not the
+        ideal one): ``deliver(payload)`` is called on the event loop when it arrives, never if
+        it is lost."""
+        token = next(self._tokens)
+        self._arrivals[token] = deliver
+        future = self.facade.radio_send(src, dst, payload, token)
+        future.add_done_callback(lambda f: self._refused_threadsafe(f, token))
+
+    def _refused_threadsafe(self, future: Future[Drop | None], token: int) -> None:
+        if future.cancelled() or future.exception() is not None or future.result() is not None:
+            call_on_loop(self.loop, self._forget, token, future)
+
+    def _forget(self, token: int, future: Future[Drop | None]) -> None:
+        self._arrivals.pop(token, None)
+        drop = None if future.cancelled() or future.exception() is not None else future.result()
+        if drop is not None:
+            self.event("message %s -> %s (%d bytes) dropped: %s", drop.src, drop.dst, drop.nbytes, drop.cause)
+
+    def _deliveries_threadsafe(self, time: float, deliveries: list[Delivery], drops: list[Drop]) -> None:
+        """The facade's ``on_deliver`` (simulation thread): handed to the event loop."""
+        call_on_loop(self.loop, self._arrive, time, deliveries, drops)
+
+    def _arrive(self, time: float, deliveries: list[Delivery], drops: list[Drop]) -> None:
+        for d in deliveries:
+            deliver = self._arrivals.pop(d.token, None)
+            if deliver is None:
+                continue
+            try:
+                deliver(d.payload)
+            except Exception:
+                log.exception("wireless: error while delivering a message")
+        for x in drops:
+            self._arrivals.pop(x.token, None)
+            self.event("message %s -> %s (%d bytes) dropped at t=%.3f: %s", x.src, x.dst, x.nbytes, x.at, x.cause)
+
+    async def counts(self) -> dict[tuple[str, str], LinkCounts]:
+        """What each link carried through the channel so far (sender, receiver)."""
+        return await self.ask(self.facade.radio_counts)
 
     def down_since(self, pair: Pair, time: float) -> bool:
         """Whether the pair was reported down at or after ``time``."""

@@ -1,0 +1,183 @@
+"""The radio channel over TCP (docs/wireless.md, "The channel"): a ComServer link between two
+ComStations in line of sight of each other, in a lock-step server whose world's ``wireless``
+section sets the channel.  The messages go through the robots' own sockets, as a controller's
+do, and what arrives is read after each STEP."""
+
+from __future__ import annotations
+
+import socket
+import struct
+
+import pytest
+from test_wireless import Wcs, listener, stations, wcs_open
+
+from helpers import ServerThread, wait_for
+
+WORLD = """\
+name: ChannelArena
+description: two ComStations 20 m apart in the open (tests only)
+floor: {{center: [0.0, 0.0], size: [60.0, 40.0]}}
+wireless:
+  channel: {channel}
+start_poses:
+  - {{name: S, location: [0.0, 5.0, -0.2], rotation: [0.0, 0.0, 0.0]}}
+"""
+
+
+def channel_server(tmp_path, channel: str, seed: int = 4) -> ServerThread:
+    from usarsim.config.world_file import load_world
+
+    p = tmp_path / "ChannelArena.yaml"
+    p.write_text(WORLD.format(channel=channel))
+    srv = ServerThread(load_world(p), seed=seed).start()
+    stations(srv, ["A0", "B0"])
+    return srv
+
+
+def open_link(srv: ServerThread, keep) -> tuple[socket.socket, socket.socket, object]:
+    """A ComServer link A0 -> B0: (A0's end, B0's end, the command connection)."""
+    w = Wcs(srv.app.wireless.comserver.port)
+    keep(w.sock)
+    for name in ("A0", "B0"):
+        assert w.ask(f"REGISTER {name} 127.0.0.1;") == "OK;"
+    la, lb = keep(listener(), listener())
+    reply, ends = wcs_open(w, "A0", la, "B0", lb)
+    assert reply == "OK;" and ends is not None
+    keep(*ends)
+    ends[1].setblocking(False)
+    return ends[0], ends[1], w
+
+
+def pending(srv: ServerThread) -> int:
+    return srv.on_sim(lambda sim: srv.app.facade.radio_net.channel.pending)
+
+
+def delivered_bytes(srv: ServerThread) -> int:
+    counts = srv.on_sim(lambda sim: srv.app.facade.radio_net.counts())
+    return sum(c.delivered_bytes for c in counts.values())
+
+
+def read_delivered(srv: ServerThread, sock: socket.socket, so_far: int) -> bytes:
+    """What the channel has delivered to ``sock`` beyond the ``so_far`` bytes read before (the
+    server writes it before its STEPPED; this waits for it to cross the loopback)."""
+    want = delivered_bytes(srv) - so_far
+    out = b""
+
+    def more() -> bool:
+        nonlocal out
+        try:
+            out += sock.recv(1 << 20)
+        except BlockingIOError:
+            pass
+        return len(out) >= want
+
+    wait_for(more, what=f"{want} delivered bytes to arrive")
+    return out
+
+
+def frames(payloads: list[bytes]) -> bytes:
+    return b"".join(b"SEND %d %s;" % (len(p), p) for p in payloads)
+
+
+@pytest.fixture
+def sockets():
+    made: list[socket.socket] = []
+
+    def keep(*socks):
+        made.extend(socks)
+        return socks
+
+    yield keep
+    for s in made:
+        s.close()
+
+
+def test_a_megabyte_over_a_link_capped_at_125_kb_s_takes_8_simulated_seconds(tmp_path, sockets):
+    srv = channel_server(tmp_path, "{link_bytes_per_s: 125000, queue_bytes: 2000000}")
+    try:
+        a, b, _w = open_link(srv, sockets)
+        a.sendall(frames([bytes([k % 251]) * 1000 for k in range(1000)]))  # 1,000,000 bytes
+        wait_for(lambda: pending(srv) == 1000, what="the ComServer to hand every message to the channel")
+        ctl = srv.connect()
+        got, done_at = b"", None
+        t0 = srv.on_sim(lambda sim: sim.time)
+        for _ in range(100):  # 10 simulated seconds in steps of 0.1 s
+            ctl.step(0.1)
+            got += read_delivered(srv, b, len(got))
+            if len(got) >= 1_000_000 and done_at is None:
+                done_at = srv.on_sim(lambda sim: sim.time) - t0
+        assert len(got) == 1_000_000
+        assert got == b"".join(bytes([k % 251]) * 1000 for k in range(1000))  # whole and in order
+        assert done_at == pytest.approx(8.0, rel=0.05)
+        counts = srv.on_sim(lambda sim: srv.app.facade.radio_net.counts())[("a0", "b0")]
+        assert counts.delivered == 1000 and counts.delivered_bytes == 1_000_000
+    finally:
+        srv.stop()
+
+
+def test_an_independent_loss_of_20_percent_drops_20_percent_of_10000_messages(tmp_path, sockets):
+    srv = channel_server(tmp_path, "{loss: {model: independent, rate: 0.2}}")
+    try:
+        a, b, _w = open_link(srv, sockets)
+        a.sendall(frames([struct.pack(">I", k) for k in range(10_000)]))
+        wait_for(lambda: pending(srv) == 10_000, what="the ComServer to hand every message to the channel")
+        srv.connect().step(0.1)
+        assert pending(srv) == 0  # every message settled
+        got = read_delivered(srv, b, 0)
+        arrived = [struct.unpack(">I", got[i : i + 4])[0] for i in range(0, len(got), 4)]
+        assert arrived == sorted(arrived)  # in the order sent
+        lost = 1.0 - len(arrived) / 10_000
+        assert abs(lost - 0.2) < 0.02, lost
+        counts = srv.on_sim(lambda sim: srv.app.facade.radio_net.counts())[("a0", "b0")]
+        assert counts.delivered == len(arrived) and counts.dropped["loss"] == 10_000 - len(arrived)
+    finally:
+        srv.stop()
+
+
+def handed(srv: ServerThread) -> int:
+    """Messages handed to the channel so far: under way, delivered or dropped."""
+
+    def count(sim) -> int:
+        net = srv.app.facade.radio_net
+        done = sum(c.delivered + sum(c.dropped.values()) for c in net.counts().values())
+        return done + net.channel.pending
+
+    return srv.on_sim(count)
+
+
+def run_bursty(tmp_path, sockets, seed: int) -> list[tuple[int, list[int]]]:
+    """(STEP number, messages that arrived by it) over 3 s of 0.05 s STEPs, with 20 messages
+    of 100 bytes sent before each STEP, on a bursty, faded, jittery, capped channel."""
+    srv = channel_server(
+        tmp_path,
+        "{loss: {model: gilbert_elliott, p_good_bad: 0.1, p_bad_good: 0.3}, fading: rayleigh, "
+        "link_bytes_per_s: 20000, latency_s: 0.02, jitter_s: 0.03}",
+        seed=seed,
+    )
+    try:
+        a, b, _w = open_link(srv, sockets)
+        ctl = srv.connect()
+        out, buf, total, sent = [], b"", 0, 0
+        for step in range(60):
+            a.sendall(frames([struct.pack(">I", sent + k) * 25 for k in range(20)]))
+            sent += 20
+            wait_for(lambda: handed(srv) == sent, what="the messages to reach the channel")  # noqa: B023
+            ctl.step(0.05)
+            new = read_delivered(srv, b, total)
+            total += len(new)
+            buf += new
+            whole = len(buf) // 100 * 100
+            out.append((step, [struct.unpack(">I", buf[i : i + 4])[0] for i in range(0, whole, 100)]))
+            buf = buf[whole:]
+        return out
+    finally:
+        srv.stop()
+
+
+def test_two_lockstep_runs_with_the_same_seed_deliver_the_same_messages_at_the_same_times(tmp_path, sockets):
+    first = run_bursty(tmp_path, sockets, seed=8)
+    second = run_bursty(tmp_path, sockets, seed=8)
+    assert first == second
+    delivered = [m for _, ms in first for m in ms]
+    assert 300 < len(delivered) < 1150  # some lost, most through
+    assert run_bursty(tmp_path, sockets, seed=9) != first
