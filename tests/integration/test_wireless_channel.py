@@ -52,15 +52,16 @@ def pending(srv: ServerThread) -> int:
     return srv.on_sim(lambda sim: srv.app.facade.radio_net.channel.pending)
 
 
-def delivered_bytes(srv: ServerThread) -> int:
+def delivered_bytes(srv: ServerThread, link: tuple[str, str] | None = None) -> int:
+    """Bytes the channel delivered so far: on ``link`` (sender, receiver), or on every link."""
     counts = srv.on_sim(lambda sim: srv.app.facade.radio_net.counts())
-    return sum(c.delivered_bytes for c in counts.values())
+    return sum(c.delivered_bytes for k, c in counts.items() if link is None or k == link)
 
 
-def read_delivered(srv: ServerThread, sock: socket.socket, so_far: int) -> bytes:
-    """What the channel has delivered to ``sock`` beyond the ``so_far`` bytes read before (the
-    server writes it before its STEPPED; this waits for it to cross the loopback)."""
-    want = delivered_bytes(srv) - so_far
+def read_delivered(srv: ServerThread, sock: socket.socket, so_far: int, link: tuple[str, str] | None = None) -> bytes:
+    """What the channel has delivered to ``sock`` (on ``link``) beyond the ``so_far`` bytes read
+    before (the server writes it before its STEPPED; this waits for it to cross the loopback)."""
+    want = delivered_bytes(srv, link) - so_far
     out = b""
 
     def more() -> bool:
@@ -181,3 +182,50 @@ def test_two_lockstep_runs_with_the_same_seed_deliver_the_same_messages_at_the_s
     delivered = [m for _, ms in first for m in ms]
     assert 300 < len(delivered) < 1150  # some lost, most through
     assert run_bursty(tmp_path, sockets, seed=9) != first
+
+
+def test_a_wss_relay_carries_its_bytes_through_the_capped_channel_both_ways(tmp_path, sockets):
+    from test_wireless import wss_dns
+
+    from helpers import DEFAULT_TIMEOUT
+
+    srv = channel_server(tmp_path, "{link_bytes_per_s: 50000, queue_bytes: 1000000}")
+    try:
+        la, lb = sockets(listener(), listener())
+        ca, cb, relay = wss_dns(srv, "A0", "B0", la, lb)
+        a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
+        b, _ = lb.accept()
+        sockets(a, b, ca.sock, cb.sock)
+        up, down = bytes(range(256)) * 400, bytes(range(255, -1, -1)) * 200  # 100 kB and 50 kB
+        a.sendall(up)
+        b.sendall(down)
+        wait_for(lambda: handed_bytes(srv) == len(up) + len(down), what="the relay to hand both ways to the channel")
+        for s in (a, b):
+            s.setblocking(False)
+        ctl = srv.connect()
+        got_a = got_b = b""
+        times = {}
+        for step in range(1, 41):  # 4 simulated seconds
+            ctl.step(0.1)
+            got_b += read_delivered(srv, b, len(got_b), ("a0", "b0"))
+            got_a += read_delivered(srv, a, len(got_a), ("b0", "a0"))
+            for key, got, want in (("up", got_b, up), ("down", got_a, down)):
+                if len(got) == len(want) and key not in times:
+                    times[key] = step * 0.1
+        assert got_b == up and got_a == down  # whole and in order, both ways
+        # each robot's radio sends at 50 kB/s: 100 kB take 2 s, 50 kB 1 s
+        assert times["up"] == pytest.approx(2.0, abs=0.11) and times["down"] == pytest.approx(1.0, abs=0.11)
+    finally:
+        srv.stop()
+
+
+def handed_bytes(srv: ServerThread) -> int:
+    """Bytes handed to the channel so far: under way or delivered (nothing is dropped here)."""
+
+    def count(sim) -> int:
+        net = srv.app.facade.radio_net
+        ch = net.channel
+        under_way = sum(len(m.payload) for m in ch._sending) + sum(len(d.payload) for _, _, d in ch._arriving)
+        return under_way + sum(c.delivered_bytes for c in net.counts().values())
+
+    return srv.on_sim(count)

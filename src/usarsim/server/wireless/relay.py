@@ -28,8 +28,9 @@ class _PipeEnd(RelayEnd):
     """One socket of a :class:`Pipe`: what arrives is written to the other one, whose
     backpressure pauses this one's reading."""
 
-    def __init__(self, pipe: Pipe):
+    def __init__(self, pipe: Pipe, robot: str):
         self.pipe = pipe
+        self.robot = robot  # the robot on this socket's side
         self.peer: _PipeEnd | None = None
         self.transport: asyncio.Transport | None = None
 
@@ -38,8 +39,17 @@ class _PipeEnd(RelayEnd):
         transport.pause_reading()  # until both ends are connected (Pipe.start)
 
     def data_received(self, data: bytes) -> None:
-        if self.peer is not None:
-            write_open(self.peer.transport, data)
+        """What this robot sent: to the other one at once on the ideal channel, else each chunk
+        read as one message through the channel (delivered when it arrives, if the pipe is
+        still open then)."""
+        peer = self.peer
+        if peer is None:
+            return
+        svc = self.pipe.port.server.service
+        if svc.ideal:
+            write_open(peer.transport, data)
+        else:
+            svc.send(self.robot, peer.robot, data, lambda payload: write_open(peer.transport, payload))
 
     def eof_received(self):
         return False  # closes the pipe: the WSS closes both sockets
@@ -68,7 +78,7 @@ class Pipe:
         loop = asyncio.get_running_loop()
         self._task = asyncio.current_task()
         try:
-            _, src = await loop.connect_accepted_socket(lambda: _PipeEnd(self), self.sock)
+            _, src = await loop.connect_accepted_socket(lambda: _PipeEnd(self, self.port.src), self.sock)
         except OSError:
             self.close()
             return
@@ -96,7 +106,7 @@ class Pipe:
             if self.closed:
                 return
             self.out_sock = None  # the transport takes it
-            dst_t, dst = await loop.create_connection(lambda: _PipeEnd(self), sock=sock)
+            dst_t, dst = await loop.create_connection(lambda: _PipeEnd(self, self.port.dst), sock=sock)
         except asyncio.CancelledError:  # closed while connecting (close()): the connect has let go of it
             sock.close()
             raise

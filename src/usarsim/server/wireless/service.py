@@ -88,7 +88,7 @@ class WirelessService:
             channel=self.channel,
             on_deliver=None if self.ideal else self._deliveries_threadsafe,
         )
-        self._arrivals: dict[int, Callable[[bytes], None]] = {}  # a message under way -> what delivers it
+        self._arrivals: dict[int, Callable[[bytes], object]] = {}  # a message under way -> what delivers it
         self._tokens = itertools.count(1)
         self.loop: asyncio.AbstractEventLoop | None = None
         self.state: dict[Pair, tuple[float, bool]] = {}  # pair -> (simulated time, holds)
@@ -131,7 +131,7 @@ class WirelessService:
                     log.exception("wireless: error while applying a link change")
 
     # messages ---------------------------------------------------------------------------
-    def send(self, src: str, dst: str, payload: bytes, deliver: Callable[[bytes], None]) -> None:
+    def send(self, src: str, dst: str, payload: bytes, deliver: Callable[[bytes], object]) -> None:
         """Carry ``payload`` from robot ``src`` to robot ``dst`` through the channel (not the
         ideal one): ``deliver(payload)`` is called on the event loop when it arrives, never if
         it is lost."""
