@@ -248,6 +248,9 @@ class FakeFacade:
     def radio_link(self, a: str, b: str) -> Future[Any]:
         return self._answer(None)
 
+    def radio_neighbours(self, a: str) -> Future[list[Any]]:
+        return self._answer([])
+
     def radio_send(self, src: str, dst: str, payload: bytes, token: object = None) -> Future[Any]:
         self.calls.append(("radio_send", (src, dst, payload)))
         return self._answer(None)

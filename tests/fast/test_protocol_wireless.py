@@ -660,3 +660,31 @@ def test_the_wireless_protocols_import_no_asyncio_numpy_simulation_or_server():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == ""
+
+
+def test_getneighbors_and_its_reply_round_trip():
+    from usarsim.protocol.wireless import (
+        Neighbor,
+        WcsFail,
+        WcsGetNeighbors,
+        WcsNeighbors,
+        format_wcs_reply,
+        format_wcs_request,
+        parse_wcs_neighbors,
+        parse_wcs_request,
+    )
+
+    assert parse_wcs_request("getneighbors R1") == WcsGetNeighbors("R1")
+    assert format_wcs_request(WcsGetNeighbors("R1")) == "GETNEIGHBORS R1;"
+    reply = WcsNeighbors((Neighbor("B0", -60.5749, 0.99249), Neighbor("C", -92.996, 0.0801)))
+    text = format_wcs_reply(reply)
+    assert text == "OK:B0 -60.57 0.992 C -93.00 0.080;"
+    assert parse_wcs_neighbors(text) == WcsNeighbors((Neighbor("B0", -60.57, 0.992), Neighbor("C", -93.0, 0.08)))
+    assert format_wcs_reply(WcsNeighbors(())) == "OK:;"
+    assert parse_wcs_neighbors("OK:;") == WcsNeighbors(())
+    assert parse_wcs_neighbors("Fail: Robot X not registered;") == WcsFail("Robot X not registered")
+    for bad in ("OK:B0 -60.57;", "OK:B0 x 0.5;", "NEIGHBORS;", ""):
+        with pytest.raises(ProtocolError):
+            parse_wcs_neighbors(bad)
+    with pytest.raises(ProtocolError):
+        parse_wcs_request("GETNEIGHBORS A B")

@@ -352,6 +352,32 @@ def test_getss_and_getobs_give_the_formula_for_a_known_geometry(radio, wcs):
         wss.close()
 
 
+def test_a_neighbour_query_lists_exactly_the_radios_whose_links_hold(radio, wcs):
+    from usarsim.protocol.wireless import WcsNeighbors, parse_wcs_neighbors
+
+    net = radio.app.facade.radio_net
+    for name in STATIONS:
+        reply = parse_wcs_neighbors(wcs.ask(f"GETNEIGHBORS {name};"))
+        assert isinstance(reply, WcsNeighbors)
+        listed = {n.name: n for n in reply.neighbors}
+        links = {
+            other: radio.on_sim(lambda sim, o=other: net.link(sim, name, o))  # noqa: B023
+            for other in STATIONS
+            if other != name
+        }
+        assert set(listed) == {o for o, ln in links.items() if ln.holds}, name
+        assert [n.name for n in reply.neighbors] == sorted(listed, key=str.lower)
+        for other, n in listed.items():
+            assert n.dbm == pytest.approx(links[other].signal_dbm, abs=0.005)
+            assert 0.0 < n.quality <= 1.0
+    # A0 reaches B0 (open lane) and not B6 (its lane behind six walls is out of reach for B6's partner)
+    a0 = {n.name for n in parse_wcs_neighbors(wcs.ask("GETNEIGHBORS A0;")).neighbors}
+    a6 = {n.name for n in parse_wcs_neighbors(wcs.ask("GETNEIGHBORS A6;")).neighbors}
+    assert "B0" in a0 and "B6" not in a6
+    assert wcs.ask("GETNEIGHBORS Nobody;") == "Fail: Robot Nobody not registered;"
+    assert wcs.ask("GETNEIGHBORS;") == "Fail: Incorrect Message;"
+
+
 def test_the_wss_relay_carries_a_megabyte_both_ways_binary_safe(radio, sockets):
     la, lb = sockets(listener(), listener())
     ca, cb, relay = wss_dns(radio, "A0", "B0", la, lb)

@@ -229,3 +229,21 @@ def handed_bytes(srv: ServerThread) -> int:
         return under_way + sum(c.delivered_bytes for c in net.counts().values())
 
     return srv.on_sim(count)
+
+
+def test_the_python_client_lists_a_radios_neighbours(tmp_path):
+    from usarsim.client.radio import Radio
+
+    srv = channel_server(tmp_path, "{shadowing_db: 3}")
+    radios = []
+    try:
+        radios = [Radio("127.0.0.1", srv.app.wireless.comserver.port, name) for name in ("A0", "B0")]
+        (n,) = radios[0].neighbours()
+        assert n.name == "B0" and n.quality == pytest.approx(1.0, abs=1e-3)
+        # the shadowed signal: GETSS and the neighbour list agree on it
+        assert n.dbm == pytest.approx(radios[0].signal("B0"), abs=0.006)
+        assert [m.name for m in radios[1].neighbours()] == ["A0"]
+    finally:
+        for r in radios:
+            r.close()
+        srv.stop()

@@ -23,9 +23,12 @@ from dataclasses import dataclass, field
 from usarsim.errors import ProtocolError
 from usarsim.protocol.wireless import (
     CommandSplitter,
+    Neighbor,
     WcsFail,
+    WcsGetNeighbors,
     WcsGetSS,
     WcsListen,
+    WcsNeighbors,
     WcsOk,
     WcsOpen,
     WcsRegister,
@@ -33,6 +36,7 @@ from usarsim.protocol.wireless import (
     WcsSignal,
     format_send,
     format_wcs_request,
+    parse_wcs_neighbors,
     parse_wcs_reply,
 )
 
@@ -77,7 +81,7 @@ class Radio:
             self.close()
             raise RadioError(f"REGISTER {name}: {reply}")
 
-    def ask(self, request: WcsRegister | WcsListen | WcsOpen | WcsGetSS) -> WcsReply:
+    def ask(self, request: WcsRegister | WcsListen | WcsOpen | WcsGetSS | WcsGetNeighbors) -> WcsReply:
         """Send one command, return its reply."""
         self._ctl.sendall(format_wcs_request(request).encode("ascii"))
         deadline = time.monotonic() + self.timeout
@@ -95,6 +99,8 @@ class Radio:
             self._replies.extend(self._splitter.feed(data))
         text = self._replies.pop(0)
         try:
+            if isinstance(request, WcsGetNeighbors):
+                return parse_wcs_neighbors(text)
             return parse_wcs_reply(text)
         except ProtocolError as exc:
             raise RadioError(f"unexpected ComServer reply to {request.type}: {text!r}") from exc
@@ -116,6 +122,14 @@ class Radio:
         model (GETSS), or None when the ComServer cannot give one."""
         reply = self.ask(WcsGetSS(self.name, peer))
         return reply.dbm if isinstance(reply, WcsSignal) else None
+
+    def neighbours(self) -> list[Neighbor]:
+        """Every robot whose link with this one holds now, with its signal strength (dBm) and
+        the link's quality (0 to 1), by name (GETNEIGHBORS, an extension of the ComServer)."""
+        reply = self.ask(WcsGetNeighbors(self.name))
+        if not isinstance(reply, WcsNeighbors):
+            raise RadioError(f"GETNEIGHBORS {self.name}: {getattr(reply, 'reason', reply)}")
+        return list(reply.neighbors)
 
     def send(self, peer: str, payload: bytes) -> bool:
         """Send ``payload`` on the open link with ``peer``; False when there is none (never

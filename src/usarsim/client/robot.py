@@ -214,6 +214,11 @@ class Robot:
         model, or None when there is none."""
         return self.radio().signal(other if isinstance(other, str) else other.name)
 
+    def neighbours(self) -> list:
+        """Every robot whose radio link with this one holds now:
+        :class:`usarsim.protocol.wireless.Neighbor` (name, dbm, quality), by name."""
+        return self.radio().neighbours()
+
     def send_to(self, other: Robot, data: bytes) -> bool:
         """Send ``data`` to another robot of this client over the simulated radio: a link is
         opened through the ComServer when there is none; False when the ComServer refuses it

@@ -326,6 +326,11 @@ class SimFacade:
         net = self._net()
         return self._ask(lambda sim: (sim.time, net.check(sim, a, b)))
 
+    def radio_neighbours(self, a: str) -> Future[list[tuple[str, Link, float]]]:
+        """Every robot whose link with ``a`` holds now: (name, link, quality)."""
+        net = self._net()
+        return self._ask(lambda sim: net.neighbours(sim, a))
+
     def radio_send(self, src: str, dst: str, payload: bytes, token: object = None) -> Future[Drop | None]:
         """Hand a message to the channel at the simulated instant it reaches the simulation
         thread (a Drop at once when the sender's queue is full)."""

@@ -41,7 +41,17 @@ from usarsim.config.world import WIRELESS_MODELS, WirelessConfig
 from usarsim.errors import ConfigError
 from usarsim.registry import Registry
 from usarsim.sim import frames
-from usarsim.sim.channel import Channel, Delivery, Drop, LinkCounts, LinkView, Shadowing, check_channel
+from usarsim.sim.channel import (
+    SENSITIVITY_FRAME_BYTES,
+    Channel,
+    Delivery,
+    Drop,
+    LinkCounts,
+    LinkView,
+    Shadowing,
+    check_channel,
+    packet_error_rate,
+)
 
 if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
@@ -219,6 +229,13 @@ def resolve_channel(*layers: WirelessConfig | None) -> ChannelConfig:
 Pair = tuple[str, str]
 
 
+def link_quality(margin_db: float) -> float:
+    """A link's quality: the share of 1,024-byte messages a signal ``margin_db`` above the
+    cutoff lets through (:func:`usarsim.sim.channel.packet_error_rate`, before fading and the
+    loss model), 0 to 1."""
+    return 1.0 - packet_error_rate(margin_db, SENSITIVITY_FRAME_BYTES)
+
+
 def pair_key(a: str, b: str) -> Pair:
     """Two robot names as one key, whatever their order and letter case."""
     a, b = a.lower(), b.lower()
@@ -331,6 +348,20 @@ class RadioNet:
             return None
         s, walls = self._signal(sim, pair, pa, pb)
         return Link(s, math.dist(pa, pb), walls, self.model.holds(s))
+
+    def neighbours(self, sim: Simulation, a: str) -> list[tuple[str, Link, float]]:
+        """Every robot whose link with ``a`` holds now, by name, with the link and its quality
+        (:func:`link_quality`); empty when ``a`` is not in the simulation."""
+        antennas = self.antennas(sim)
+        if a.lower() not in antennas:
+            return []
+        names = sorted({r.name for r in sim.robots.values() if r.name.lower() != a.lower()}, key=str.lower)
+        out = []
+        for b in names:
+            ln = self.link(sim, a, b, antennas)
+            if ln is not None and ln.holds:
+                out.append((b, ln, link_quality(ln.signal_dbm - self.model.cutoff_dbm)))
+        return out
 
     def check(self, sim: Simulation, a: str, b: str) -> Link | None:
         """``link``, for a link about to be opened on it: a state that differs from the one

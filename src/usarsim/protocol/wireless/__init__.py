@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from .common import MAX_PORT, parse_port
 from .comserver import (
-    CLOSE_FRAME,
     FAIL_INCORRECT_MESSAGE,
     FAIL_NO_CONNECTION,
     FAIL_NO_SIGNAL,
@@ -30,13 +29,12 @@ from .comserver import (
     MAX_SEND_BYTES,
     WCS_PORT,
     CommandSplitter,
-    SendClose,
-    SendEvent,
-    SendParser,
-    SendProblem,
+    Neighbor,
     WcsFail,
+    WcsGetNeighbors,
     WcsGetSS,
     WcsListen,
+    WcsNeighbors,
     WcsOk,
     WcsOpen,
     WcsRegister,
@@ -45,9 +43,9 @@ from .comserver import (
     WcsSignal,
     WcsUnknown,
     fmt_wcs_dbm,
-    format_send,
     format_wcs_reply,
     format_wcs_request,
+    parse_wcs_neighbors,
     parse_wcs_reply,
     parse_wcs_request,
     wcs_request_word,
@@ -69,6 +67,7 @@ from .interface import (
     parse_interface_reply,
     parse_interface_request,
 )
+from .sendframes import CLOSE_FRAME, SendClose, SendEvent, SendParser, SendProblem, format_send
 from .wss import (
     DNS_NO_ROBOT,
     DNS_NOT_LISTENING,
@@ -148,6 +147,8 @@ __all__ = [
     "SendParser",
     "SendProblem",
     "WcsFail",
+    "Neighbor",
+    "WcsGetNeighbors",
     "WcsGetSS",
     "WcsListen",
     "WcsOk",
@@ -155,6 +156,7 @@ __all__ = [
     "WcsRegister",
     "WcsReply",
     "WcsRequest",
+    "WcsNeighbors",
     "WcsSignal",
     "WcsUnknown",
     "WssDns",
@@ -182,6 +184,7 @@ __all__ = [
     "parse_interface_reply",
     "parse_interface_request",
     "parse_port",
+    "parse_wcs_neighbors",
     "parse_wcs_reply",
     "parse_wcs_request",
     "parse_wss_reply",

@@ -10,14 +10,14 @@ case-insensitive.  Replies are ``OK;``, ``OK:<dBm>;`` (GETSS) and ``Fail: <reaso
 * :func:`parse_wcs_request` / :func:`format_wcs_request`: the typed commands.
 * :func:`format_wcs_reply` / :func:`parse_wcs_reply`: the typed replies; the documented
   ``Fail`` reasons are the ``FAIL_*`` constants and the :class:`WcsFail` constructors.
-* :class:`SendParser` / :func:`format_send`: the framing of a relayed link,
-  ``SEND <n> <n bytes>;`` (binary-safe) and ``CLOSE;``.
+* the framing of a relayed link, ``SEND <n> <n bytes>;`` (binary-safe) and ``CLOSE;``, is
+  :mod:`.sendframes`'s.
 """
 
 from __future__ import annotations
 
 from dataclasses import astuple, dataclass
-from typing import ClassVar, Self
+from typing import ClassVar
 
 from usarsim.errors import ProtocolError
 
@@ -26,7 +26,6 @@ from ..numbers import f2
 from .common import check_port, check_word, parse_port, shorten
 
 __all__ = [
-    "CLOSE_FRAME",
     "FAIL_INCORRECT_MESSAGE",
     "FAIL_NO_CONNECTION",
     "FAIL_NO_SIGNAL",
@@ -38,10 +37,6 @@ __all__ = [
     "MAX_SEND_BYTES",
     "WCS_PORT",
     "CommandSplitter",
-    "SendClose",
-    "SendEvent",
-    "SendParser",
-    "SendProblem",
     "WcsFail",
     "WcsGetSS",
     "WcsListen",
@@ -53,9 +48,9 @@ __all__ = [
     "WcsSignal",
     "WcsUnknown",
     "fmt_wcs_dbm",
-    "format_send",
     "format_wcs_reply",
     "format_wcs_request",
+    "parse_wcs_neighbors",
     "parse_wcs_reply",
     "parse_wcs_request",
     "wcs_request_word",
@@ -177,6 +172,15 @@ class WcsGetSS:
 
 
 @dataclass(frozen=True, slots=True)
+class WcsGetNeighbors:
+    """``GETNEIGHBORS name;`` (an extension): every robot whose link with ``name`` holds now,
+    with its signal strength and link quality."""
+
+    type: ClassVar[str] = "GETNEIGHBORS"
+    name: str
+
+
+@dataclass(frozen=True, slots=True)
 class WcsUnknown:
     """A command whose first word the ComServer does not know (``text`` as sent, trimmed);
     answered ``Fail: Unknown Message;``."""
@@ -184,7 +188,7 @@ class WcsUnknown:
     text: str
 
 
-WcsRequest = WcsRegister | WcsListen | WcsOpen | WcsGetSS | WcsUnknown
+WcsRequest = WcsRegister | WcsListen | WcsOpen | WcsGetSS | WcsGetNeighbors | WcsUnknown
 
 # command word -> (class, what its words are, which of them are ports)
 _COMMANDS: dict[str, tuple[type, str, tuple[bool, ...]]] = {
@@ -192,6 +196,7 @@ _COMMANDS: dict[str, tuple[type, str, tuple[bool, ...]]] = {
     "LISTEN": (WcsListen, "robotName port", (False, True)),
     "OPEN": (WcsOpen, "srcName srcPort dstName dstPort", (False, True, False, True)),
     "GETSS": (WcsGetSS, "name1 name2", (False, False)),
+    "GETNEIGHBORS": (WcsGetNeighbors, "robotName", (False,)),
 }
 
 
@@ -212,7 +217,7 @@ def parse_wcs_request(text: str) -> WcsRequest:
     """
     words = text.split()
     if not words:
-        raise ProtocolError("an empty ComServer command: expected REGISTER, LISTEN, OPEN or GETSS")
+        raise ProtocolError("an empty ComServer command: expected REGISTER, LISTEN, OPEN, GETSS or GETNEIGHBORS")
     word = words[0].upper()
     spec = _COMMANDS.get(word)
     if spec is None:
@@ -267,6 +272,24 @@ class WcsSignal:
 
 
 @dataclass(frozen=True, slots=True)
+class Neighbor:
+    """A robot in reach: its name, the signal strength (dBm) and the link's quality (the share
+    of 1,024-byte messages its signal alone lets through, 0 to 1)."""
+
+    name: str
+    dbm: float
+    quality: float
+
+
+@dataclass(frozen=True, slots=True)
+class WcsNeighbors:
+    """``OK:<name> <dBm> <quality> ...;``: the answer to GETNEIGHBORS, a triple for each robot
+    in reach (dBm with 2 decimals, quality with 3), by name; ``OK:;`` when none is."""
+
+    neighbors: tuple[Neighbor, ...]
+
+
+@dataclass(frozen=True, slots=True)
 class WcsFail:
     """``Fail: <reason>;``.  The reasons the ComServer gives are the ``FAIL_*`` constants
     and the constructors below (USARSim's own words)."""
@@ -314,7 +337,7 @@ FAIL_THIRD_PARTY = WcsFail("Server does not accept third party requests")
 FAIL_NO_SIGNAL = WcsFail("Could not calculate signal strength")
 """GETSS for a robot that is not in the simulation."""
 
-WcsReply = WcsOk | WcsSignal | WcsFail
+WcsReply = WcsOk | WcsSignal | WcsNeighbors | WcsFail
 
 
 def format_wcs_reply(reply: WcsReply) -> str:
@@ -323,6 +346,8 @@ def format_wcs_reply(reply: WcsReply) -> str:
         return "OK;"
     if isinstance(reply, WcsSignal):
         return f"OK:{fmt_wcs_dbm(reply.dbm)};"
+    if isinstance(reply, WcsNeighbors):
+        return "OK:" + " ".join(f"{n.name} {fmt_wcs_dbm(n.dbm)} {n.quality:.3f}" for n in reply.neighbors) + ";"
     if isinstance(reply, WcsFail):
         return f"Fail: {reply.reason};"
     raise TypeError(f"not a ComServer reply: {reply!r}")
@@ -341,160 +366,15 @@ def parse_wcs_reply(text: str) -> WcsReply:
     raise ProtocolError(f"expected a ComServer reply OK;, OK:<dBm>; or Fail: <reason>;, got {shorten(text)}")
 
 
-# --------------------------------------------------------------------------- relayed links
-
-
-@dataclass(frozen=True, slots=True)
-class SendClose:
-    """``CLOSE;`` on a relayed link: the robot ends the link."""
-
-
-class SendProblem(str):
-    """A frame of a relayed link that was dropped: the text says why; ``kind`` is one of
-    ``unknown`` (not SEND or CLOSE), ``no-length``, ``too-long``, ``wrong-length`` (the
-    bytes are not followed by ``;``) and ``close`` (CLOSE not followed by ``;``), what a
-    server logs once each."""
-
-    kind: str
-
-    def __new__(cls, kind: str, text: str) -> Self:
-        self = super().__new__(cls, text)
-        self.kind = kind
-        return self
-
-
-SendEvent = bytes | SendClose | SendProblem
-
-CLOSE_FRAME = b"CLOSE;"
-"""What a robot sends to end a relayed link."""
-
-_BLANKS = b" \t\r\n"
-
-
-def format_send(payload: bytes) -> bytes:
-    """The frame that relays ``payload`` (any bytes, ``;`` and line breaks included)."""
-    return b"SEND %d %s;" % (len(payload), payload)
-
-
-def _skip_blanks(buf: bytearray) -> None:
-    """Drop the blanks and line breaks at the start of ``buf``."""
-    i = 0
-    while i < len(buf) and buf[i] in _BLANKS:
-        i += 1
-    del buf[:i]
-
-
-class SendParser:
-    """The framing of a relayed ComServer link (manual 3.2.4.3): ``SEND <n> <n bytes>;``
-    (binary-safe) and ``CLOSE;``, both words case-sensitive; blanks and line breaks between
-    frames are skipped.
-
-    ``feed`` returns the events the bytes complete, in order: a message (``bytes``), ``CLOSE``
-    (a :class:`SendClose`), or a :class:`SendProblem` for a frame that was dropped, after
-    which the parser skips to the next ``;``.  A SEND is delivered only once its ``n`` bytes
-    and its ``;`` have arrived: one whose length does not end at a ``;`` is dropped whole,
-    never delivered in part, and one cut off by the end of the connection shows as
-    ``partial``.  The result does not depend on how the bytes are split between calls, and
-    ``feed`` never raises.
-    """
-
-    CLOSE: ClassVar[SendClose] = SendClose()
-
-    def __init__(self, max_bytes: int = MAX_SEND_BYTES):
-        self.max_bytes = max_bytes
-        self._buf = bytearray()
-        self._state = "head"
-        self._digits = b""
-        self._need = 0
-        self._body = bytearray()
-
-    def feed(self, data: bytes) -> list[SendEvent]:
-        """The events completed by ``data``: payload bytes, CLOSE, or the problem of a dropped frame."""
-        buf = self._buf
-        buf += data
-        out: list[SendEvent] = []
-        while True:
-            st = self._state
-            if st == "head":
-                _skip_blanks(buf)
-                if not buf:
-                    break
-                head = bytes(buf[:5])
-                if head == b"SEND ":
-                    del buf[:5]
-                    self._state, self._digits = "length", b""
-                elif head == b"CLOSE":
-                    del buf[:5]
-                    self._state = "close"
-                elif len(head) < 5 and (b"SEND ".startswith(head) or b"CLOSE".startswith(head)):
-                    break
-                else:
-                    out.append(SendProblem("unknown", f"unknown message {head!r}..."))
-                    self._state = "skip"
-            elif st == "length":
-                i = 0
-                while i < len(buf) and 48 <= buf[i] <= 57 and len(self._digits) + i < 10:
-                    i += 1
-                self._digits += bytes(buf[:i])
-                del buf[:i]
-                if not buf:
-                    break
-                if buf[0] == 32 and self._digits:
-                    del buf[:1]
-                    n = int(self._digits)
-                    if n > self.max_bytes:
-                        out.append(SendProblem("too-long", f"SEND of {n} bytes, more than {self.max_bytes}"))
-                        self._state = "skip"
-                    else:
-                        self._need, self._body = n, bytearray()
-                        self._state = "body"
-                else:
-                    out.append(SendProblem("no-length", "SEND without a length"))
-                    self._state = "skip"
-            elif st == "body":
-                take = min(self._need, len(buf))
-                self._body += buf[:take]
-                del buf[:take]
-                self._need -= take
-                if self._need:
-                    break
-                self._state = "end"
-            elif st == "end":
-                if not buf:
-                    break
-                if buf[0] == 59:  # ;
-                    del buf[:1]
-                    out.append(bytes(self._body))
-                    self._state = "head"
-                else:
-                    out.append(
-                        SendProblem(
-                            "wrong-length", f"SEND of {len(self._body)} bytes not followed by ';' (a wrong length)"
-                        )
-                    )
-                    self._state = "skip"
-                self._body = bytearray()
-            elif st == "close":
-                _skip_blanks(buf)
-                if not buf:
-                    break
-                if buf[0] == 59:
-                    del buf[:1]
-                    out.append(self.CLOSE)
-                    self._state = "head"
-                else:
-                    out.append(SendProblem("close", "CLOSE not followed by ';'"))
-                    self._state = "skip"
-            else:  # skip to the next ';'
-                j = buf.find(b";")
-                if j < 0:
-                    buf.clear()
-                    break
-                del buf[: j + 1]
-                self._state = "head"
-        return out
-
-    @property
-    def partial(self) -> bool:
-        """A frame was begun and not finished."""
-        return self._state != "head" or bool(self._buf)
+def parse_wcs_neighbors(text: str) -> WcsNeighbors | WcsFail:
+    """The reply to GETNEIGHBORS (with or without its ``;``): ``OK:<name> <dBm> <quality> ...;``
+    (``OK:;``: none) or a ``Fail``.  Anything else raises :class:`~usarsim.errors.ProtocolError`."""
+    t = text.strip().removesuffix(";")
+    if t.startswith("Fail:"):
+        return WcsFail(t[5:].strip())
+    words = t[3:].split() if t.startswith("OK:") else None
+    if words is None or len(words) % 3:
+        raise ProtocolError(f"expected OK:<name> <dBm> <quality> ...; or Fail: <reason>;, got {shorten(text)}")
+    return WcsNeighbors(
+        tuple(Neighbor(words[i], parse_float(words[i + 1]), parse_float(words[i + 2])) for i in range(0, len(words), 3))
+    )

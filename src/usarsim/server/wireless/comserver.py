@@ -30,10 +30,13 @@ from usarsim.protocol.wireless import (
     MAX_COMMAND_BYTES,
     WCS_PORT,
     CommandSplitter,
+    Neighbor,
     SendClose,
     SendParser,
     WcsFail,
+    WcsGetNeighbors,
     WcsListen,
+    WcsNeighbors,
     WcsOk,
     WcsOpen,
     WcsRegister,
@@ -197,6 +200,8 @@ class WcsConnection(WirelessConnection):
             return srv.listen(cmd.name, cmd.port)
         if isinstance(cmd, WcsOpen):
             return await srv.open(cmd)
+        if isinstance(cmd, WcsGetNeighbors):
+            return await srv.neighbours(cmd.name, self.ip)
         return await srv.getss(cmd.a, cmd.b, self.ip)  # WcsGetSS, the last kind
 
 
@@ -347,6 +352,17 @@ class ComServer(WirelessServer):
             else:
                 self.service.event("comserver: cannot connect to %s at %s:%d: %s", robot, ip, port, r)
         return None
+
+    async def neighbours(self, name: str, peer_ip: str) -> WcsReply:
+        """GETNEIGHBORS name (an extension): only from the IP of ``name``, as GETSS is only
+        answered to one of its two robots; a name nobody registered is refused as OPEN's."""
+        ip = self.registered.get(name)
+        if ip is None:
+            return WcsFail.not_registered(name)
+        if same_host(peer_ip) != same_host(ip):
+            return FAIL_THIRD_PARTY
+        found = await self.service.neighbours(name)
+        return WcsNeighbors(tuple(Neighbor(b, ln.signal_dbm, q) for b, ln, q in found))
 
     async def getss(self, a: str, b: str, peer_ip: str) -> WcsReply:
         """GETSS a b: only from the IP of one of the two robots (USARSim's rule)."""

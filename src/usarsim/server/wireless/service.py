@@ -186,6 +186,10 @@ class WirelessService:
         """(simulated time, link) for a link about to be opened; its state is reported."""
         return await self.ask(self.facade.radio_check, a, b)
 
+    async def neighbours(self, a: str) -> list[tuple[str, Link, float]]:
+        """Every robot whose link with ``a`` holds now: (name, link, quality)."""
+        return await self.ask(self.facade.radio_neighbours, a)
+
     async def signal(self, a: str, b: str) -> Link | None:
         """The link between two robots now (None: either is not in the simulation)."""
         return await self.ask(self.facade.radio_link, a, b)
