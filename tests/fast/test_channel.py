@@ -240,3 +240,22 @@ def test_a_yaml_wireless_configuration_file_carries_the_channel_and_wins_over_th
     p.write_text("channel: {loss: {model: independent, rate: 2}}\n")
     with pytest.raises(ConfigError, match="probability"):
         load_wireless_file(p)
+
+
+def test_the_best_route_maximises_the_product_of_the_hops_qualities():
+    from usarsim.sim.routing import best_route
+
+    q = {("a", "r1"): 0.9, ("r1", "b"): 0.9, ("a", "r2"): 0.99, ("r2", "r3"): 0.99, ("r3", "b"): 0.99, ("a", "c"): 0.5}
+
+    def quality(x, y):
+        return q.get((x, y)) or q.get((y, x))
+
+    nodes = ["a", "b", "c", "r1", "r2", "r3"]
+    # three hops at 0.99 (0.970) beat two at 0.9 (0.81)
+    assert best_route("a", "b", nodes, quality) == ["a", "r2", "r3", "b"]
+    q[("r2", "r3")] = 0.5
+    assert best_route("a", "b", nodes, quality) == ["a", "r1", "b"]
+    assert best_route("a", "z", nodes + ["z"], quality) is None
+    assert best_route("a", "a", nodes, quality) == ["a"]
+    q[("c", "b")] = 1e-4  # too weak a hop to route through
+    assert best_route("c", "b", ["b", "c"], quality) is None

@@ -247,3 +247,80 @@ def test_the_python_client_lists_a_radios_neighbours(tmp_path):
         for r in radios:
             r.close()
         srv.stop()
+
+
+RELAY_WORLD = """\
+name: RelayLane
+description: a short-range radio (n = 3) along an open lane (tests only)
+floor: {center: [0.0, 0.0], size: [60.0, 20.0]}
+wireless: {eN: 3.0, eCutoff: -70.0}
+start_poses:
+  - {name: S, location: [0.0, 5.0, -0.2], rotation: [0.0, 0.0, 0.0]}
+"""
+
+
+def relay_run(tmp_path, drop: bool) -> tuple[str, list[str], bytes]:
+    """A ComStation at x = -10 and a robot with a RelayDropper starting at x = -2: it drops a
+    relay there (or not), drives to x = 5, beyond the station's reach (9.5 m with n = 3 and a
+    -70 dBm cutoff), and opens a link to it.  (OPEN's reply, the robot's neighbours, what the
+    station received)."""
+    from test_wireless import spawn
+
+    from usarsim.client.radio import Radio, link
+    from usarsim.config.catalog import ROBOTS_DIR
+    from usarsim.config.world_file import load_world
+
+    head = (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0]
+    robots = tmp_path / ("robots-drop" if drop else "robots-keep")
+    robots.mkdir()
+    (robots / "Courier.yaml").write_text(
+        head.replace("class_name: P2AT", "class_name: Courier")
+        + "\nsensors:\n  - {type: RelayDropper, name: Relays, location: [-0.2, 0.0, 0.08], capacity: 1}\n"
+    )
+    p = tmp_path / "RelayLane.yaml"
+    p.write_text(RELAY_WORLD)
+    srv = ServerThread(load_world(p), seed=3, robot_dirs=(str(robots),)).start()
+    radios = []
+    try:
+        (station,) = spawn(srv, [("ComStation", "Base", "-10,0,-0.61")])
+        (courier,) = spawn(srv, [("Courier", "Courier", "-2,0,-0.2")])
+        if drop:
+            reply = courier.ask("SET {Type RelayDropper} {Name Relays} {Opcode Drop}", "RES")
+            assert "{Status OK}" in reply.text, reply.text
+            again = courier.ask("SET {Type RelayDropper} {Name Relays} {Opcode Drop}", "RES")
+            assert "{Status Failed}" in again.text  # it carried one
+        courier.send("DRIVE {Left 5} {Right 5}")
+        for _ in range(200):
+            courier.step(0.1)
+            if positions(srv)["Courier"][0] >= 5.0:
+                break
+        courier.send("DRIVE {Left 0} {Right 0}")
+        courier.step(0.5)
+        assert positions(srv)["Courier"][0] >= 5.0
+        port = srv.app.wireless.comserver.port
+        radios = [Radio("127.0.0.1", port, name) for name in ("Courier", "Base")]
+        opened = link(radios[0], radios[1])
+        neighbours = [n.name for n in radios[0].neighbours()]
+        got = b""
+        if opened:
+            assert radios[0].send("Base", b"victim at 3,4")
+            courier.step(0.1)
+            msgs = wait_for(lambda: radios[1].poll(), what="the message to arrive")  # noqa: B023
+            got = msgs[0][1] if msgs[0][0] == "Courier" else b""
+        return ("OK;" if opened else "Fail;"), neighbours, got
+    finally:
+        for r in radios:
+            r.close()
+        srv.stop()
+
+
+def positions(srv: ServerThread) -> dict[str, tuple[float, float, float]]:
+    return srv.on_sim(lambda sim: {r.name: r.handle.location(sim.data) for r in sim.robots.values()})
+
+
+def test_a_robot_out_of_reach_of_the_comstation_reaches_it_through_a_relay_it_dropped(tmp_path):
+    without, neighbours_without, _ = relay_run(tmp_path, drop=False)
+    assert without == "Fail;" and neighbours_without == []
+    with_relay, neighbours_with, got = relay_run(tmp_path, drop=True)
+    assert with_relay == "OK;" and got == b"victim at 3,4"
+    assert neighbours_with == ["Courier-Relay1"]  # the relay is in reach; the station is not

@@ -9,7 +9,8 @@ file's item is looked up among sensors, effecters and cameras by
 from usarsim.effecters import grasps, rollers  # noqa: F401,E402  (registration: their world systems)
 from usarsim.effecters.base import EFFECTERS, Effecter
 from usarsim.effecters.gripper import Gripper
+from usarsim.effecters.relay_dropper import RelayDropper
 from usarsim.effecters.releaser import RFIDReleaser
 from usarsim.effecters.roller_table import RollerTable
 
-__all__ = ["EFFECTERS", "Effecter", "Gripper", "RFIDReleaser", "RollerTable"]
+__all__ = ["EFFECTERS", "Effecter", "Gripper", "RFIDReleaser", "RelayDropper", "RollerTable"]

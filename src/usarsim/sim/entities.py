@@ -58,6 +58,18 @@ class Tag:
 
 
 @dataclass(frozen=True)
+class RelayNode:
+    """A radio relay a robot dropped (a ``RelayDropper``'s breadcrumb): its name on the radio
+    (``<robot>-Relay<k>``), the robot that dropped it, where its antenna is (USARSim frame) and
+    when it was dropped (simulated seconds)."""
+
+    name: str
+    owner: str
+    location: tuple[float, float, float]
+    time: float
+
+
+@dataclass(frozen=True)
 class PartHit:
     """What a geom of a victim or a false alarm is to the victim sensor: whose part it is, which body part, and
     whether it is a false alarm."""
@@ -79,6 +91,7 @@ class Entities:
             for t in world.rfid_tags
         }
         self._next_id = max([RELEASED_TAG_FIRST_ID - 1, *self.tags]) + 1
+        self.relays: list[RelayNode] = []  # dropped by robots (RelayDropper), in the order dropped
         self._tag_rows: tuple[list[int], np.ndarray] | None = None  # see tag_positions
         self.parts: dict[int, PartHit] = {}
         self._part_ids: np.ndarray | None = None
@@ -188,6 +201,15 @@ class Entities:
             rows = (ids, np.array([frames.to_mj_vec(self.tags[i].location) for i in ids], dtype=float).reshape(-1, 3))
             self._tag_rows = rows
         return rows
+
+    def drop_relay(self, owner: str, location: tuple[float, float, float], time: float) -> RelayNode:
+        """A relay node of ``owner``'s, its antenna at ``location`` (USARSim frame), from now on
+        a radio of the wireless simulation (usarsim.sim.radio)."""
+        k = sum(1 for r in self.relays if r.owner == owner) + 1
+        loc = cast("tuple[float, float, float]", tuple(float(v) for v in location))
+        node = RelayNode(f"{owner}-Relay{k}", owner, loc, float(time))
+        self.relays.append(node)
+        return node
 
     def release_tag(self, location: tuple[float, float, float]) -> Tag:
         tag = Tag(self._next_id, cast("tuple[float, float, float]", tuple(float(v) for v in location)), "")

@@ -52,6 +52,7 @@ from usarsim.sim.channel import (
     check_channel,
     packet_error_rate,
 )
+from usarsim.sim.routing import best_route
 
 if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
@@ -250,6 +251,9 @@ class Link:
     distance_m: float
     walls: int
     holds: bool
+    # the radios a routed link goes through (relays and robots, in order); () for a direct one.
+    # A routed link's signal is its weakest hop's, its distance and walls its hops' sums
+    via: tuple[str, ...] = ()
 
 
 class RadioNet:
@@ -326,6 +330,8 @@ class RadioNet:
             key = r.name.lower()
             if key not in out:
                 out[key] = tuple(d.xpos[r.handle.body_id].tolist())
+        for relay in sim.entities.relays:  # the relays robots dropped (RelayDropper)
+            out.setdefault(relay.name.lower(), tuple(frames.to_mj_vec(relay.location).tolist()))
         return out
 
     def _signal(self, sim: Simulation, pair: Pair, pa: Point, pb: Point) -> tuple[float, int]:
@@ -347,19 +353,55 @@ class RadioNet:
             self._walls.pop(pair, None)
             return None
         s, walls = self._signal(sim, pair, pa, pb)
-        return Link(s, math.dist(pa, pb), walls, self.model.holds(s))
+        direct = Link(s, math.dist(pa, pb), walls, self.model.holds(s))
+        if direct.holds or not sim.entities.relays:
+            return direct
+        return self._routed(sim, pair, antennas) or direct
+
+    def _routed(self, sim: Simulation, pair: Pair, antennas: dict[str, Point]) -> Link | None:
+        """The best route between the two radios of ``pair`` through the others
+        (:func:`usarsim.sim.routing.best_route`), as one link; None when there is none."""
+        hops: dict[Pair, Link] = {}
+
+        def hop(a: str, b: str) -> Link:
+            key = pair_key(a, b)
+            ln = hops.get(key)
+            if ln is None:
+                pa, pb = antennas[key[0]], antennas[key[1]]
+                s, walls = self._signal(sim, key, pa, pb)
+                ln = hops[key] = Link(s, math.dist(pa, pb), walls, self.model.holds(s))
+            return ln
+
+        def quality(a: str, b: str) -> float | None:
+            ln = hop(a, b)
+            return link_quality(ln.signal_dbm - self.model.cutoff_dbm) if ln.holds else None
+
+        path = best_route(pair[0], pair[1], sorted(antennas), quality)
+        if path is None:
+            return None
+        legs = [hop(a, b) for a, b in zip(path, path[1:], strict=False)]
+        return Link(
+            min(ln.signal_dbm for ln in legs),
+            sum(ln.distance_m for ln in legs),
+            sum(ln.walls for ln in legs),
+            True,
+            tuple(path[1:-1]),
+        )
 
     def neighbours(self, sim: Simulation, a: str) -> list[tuple[str, Link, float]]:
-        """Every robot whose link with ``a`` holds now, by name, with the link and its quality
-        (:func:`link_quality`); empty when ``a`` is not in the simulation."""
+        """Every radio (robot or relay) whose direct link with ``a`` holds now, by name, with the
+        link and its quality (:func:`link_quality`); empty when ``a`` is not in the simulation."""
         antennas = self.antennas(sim)
         if a.lower() not in antennas:
             return []
-        names = sorted({r.name for r in sim.robots.values() if r.name.lower() != a.lower()}, key=str.lower)
+        names = [r.name for r in sim.robots.values()] + [relay.name for relay in sim.entities.relays]
         out = []
-        for b in names:
-            ln = self.link(sim, a, b, antennas)
-            if ln is not None and ln.holds:
+        for b in sorted({n for n in names if n.lower() != a.lower()}, key=str.lower):
+            pair = pair_key(a, b)
+            pa, pb = antennas[pair[0]], antennas[pair[1]]
+            signal, walls = self._signal(sim, pair, pa, pb)  # in reach: the direct link only
+            ln = Link(signal, math.dist(pa, pb), walls, self.model.holds(signal))
+            if ln.holds:
                 out.append((b, ln, link_quality(ln.signal_dbm - self.model.cutoff_dbm)))
         return out
 
@@ -393,15 +435,11 @@ class RadioNet:
         if ch is None or not ch.pending:
             return
         antennas = self.antennas(sim)
-        cutoff, holds = self.model.cutoff_dbm, self.model.holds
+        cutoff = self.model.cutoff_dbm
 
         def view(src: str, dst: str) -> LinkView | None:
-            pair = pair_key(src, dst)
-            pa, pb = antennas.get(pair[0]), antennas.get(pair[1])
-            if pa is None or pb is None:
-                return None
-            signal, _ = self._signal(sim, pair, pa, pb)
-            return LinkView(signal, cutoff, math.dist(pa, pb), holds(signal))
+            ln = self.link(sim, src, dst, antennas)
+            return None if ln is None else LinkView(ln.signal_dbm, cutoff, ln.distance_m, ln.holds)
 
         deliveries, drops = ch.due(sim.time, view)
         if (deliveries or drops) and self.on_deliver is not None:
@@ -420,10 +458,16 @@ class RadioNet:
         self._last = now
         antennas = self.antennas(sim)
         holds = self.model.holds
+        routed = bool(sim.entities.relays)
         changes = []
         for pair in sorted(watched):
             pa, pb = antennas.get(pair[0]), antennas.get(pair[1])
-            up = pa is not None and pb is not None and holds(self._signal(sim, pair, pa, pb)[0])
+            if pa is None or pb is None:
+                up = False
+            elif routed:  # direct, or through relays and robots
+                up = (ln := self.link(sim, *pair, antennas)) is not None and ln.holds
+            else:
+                up = holds(self._signal(sim, pair, pa, pb)[0])
             if self._reported.get(pair) is not up:
                 self._reported[pair] = up
                 changes.append((pair, up))

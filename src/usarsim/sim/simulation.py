@@ -345,7 +345,9 @@ class Simulation:
         t = item_type or ""
         for s in r.sensors:
             if s.TYPE.lower() == t.lower() and (not name or s.name.lower() == name.lower()):
-                view = dataclasses.replace(self.view(), drive_joint=lambda n, v, o: joints.order(self, r, n, v, o))
+                view = dataclasses.replace(
+                    self.view(), drive_joint=lambda n, v, o: joints.order(self, r, n, v, o), robot_name=r.name
+                )
                 result = s.operate(view, opcode, params) if opcode else None
                 state = s.state() if result is not None else None
                 if state is not None:

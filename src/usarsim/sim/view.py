@@ -25,7 +25,8 @@ if TYPE_CHECKING:
 @dataclass
 class WorldView:
     """What a sensor or effecter is handed when it measures or acts: the model and the physics state, the simulated
-    time (s), the ray caster, the world file and its entities, and for an effecter the operating robot's joints."""
+    time (s), the ray caster, the world file and its entities, and for an effecter the operating robot's joints and
+    name."""
 
     model: mujoco.MjModel
     data: mujoco.MjData
@@ -35,6 +36,7 @@ class WorldView:
     entities: Entities | None = None
     # for effecters: drive_joint(name, value, order) on the operating robot's joints
     drive_joint: Callable[[str, float, int], bool] | None = None
+    robot_name: str = ""  # for effecters: the operating robot's name (its INIT's)
 
     @property
     def geo(self) -> GeoReference:
