@@ -9,9 +9,15 @@ It sends no SEN line.  Robot files list effecters with the other items, under ``
 
 from __future__ import annotations
 
-from typing import TypeVar
+import math
+from typing import TYPE_CHECKING, TypeVar
+
+import numpy as np
 
 from usarsim.sensors.base import ITEMS, Item, ItemConfig
+
+if TYPE_CHECKING:
+    from usarsim.sim.view import WorldView
 
 __all__ = ["EFFECTERS", "Effecter"]
 
@@ -23,6 +29,15 @@ class Effecter(Item[EC]):
     """Base class of every effecter plugin."""
 
     PERIODIC = False
+
+    def ground_below(self, view: WorldView) -> np.ndarray:
+        """The point of the ground (or whatever lies below) straight under the item, within 10 m,
+        MuJoCo frame; the item's own place when nothing is that near (what a dropper drops on)."""
+        pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
+        down = np.array([[0.0, 0.0, -1.0]])
+        dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
+        ground: np.ndarray = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)
+        return ground
 
 
 EFFECTERS = ITEMS.new("effecter")

@@ -5,7 +5,6 @@ virtual competition's robot configurations; a robot file gives the number (``cap
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -51,11 +50,7 @@ class RelayDropper(Effecter[RelayDropperConfig]):
             return None
         if self.left <= 0 or view.entities is None:
             return OperationResult(ok=False)
-        pos, _ = self.handle.sensor_frame(view.data, self.item.location, self.item.orientation, self.item.mount)
-        down = np.array([[0.0, 0.0, -1.0]])
-        dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
-        ground = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)
-        antenna = ground + np.array([0.0, 0.0, ANTENNA_HEIGHT_M])
+        antenna = self.ground_below(view) + np.array([0.0, 0.0, ANTENNA_HEIGHT_M])
         view.entities.drop_relay(view.robot_name or self.robot.class_name, frames.from_mj_vec(antenna), view.time)
         self.left -= 1
         return OperationResult(ok=True)

@@ -3,11 +3,8 @@ tags that every robot's reader (:mod:`usarsim.sensors.rfid`) can sense."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
-
-import numpy as np
 
 from usarsim.effecters.base import EFFECTERS, Effecter
 from usarsim.readings import ItemParams, OperationResult
@@ -46,11 +43,6 @@ class RFIDReleaser(Effecter[RfidReleaserConfig]):
             return None
         if self.left <= 0 or view.entities is None:
             return OperationResult(ok=False)
-        d = view.data
-        pos, _ = self.handle.sensor_frame(d, self.item.location, self.item.orientation, self.item.mount)
-        down = np.array([[0.0, 0.0, -1.0]])
-        dist, _, _ = view.caster.cast(pos, down, 10.0, self.handle.body_id)
-        ground = pos + down[0] * (float(dist[0]) if math.isfinite(dist[0]) else 0.0)
-        view.entities.release_tag(frames.from_mj_vec(ground))
+        view.entities.release_tag(frames.from_mj_vec(self.ground_below(view)))
         self.left -= 1
         return OperationResult(ok=True)
