@@ -279,8 +279,11 @@ class ServerThread:
         image=None,
         wireless_model: str | None = None,
         sim=None,
+        **serve_options,
     ):
-        """``sim``: the simulation's :class:`usarsim.sim.settings.SimSettings` (None: the defaults)."""
+        """``sim``: the simulation's :class:`usarsim.sim.settings.SimSettings` (None: the defaults);
+        ``serve_options``: more fields of :class:`usarsim.server.config.ServeConfig` (``record``,
+        ``score_file``...)."""
         from usarsim.server.app import Application
         from usarsim.server.config import ServeConfig
         from usarsim.server.image import ImageSettings
@@ -304,6 +307,7 @@ class ServerThread:
                 image=image if image is not None else ImageSettings(),
                 wireless=wireless,
                 web_port=0,
+                **serve_options,
             )
         )
         self.loop = asyncio.new_event_loop()

@@ -326,7 +326,7 @@ def test_the_summary_gives_mean_deviation_and_an_interval_suited_to_each_score(t
     assert float(summary[1]["victims_found_ci95_low"]) == pytest.approx(0.2422 / 3, abs=1e-4)
     page = report.html_path.read_text()
     assert page.count('<img src="data:image/png;base64,') == 6 and "boom" in page
-    assert "±" not in page and page.count("mean [95 % CI, Poisson]") == 5  # the five counts
+    assert "±" not in page and page.count("mean [95 % CI, Poisson]") == 5  # the five counts (no message was sent)
 
 
 def test_report_help_shows_plain_percent_signs(capsys):

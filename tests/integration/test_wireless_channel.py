@@ -5,6 +5,7 @@ do, and what arrives is read after each STEP."""
 
 from __future__ import annotations
 
+import json
 import socket
 import struct
 
@@ -24,12 +25,12 @@ start_poses:
 """
 
 
-def channel_server(tmp_path, channel: str, seed: int = 4) -> ServerThread:
+def channel_server(tmp_path, channel: str, seed: int = 4, **serve_options) -> ServerThread:
     from usarsim.config.world_file import load_world
 
     p = tmp_path / "ChannelArena.yaml"
     p.write_text(WORLD.format(channel=channel))
-    srv = ServerThread(load_world(p), seed=seed).start()
+    srv = ServerThread(load_world(p), seed=seed, **serve_options).start()
     stations(srv, ["A0", "B0"])
     return srv
 
@@ -117,7 +118,10 @@ def test_a_megabyte_over_a_link_capped_at_125_kb_s_takes_8_simulated_seconds(tmp
 
 
 def test_an_independent_loss_of_20_percent_drops_20_percent_of_10000_messages(tmp_path, sockets):
-    srv = channel_server(tmp_path, "{loss: {model: independent, rate: 0.2}}")
+    record, score = tmp_path / "loss.mcap", tmp_path / "score.json"
+    srv = channel_server(
+        tmp_path, "{loss: {model: independent, rate: 0.2}}", record=str(record), score=True, score_file=str(score)
+    )
     try:
         a, b, _w = open_link(srv, sockets)
         a.sendall(frames([struct.pack(">I", k) for k in range(10_000)]))
@@ -131,8 +135,20 @@ def test_an_independent_loss_of_20_percent_drops_20_percent_of_10000_messages(tm
         assert abs(lost - 0.2) < 0.02, lost
         counts = srv.on_sim(lambda sim: srv.app.facade.radio_net.counts())[("a0", "b0")]
         assert counts.delivered == len(arrived) and counts.dropped["loss"] == 10_000 - len(arrived)
+        srv.connect().step(1.0)  # the traffic is sampled with the links, every simulated second
     finally:
         srv.stop()
+    # the numbers, in the score file and the recording
+    team = json.loads(score.read_text())
+    assert team["team"]["messages_lost"] == 10_000 - len(arrived)
+    assert team["team"]["messages_delivered"] == len(arrived)
+    assert team["radio"]["a0>b0"]["dropped"] == {"range": 0, "loss": 10_000 - len(arrived), "capacity": 0}
+    from mcap.reader import make_reader
+
+    with open(record, "rb") as f:
+        traffic = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages(topics=["/usarsim/radio/traffic"])]
+    assert traffic[-1]["a0>b0"]["dropped_loss"] == 10_000 - len(arrived)
+    assert traffic[-1]["a0>b0"]["delivered"] == len(arrived)
 
 
 def handed(srv: ServerThread) -> int:
@@ -259,7 +275,7 @@ start_poses:
 """
 
 
-def relay_run(tmp_path, drop: bool) -> tuple[str, list[str], bytes]:
+def relay_run(tmp_path, drop: bool, **serve_options) -> tuple[str, list[str], bytes]:
     """A ComStation at x = -10 and a robot with a RelayDropper starting at x = -2: it drops a
     relay there (or not), drives to x = 5, beyond the station's reach (9.5 m with n = 3 and a
     -70 dBm cutoff), and opens a link to it.  (OPEN's reply, the robot's neighbours, what the
@@ -279,7 +295,7 @@ def relay_run(tmp_path, drop: bool) -> tuple[str, list[str], bytes]:
     )
     p = tmp_path / "RelayLane.yaml"
     p.write_text(RELAY_WORLD)
-    srv = ServerThread(load_world(p), seed=3, robot_dirs=(str(robots),)).start()
+    srv = ServerThread(load_world(p), seed=3, robot_dirs=(str(robots),), **serve_options).start()
     radios = []
     try:
         (station,) = spawn(srv, [("ComStation", "Base", "-10,0,-0.61")])
@@ -305,6 +321,7 @@ def relay_run(tmp_path, drop: bool) -> tuple[str, list[str], bytes]:
         if opened:
             assert radios[0].send("Base", b"victim at 3,4")
             courier.step(0.1)
+            courier.step(1.0)  # the traffic is sampled with the links, every simulated second
             msgs = wait_for(lambda: radios[1].poll(), what="the message to arrive")  # noqa: B023
             got = msgs[0][1] if msgs[0][0] == "Courier" else b""
         return ("OK;" if opened else "Fail;"), neighbours, got
@@ -321,6 +338,18 @@ def positions(srv: ServerThread) -> dict[str, tuple[float, float, float]]:
 def test_a_robot_out_of_reach_of_the_comstation_reaches_it_through_a_relay_it_dropped(tmp_path):
     without, neighbours_without, _ = relay_run(tmp_path, drop=False)
     assert without == "Fail;" and neighbours_without == []
-    with_relay, neighbours_with, got = relay_run(tmp_path, drop=True)
+    record, score = tmp_path / "relay.mcap", tmp_path / "score.json"
+    with_relay, neighbours_with, got = relay_run(
+        tmp_path, drop=True, record=str(record), score_file=str(score), score=True
+    )
     assert with_relay == "OK;" and got == b"victim at 3,4"
     assert neighbours_with == ["Courier-Relay1"]  # the relay is in reach; the station is not
+    # the recording has the relay where it was dropped (x = -2 less the item's 0.2 m)
+    from mcap.reader import make_reader
+
+    relays = []
+    with open(record, "rb") as f:
+        for _schema, channel, message in make_reader(f).iter_messages(topics=["/usarsim/relays"]):
+            relays.append(json.loads(message.data) if channel.message_encoding == "json" else message.data)
+    assert relays, "no relay in the recording"
+    assert b"Courier-Relay1" in (relays[-1] if isinstance(relays[-1], bytes) else json.dumps(relays[-1]).encode())

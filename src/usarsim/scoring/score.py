@@ -22,7 +22,7 @@ import numpy as np
 from usarsim.config.world import WorldConfig
 from usarsim.coverage import CoverageGrid
 from usarsim.readings import CommandResult, RangeScanReading, VictimReading
-from usarsim.sim.types import Output, WorldFrame, euler_to_mat
+from usarsim.sim.types import LinkTraffic, Output, WorldFrame, euler_to_mat
 
 # Floor explored: cells of this size over the world's floor, marked along every laser beam
 # from the scanner to what it hit, up to SCAN_RANGE_M (the reach at which a laser's map of a
@@ -113,6 +113,7 @@ class Scorer:
         self.false_reports = 0
         self._victims = [(v.name, v.location) for v in world.victims]
         self._waiting: dict[int, list[Output]] = {}
+        self.traffic: dict[tuple[str, str], LinkTraffic] = {}  # what the radio channel carried, by link
 
     # Feeding ---------------------------------------------------------------------------
     def frame(self, f: WorldFrame) -> None:
@@ -143,6 +144,8 @@ class Scorer:
             s.flipped = rot[2][2] < 0.0  # the robot's own down axis points up
             for o in self._waiting.pop(r.uid, ()):
                 self.output(o)
+        if f.traffic is not None:
+            self.traffic = {(t.src, t.dst): t for t in f.traffic}  # counts since the start: the latest
         if f.links is not None:
             up: set[str] = set()
             for ln in f.links:
@@ -253,6 +256,7 @@ class Scorer:
             shares.append(share)
         area = self.grid.seen_m2
         team_share = float(np.mean(shares)) if shares else 0.0
+        traffic = list(self.traffic.values())
         counted = len(self._reported) if self.reports else len(found)
         score = (
             w.victim * counted
@@ -277,8 +281,20 @@ class Scorer:
                 "collisions": collisions,
                 "robots_lost": lost,
                 "radio_contact_share": round(team_share, 4),
+                "messages_delivered": sum(t.delivered for t in traffic),
+                "messages_lost": sum(t.dropped for t in traffic),
             },
             "robots": robots,
+            "radio": {
+                f"{t.src}>{t.dst}": {
+                    "delivered": t.delivered,
+                    "delivered_bytes": t.delivered_bytes,
+                    "dropped": {"range": t.dropped_range, "loss": t.dropped_loss, "capacity": t.dropped_capacity},
+                    "dropped_bytes": t.dropped_bytes,
+                    "mean_delay_s": round(t.mean_delay_s, 6),
+                }
+                for t in sorted(traffic, key=lambda t: (t.src, t.dst))
+            },
         }
 
     def line(self) -> str:
@@ -289,7 +305,12 @@ class Scorer:
             f"score t={r['time_s']:.1f} s: {t['score']:.1f} (victims {t['victims_found']} found, "
             f"{t['victims_reported']} reported, {t['false_reports']} false; area {t['area_m2']:.1f} m2; "
             f"distance {t['distance_m']:.1f} m; collisions {t['collisions']}; robots lost {t['robots_lost']}; "
-            f"radio contact {100 * t['radio_contact_share']:.0f} %)"
+            f"radio contact {100 * t['radio_contact_share']:.0f} %"
+            + (
+                f"; messages lost {t['messages_lost']} of {t['messages_delivered'] + t['messages_lost']})"
+                if self.traffic
+                else ")"
+            )
         )
 
 

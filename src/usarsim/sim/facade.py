@@ -391,7 +391,7 @@ class SimFacade:
         key = (float(period_s), float(links_period_s))
         watch = self._frame_watches.get(key)
         if watch is None:  # observers with the same periods share one frame (the recording, the score)
-            watch = self._frame_watches[key] = FrameWatch(links_period_s)
+            watch = self._frame_watches[key] = FrameWatch(links_period_s, live=lambda: self._radio)
             self.sim.every(period_s, watch)
         watch.add(on_frame, radio_model)
 

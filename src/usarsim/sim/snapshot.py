@@ -20,7 +20,7 @@ import numpy as np
 
 from usarsim.sim import frames
 from usarsim.sim.radio import RadioModel, RadioNet, pair_key
-from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
+from usarsim.sim.worldframe import LinkFrame, LinkTraffic, ObjectFrame, RelayFrame, RobotFrame, WorldFrame
 
 if TYPE_CHECKING:
     from usarsim.sim.simulation import Simulation
@@ -30,9 +30,10 @@ if TYPE_CHECKING:
 MAX_LINK_ROBOTS = 32
 
 
-def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
-    """The poses of every robot and movable object now; with ``radio``, the links of every
-    pair of robots (at most MAX_LINK_ROBOTS robots)."""
+def take_frame(sim: Simulation, radio: RadioNet | None = None, live: RadioNet | None = None) -> WorldFrame:
+    """The poses of every robot and movable object now, and the relays dropped; with
+    ``radio``, the links of every pair of robots (at most MAX_LINK_ROBOTS robots) and what the
+    channel of ``live`` (the servers' radio) carried so far."""
     d, m = sim.data, sim.model
     forces = wall_forces(sim)
     robots = tuple(
@@ -73,7 +74,24 @@ def take_frame(sim: Simulation, radio: RadioNet | None = None) -> WorldFrame:
                         pa, pb = pair_key(a, b)
                         found.append(LinkFrame(pa, pb, ln.signal_dbm, ln.distance_m, ln.walls, ln.holds))
         links = tuple(found)
-    return WorldFrame(sim.time, robots, tuple(objects), links)
+    traffic = None
+    if radio is not None and live is not None and live.channel is not None:
+        traffic = tuple(
+            LinkTraffic(
+                a,
+                b,
+                c.delivered,
+                c.delivered_bytes,
+                c.dropped["range"],
+                c.dropped["loss"],
+                c.dropped["capacity"],
+                sum(c.dropped_bytes.values()),
+                c.delay_s / c.delivered if c.delivered else 0.0,
+            )
+            for (a, b), c in live.counts().items()
+        )
+    relays = tuple(RelayFrame(r.name, r.owner, r.location) for r in sim.entities.relays)
+    return WorldFrame(sim.time, robots, tuple(objects), links, traffic, relays)
 
 
 # A contact counts as a push against a wall when its normal is within 60 degrees of the
@@ -120,8 +138,9 @@ class FrameWatch:
     after the last ones that had them, for the observers that asked for them (with a radio
     model); the others get those frames without links."""
 
-    def __init__(self, links_period_s: float = 1.0):
+    def __init__(self, links_period_s: float = 1.0, live: Callable[[], RadioNet | None] | None = None):
         self.links_period_s = links_period_s
+        self.live = live or (lambda: None)  # the servers' radio, whose channel's counts frames carry
         self._observers: list[tuple[Callable[[WorldFrame], None], bool]] = []
         self._radio: RadioNet | None = None  # its own wall cache
         self._last_links = -math.inf
@@ -138,11 +157,11 @@ class FrameWatch:
         radio = None
         if self._radio is not None and now - self._last_links >= self.links_period_s - 1e-9:
             radio, self._last_links = self._radio, now
-        frame = take_frame(sim, radio)
+        frame = take_frame(sim, radio, self.live())
         bare = None
         for on_frame, links in self._observers:
             if frame.links is not None and not links:
-                bare = bare or WorldFrame(frame.time, frame.robots, frame.objects, None)
+                bare = bare or WorldFrame(frame.time, frame.robots, frame.objects, None, None, frame.relays)
                 on_frame(bare)
             else:
                 on_frame(frame)

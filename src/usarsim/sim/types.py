@@ -12,7 +12,7 @@ from usarsim.sim.frames import euler_to_mat
 from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers, VelocityLimits
 from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_channel, resolve_model
 from usarsim.sim.tiles import Tile, grid_tiles
-from usarsim.sim.worldframe import LinkFrame, ObjectFrame, RobotFrame, WorldFrame
+from usarsim.sim.worldframe import LinkFrame, LinkTraffic, ObjectFrame, RelayFrame, RobotFrame, WorldFrame
 
 __all__ = [
     "Delivery",
@@ -21,10 +21,12 @@ __all__ = [
     "Link",
     "LinkCounts",
     "LinkFrame",
+    "LinkTraffic",
     "ObjectFrame",
     "Output",
     "Pair",
     "RadioModel",
+    "RelayFrame",
     "RobotFrame",
     "RobotNumbers",
     "Tile",

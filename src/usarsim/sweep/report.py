@@ -36,6 +36,8 @@ METRICS = {
     "collisions": "collisions",
     "robots_lost": "robots lost",
     "radio_contact_share": "radio contact share",
+    "messages_delivered": "team messages delivered",
+    "messages_lost": "team messages lost",
 }
 PLOTTED = ("score", "victims_found", "area_m2")
 AXIS_NAMES = {
@@ -59,6 +61,8 @@ INTERVALS: dict[str, tuple[str, float | None, float | None]] = {
     "area_m2": (T_CLIPPED, 0.0, None),
     "distance_m": (T_CLIPPED, 0.0, None),
     "radio_contact_share": (T_CLIPPED, 0.0, 1.0),
+    "messages_delivered": (POISSON, 0.0, None),
+    "messages_lost": (POISSON, 0.0, None),
 }
 
 
@@ -166,7 +170,16 @@ def digits_of(metric: str) -> int:
         3
         if metric == "radio_contact_share"
         else 2
-        if metric in ("collisions", "robots_lost", "victims_found", "victims_reported", "false_reports")
+        if metric
+        in (
+            "collisions",
+            "robots_lost",
+            "victims_found",
+            "victims_reported",
+            "false_reports",
+            "messages_delivered",
+            "messages_lost",
+        )
         else 1
     )
 
@@ -328,6 +341,18 @@ def _cfg_cell(text: str) -> str:
     return f'<td class="cfg{" word" if whole else ""}">{html.escape(text)}</td>'
 
 
+# Scores a run has only with a radio channel beyond USARSim's (docs/wireless.md): the summary
+# shows them when some run counted a message
+CHANNEL_SCORES = ("messages_delivered", "messages_lost")
+
+
+def shown_metrics(rows: list[dict[str, Any]]) -> list[str]:
+    """The scores the summary table shows: every one, but the channel's messages only when some
+    run counted one."""
+    counted = any((r.get(m) or 0) > 0 for r in rows for m in CHANNEL_SCORES)
+    return [m for m in SCORE_COLUMNS if counted or m not in CHANNEL_SCORES]
+
+
 def _html(
     folder: Path,
     rows: list[dict[str, Any]],
@@ -371,14 +396,15 @@ def _html(
     )
     out.append('<div class="fit"><table id="summary"><thead><tr>')
     out += [f"<th>{e(AXIS_NAMES[c])}</th>" for c in shown]
+    metrics = shown_metrics(rows)
     out += ["<th>runs</th>", "<th>failed</th>"] + [
-        f'<th>{e(METRICS[m])}<span class="how">mean [95 % CI, {e(_how(m))}]</span></th>' for m in SCORE_COLUMNS
+        f'<th>{e(METRICS[m])}<span class="how">mean [95 % CI, {e(_how(m))}]</span></th>' for m in metrics
     ]
     out.append("</tr></thead><tbody>")
     for g in groups:
         out.append("<tr>" + "".join(_cfg_cell(short(g.config[c], 60)) for c in shown))
         out.append(f'<td class="num">{len(g.seeds)}</td><td class="num">{g.failed}</td>')
-        for m in SCORE_COLUMNS:
+        for m in metrics:
             s, d = g.stat(m), digits_of(m)
             tip = f' title="standard deviation {fmt(s.sd, d)} over {s.n} runs"' if s.sd is not None else ""
             ci = f'<span class="ci">{fmt_ci(s, d)}</span>' if s.ci_low is not None else ""

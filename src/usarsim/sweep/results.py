@@ -25,8 +25,18 @@ SCORE_COLUMNS = (
     "collisions",
     "robots_lost",
     "radio_contact_share",
+    "messages_delivered",
+    "messages_lost",
 )
-_INT_SCORES = {"victims_found", "victims_reported", "false_reports", "collisions", "robots_lost"}
+_INT_SCORES = {
+    "victims_found",
+    "victims_reported",
+    "false_reports",
+    "collisions",
+    "robots_lost",
+    "messages_delivered",
+    "messages_lost",
+}
 
 # Every column of a row, in order, with its type (pyarrow's name).
 COLUMNS: tuple[tuple[str, str], ...] = (

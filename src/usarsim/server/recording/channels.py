@@ -59,6 +59,26 @@ LINK_SCHEMA = {
     },
 }
 
+TRAFFIC_SCHEMA = {
+    "title": "usarsim.RadioTraffic",
+    "type": "object",
+    "description": "what the radio channel carried on each link (sender>receiver) since the start",
+    "additionalProperties": {
+        "type": "object",
+        "properties": {
+            "delivered": {"type": "integer"},
+            "delivered_bytes": {"type": "integer"},
+            "dropped_range": {"type": "integer"},
+            "dropped_loss": {"type": "integer"},
+            "dropped_capacity": {"type": "integer"},
+            "dropped_bytes": {"type": "integer"},
+            "mean_delay_s": {"type": "number"},
+        },
+    },
+}
+TRAFFIC_TOPIC = "/usarsim/radio/traffic"
+RELAYS_TOPIC = "/usarsim/relays"
+
 LEVELS = ((logging.ERROR, LogLevel.Error), (logging.WARNING, LogLevel.Warning), (logging.INFO, LogLevel.Info))
 
 
@@ -97,6 +117,7 @@ IMAGE = typed(fch.CompressedImageChannel)
 STATE = json_channel(STATE_SCHEMA)
 STATUS = json_channel(STATUS_SCHEMA)
 LINK = json_channel(LINK_SCHEMA)
+TRAFFIC = json_channel(TRAFFIC_SCHEMA)
 
 
 _XYZ = [

@@ -219,6 +219,7 @@ class Recorder(RecordingWriter):
         self._names: dict[int, str] = {}  # uid -> robot name
         self._seen: dict[str, Seen] = {}  # robots by name
         self._objects: dict[str, object] = {}  # movable objects as last written
+        self._relays: int = 0  # relays written to the relays channel
         self._waiting: dict[int, list[Output]] = {}
         self._last_refresh = -math.inf
         self.messages = 0  # written (every sink counted once)

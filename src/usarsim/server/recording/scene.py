@@ -333,6 +333,50 @@ def robot_entity(name: str, class_name: str, dimensions, t: float) -> SceneEntit
     )
 
 
+# A dropped radio relay as recordings draw it: an orange box 0.15 m across with its antenna
+# (the size of a breadcrumb is an estimate)
+RELAY_RGBA = (1.0, 0.55, 0.0, 1.0)
+RELAY_SIZE_M = 0.15
+
+
+def relays_scene(relays, t: float) -> SceneUpdate:
+    """The relays robots dropped (:class:`usarsim.sim.types.RelayFrame`), each a box on the
+    ground under its antenna and its name, in the world frame."""
+    ents = []
+    for r in relays:
+        x, y, z = r.location
+        ground = (x, y, z + ANTENNA_ABOVE_GROUND_M - RELAY_SIZE_M / 2)  # USARSim's Z is down
+        ents.append(
+            SceneEntity(
+                timestamp=timestamp(t),
+                frame_id=WORLD_FRAME,
+                id=f"relay/{r.name}",
+                cubes=[
+                    CubePrimitive(
+                        pose=pose(ground, (0.0, 0.0, 0.0)),
+                        size=Vector3(x=RELAY_SIZE_M, y=RELAY_SIZE_M, z=RELAY_SIZE_M),
+                        color=color(RELAY_RGBA),
+                    )
+                ],
+                texts=[
+                    TextPrimitive(
+                        pose=pose((x, y, z - 0.3), (0.0, 0.0, 0.0)),
+                        billboard=True,
+                        font_size=12.0,
+                        scale_invariant=True,
+                        color=color(RELAY_RGBA),
+                        text=r.name,
+                    )
+                ],
+            )
+        )
+    return SceneUpdate(entities=ents)
+
+
+# where a relay's antenna stands above the ground (usarsim.effecters.relay_dropper)
+ANTENNA_ABOVE_GROUND_M = 0.2
+
+
 def robot_deletion(name: str, t: float) -> SceneUpdate:
     return SceneUpdate(deletions=[SceneEntityDeletion(timestamp=timestamp(t), id=f"robot/{name}")])
 

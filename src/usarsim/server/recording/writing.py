@@ -114,6 +114,7 @@ class RecordingWriter:
     _names: dict[int, str]
     _seen: dict[str, Seen]
     _objects: dict[str, object]
+    _relays: int
     _waiting: dict[int, list[Output]]
     _last_refresh: float
 
@@ -299,6 +300,23 @@ class RecordingWriter:
                 ).encode(),
                 t,
             )
+        if f.traffic:
+            body = {
+                f"{x.src}>{x.dst}": {
+                    "delivered": x.delivered,
+                    "delivered_bytes": x.delivered_bytes,
+                    "dropped_range": x.dropped_range,
+                    "dropped_loss": x.dropped_loss,
+                    "dropped_capacity": x.dropped_capacity,
+                    "dropped_bytes": x.dropped_bytes,
+                    "mean_delay_s": round(x.mean_delay_s, 6),
+                }
+                for x in f.traffic
+            }
+            self._log(ch.TRAFFIC_TOPIC, ch.TRAFFIC, json.dumps(body).encode(), t)
+        if len(f.relays) != self._relays:  # a relay was dropped: all of them again
+            self._relays = len(f.relays)
+            self._log(ch.RELAYS_TOPIC, ch.SCENE, scene.relays_scene(f.relays, t), t)
         if self._renderer is not None and t - self._last_pictures >= 1.0 / self.camera_fps - 1e-9:
             self._last_pictures = t
             self._ask_pictures()
