@@ -7,9 +7,11 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -291,3 +293,15 @@ def test_the_brains_load_no_mujoco_simulation_or_server():
     loaded, probe = out.stdout.splitlines()
     assert loaded == ""
     assert probe == "True"
+
+
+def test_the_team_under_a_subt_like_radio_reports_what_was_lost(capsys):
+    from usarsim.brains.team import main
+
+    radio = Path(__file__).resolve().parents[2] / "examples" / "subt_radio.yaml"
+    assert main(["--robots", "2", "--seconds", "12", "--wireless-config", str(radio)]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    m = re.search(r"radio: (\d+) messages delivered, (\d+) lost \((\d+) out of range, (\d+) on the way, (\d+)", line)
+    assert m is not None, line
+    delivered, lost, by_range, on_way, queues = map(int, m.groups())
+    assert delivered > 0 and lost == by_range + on_way + queues

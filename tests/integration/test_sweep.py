@@ -141,6 +141,20 @@ def test_dry_run_lists_every_run_and_runs_none(tmp_path, capsys):
     assert not out.exists()  # nothing ran, nothing written
 
 
+def test_a_wireless_configuration_file_is_a_value_of_the_wireless_axis(tmp_path):
+    from usarsim.sweep.worker import server_arguments
+
+    (tmp_path / "radio.yaml").write_text("channel: {loss: {model: independent, rate: 0.1}}\n")
+    exp = load_experiment(write(tmp_path, TWO_BY_TWO.replace("grid:", "wireless: radio.yaml\ngrid:")))
+    assert {r.wireless for r in exp.runs} == {str((tmp_path / "radio.yaml").resolve())}
+    assert server_arguments(exp.runs[0])[-2:] == ["--wireless-config", str((tmp_path / "radio.yaml").resolve())]
+    (tmp_path / "bad.yaml").write_text("channel: {loss: {model: independent, rate: 5}}\n")
+    err = error_of(tmp_path, TWO_BY_TWO.replace("grid:", "wireless: bad.yaml\ngrid:"))
+    assert "probability" in str(err)
+    err = error_of(tmp_path, TWO_BY_TWO.replace("grid:", "wireless: nothere.yaml\ngrid:"))
+    assert "nothere.yaml" in str(err)
+
+
 # ---------------------------------------------------------------- real sweeps
 
 

@@ -353,3 +353,34 @@ def test_a_robot_out_of_reach_of_the_comstation_reaches_it_through_a_relay_it_dr
             relays.append(json.loads(message.data) if channel.message_encoding == "json" else message.data)
     assert relays, "no relay in the recording"
     assert b"Courier-Relay1" in (relays[-1] if isinstance(relays[-1], bytes) else json.dumps(relays[-1]).encode())
+
+
+def test_a_dropped_relay_is_drawn_in_pictures():
+    from helpers import gl_problem
+
+    if problem := gl_problem():
+        pytest.skip(problem)
+    import mujoco
+
+    from usarsim.sim.render import SEEN, camera_renderer, draw_relays
+
+    m = mujoco.MjModel.from_xml_string(
+        "<mujoco><worldbody><light pos='0 -1 3' dir='0 0.3 -1'/>"
+        "<geom type='plane' size='5 5 0.1' rgba='0.5 0.5 0.5 1'/></worldbody></mujoco>"
+    )
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    cam = mujoco.MjvCamera()
+    cam.lookat[:] = (0.0, 0.0, 0.1)
+    cam.distance, cam.azimuth, cam.elevation = 1.5, 90.0, -30.0
+    r = camera_renderer(m, 160, 120, shadows=False)
+    try:
+        pictures = []
+        for relays in ((), ((0.0, 0.0, 0.2),)):
+            r.update_scene(d, cam, SEEN)
+            draw_relays(r.scene, relays)
+            pictures.append(r.render().astype(int))
+    finally:
+        r.close()
+    orange = [((p[..., 0] > 150) & (p[..., 1] > 60) & (p[..., 1] < 160) & (p[..., 2] < 60)).sum() for p in pictures]
+    assert orange[0] == 0 and orange[1] > 150, orange  # the box is about 17 x 17 pixels here

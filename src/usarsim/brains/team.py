@@ -23,10 +23,13 @@ lasers swept (:class:`usarsim.brains.coverage.Referee`, from the robots' ground 
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import math
+import os
 import struct
 import sys
+import tempfile
 import time
 import zlib
 from typing import Any
@@ -232,6 +235,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--lockstep", action="store_true", help="the running simulator is in lock-step: step it")
     p.add_argument("--no-radio", action="store_true", help="explore without sharing maps")
     p.add_argument(
+        "--wireless-config",
+        metavar="FILE",
+        help="the launched simulator's radio (usarsim serve --wireless-config): a YAML file with a "
+        "world's wireless keys, for example examples/subt_radio.yaml (capacity, fading and loss "
+        "like DARPA SubT's); the figures then give the team's messages delivered and lost",
+    )
+    p.add_argument(
         "--compare",
         action="store_true",
         help="also run one robot alone on a fresh simulator, same seed and time (launched only)",
@@ -270,13 +280,21 @@ def main(argv: list[str] | None = None) -> int:
             bounds = Bounds(*FloorMap.from_world(config).solids_box)
         runs = [(args.robots, not args.no_radio)] + ([(1, False)] if args.compare else [])
         for n, radio in runs:
-            with launch(world=args.world, seed=args.seed, lockstep=True, wireless=radio) as server:
-                world = server.connect()
-                poses = world.start_poses
-                referee = Referee(config, (poses[0].location[0], poses[0].location[1]))
-                comserver = (server.host, server.ports["comserver"]) if radio else None
-                fig = explore(world, n, args.seconds, bounds=bounds, comserver=comserver, referee=referee)
-                world.close()
+            with tempfile.TemporaryDirectory() as tmp:
+                score_file = os.path.join(tmp, "score.json")
+                extra: tuple[str, ...] = ("--score-file", score_file)
+                if radio and args.wireless_config:
+                    extra += ("--wireless-config", args.wireless_config)
+                with launch(
+                    world=args.world, seed=args.seed, lockstep=True, wireless=radio, extra_args=extra
+                ) as server:
+                    world = server.connect()
+                    poses = world.start_poses
+                    referee = Referee(config, (poses[0].location[0], poses[0].location[1]))
+                    comserver = (server.host, server.ports["comserver"]) if radio else None
+                    fig = explore(world, n, args.seconds, bounds=bounds, comserver=comserver, referee=referee)
+                    world.close()
+                fig.update(radio_figures(score_file))
             print_figures(fig)
     except (ClientError, RadioError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -284,6 +302,26 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
     return 0
+
+
+def radio_figures(score_file: str) -> dict[str, Any]:
+    """What the simulator's radio channel carried, from the score file it wrote when it stopped:
+    the team's messages delivered and lost, and the losses by cause (empty: no channel beyond
+    USARSim's, or no file)."""
+    try:
+        with open(score_file, encoding="utf-8") as f:
+            score = json.load(f)
+    except (OSError, ValueError):
+        return {}
+    links = score.get("radio") or {}
+    if not links:
+        return {}
+    causes = {c: sum(ln["dropped"][c] for ln in links.values()) for c in ("range", "loss", "capacity")}
+    return {
+        "messages_delivered": score["team"]["messages_delivered"],
+        "messages_lost": score["team"]["messages_lost"],
+        "lost_by_cause": causes,
+    }
 
 
 def print_figures(fig: dict[str, Any]) -> None:
@@ -299,6 +337,12 @@ def print_figures(fig: dict[str, Any]) -> None:
             f"; arena floor swept {100 * fig['arena_share']:.1f} %, within {NEAR_M:g} m "
             f"{100 * fig['arena_near_share']:.1f} % (all reachable floor {100 * fig['reachable_share']:.1f} %)"
             f" [{every}]"
+        )
+    if "messages_lost" in fig:
+        c = fig["lost_by_cause"]
+        line += (
+            f"; radio: {fig['messages_delivered']} messages delivered, {fig['messages_lost']} lost "
+            f"({c['range']} out of range, {c['loss']} on the way, {c['capacity']} to full queues)"
         )
     print(line, flush=True)
 

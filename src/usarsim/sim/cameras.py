@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, cast
 
 import mujoco
 
-from usarsim.sim import robotspec
+from usarsim.sim import frames, robotspec
 from usarsim.sim.pictures import SceneTables, scene_tables
 
 if TYPE_CHECKING:
@@ -124,6 +124,7 @@ class Cameras:
                 )
         snap.tables = self.scene_tables() if beyond_colour else None
         snap.cold_robots = frozenset(r.uid for r in self.sim.robots.values() if r.battery_empty)
+        snap.relays = tuple(tuple(frames.to_mj_vec(r.location).tolist()) for r in self.sim.entities.relays)
         return snap
 
     def scene_tables(self) -> SceneTables:

@@ -129,6 +129,7 @@ class Snapshot:
     bodies: dict[str, int] = field(default_factory=dict)  # each robot's chassis body, by its name in lower case
     tables: SceneTables | None = None  # what thermal and label cameras see of each geom
     cold_robots: frozenset[int] = frozenset()  # robots whose battery is empty (cold to a thermal camera)
+    relays: tuple[tuple[float, ...], ...] = ()  # the antennas of the radio relays robots dropped (MuJoCo frame)
 
 
 @dataclass(frozen=True)
@@ -333,6 +334,7 @@ class RenderService:
             model.cam_fovy[cam.cam_id] = camera_fovy_deg(cam.fov_rad, width, height)
             r = self._renderer(model, width, height)
             r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
+            draw_relays(r.scene, snap.relays)
             if cam.picture != "colour":
                 return self._beyond_colour(r, snap, cam)
             return self._shoot(r, snap)
@@ -350,6 +352,7 @@ class RenderService:
                 model.cam_fovy[cam.cam_id] = camera_fovy_deg(math.pi / 2, w, height)
                 r = self._renderer(model, w, height)
                 r.update_scene(data, camera=cam.cam_id, scene_option=SEEN)
+                draw_relays(r.scene, snap.relays)
                 out[:, edges[k] : edges[k + 1]] = self._shoot(r, snap)
         finally:
             data.cam_xmat[cam.cam_id] = base.ravel()
@@ -403,6 +406,7 @@ class RenderService:
         cam.distance = v.distance
         r = self._renderer(model, v.width, v.height)
         r.update_scene(data, camera=cam, scene_option=SEEN)
+        draw_relays(r.scene, snap.relays)
         picture = self._shoot(r, snap)
         return picture, {
             "lookat": [round(float(c), 4) for c in lookat],
@@ -413,6 +417,41 @@ class RenderService:
             "time": round(snap.time, 4),
             "follow": followed,
         }
+
+
+# A dropped radio relay in pictures: an orange box on the ground with a short black antenna (the
+# antenna point is its tip; sizes are estimates of a breadcrumb, as usarsim.effecters.relay_dropper's)
+RELAY_BOX_M = 0.15
+RELAY_RGBA = np.array([1.0, 0.55, 0.0, 1.0], dtype=np.float32)
+ANTENNA_RGBA = np.array([0.05, 0.05, 0.05, 1.0], dtype=np.float32)
+RELAY_ANTENNA_M = 0.2
+
+
+def draw_relays(scene: mujoco.MjvScene, relays) -> None:
+    """Add the relays (their antenna tips, MuJoCo frame) to ``scene`` as decorations: they are
+    drawn in every picture, and no sensor's ray meets them."""
+    eye = np.eye(3).ravel()
+    for x, y, z in relays:
+        for kind, size, pos, rgba in (
+            (
+                mujoco.mjtGeom.mjGEOM_BOX,
+                [RELAY_BOX_M / 2] * 3,
+                (x, y, z - RELAY_ANTENNA_M + RELAY_BOX_M / 2),
+                RELAY_RGBA,
+            ),
+            (
+                mujoco.mjtGeom.mjGEOM_CYLINDER,
+                [0.006, RELAY_ANTENNA_M / 2, 0.0],
+                (x, y, z - RELAY_ANTENNA_M / 2),
+                ANTENNA_RGBA,
+            ),
+        ):
+            if scene.ngeom >= scene.maxgeom:
+                return
+            mujoco.mjv_initGeom(
+                scene.geoms[scene.ngeom], int(kind), np.array(size, dtype=float), np.array(pos, dtype=float), eye, rgba
+            )
+            scene.ngeom += 1
 
 
 def render_with_depth(r: mujoco.Renderer) -> tuple[np.ndarray, np.ndarray]:

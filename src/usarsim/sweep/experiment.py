@@ -302,10 +302,20 @@ class Reader:
             raise self.error(key, exc.message if exc.path is None else str(exc)) from None
 
     def wireless(self, v: Any, key: str) -> str:
+        """``off``, ``world``, a radio model, or a wireless configuration file's absolute path."""
         if v is False or v is None:
             v = "off"
+        if isinstance(v, str) and v.lower().endswith((".yaml", ".yml", ".ini")):  # serve --wireless-config
+            from usarsim.sim.wireless_file import load_wireless_file
+
+            p = Path(v) if Path(v).is_absolute() else self.folder / v
+            try:
+                load_wireless_file(p)
+            except ConfigError as exc:
+                raise self.error(key, str(exc)) from None
+            return str(p.resolve())
         if not isinstance(v, str) or v.lower() not in WIRELESS:
-            raise self.error(key, f"'{v}' is not a wireless setting{did_you_mean(str(v), WIRELESS)}")
+            raise self.error(key, f"'{v}' is not a wireless setting or file{did_you_mean(str(v), WIRELESS)}")
         return v.lower()
 
     def duration(self, v: Any, key: str) -> float:

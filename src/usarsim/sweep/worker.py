@@ -56,9 +56,7 @@ def execute(run: Run) -> dict[str, Any]:
     watchdog: threading.Timer | None = None
     error: str | None = None
     try:
-        extra = ["--score-file", str(score_path)]
-        if run.wireless not in ("off", "world"):
-            extra += ["--wireless-model", run.wireless]
+        extra = ["--score-file", str(score_path), *server_arguments(run)]
         server = launch(
             world=run.world,
             seed=run.seed,
@@ -266,3 +264,13 @@ def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], dea
             raise RunFailed(
                 f"the controller exited with code {proc.returncode}" + (f": {tail}" if tail else " and printed nothing")
             )
+
+
+def server_arguments(run: Run) -> list[str]:
+    """The simulator's options for ``run``'s radio: a wireless configuration file, or a radio
+    model (none for the world's own, or with the wireless servers off)."""
+    if run.wireless.lower().endswith((".yaml", ".yml", ".ini")):
+        return ["--wireless-config", run.wireless]
+    if run.wireless not in ("off", "world"):
+        return ["--wireless-model", run.wireless]
+    return []
