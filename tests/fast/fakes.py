@@ -255,6 +255,10 @@ class FakeFacade:
         self.calls.append(("radio_send", (src, dst, payload)))
         return self._answer(None)
 
+    def radio_send_many(self, messages: list[Any]) -> Future[list[Any]]:
+        self.calls.append(("radio_send_many", (len(messages),)))
+        return self._answer([])
+
     def radio_counts(self) -> Future[dict[Any, Any]]:
         return self._answer({})
 

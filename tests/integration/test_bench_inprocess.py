@@ -25,3 +25,13 @@ def test_a_run_leaves_no_simulation_or_server_alive(yellow_world):
         assert (alive(Simulation), alive(Application)) == (sims, apps)
     finally:
         gc.enable()
+
+
+def test_the_radio_load_flows_through_the_channel_and_is_counted(yellow_world):
+    from usarsim.bench.radio import SUBT_CHANNEL, radio_rtf
+
+    ideal = radio_rtf(yellow_world, 3, 1.0, None, 10.0)
+    subt = radio_rtf(yellow_world, 3, 1.0, SUBT_CHANNEL, 10.0)
+    assert ideal["rtf"] > 0 and subt["rtf"] > 0
+    assert ideal["delivered"] == 0  # USARSim's channel relays at once: nothing goes through the channel
+    assert subt["links"] >= 1 and subt["delivered"] > 0  # every robot's messages to each teammate in reach

@@ -205,6 +205,10 @@ def _bench(args) -> int:
         from usarsim.ros2.bench import run_ros2_bench
 
         return run_ros2_bench(args)
+    if getattr(args, "radio_load", False):
+        from usarsim.bench.radio import run_radio_bench
+
+        return run_radio_bench(args)
     if args.round_trips:
         from usarsim.bench import run_round_trip_bench
 

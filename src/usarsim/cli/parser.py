@@ -133,6 +133,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --targets: runs of each benchmark; with --ros2: runs each way (default: %(default)s)",
     )
     b.add_argument(
+        "--radio-load",
+        action="store_true",
+        help="measure what the radio channel costs: --robots P2ATs (16 unless given) driving about while "
+        "each sends every teammate --radio-rate messages a simulated second through the ComServer, "
+        "under USARSim's channel and a SubT-like one (capacity, fading, loss) alternately, --runs pairs",
+    )
+    b.add_argument(
+        "--radio-rate",
+        type=float,
+        default=10.0,
+        help="with --radio-load: messages a simulated second to each teammate (default: %(default)s)",
+    )
+    b.add_argument(
         "--ros2",
         action="store_true",
         help="the ROS 2 bridge: N P2ATs in real time, alternately without and with 'usarsim ros2' and a "

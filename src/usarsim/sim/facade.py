@@ -337,6 +337,12 @@ class SimFacade:
         net = self._net()
         return self._ask(lambda sim: net.send(sim, src, dst, payload, token))
 
+    def radio_send_many(self, messages: list[tuple[str, str, bytes, object]]) -> Future[list[Drop]]:
+        """:meth:`radio_send` for many messages (src, dst, payload, token) at once, in order;
+        the drops (full queues)."""
+        net = self._net()
+        return self._ask(lambda sim: net.send_many(sim, messages))
+
     def radio_counts(self) -> Future[dict[tuple[str, str], LinkCounts]]:
         """What each link carried through the channel (sender, receiver): delivered, dropped by
         cause, delays."""

@@ -426,6 +426,15 @@ class RadioNet:
             raise RuntimeError("the ideal channel carries no messages: servers relay them at once")
         return self.channel.submit(sim.time, src, dst, payload, token)
 
+    def send_many(self, sim: Simulation, messages: list[tuple[str, str, bytes, object]]) -> list[Drop]:
+        """:meth:`send` for each (src, dst, payload, token) in order; the drops (full queues)."""
+        out = []
+        for src, dst, payload, token in messages:
+            drop = self.send(sim, src, dst, payload, token)
+            if drop is not None:
+                out.append(drop)
+        return out
+
     def counts(self) -> dict[tuple[str, str], LinkCounts]:
         """What each link (sender, receiver) carried through the channel so far."""
         return self.channel.counts() if self.channel is not None else {}
@@ -437,9 +446,14 @@ class RadioNet:
         antennas = self.antennas(sim)
         cutoff = self.model.cutoff_dbm
 
+        seen: dict[Pair, LinkView | None] = {}  # each link once an advance, however many messages it carries
+
         def view(src: str, dst: str) -> LinkView | None:
-            ln = self.link(sim, src, dst, antennas)
-            return None if ln is None else LinkView(ln.signal_dbm, cutoff, ln.distance_m, ln.holds)
+            pair = pair_key(src, dst)
+            if pair not in seen:
+                ln = self.link(sim, src, dst, antennas)
+                seen[pair] = None if ln is None else LinkView(ln.signal_dbm, cutoff, ln.distance_m, ln.holds)
+            return seen[pair]
 
         deliveries, drops = ch.due(sim.time, view)
         if (deliveries or drops) and self.on_deliver is not None:

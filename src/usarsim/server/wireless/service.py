@@ -90,6 +90,7 @@ class WirelessService:
         )
         self._arrivals: dict[int, Callable[[bytes], object]] = {}  # a message under way -> what delivers it
         self._tokens = itertools.count(1)
+        self._outgoing: list[tuple[str, str, bytes, object]] = []  # handed to the simulation at the loop's next turn
         self.loop: asyncio.AbstractEventLoop | None = None
         self.state: dict[Pair, tuple[float, bool]] = {}  # pair -> (simulated time, holds)
         self.subscribers: list[Callable[[Pair, bool, float], None]] = []
@@ -134,20 +135,29 @@ class WirelessService:
     def send(self, src: str, dst: str, payload: bytes, deliver: Callable[[bytes], object]) -> None:
         """Carry ``payload`` from robot ``src`` to robot ``dst`` through the channel (not the
         ideal one): ``deliver(payload)`` is called on the event loop when it arrives, never if
-        it is lost."""
+        it is lost.  The messages of one turn of the event loop go to the simulation together,
+        in the order they were sent."""
         token = next(self._tokens)
         self._arrivals[token] = deliver
-        future = self.facade.radio_send(src, dst, payload, token)
-        future.add_done_callback(lambda f: self._refused_threadsafe(f, token))
+        self._outgoing.append((src, dst, payload, token))
+        if len(self._outgoing) == 1:
+            asyncio.get_running_loop().call_soon(self._flush)
 
-    def _refused_threadsafe(self, future: Future[Drop | None], token: int) -> None:
-        if future.cancelled() or future.exception() is not None or future.result() is not None:
-            call_on_loop(self.loop, self._forget, token, future)
+    def _flush(self) -> None:
+        batch, self._outgoing = self._outgoing, []
+        if batch:
+            self.facade.radio_send_many(batch).add_done_callback(self._refused_threadsafe)
 
-    def _forget(self, token: int, future: Future[Drop | None]) -> None:
-        self._arrivals.pop(token, None)
-        drop = None if future.cancelled() or future.exception() is not None else future.result()
-        if drop is not None:
+    def _refused_threadsafe(self, future: Future[list[Drop]]) -> None:
+        if future.cancelled() or future.exception() is not None or future.result():
+            call_on_loop(self.loop, self._forget, future)
+
+    def _forget(self, future: Future[list[Drop]]) -> None:
+        if future.cancelled() or future.exception() is not None:
+            log.error("wireless: messages not handed to the channel: %r", future.exception())
+            return
+        for drop in future.result():
+            self._arrivals.pop(drop.token, None)
             self.event("message %s -> %s (%d bytes) dropped: %s", drop.src, drop.dst, drop.nbytes, drop.cause)
 
     def _deliveries_threadsafe(self, time: float, deliveries: list[Delivery], drops: list[Drop]) -> None:
