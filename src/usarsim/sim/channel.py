@@ -300,6 +300,7 @@ class _Sending:
     payload: bytes
     sent_at: float
     token: Any
+    link: _Link
 
 
 class _Link:
@@ -325,13 +326,15 @@ class Channel:
         self._settings = self._loss.read(cfg.loss_settings)
         self._links: dict[tuple[str, str], _Link] = {}
         self._sending: list[tuple[float, int, _Sending]] = []  # by the time the last byte leaves
-        self._arriving: list[tuple[float, int, Delivery]] = []  # by delivery time
+        self._arriving: list[tuple[float, int, Delivery, _Link]] = []  # by delivery time
         self._radio_free: dict[str, float] = {}  # when each radio's last queued message is sent
         self._backlog: dict[str, collections.deque[tuple[float, int]]] = {}  # (finish, bytes) at each radio
         self._waiting: dict[str, int] = {}  # the bytes of each radio's backlog
         self._seq = 0
         rates = [r for r in (cfg.link_bytes_per_s, cfg.radio_bytes_per_s) if r is not None]
         self.rate = min(rates) if rates else math.inf
+        self._rayleigh = cfg.fading == "rayleigh"
+        self._fade_loses = cfg.loss in ("none", "signal")  # a message faded below the cutoff is lost
 
     def link(self, src: str, dst: str) -> _Link:
         key = (src.lower(), dst.lower())
@@ -354,6 +357,7 @@ class Channel:
         room for it (counted), else None (it is under way)."""
         n = len(payload)
         radio = src.lower()
+        ln = self.link(src, dst)
         finish = now
         if math.isfinite(self.rate):  # it waits its turn at the radio
             backlog = self._backlog.setdefault(radio, collections.deque())
@@ -362,27 +366,35 @@ class Channel:
                 waiting -= backlog.popleft()[1]
             if waiting and waiting + n > self.cfg.queue_bytes:
                 self._waiting[radio] = waiting
-                return self._drop(_Sending(now, 0, src, dst, payload, now, token), now, "capacity")
+                return self._drop(_Sending(now, 0, src, dst, payload, now, token, ln), now, "capacity")
             finish = max(now, self._radio_free.get(radio, -math.inf)) + n / self.rate
             self._radio_free[radio] = finish
             backlog.append((finish, n))
             self._waiting[radio] = waiting + n
         self._seq += 1
-        heapq.heappush(self._sending, (finish, self._seq, _Sending(finish, self._seq, src, dst, payload, now, token)))
+        heapq.heappush(
+            self._sending, (finish, self._seq, _Sending(finish, self._seq, src, dst, payload, now, token, ln))
+        )
         return None
 
     def due(self, now: float, view: Callable[[str, str], LinkView | None]) -> tuple[list[Delivery], list[Drop]]:
         """What arrived (in order of arrival) and what was dropped by ``now``."""
         drops: list[Drop] = []
-        while self._sending and self._sending[0][0] <= now:
-            m = heapq.heappop(self._sending)[2]
-            drop = self._judge(m, view(m.src, m.dst))
+        views: dict[int, LinkView | None] = {}  # each link asked once a call
+        sending = self._sending
+        while sending and sending[0][0] <= now:
+            m = heapq.heappop(sending)[2]
+            key = id(m.link)
+            if key not in views:
+                views[key] = view(m.src, m.dst)
+            drop = self._judge(m, views[key])
             if drop is not None:
                 drops.append(drop)
         out: list[Delivery] = []
-        while self._arriving and self._arriving[0][0] <= now:
-            d = heapq.heappop(self._arriving)[2]
-            c = self.link(d.src, d.dst).counts
+        arriving = self._arriving
+        while arriving and arriving[0][0] <= now:
+            _, _, d, ln = heapq.heappop(arriving)
+            c = ln.counts
             c.delivered += 1
             c.delivered_bytes += len(d.payload)
             c.delay_s += d.at - d.sent_at
@@ -390,27 +402,27 @@ class Channel:
         return out, drops
 
     def _judge(self, m: _Sending, lv: LinkView | None) -> Drop | None:
-        ln = self.link(m.src, m.dst)
-        n = len(m.payload)
+        ln = m.link
         if lv is None or not lv.holds:
             return self._drop(m, m.finish, "range")
         signal = lv.signal_dbm
-        if self.cfg.fading == "rayleigh":
+        if self._rayleigh:
             signal += 10.0 * math.log10(max(ln.fade.expovariate(1.0), 1e-12))
-            if signal < lv.cutoff_dbm and self.cfg.loss in ("none", "signal"):
+            if signal < lv.cutoff_dbm and self._fade_loses:
                 return self._drop(m, m.finish, "loss")  # faded below the cutoff
-        if ln.loss.lost(signal - lv.cutoff_dbm, n):
+        if ln.loss.lost(signal - lv.cutoff_dbm, len(m.payload)):
             return self._drop(m, m.finish, "loss")
         at = m.finish + lv.distance_m / SPEED_OF_LIGHT_M_S + self.cfg.latency_s
         if self.cfg.jitter_s > 0.0:
             at += ln.jitter.uniform(0.0, self.cfg.jitter_s)
-        at = max(at, ln.last_at)  # a link's messages arrive in the order they were sent
+        if at < ln.last_at:  # a link's messages arrive in the order they were sent
+            at = ln.last_at
         ln.last_at = at
-        heapq.heappush(self._arriving, (at, m.seq, Delivery(m.token, m.src, m.dst, m.payload, m.sent_at, at)))
+        heapq.heappush(self._arriving, (at, m.seq, Delivery(m.token, m.src, m.dst, m.payload, m.sent_at, at), ln))
         return None
 
     def _drop(self, m: _Sending, at: float, cause: str) -> Drop:
-        c = self.link(m.src, m.dst).counts
+        c = m.link.counts
         c.dropped[cause] += 1
         c.dropped_bytes[cause] += len(m.payload)
         return Drop(m.token, m.src, m.dst, len(m.payload), m.sent_at, at, cause)
