@@ -315,6 +315,12 @@ def relay_run(tmp_path, drop: bool, **serve_options) -> tuple[str, list[str], by
         assert positions(srv)["Courier"][0] >= 5.0
         port = srv.app.wireless.comserver.port
         radios = [Radio("127.0.0.1", port, name) for name in ("Courier", "Base")]
+        if drop:  # the ground-truth service (and with it the console's map) shows the relay
+            from usarsim.sim.truth import truth_rows
+
+            rows = srv.on_sim(lambda sim: truth_rows(sim, "RadioRelay", None))
+            assert [(r[0], r[1]) for r in rows] == [("Courier-Relay1", "RadioRelay")]
+            assert abs(rows[0][3][0] - (-2.2)) < 0.15  # dropped at x = -2, the item 0.2 m behind the centre
         opened = link(radios[0], radios[1])
         neighbours = [n.name for n in radios[0].neighbours()]
         got = b""

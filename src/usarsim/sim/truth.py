@@ -16,7 +16,8 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
     rotation) of every robot (its class and INIT name; the class ``Robot`` asks for every
     robot), victim (``Victim``), RFID tag
     (``RFIDTag``, named by its id), false alarm (``FalseAlarm``) and movable object
-    (``MovableObject``), and the landmarks of the world's element kinds (their own classes);
+    (``MovableObject``), the landmarks of the world's element kinds (their own classes) and the
+    radio relays robots dropped (``RadioRelay``, at their antennas);
     world frame, rotations in [0, 2 pi).  Filtered by class and
     name (any case) when given."""
     now = sim.time
@@ -42,6 +43,8 @@ def truth_rows(sim: Simulation, class_name: str | None = None, name: str | None 
             )
     for lm in sim.world.landmarks:  # what the world's element kinds list (usarsim.config.elements)
         rows.append((lm.name, lm.class_name, lm.location, lm.rotation))
+    for relay in sim.entities.relays:  # the radio relays robots dropped (RelayDropper)
+        rows.append((relay.name, "RadioRelay", relay.location, (0.0, 0.0, 0.0)))
     robots = len(sim.robots)  # the first rows: ``{Class Robot}`` asks for every one of them
     out = []
     for i, (n, c, loc, rot) in enumerate(rows):

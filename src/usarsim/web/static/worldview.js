@@ -101,7 +101,7 @@ export class WorldView {
     this.objects = rows;
     const robots = new Map();
     for (const o of rows) {
-      if (["Victim", "RFIDTag", "FalseAlarm", "MovableObject"].includes(o.class)) continue;
+      if (["Victim", "RFIDTag", "FalseAlarm", "MovableObject", "RadioRelay"].includes(o.class)) continue;
       robots.set(o.name, o);
       const t = this.traces.get(o.name) || [];
       const last = t[t.length - 1];
@@ -338,7 +338,7 @@ export class WorldView {
       });
     }
     this.drawStartLabels(world.start_poses);
-    const truth = { Victim: [], RFIDTag: [], FalseAlarm: [], MovableObject: [] };
+    const truth = { Victim: [], RFIDTag: [], FalseAlarm: [], MovableObject: [], RadioRelay: [] };
     for (const o of this.objects) if (truth[o.class]) truth[o.class].push(o);
     // movable objects where they are now
     const movable = new Map(world.objects.filter((o) => o.movable).map((o) => [o.name, o]));
@@ -380,6 +380,14 @@ export class WorldView {
       ctx.moveTo(sx, sy - 5); ctx.lineTo(sx + 5, sy); ctx.lineTo(sx, sy + 5); ctx.lineTo(sx - 5, sy);
       ctx.closePath(); ctx.fill();
       if (this.view.scale > 40) this.label("tag " + t.name, t.location[0], t.location[1], "#c99af5", -8);
+    }
+    // the radio relays robots dropped: orange squares
+    for (const r of truth.RadioRelay) {
+      const [sx, sy] = this.toScreen(r.location[0], r.location[1]);
+      ctx.fillStyle = "#ff8c00";
+      ctx.fillRect(sx - 4, sy - 4, 8, 8);
+      ctx.strokeStyle = "rgba(0,0,0,.7)"; ctx.lineWidth = 1; ctx.strokeRect(sx - 4, sy - 4, 8, 8);
+      if (this.view.scale > 40) this.label(r.name, r.location[0], r.location[1], "#ffb04d", -8);
     }
     // traces
     if (this.showTrace) {
