@@ -251,10 +251,6 @@ class FakeFacade:
     def radio_neighbours(self, a: str) -> Future[list[Any]]:
         return self._answer([])
 
-    def radio_send(self, src: str, dst: str, payload: bytes, token: object = None) -> Future[Any]:
-        self.calls.append(("radio_send", (src, dst, payload)))
-        return self._answer(None)
-
     def radio_send_many(self, messages: list[Any]) -> Future[list[Any]]:
         self.calls.append(("radio_send_many", (len(messages),)))
         return self._answer([])

@@ -10,7 +10,7 @@ import socket
 import struct
 
 import pytest
-from test_wireless import Wcs, listener, stations, wcs_open
+from test_wireless import Wcs, listener, positions, stations, wcs_open
 
 from helpers import ServerThread, wait_for
 
@@ -335,10 +335,6 @@ def relay_run(tmp_path, drop: bool, **serve_options) -> tuple[str, list[str], by
         for r in radios:
             r.close()
         srv.stop()
-
-
-def positions(srv: ServerThread) -> dict[str, tuple[float, float, float]]:
-    return srv.on_sim(lambda sim: {r.name: r.handle.location(sim.data) for r in sim.robots.values()})
 
 
 def test_a_robot_out_of_reach_of_the_comstation_reaches_it_through_a_relay_it_dropped(tmp_path):

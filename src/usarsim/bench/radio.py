@@ -15,7 +15,7 @@ import subprocess
 import sys
 import time
 
-from usarsim.bench.serving import ServedApp, logging_quiet
+from usarsim.bench.serving import ServedApp, bench_app, logging_quiet
 from usarsim.bench.spots import spread_spots
 from usarsim.config.channel import ChannelConfig
 from usarsim.config.world import WirelessConfig
@@ -67,28 +67,18 @@ def radio_client(port: int, names: list[str], rate_hz: float, clock, ready, stop
 
 def radio_rtf(world, n: int, seconds: float, channel: ChannelConfig | None, rate_hz: float) -> dict:
     """One run: the real-time factor with the radio load under ``channel`` (None: USARSim's)."""
-    from usarsim.server.app import Application
-    from usarsim.server.config import ServeConfig
     from usarsim.server.wireless import WirelessOptions
 
     if channel is not None:
         base = world.wireless or WirelessConfig()
         world = dataclasses.replace(world, wireless=dataclasses.replace(base, channel=channel))
     poses = spread_spots(world, n)
-    app = Application(
-        ServeConfig(
-            world=world,
-            host="127.0.0.1",
-            port=0,
-            seed=0,
-            speed=None,
-            lockstep=False,
-            max_connections=max(64, n),
-            truth_port=None,
-            image_port=None,
-            web_port=None,
-            wireless=WirelessOptions(wcs_port=0, wss_port=0, interface_port=0, max_connections=max(64, 2 * n)),
-        )
+    app = bench_app(
+        world,
+        speed=None,
+        lockstep=False,
+        max_connections=max(64, n),
+        wireless=WirelessOptions(wcs_port=0, wss_port=0, interface_port=0, max_connections=max(64, 2 * n)),
     )
     served = ServedApp(app)
     ctx = mp.get_context("spawn")

@@ -10,7 +10,7 @@ import subprocess
 import sys
 
 from usarsim.bench.clients import ROUND_TRIP_STEP_S
-from usarsim.bench.serving import LoopThread, ServedApp, logging_quiet
+from usarsim.bench.serving import LoopThread, ServedApp, bench_app, logging_quiet
 
 
 class EchoServer(LoopThread):
@@ -81,24 +81,11 @@ def round_trip_result(world, count: int) -> dict | None:
     """Round trips a second with no robot, with one P2AT and against the bare echo server,
     ``count`` each (at least 100): what ``usarsim bench --round-trips --json`` prints; None
     when a client failed (said on stderr)."""
-    from usarsim.server.app import Application
-    from usarsim.server.config import ServeConfig
 
     count = max(100, int(count))
     result = {"world": world.name, "step_s": ROUND_TRIP_STEP_S, "count": count, "cpu_count": os.cpu_count()}
     for robot in (False, True):
-        app = Application(
-            ServeConfig(
-                world=world,
-                host="127.0.0.1",
-                port=0,
-                seed=0,
-                lockstep=True,
-                truth_port=None,
-                image_port=None,
-                web_port=None,
-            )
-        )
+        app = bench_app(world, lockstep=True)
         served = ServedApp(app)
         try:
             rate = round_trips(app.control.port, robot, count)

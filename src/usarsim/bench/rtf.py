@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from usarsim.bench.serving import ServedApp, peak_rss_mb, rss_mb
+from usarsim.bench.serving import ServedApp, bench_app, peak_rss_mb, rss_mb
 from usarsim.bench.spots import spread_spots
 
 
@@ -64,25 +64,15 @@ def _measure_rtf(
     cameras_fps: float,
     window,
 ) -> dict:
-    from usarsim.server.app import Application
-    from usarsim.server.config import ServeConfig
 
     poses = spread_spots(world, n)
-    app = Application(
-        ServeConfig(
-            world=world,
-            host="127.0.0.1",
-            port=0,
-            seed=0,
-            speed=speed,
-            lockstep=False,
-            max_connections=max(64, n),
-            truth_port=None,
-            image_port=None,
-            web_port=None,
-            record=record,
-            record_cameras_fps=cameras_fps,
-        )
+    app = bench_app(
+        world,
+        speed=speed,
+        lockstep=False,
+        max_connections=max(64, n),
+        record=record,
+        record_cameras_fps=cameras_fps,
     )
     served = ServedApp(app)
     rss_before = rss_mb()  # the world built, no robot yet

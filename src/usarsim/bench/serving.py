@@ -47,6 +47,17 @@ class ServedApp(LoopThread):
         self.stop_loop()
 
 
+def bench_app(world, **options):
+    """The Application a benchmark serves: ``world`` on a free control port of 127.0.0.1, seed 0,
+    no ground-truth service, image server or console, with ``options`` (ServeConfig's fields:
+    ``lockstep``, ``speed``, ``wireless``...) on top."""
+    from usarsim.server.app import Application
+    from usarsim.server.config import ServeConfig
+
+    base = {"host": "127.0.0.1", "port": 0, "seed": 0, "truth_port": None, "image_port": None, "web_port": None}
+    return Application(ServeConfig(world=world, **(base | options)))
+
+
 def rss_mb() -> float:
     """This process's resident memory now (MB; Linux /proc, else the peak so far)."""
     try:

@@ -162,25 +162,10 @@ class _ClockSampler:
 
 
 def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain: int) -> dict:
-    from usarsim.bench.serving import ServedApp
-    from usarsim.server.app import Application
-    from usarsim.server.config import ServeConfig
+    from usarsim.bench.serving import ServedApp, bench_app
 
     n = len(spots)
-    app = Application(
-        ServeConfig(
-            world=world,
-            host="127.0.0.1",
-            port=0,
-            seed=0,
-            speed=1.0,
-            lockstep=False,
-            max_connections=max(64, 2 * n),
-            truth_port=None,
-            image_port=None,
-            web_port=None,
-        )
-    )
+    app = bench_app(world, speed=1.0, lockstep=False, max_connections=max(64, 2 * n))
     served = ServedApp(app)
     sim = app.facade.sim
     port = app.control.port

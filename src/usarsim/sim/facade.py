@@ -306,7 +306,7 @@ class SimFacade:
         """Compute radio links with ``model`` after every advance of the clock (every STEP in
         lock-step, else at most every RADIO_INTERVAL_S); ``on_change(time, [(pair, holds)])``
         is called on the simulation thread for the watched pairs whose state changed.  With a
-        ``channel`` that is not ideal, messages go through it (:meth:`radio_send`) and
+        ``channel`` that is not ideal, messages go through it (:meth:`radio_send_many`) and
         ``on_deliver(time, deliveries, drops)`` is called on the simulation thread after each
         advance with what arrived and what was lost.  Call before :meth:`start`."""
         net = RadioNet(model, channel, seed=self.sim.seed)
@@ -331,15 +331,9 @@ class SimFacade:
         net = self._net()
         return self._ask(lambda sim: net.neighbours(sim, a))
 
-    def radio_send(self, src: str, dst: str, payload: bytes, token: object = None) -> Future[Drop | None]:
-        """Hand a message to the channel at the simulated instant it reaches the simulation
-        thread (a Drop at once when the sender's queue is full)."""
-        net = self._net()
-        return self._ask(lambda sim: net.send(sim, src, dst, payload, token))
-
     def radio_send_many(self, messages: list[tuple[str, str, bytes, object]]) -> Future[list[Drop]]:
-        """:meth:`radio_send` for many messages (src, dst, payload, token) at once, in order;
-        the drops (full queues)."""
+        """Hand messages (src, dst, payload, token) to the channel, in order, at the simulated
+        instant they reach the simulation thread; the drops (the sender's queue full)."""
         net = self._net()
         return self._ask(lambda sim: net.send_many(sim, messages))
 
