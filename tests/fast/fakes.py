@@ -235,9 +235,10 @@ class FakeFacade:
         model: Any,
         on_change: Callable[[float, list[tuple[Any, bool]]], None],
         channel: Any = None,
-        on_deliver: Any = None,
-    ) -> None:
+        on_views: Any = None,
+    ) -> Any:
         self.calls.append(("open_radio", (model,)))
+        return None
 
     def radio_watch(self, pairs: frozenset[Any]) -> None:
         self.calls.append(("radio_watch", (pairs,)))
@@ -249,10 +250,6 @@ class FakeFacade:
         return self._answer(None)
 
     def radio_neighbours(self, a: str) -> Future[list[Any]]:
-        return self._answer([])
-
-    def radio_send_many(self, messages: list[Any]) -> Future[list[Any]]:
-        self.calls.append(("radio_send_many", (len(messages),)))
         return self._answer([])
 
     def radio_counts(self) -> Future[dict[Any, Any]]:

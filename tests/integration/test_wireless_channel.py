@@ -241,7 +241,7 @@ def handed_bytes(srv: ServerThread) -> int:
     def count(sim) -> int:
         net = srv.app.facade.radio_net
         ch = net.channel
-        under_way = sum(len(m.payload) for _, _, m in ch._sending) + sum(len(d.payload) for _, _, d, _ in ch._arriving)
+        under_way = ch.under_way_bytes()
         return under_way + sum(c.delivered_bytes for c in net.counts().values())
 
     return srv.on_sim(count)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import multiprocessing as mp
+import os
 import statistics
 import subprocess
 import sys
@@ -63,6 +64,12 @@ def radio_client(port: int, names: list[str], rate_hz: float, clock, ready, stop
     finally:
         for r in radios:
             r.close()
+
+
+def process_cpu_s() -> float:
+    """The CPU time this process (the server) has used, user and system, in seconds."""
+    t = os.times()
+    return t.user + t.system
 
 
 def radio_rtf(world, n: int, seconds: float, channel: ChannelConfig | None, rate_hz: float) -> dict:
@@ -121,11 +128,11 @@ def radio_rtf(world, n: int, seconds: float, channel: ChannelConfig | None, rate
         while sim.time < t_settle:
             clock.value = sim.time
             time.sleep(0.005)
-        start, wall = sim.time, time.perf_counter()
+        start, wall, cpu = sim.time, time.perf_counter(), process_cpu_s()
         while sim.time - start < seconds:
             clock.value = sim.time
             time.sleep(0.005)
-        sim_s, wall_s = sim.time - start, time.perf_counter() - wall
+        sim_s, wall_s, cpu_s = sim.time - start, time.perf_counter() - wall, process_cpu_s() - cpu
         net = app.facade.radio_net
         counts = list(net.counts().values()) if net is not None else []
     finally:
@@ -137,6 +144,7 @@ def radio_rtf(world, n: int, seconds: float, channel: ChannelConfig | None, rate
         served.stop()
     return {
         "rtf": round(sim_s / wall_s, 3),
+        "server_cpu_ms_per_sim_s": round(1000.0 * cpu_s / sim_s, 1),
         "links": int(ready.value),
         "delivered": sum(c.delivered for c in counts),
         "lost": sum(sum(c.dropped.values()) for c in counts),
@@ -170,17 +178,24 @@ def run_radio_bench(args) -> int:
         "rtf_ideal": [r["rtf"] for r in runs["ideal"]],
         "rtf_subt": [r["rtf"] for r in runs["subt"]],
         "cost_percent": round(100.0 * (1.0 - subt / ideal), 1),
+        "server_cpu_ms_per_sim_s_ideal": [r["server_cpu_ms_per_sim_s"] for r in runs["ideal"]],
+        "server_cpu_ms_per_sim_s_subt": [r["server_cpu_ms_per_sim_s"] for r in runs["subt"]],
         "subt_delivered": [r["delivered"] for r in runs["subt"]],
         "subt_lost": [r["lost"] for r in runs["subt"]],
         "links": [r["links"] for r in runs["ideal"] + runs["subt"]],
     }
+    cpu_ideal = statistics.median(result["server_cpu_ms_per_sim_s_ideal"])
+    cpu_subt = statistics.median(result["server_cpu_ms_per_sim_s_subt"])
+    result["server_cpu_percent_more"] = round(100.0 * (cpu_subt / cpu_ideal - 1.0), 1)
     if args.json:
         print(json.dumps(result))
     else:
         print(
             f"radio load, {n} robots each sending every teammate {rate:g} messages a simulated second: real-time "
             f"factor {ideal:.3f} with USARSim's channel, {subt:.3f} with the SubT-like one (median of "
-            f"{len(runs['ideal'])}); the channel costs {result['cost_percent']:.1f} %; it delivered "
+            f"{len(runs['ideal'])}); the channel costs {result['cost_percent']:.1f} %; the server used "
+            f"{cpu_ideal:.0f} and {cpu_subt:.0f} ms of CPU a simulated second "
+            f"({result['server_cpu_percent_more']:+.1f} %); it delivered "
             f"{result['subt_delivered']} and lost {result['subt_lost']} messages on {result['links']} links"
         )
     return 0

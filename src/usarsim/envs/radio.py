@@ -27,7 +27,7 @@ def radio_model(world_wireless: WirelessConfig | None, model: str | None = None,
     ``--wireless-model model`` and ``--wireless-config config_file`` on a world with this
     ``wireless`` section uses, resolved by the simulator's own code; its ``holds(dBm)``
     says whether a link with that signal carries messages."""
-    from usarsim.sim.radio import resolve_model  # configuration only: no MuJoCo
+    from usarsim.sim.radiomodels import resolve_model  # configuration only: no MuJoCo
     from usarsim.sim.wireless_file import load_wireless_file
 
     layer = load_wireless_file(config_file).radio if config_file else None

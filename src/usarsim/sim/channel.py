@@ -31,18 +31,58 @@ the same seed with the same messages at the same simulated times gives the same 
 from __future__ import annotations
 
 import collections
+import dataclasses
 import heapq
 import math
 import random
+import threading
 import zlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 from usarsim.config.channel import ChannelConfig
-from usarsim.config.reader import did_you_mean
-from usarsim.errors import ConfigError
-from usarsim.registry import Registry
+from usarsim.sim.lossmodels import (
+    EB_N0_AT_CUTOFF_DB,
+    LOSS_MODELS,
+    SENSITIVITY_FRAME_BYTES,
+    SENSITIVITY_PER,
+    GilbertElliottLoss,
+    IndependentLoss,
+    LossModel,
+    NoLoss,
+    SignalLoss,
+    check_channel,
+    describe_channel,
+    loss_model_class,
+    packet_error_rate,
+)
+
+# the loss models, where they have always been imported from
+__all__ = [
+    "DROP_CAUSES",
+    "EB_N0_AT_CUTOFF_DB",
+    "LATER",
+    "LOSS_MODELS",
+    "SENSITIVITY_FRAME_BYTES",
+    "SENSITIVITY_PER",
+    "Channel",
+    "Delivery",
+    "Drop",
+    "GilbertElliottLoss",
+    "IndependentLoss",
+    "LinkCounts",
+    "LinkView",
+    "LossModel",
+    "NoLoss",
+    "Shadowing",
+    "SignalLoss",
+    "check_channel",
+    "describe_channel",
+    "link_rng",
+    "loss_model_class",
+    "packet_error_rate",
+]
 
 SPEED_OF_LIGHT_M_S = 299_792_458.0
 DROP_CAUSES = ("range", "loss", "capacity")  # out of reach, lost on the way, no room in the queue
@@ -57,143 +97,6 @@ def link_rng(seed: int, src: str, dst: str, purpose: str) -> random.Random:
     return random.Random(int(seed) * 4_294_967_296 + key)
 
 
-# --------------------------------------------------------------------------- loss models
-
-# IEEE 802.11b-1999, 18.4.8.2: a receiver's sensitivity is the signal at which 8 % of 1,024-byte
-# frames are lost.  The cutoff is taken as that sensitivity: at the cutoff the signal model
-# loses 8 % of 1,024-byte messages.
-SENSITIVITY_PER = 0.08
-SENSITIVITY_FRAME_BYTES = 1024
-
-
-def _ber_at_sensitivity() -> float:
-    return 1.0 - (1.0 - SENSITIVITY_PER) ** (1.0 / (8 * SENSITIVITY_FRAME_BYTES))
-
-
-# Eb/N0 at the cutoff (about 10.3 dB) for differential BPSK, whose bit error rate is
-# 0.5 exp(-Eb/N0) (J. G. Proakis, "Digital Communications", 4th ed., 2001, 5.2.8), the
-# modulation of 802.11's 1 Mb/s rate
-EB_N0_AT_CUTOFF_DB = 10.0 * math.log10(math.log(0.5 / _ber_at_sensitivity()))
-
-
-def packet_error_rate(margin_db: float, nbytes: int) -> float:
-    """The chance that a message of ``nbytes`` is lost at ``margin_db`` above the cutoff: each
-    bit in error with DBPSK's rate 0.5 exp(-Eb/N0), Eb/N0 rising dB for dB with the margin from
-    EB_N0_AT_CUTOFF_DB at the cutoff (8 % of 1,024-byte messages lost there)."""
-    eb_n0 = 10.0 ** ((margin_db + EB_N0_AT_CUTOFF_DB) / 10.0)
-    ber = 0.5 * math.exp(-eb_n0)
-    return 1.0 - (1.0 - ber) ** (8 * max(1, nbytes))
-
-
-LOSS_MODELS = Registry("loss model")
-
-
-class LossModel:
-    """Whether each message of one link (one direction) is lost, with the link's own generator;
-    a model is a subclass registered with :data:`LOSS_MODELS`, its settings (``SETTINGS``: name
-    -> default) read from the ``loss`` mapping of the channel."""
-
-    SETTINGS: ClassVar[dict[str, float]] = {}
-
-    def __init__(self, settings: Mapping[str, float], rng: random.Random):
-        self.settings = dict(settings)
-        self.rng = rng
-
-    @classmethod
-    def read(cls, raw: Mapping[str, Any]) -> dict[str, float]:
-        """The model's settings from the ``loss`` mapping (``raw``), defaults filled in; a key
-        it does not know, or a value that is not a probability, is refused by name."""
-        out = dict(cls.SETTINGS)
-        for key, value in raw.items():
-            if key not in cls.SETTINGS:
-                raise ConfigError(
-                    f"the {cls.TYPE} loss model has no setting '{key}'{did_you_mean(key, cls.SETTINGS)}"  # type: ignore[attr-defined]
-                )
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
-                raise ConfigError(f"loss setting '{key}' is a probability from 0 to 1, got {value!r}")
-            out[key] = float(value)
-        return out
-
-    def lost(self, margin_db: float, nbytes: int) -> bool:
-        """Whether the next message (``nbytes`` long, its signal ``margin_db`` above the
-        cutoff, faded) is lost."""
-        return False
-
-
-@LOSS_MODELS.register("none")
-class NoLoss(LossModel):
-    """Nothing is lost while the link holds (USARSim's channel)."""
-
-
-@LOSS_MODELS.register("independent")
-class IndependentLoss(LossModel):
-    """Each message lost with probability ``rate``, whatever befell the one before."""
-
-    SETTINGS: ClassVar[dict[str, float]] = {"rate": 0.0}
-
-    def lost(self, margin_db: float, nbytes: int) -> bool:
-        return self.rng.random() < self.settings["rate"]
-
-
-@LOSS_MODELS.register("gilbert_elliott")
-class GilbertElliottLoss(LossModel):
-    """Bursts of loss: before each message the link passes from its good state to its bad one
-    with ``p_good_bad`` and back with ``p_bad_good``, and loses the message with ``loss_good`` or
-    ``loss_bad`` of the state it is in.  A bad spell lasts 1 / ``p_bad_good`` messages on average
-    (geometrically distributed), a good one 1 / ``p_good_bad``; the long-run loss is
-    (p_bad_good loss_good + p_good_bad loss_bad) / (p_good_bad + p_bad_good)."""
-
-    SETTINGS: ClassVar[dict[str, float]] = {"p_good_bad": 0.01, "p_bad_good": 0.25, "loss_good": 0.0, "loss_bad": 1.0}
-
-    def __init__(self, settings: Mapping[str, float], rng: random.Random):
-        super().__init__(settings, rng)
-        self.bad = False
-
-    def lost(self, margin_db: float, nbytes: int) -> bool:
-        s = self.settings
-        self.bad = self.rng.random() < (1.0 - s["p_bad_good"] if self.bad else s["p_good_bad"])
-        return self.rng.random() < (s["loss_bad"] if self.bad else s["loss_good"])
-
-
-@LOSS_MODELS.register("signal")
-class SignalLoss(LossModel):
-    """Each message lost with the packet error rate of its faded signal's margin over the
-    cutoff and its length (:func:`packet_error_rate`)."""
-
-    def lost(self, margin_db: float, nbytes: int) -> bool:
-        return self.rng.random() < packet_error_rate(margin_db, nbytes)
-
-
-def loss_model_class(name: str) -> type[LossModel]:
-    if name not in LOSS_MODELS:
-        raise ConfigError(f"unknown loss model {name!r}{did_you_mean(name, LOSS_MODELS.names())}")
-    cls: type[LossModel] = LOSS_MODELS.get(name)
-    return cls
-
-
-def check_channel(cfg: ChannelConfig) -> None:
-    """Refuse a channel whose loss model or loss settings are unknown (ConfigError)."""
-    loss_model_class(cfg.loss).read(cfg.loss_settings)
-
-
-def describe_channel(cfg: ChannelConfig) -> str:
-    """The channel in a few words, for the server's log."""
-    parts = []
-    if cfg.shadowing_db or cfg.shadowing_wall_db:
-        parts.append(f"shadowing {cfg.shadowing_db:g} dB + {cfg.shadowing_wall_db:g} dB a wall")
-    if cfg.fading != "none":
-        parts.append(f"{cfg.fading} fading")
-    if cfg.loss != "none":
-        settings = ", ".join(f"{k} {v:g}" for k, v in loss_model_class(cfg.loss).read(cfg.loss_settings).items())
-        parts.append(f"{cfg.loss} loss ({settings})" if settings else f"{cfg.loss} loss")
-    for what, rate in (("link", cfg.link_bytes_per_s), ("radio", cfg.radio_bytes_per_s)):
-        if rate is not None:
-            parts.append(f"{rate:g} bytes/s a {what}")
-    if cfg.latency_s or cfg.jitter_s:
-        parts.append(f"latency {cfg.latency_s:g} s + up to {cfg.jitter_s:g} s")
-    return "; ".join(parts) or "ideal"
-
-
 # --------------------------------------------------------------------------- shadowing
 
 
@@ -206,18 +109,17 @@ class Shadowing:
         self.seed = seed
         self._drawn: dict[tuple[str, str], tuple[tuple[float, ...], tuple[float, ...], float]] = {}
         self._rngs: dict[tuple[str, str], random.Random] = {}
-
-    @property
-    def active(self) -> bool:
-        return self.cfg.shadowing_db > 0.0 or self.cfg.shadowing_wall_db > 0.0
+        self.active = cfg.shadowing_db > 0.0 or cfg.shadowing_wall_db > 0.0
+        self._lim = cfg.shadowing_distance_m
 
     def offset_db(self, pair: tuple[str, str], pa, pb, walls: int) -> float:
         if not self.active:
             return 0.0
         hit = self._drawn.get(pair)
-        lim = self.cfg.shadowing_distance_m
-        if hit is not None and math.dist(pa, hit[0]) <= lim and math.dist(pb, hit[1]) <= lim:
-            return hit[2]
+        if hit is not None:
+            lim, dist = self._lim, math.dist
+            if dist(pa, hit[0]) <= lim and dist(pb, hit[1]) <= lim:
+                return hit[2]
         rng = self._rngs.get(pair)
         if rng is None:
             rng = self._rngs[pair] = link_rng(self.seed, pair[0], pair[1], "shadow")
@@ -233,7 +135,7 @@ class Shadowing:
 # --------------------------------------------------------------------------- the channel
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class LinkView:
     """What the channel needs of a link at one instant: its signal (shadowing included), the
     cutoff, and the distance between the antennas."""
@@ -244,7 +146,7 @@ class LinkView:
     holds: bool
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Delivery:
     """A message that arrived: ``payload`` from ``src`` to ``dst``, sent at ``sent_at`` and
     delivered at ``at`` (simulated seconds); ``token`` is the sender's own mark."""
@@ -257,7 +159,7 @@ class Delivery:
     at: float
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Drop:
     """A message that did not arrive, and why (``cause``: one of DROP_CAUSES)."""
 
@@ -291,109 +193,167 @@ class LinkCounts:
         }
 
 
-@dataclass(slots=True)
-class _Sending:
-    finish: float
-    seq: int
-    src: str
-    dst: str
-    payload: bytes
-    sent_at: float
-    token: Any
-    link: _Link
-
-
 class _Link:
-    """One direction of one link: its generators, loss model, last delivery time and counts."""
+    """One direction of one link: its generators, loss model, last delivery time and counts, and
+    the sending radio's state (shared by every link from that radio)."""
 
-    def __init__(self, loss: type[LossModel], settings: dict[str, float], seed: int, src: str, dst: str):
+    __slots__ = ("counts", "fade", "jitter", "last_at", "loss", "pair", "radio")
+
+    def __init__(self, loss: type[LossModel], settings: dict[str, float], seed: int, src: str, dst: str, radio: _Radio):
         self.fade = link_rng(seed, src, dst, "fade")
         self.jitter = link_rng(seed, src, dst, "jitter")
         self.loss = loss(settings, link_rng(seed, src, dst, "loss"))
         self.last_at = -math.inf
         self.counts = LinkCounts()
+        self.radio = radio
+        self.pair = (src, dst) if src <= dst else (dst, src)  # the two radios, lower case, in order
+
+
+class _Radio:
+    """One sending radio: when its last queued byte leaves (``free``), the (time its last byte
+    leaves, bytes) of what it has still to send (``backlog``, ``waiting`` bytes), and the
+    messages not judged yet, in the order their last bytes leave (``sending``: tuples of finish,
+    sequence number, src, dst, payload, sent_at, token and _Link)."""
+
+    __slots__ = ("backlog", "free", "sending", "waiting")
+
+    def __init__(self) -> None:
+        self.free = -math.inf
+        self.backlog: collections.deque[tuple[float, int]] = collections.deque()
+        self.waiting = 0
+        self.sending: collections.deque[tuple] = collections.deque()
+
+
+_UNSEEN = object()
+# what a view answers for a link it knows nothing of yet: its messages wait for a later call
+LATER: Any = object()
+
+
+def _arrival_order(entry: tuple) -> tuple[float, int]:
+    return entry[0], entry[1]
 
 
 class Channel:
     """The messages under way between robots (see the module's text).  ``submit`` hands one
     over at the simulated instant ``now``; ``due`` returns what arrived and what was dropped by
-    ``now``, each link judged by ``view(src, dst)`` when a message's last byte leaves."""
+    ``now``, each link judged by ``view(src, dst)`` when a message's last byte leaves.
+
+    A radio sends in order, so each radio's messages wait in a queue of their own, in the order
+    they finish; a message's fate is drawn from its link's generators only, so that the order in
+    which the radios' queues are judged changes nothing.  A message is judged at the first call
+    of ``due`` after the instant it was handed over, never at that instant, so that whether it
+    was handed over before or after the call at that instant changes nothing either.
+
+    Its methods may be called from any thread (they hold :attr:`lock`)."""
 
     def __init__(self, cfg: ChannelConfig, seed: int):
         self.cfg = cfg
         self.seed = cfg.seed if cfg.seed is not None else seed
         self._loss = loss_model_class(cfg.loss)
         self._settings = self._loss.read(cfg.loss_settings)
-        self._links: dict[tuple[str, str], _Link] = {}
-        self._sending: list[tuple[float, int, _Sending]] = []  # by the time the last byte leaves
-        self._arriving: list[tuple[float, int, Delivery, _Link]] = []  # by delivery time
-        self._radio_free: dict[str, float] = {}  # when each radio's last queued message is sent
-        self._backlog: dict[str, collections.deque[tuple[float, int]]] = {}  # (finish, bytes) at each radio
-        self._waiting: dict[str, int] = {}  # the bytes of each radio's backlog
+        self._links: dict[tuple[str, str], _Link] = {}  # by lower-case names
+        self._named: dict[tuple[str, str], _Link] = {}  # by the names as given
+        self.lock = threading.Lock()
+        self._unjudged_by_pair: dict[tuple[str, str], int] = {}
+        self._radios: dict[str, _Radio] = {}  # by lower-case name
+        self._arriving: list[tuple[float, int, Delivery, _Link]] = []  # judged and delivered, by time
+        self._unjudged = 0
         self._seq = 0
         rates = [r for r in (cfg.link_bytes_per_s, cfg.radio_bytes_per_s) if r is not None]
         self.rate = min(rates) if rates else math.inf
+        self._capped = math.isfinite(self.rate)
         self._rayleigh = cfg.fading == "rayleigh"
         self._fade_loses = cfg.loss in ("none", "signal")  # a message faded below the cutoff is lost
 
     def link(self, src: str, dst: str) -> _Link:
-        key = (src.lower(), dst.lower())
-        ln = self._links.get(key)
+        ln = self._named.get((src, dst))
         if ln is None:
-            ln = self._links[key] = _Link(self._loss, self._settings, self.seed, *key)
+            key = (src.lower(), dst.lower())
+            ln = self._links.get(key)
+            if ln is None:
+                radio = self._radios.setdefault(key[0], _Radio())
+                ln = self._links[key] = _Link(self._loss, self._settings, self.seed, *key, radio)
+            self._named[(src, dst)] = ln
         return ln
 
     def counts(self) -> dict[tuple[str, str], LinkCounts]:
-        """Each link's counts (by sender and receiver, lower case), as they stand."""
-        return {k: ln.counts for k, ln in sorted(self._links.items())}
+        """Each link's counts (by sender and receiver, lower case), a copy of how they stand."""
+        with self.lock:
+            return {
+                k: dataclasses.replace(
+                    ln.counts, dropped=dict(ln.counts.dropped), dropped_bytes=dict(ln.counts.dropped_bytes)
+                )
+                for k, ln in sorted(self._links.items())
+            }
+
+    def waiting_pairs(self) -> frozenset[tuple[str, str]]:
+        """The pairs of radios (lower case, in order) with messages not judged yet: those whose
+        links a view must give."""
+        with self.lock:
+            return frozenset(self._unjudged_by_pair)
 
     @property
     def pending(self) -> int:
         """Messages handed over and neither delivered nor dropped yet."""
-        return len(self._sending) + len(self._arriving)
+        return self._unjudged + len(self._arriving)
+
+    def under_way_bytes(self) -> int:
+        """The bytes of the messages handed over and neither delivered nor dropped yet."""
+        with self.lock:
+            waiting = sum(len(m[4]) for r in self._radios.values() for m in r.sending)
+            return waiting + sum(len(d.payload) for _, _, d, _ in self._arriving)
 
     def submit(self, now: float, src: str, dst: str, payload: bytes, token: Any = None) -> Drop | None:
         """Hand over a message from ``src`` to ``dst``; a Drop when its radio's queue has no
         room for it (counted), else None (it is under way)."""
-        n = len(payload)
-        radio = src.lower()
-        ln = self.link(src, dst)
+        with self.lock:
+            return self._put(now, src, dst, payload, token)
+
+    def submit_many(self, now: float, messages: list[tuple[str, str, bytes, Any]]) -> list[Drop]:
+        """:meth:`submit` for each (src, dst, payload, token) in order; the drops."""
+        with self.lock:
+            drops = [self._put(now, *m) for m in messages]
+        return [d for d in drops if d is not None]
+
+    def _put(self, now: float, src: str, dst: str, payload: bytes, token: Any) -> Drop | None:
+        ln = self._named.get((src, dst)) or self.link(src, dst)
+        radio = ln.radio
         finish = now
-        if math.isfinite(self.rate):  # it waits its turn at the radio
-            backlog = self._backlog.setdefault(radio, collections.deque())
-            waiting = self._waiting.get(radio, 0)
+        if self._capped:  # it waits its turn at the radio
+            n = len(payload)
+            backlog = radio.backlog
             while backlog and backlog[0][0] <= now:
-                waiting -= backlog.popleft()[1]
-            if waiting and waiting + n > self.cfg.queue_bytes:
-                self._waiting[radio] = waiting
-                return self._drop(_Sending(now, 0, src, dst, payload, now, token, ln), now, "capacity")
-            finish = max(now, self._radio_free.get(radio, -math.inf)) + n / self.rate
-            self._radio_free[radio] = finish
+                radio.waiting -= backlog.popleft()[1]
+            if radio.waiting and radio.waiting + n > self.cfg.queue_bytes:
+                return self._drop(ln, (now, 0, src, dst, payload, now, token), now, "capacity")
+            finish = (now if now > radio.free else radio.free) + n / self.rate
+            radio.free = finish
             backlog.append((finish, n))
-            self._waiting[radio] = waiting + n
+            radio.waiting += n
         self._seq += 1
-        heapq.heappush(
-            self._sending, (finish, self._seq, _Sending(finish, self._seq, src, dst, payload, now, token, ln))
-        )
+        radio.sending.append((finish, self._seq, src, dst, payload, now, token, ln))
+        self._unjudged += 1
+        by_pair = self._unjudged_by_pair
+        by_pair[ln.pair] = by_pair.get(ln.pair, 0) + 1
         return None
 
     def due(self, now: float, view: Callable[[str, str], LinkView | None]) -> tuple[list[Delivery], list[Drop]]:
-        """What arrived (in order of arrival) and what was dropped by ``now``."""
+        """What arrived (in order of arrival) and what was dropped by ``now`` (``view`` may answer
+        :data:`LATER` for a link: its messages are judged at a later call)."""
+        with self.lock:
+            return self._due(now, view)
+
+    def _due(self, now: float, view: Callable[[str, str], LinkView | None]) -> tuple[list[Delivery], list[Drop]]:
         drops: list[Drop] = []
-        views: dict[int, LinkView | None] = {}  # each link asked once a call
-        sending = self._sending
-        while sending and sending[0][0] <= now:
-            m = heapq.heappop(sending)[2]
-            key = id(m.link)
-            if key not in views:
-                views[key] = view(m.src, m.dst)
-            drop = self._judge(m, views[key])
-            if drop is not None:
-                drops.append(drop)
-        out: list[Delivery] = []
+        ready: list[tuple[float, int, Delivery, _Link]] = []  # judged now and arrived already
+        if self._unjudged:
+            self._judge_due(now, view, drops, ready)
         arriving = self._arriving
         while arriving and arriving[0][0] <= now:
-            _, _, d, ln = heapq.heappop(arriving)
+            ready.append(heapq.heappop(arriving))
+        ready.sort(key=_arrival_order)
+        out: list[Delivery] = []
+        for _, _, d, ln in ready:
             c = ln.counts
             c.delivered += 1
             c.delivered_bytes += len(d.payload)
@@ -401,28 +361,65 @@ class Channel:
             out.append(d)
         return out, drops
 
-    def _judge(self, m: _Sending, lv: LinkView | None) -> Drop | None:
-        ln = m.link
-        if lv is None or not lv.holds:
-            return self._drop(m, m.finish, "range")
-        signal = lv.signal_dbm
-        if self._rayleigh:
-            signal += 10.0 * math.log10(max(ln.fade.expovariate(1.0), 1e-12))
-            if signal < lv.cutoff_dbm and self._fade_loses:
-                return self._drop(m, m.finish, "loss")  # faded below the cutoff
-        if ln.loss.lost(signal - lv.cutoff_dbm, len(m.payload)):
-            return self._drop(m, m.finish, "loss")
-        at = m.finish + lv.distance_m / SPEED_OF_LIGHT_M_S + self.cfg.latency_s
-        if self.cfg.jitter_s > 0.0:
-            at += ln.jitter.uniform(0.0, self.cfg.jitter_s)
-        if at < ln.last_at:  # a link's messages arrive in the order they were sent
-            at = ln.last_at
-        ln.last_at = at
-        heapq.heappush(self._arriving, (at, m.seq, Delivery(m.token, m.src, m.dst, m.payload, m.sent_at, at), ln))
-        return None
+    def _judge_due(
+        self, now: float, view: Callable[[str, str], LinkView | None], drops: list[Drop], ready: list
+    ) -> None:
+        """Judge every message whose last byte has left by ``now``, by its link's view: a drop
+        goes to ``drops``; a delivery to ``ready`` when it has arrived by ``now``, else it waits."""
+        views: dict[_Link, Any] = {}  # each link asked once a call
+        log10, expo = math.log10, random.Random.expovariate
+        cfg = self.cfg
+        latency, jitter = cfg.latency_s, cfg.jitter_s
+        rayleigh, fade_loses = self._rayleigh, self._fade_loses
+        arriving = self._arriving
+        by_pair = self._unjudged_by_pair
+        judged = 0
+        for radio in self._radios.values():
+            sending = radio.sending
+            while sending and sending[0][0] <= now and sending[0][5] < now:
+                m = sending[0]
+                finish, seq, src, dst, payload, sent_at, token, ln = m
+                lv = views.get(ln, _UNSEEN)
+                if lv is _UNSEEN:
+                    lv = views[ln] = view(src, dst)
+                if lv is LATER:
+                    break  # this radio's queue waits for its link to be known
+                sending.popleft()
+                judged += 1
+                left = by_pair[ln.pair] - 1
+                if left:
+                    by_pair[ln.pair] = left
+                else:
+                    del by_pair[ln.pair]
+                if lv is None or not lv.holds:
+                    drops.append(self._drop(ln, m, finish, "range"))
+                    continue
+                signal = lv.signal_dbm
+                if rayleigh:
+                    signal += 10.0 * log10(max(expo(ln.fade, 1.0), 1e-12))
+                    if signal < lv.cutoff_dbm and fade_loses:
+                        drops.append(self._drop(ln, m, finish, "loss"))  # faded below the cutoff
+                        continue
+                if ln.loss.lost(signal - lv.cutoff_dbm, len(payload)):
+                    drops.append(self._drop(ln, m, finish, "loss"))
+                    continue
+                at = finish + lv.distance_m / SPEED_OF_LIGHT_M_S + latency
+                if jitter > 0.0:
+                    at += ln.jitter.uniform(0.0, jitter)
+                if at < ln.last_at:  # a link's messages arrive in the order they were sent
+                    at = ln.last_at
+                ln.last_at = at
+                entry = (at, seq, Delivery(token, src, dst, payload, sent_at, at), ln)
+                if at <= now:
+                    ready.append(entry)
+                else:
+                    heapq.heappush(arriving, entry)
+        self._unjudged -= judged
 
-    def _drop(self, m: _Sending, at: float, cause: str) -> Drop:
-        c = m.link.counts
+    @staticmethod
+    def _drop(ln: _Link, m: tuple, at: float, cause: str) -> Drop:
+        n = len(m[4])
+        c = ln.counts
         c.dropped[cause] += 1
-        c.dropped_bytes[cause] += len(m.payload)
-        return Drop(m.token, m.src, m.dst, len(m.payload), m.sent_at, at, cause)
+        c.dropped_bytes[cause] += n
+        return Drop(m[6], m[2], m[3], n, m[5], at, cause)

@@ -11,7 +11,6 @@ The servers import nothing else from the simulation layer but :mod:`usarsim.sim.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
@@ -23,7 +22,7 @@ from usarsim.config.world import StartPose, WorldConfig
 from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
 from usarsim.sim.api import Position, RobotEntry, settle
-from usarsim.sim.channel import Delivery, Drop, LinkCounts
+from usarsim.sim.channel import Channel, LinkCounts, LinkView
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits, package_frames
 from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
@@ -301,20 +300,23 @@ class SimFacade:
         model: RadioModel,
         on_change: Callable[[float, list[tuple[Pair, bool]]], None],
         channel: ChannelConfig | None = None,
-        on_deliver: Callable[[float, list[Delivery], list[Drop]], None] | None = None,
-    ) -> None:
+        on_views: Callable[[float, dict[Pair, LinkView | None]], None] | None = None,
+    ) -> Channel | None:
         """Compute radio links with ``model`` after every advance of the clock (every STEP in
         lock-step, else at most every RADIO_INTERVAL_S); ``on_change(time, [(pair, holds)])``
         is called on the simulation thread for the watched pairs whose state changed.  With a
-        ``channel`` that is not ideal, messages go through it (:meth:`radio_send_many`) and
-        ``on_deliver(time, deliveries, drops)`` is called on the simulation thread after each
-        advance with what arrived and what was lost.  Call before :meth:`start`."""
+        ``channel`` that is not ideal, the :class:`Channel` that carries the messages is
+        returned, for the caller to drive on its own thread (it is thread-safe), and
+        ``on_views(time, views)`` is called on the simulation thread after each evaluation
+        with the links its messages are judged by (the watched pairs' and those of pairs with
+        messages waiting).  Call before :meth:`start`."""
         net = RadioNet(model, channel, seed=self.sim.seed)
         net.min_interval_s = 0.0 if self.lockstep else RADIO_INTERVAL_S
         net.on_change = on_change
-        net.on_deliver = on_deliver
+        net.on_views = on_views
         self._radio = net
         self.sim.on_advance(net.evaluate)
+        return net.channel
 
     def radio_watch(self, pairs: frozenset[Pair]) -> None:
         """The pairs whose links are evaluated after every advance (replaced as a whole)."""
@@ -331,22 +333,11 @@ class SimFacade:
         net = self._net()
         return self._ask(lambda sim: net.neighbours(sim, a))
 
-    def radio_send_many(self, messages: list[tuple[str, str, bytes, object]]) -> Future[list[Drop]]:
-        """Hand messages (src, dst, payload, token) to the channel, in order, at the simulated
-        instant they reach the simulation thread; the drops (the sender's queue full)."""
-        net = self._net()
-        return self._ask(lambda sim: net.send_many(sim, messages))
-
     def radio_counts(self) -> Future[dict[tuple[str, str], LinkCounts]]:
         """What each link carried through the channel (sender, receiver): delivered, dropped by
         cause, delays."""
         net = self._net()
-        return self._ask(
-            lambda sim: {
-                k: dataclasses.replace(c, dropped=dict(c.dropped), dropped_bytes=dict(c.dropped_bytes))
-                for k, c in net.counts().items()
-            }
-        )
+        return self._ask(lambda sim: net.counts())
 
     def radio_link(self, a: str, b: str) -> Future[Link | None]:
         """The link between two robots now (None: either is not in the simulation)."""

@@ -7,7 +7,7 @@ rotation of a USARSim roll, pitch and yaw, for drawing the world).
 
 from __future__ import annotations
 
-from usarsim.sim.channel import Delivery, Drop, LinkCounts, describe_channel
+from usarsim.sim.channel import LATER, Channel, Delivery, Drop, LinkCounts, LinkView, describe_channel
 from usarsim.sim.frames import euler_to_mat
 from usarsim.sim.outputs import ItemDescription, Output, RobotNumbers, VelocityLimits
 from usarsim.sim.radio import Link, Pair, RadioModel, pair_key, resolve_channel, resolve_model
@@ -15,11 +15,14 @@ from usarsim.sim.tiles import Tile, grid_tiles
 from usarsim.sim.worldframe import LinkFrame, LinkTraffic, ObjectFrame, RelayFrame, RobotFrame, WorldFrame
 
 __all__ = [
+    "LATER",
+    "Channel",
     "Delivery",
     "Drop",
     "ItemDescription",
     "Link",
     "LinkCounts",
+    "LinkView",
     "LinkFrame",
     "LinkTraffic",
     "ObjectFrame",

@@ -14,6 +14,7 @@ logged once per connection.
 from __future__ import annotations
 
 import asyncio
+import functools
 import logging
 import math
 from typing import cast
@@ -124,6 +125,8 @@ class WcsLink:
         for end in self.ends:
             end.link = self
             end.log_once.label = f"comserver link {self.name}"
+        # what delivers a message to each end when the channel hands it over (made once)
+        self._deliver = {id(end): functools.partial(self._arrived, end) for end in self.ends}
 
     def start(self) -> None:
         for end in self.ends:
@@ -143,7 +146,7 @@ class WcsLink:
         if svc.ideal:
             self._arrived(dst, payload)
         else:
-            svc.send(src.robot, dst.robot, payload, lambda data: self._arrived(dst, data))
+            svc.send(src.robot, dst.robot, payload, self._deliver[id(dst)])
 
     def _arrived(self, dst: _LinkEnd, payload: bytes) -> None:
         if self.open and write_open(dst.transport, payload):

@@ -49,7 +49,11 @@ class _PipeEnd(RelayEnd):
         if svc.ideal:
             write_open(peer.transport, data)
         else:
-            svc.send(self.robot, peer.robot, data, lambda payload: write_open(peer.transport, payload))
+            svc.send(self.robot, peer.robot, data, peer.receive)
+
+    def receive(self, payload: bytes) -> None:
+        """What the channel delivers to this end's robot."""
+        write_open(self.transport, payload)
 
     def eof_received(self):
         return False  # closes the pipe: the WSS closes both sockets

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import asyncio
 import collections
-import itertools
 import logging
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -31,7 +30,7 @@ from usarsim.protocol.wireless import INTERFACE_PORT, WCS_PORT, WSS_PORT
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener, call_on_loop
 from usarsim.sim.api import Facade
-from usarsim.sim.types import Delivery, Drop, Link, LinkCounts, Pair, RadioModel
+from usarsim.sim.types import LATER, Channel, Link, LinkCounts, LinkView, Pair, RadioModel, pair_key
 
 T = TypeVar("T")
 
@@ -82,15 +81,15 @@ class WirelessService:
         self.channel = channel if channel is not None else ChannelConfig()
         # the ideal channel (USARSim's): servers relay what robots send at once, while the link holds
         self.ideal = self.channel.ideal
-        facade.open_radio(  # before the simulation thread starts
+        # the messages under way (None: the ideal channel), driven here on the event loop by the
+        # links the simulation thread computes (_views_threadsafe)
+        self._carrier: Channel | None = facade.open_radio(  # before the simulation thread starts
             model,
             self._changes_threadsafe,
             channel=self.channel,
-            on_deliver=None if self.ideal else self._deliveries_threadsafe,
+            on_views=None if self.ideal else self._views_threadsafe,
         )
-        self._arrivals: dict[int, Callable[[bytes], object]] = {}  # a message under way -> what delivers it
-        self._tokens = itertools.count(1)
-        self._outgoing: list[tuple[str, str, bytes, object]] = []  # handed to the simulation at the loop's next turn
+        self.now = 0.0  # the simulated time of the latest links the channel was given
         self.loop: asyncio.AbstractEventLoop | None = None
         self.state: dict[Pair, tuple[float, bool]] = {}  # pair -> (simulated time, holds)
         self.subscribers: list[Callable[[Pair, bool, float], None]] = []
@@ -134,47 +133,32 @@ class WirelessService:
     # messages ---------------------------------------------------------------------------
     def send(self, src: str, dst: str, payload: bytes, deliver: Callable[[bytes], object]) -> None:
         """Carry ``payload`` from robot ``src`` to robot ``dst`` through the channel (not the
-        ideal one): ``deliver(payload)`` is called on the event loop when it arrives, never if
-        it is lost.  The messages of one turn of the event loop go to the simulation together,
-        in the order they were sent."""
-        token = next(self._tokens)
-        self._arrivals[token] = deliver
-        self._outgoing.append((src, dst, payload, token))
-        if len(self._outgoing) == 1:
-            asyncio.get_running_loop().call_soon(self._flush)
-
-    def _flush(self) -> None:
-        batch, self._outgoing = self._outgoing, []
-        if batch:
-            self.facade.radio_send_many(batch).add_done_callback(self._refused_threadsafe)
-
-    def _refused_threadsafe(self, future: Future[list[Drop]]) -> None:
-        if future.cancelled() or future.exception() is not None or future.result():
-            call_on_loop(self.loop, self._forget, future)
-
-    def _forget(self, future: Future[list[Drop]]) -> None:
-        if future.cancelled() or future.exception() is not None:
-            log.error("wireless: messages not handed to the channel: %r", future.exception())
-            return
-        for drop in future.result():
-            self._arrivals.pop(drop.token, None)
+        ideal one), handed over at the simulated time of the latest links (:attr:`now`):
+        ``deliver(payload)`` is called on the event loop when it arrives, never if it is lost."""
+        assert self._carrier is not None, "the ideal channel relays at once"
+        drop = self._carrier.submit(self.now, src, dst, payload, deliver)
+        if drop is not None:
             self.event("message %s -> %s (%d bytes) dropped: %s", drop.src, drop.dst, drop.nbytes, drop.cause)
 
-    def _deliveries_threadsafe(self, time: float, deliveries: list[Delivery], drops: list[Drop]) -> None:
-        """The facade's ``on_deliver`` (simulation thread): handed to the event loop."""
-        call_on_loop(self.loop, self._arrive, time, deliveries, drops)
+    def _views_threadsafe(self, time: float, views: dict[Pair, LinkView | None]) -> None:
+        """The facade's ``on_views`` (simulation thread): handed to the event loop."""
+        call_on_loop(self.loop, self._due, time, views)
 
-    def _arrive(self, time: float, deliveries: list[Delivery], drops: list[Drop]) -> None:
+    def _due(self, time: float, views: dict[Pair, LinkView | None]) -> None:
+        """The links at ``time``: what the channel delivers and drops by then, judged by them."""
+        assert self._carrier is not None
+        self.now = max(self.now, time)
+
+        def view(src: str, dst: str) -> LinkView | None:
+            return views.get(pair_key(src, dst), LATER)
+
+        deliveries, drops = self._carrier.due(time, view)
         for d in deliveries:
-            deliver = self._arrivals.pop(d.token, None)
-            if deliver is None:
-                continue
             try:
-                deliver(d.payload)
+                d.token(d.payload)
             except Exception:
                 log.exception("wireless: error while delivering a message")
         for x in drops:
-            self._arrivals.pop(x.token, None)
             self.event("message %s -> %s (%d bytes) dropped at t=%.3f: %s", x.src, x.dst, x.nbytes, x.at, x.cause)
 
     async def counts(self) -> dict[tuple[str, str], LinkCounts]:
