@@ -30,7 +30,6 @@ import shlex
 import shutil
 import string
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import Any, cast
@@ -51,9 +50,11 @@ from usarsim.sweep.runs import (
     Controller,
     Experiment,
     Member,
+    MemberSpec,
     Run,
     brain_parameters,
     resolve_brain,
+    team_label,
     varying_axes,
 )
 
@@ -88,16 +89,6 @@ def load_experiment(path: str | Path) -> Experiment:
     p = Path(path)
     data = load_yaml(p)
     return Reader(p).read(data)
-
-
-@dataclass
-class _MemberSpec:
-    robot: str
-    count: int
-    starts: tuple[str | None, ...]  # one per robot (None: the next free start pose)
-    location: tuple[float, float, float] | None
-    yaw: float
-    key: str
 
 
 class Reader:
@@ -180,6 +171,12 @@ class Reader:
         seen: set[str] = set()
         for values, run_seeds, key in configs:
             team = self.place_team(values["team"], values["world"], key)
+            if values["controller"].isolate and values["clock"] == "lockstep":
+                raise self.error(
+                    key or "clock",
+                    "isolated controllers need 'clock: max': in lock-step one process steps the world, "
+                    "and isolated ones are one a robot",
+                )
             for seed in run_seeds:
                 run = Run(
                     experiment=name,
@@ -242,7 +239,7 @@ class Reader:
             raise self.error(key, exc.message) from None
         return cfg.name, cfg
 
-    def team(self, v: Any, key: str) -> tuple[_MemberSpec, ...]:
+    def team(self, v: Any, key: str) -> tuple[MemberSpec, ...]:
         entries = [v] if isinstance(v, (str, dict)) else v
         if not isinstance(entries, list) or not entries:
             raise self.error(
@@ -254,7 +251,7 @@ class Reader:
         for i, entry in enumerate(entries):
             k = key if isinstance(v, (str, dict)) else f"{key}[{i}]"
             if isinstance(entry, str):
-                out.append(_MemberSpec(self.robot_class(entry, k), 1, (None,), None, 0.0, k))
+                out.append(MemberSpec(self.robot_class(entry, k), 1, (None,), None, 0.0, k))
                 continue
             s = Section(entry, path=self.file, key=k)
             robot = self.robot_class(s.str("robot"), f"{k}.robot")
@@ -275,7 +272,7 @@ class Reader:
                         "robots placed at a location come one to an entry: "
                         f"give one entry per robot, got count {count}",
                     )
-                out.append(_MemberSpec(robot, 1, (None,), location, yaw, k))
+                out.append(MemberSpec(robot, 1, (None,), location, yaw, k))
                 continue
             starts = [start] if isinstance(start, str) else start
             if not isinstance(starts, list) or not all(isinstance(x, str) and x.strip() for x in starts):
@@ -288,7 +285,7 @@ class Reader:
                 raise self.error(
                     f"{k}.start", f"{len(starts)} start poses for {count} robots: give one per robot, or 'auto'"
                 )
-            out.append(_MemberSpec(robot, count, tuple(None if x == "auto" else x for x in starts), None, yaw, k))
+            out.append(MemberSpec(robot, count, tuple(None if x == "auto" else x for x in starts), None, yaw, k))
         return tuple(out)
 
     def robot_class(self, name: Any, key: str) -> str:
@@ -356,6 +353,12 @@ class Reader:
         label = s.str("label", "")
         if s.has("brain"):
             target = s.str("brain").strip()
+            if s.has("isolate"):
+                raise self.error(
+                    f"{key}.isolate",
+                    "isolation runs commands, one per robot: run the brain as one "
+                    "(python -m usarsim.brains.wander --host {host} --port {port} --name {name} --start {start} ...)",
+                )
             params = s.section("params", {}).data
             period = s.float("period", DEFAULT_PERIOD_S, min=0.0, min_exclusive=True)
             s.finish()
@@ -370,9 +373,10 @@ class Reader:
                 label = target.rsplit(":", 1)[1] + (f"({short})" if short else "")
             return Controller("brain", target, text, period, label)
         command = s.str("command")
+        isolate = s.bool("isolate", False)
         s.finish()
         self.check_command(command, f"{key}.command")
-        return Controller("command", command, "{}", DEFAULT_PERIOD_S, label or command)
+        return Controller("command", command, "{}", DEFAULT_PERIOD_S, label or command, isolate)
 
     def brain(self, target: str, key: str) -> Callable[..., Any]:
         if not _BRAIN_TARGET.match(target):
@@ -425,7 +429,7 @@ class Reader:
         if "{" not in program and shutil.which(program) is None and not (self.folder / program).exists():
             raise self.error(key, f"no program '{program}' on the PATH or in {self.folder}")
 
-    def place_team(self, specs: tuple[_MemberSpec, ...], world: tuple[str, Any], key: str) -> tuple[Member, ...]:
+    def place_team(self, specs: tuple[MemberSpec, ...], world: tuple[str, Any], key: str) -> tuple[Member, ...]:
         """The team's robots with their names and start poses in ``world``: a start pose
         named in the file, or the world's next start pose no other robot of the team takes."""
         cfg = world[1]
@@ -483,17 +487,3 @@ def _world_at(path: str) -> Any:
     from usarsim.config.catalog import resolve_world
 
     return resolve_world(path)
-
-
-def team_label(specs: tuple[_MemberSpec, ...]) -> str:
-    """``P2AT``, ``2xP2AT``, ``P2AT+P3AT``, ``P2AT@PlayerStart3``: the team as a row shows it."""
-    parts = []
-    for s in specs:
-        text = s.robot if s.count == 1 else f"{s.count}x{s.robot}"
-        named = [x for x in s.starts if x is not None]
-        if s.location is not None:
-            text += "@" + ",".join(f"{v:g}" for v in s.location)
-        elif named:
-            text += "@" + ",".join(x if x is not None else "auto" for x in s.starts)
-        parts.append(text)
-    return "+".join(parts)

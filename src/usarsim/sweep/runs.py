@@ -80,13 +80,15 @@ class Controller:
     """What drives a run's robots: a Python brain (``kind`` "brain", ``target``
     ``module:callable``, called once per robot with ``params``, stepped every ``period``
     simulated seconds) or an external command (``kind`` "command", ``target`` the command
-    line with placeholders)."""
+    line with placeholders; ``isolate``: one per robot, each in a network namespace of its own,
+    :mod:`usarsim.sweep.isolation`)."""
 
     kind: str
     target: str
     params: str = "{}"  # JSON text (sorted keys): hashable, and the same in every row
     period: float = DEFAULT_PERIOD_S
     label: str = ""
+    isolate: bool = False
 
     @property
     def param_dict(self) -> dict[str, Any]:
@@ -96,6 +98,8 @@ class Controller:
         out: dict[str, Any] = {"kind": self.kind, "target": self.target}
         if self.kind == "brain":
             out.update(params=self.param_dict, period=self.period)
+        if self.isolate:
+            out["isolate"] = True
         return out
 
 
@@ -228,3 +232,30 @@ def brain_parameters(factory: Callable[..., Any]) -> set[str] | None:
             return None
     names -= {"self"}
     return names
+
+
+@dataclass
+class MemberSpec:
+    """A member of a team as the experiment file gives it: ``count`` robots of a class, their
+    start poses (None: the next free one), or a location and yaw; ``key`` where it was read."""
+
+    robot: str
+    count: int
+    starts: tuple[str | None, ...]  # one per robot (None: the next free start pose)
+    location: tuple[float, float, float] | None
+    yaw: float
+    key: str
+
+
+def team_label(specs: tuple[MemberSpec, ...]) -> str:
+    """``P2AT``, ``2xP2AT``, ``P2AT+P3AT``, ``P2AT@PlayerStart3``: the team as a row shows it."""
+    parts = []
+    for s in specs:
+        text = s.robot if s.count == 1 else f"{s.count}x{s.robot}"
+        named = [x for x in s.starts if x is not None]
+        if s.location is not None:
+            text += "@" + ",".join(f"{v:g}" for v in s.location)
+        elif named:
+            text += "@" + ",".join(x if x is not None else "auto" for x in s.starts)
+        parts.append(text)
+    return "+".join(parts)

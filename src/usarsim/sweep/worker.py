@@ -211,59 +211,114 @@ def command_values(run: Run, server: Any) -> dict[str, str]:
 
 def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], deadline: float) -> None:
     """Run the controller command until it exits or the simulated time reaches the
-    duration (then it is stopped: SIGTERM, SIGKILL 5 s later)."""
+    duration (then it is stopped: SIGTERM, SIGKILL 5 s later); isolated, one for each robot,
+    each in a network namespace of its own (:mod:`usarsim.sweep.isolation`)."""
     from usarsim.client import connect
 
     t = time.monotonic()
     values = command_values(run, server)
-    argv = [part.format(**values) for part in shlex.split(run.controller.target)]
+    relay = None
+    if run.controller.isolate:
+        from usarsim.sweep.isolation import REACHABLE, HostRelay, isolation_problem
+
+        problem = isolation_problem()
+        if problem is not None:
+            raise RunFailed(f"the controllers cannot be isolated: {problem}")
+        relay = HostRelay(server.host, [server.ports[k] for k in REACHABLE if k in server.ports])
+        commands = [
+            (relay.launcher(command_argv(run, v)), v, f"controller-{m.name}.log")
+            for m, v in ((m, member_values(values, m)) for m in run.team)
+        ]
+    else:
+        commands = [(command_argv(run, values), values, "controller.log")]
+    procs: list[tuple[subprocess.Popen, Any]] = []
+    try:
+        with connect(server.host, server.port, lockstep=False, truth_port=server.ports["truth"]) as clock:
+            for argv, vals, log_name in commands:
+                out = open(tmp / log_name, "w+b")  # noqa: SIM115 (closed below, with its process)
+                try:
+                    procs.append((start_command(run, argv, vals, out), out))
+                except BaseException:
+                    out.close()
+                    raise
+            phases["setup_s"] = time.monotonic() - t
+            t = time.monotonic()
+            stopped = _wait_commands(run, server, clock, [p for p, _ in procs], deadline)
+        phases["control_s"] = time.monotonic() - t
+        for proc, out in procs:
+            if not stopped and proc.returncode not in (None, 0) and time.monotonic() <= deadline:
+                out.seek(0)
+                tail = out.read().decode("utf-8", "replace")[-OUTPUT_TAIL_CHARS:].strip()
+                raise RunFailed(
+                    f"the controller exited with code {proc.returncode}"
+                    + (f": {tail}" if tail else " and printed nothing")
+                )
+    finally:
+        for proc, out in procs:
+            stop_process(proc)
+            out.close()
+        if relay is not None:
+            relay.close()
+
+
+def command_argv(run: Run, values: dict[str, str]) -> list[str]:
+    """The controller command's words, its placeholders filled in."""
+    return [part.format(**values) for part in shlex.split(run.controller.target)]
+
+
+def member_values(values: dict[str, str], member: Any) -> dict[str, str]:
+    """``values`` with ``{robot}``, ``{name}`` and ``{start}`` those of one team ``member``."""
+    return {**values, "robot": member.robot, "name": member.name, "start": member.start or ""}
+
+
+def start_command(run: Run, argv: list[str], values: dict[str, str], out: Any) -> subprocess.Popen:
     env = dict(os.environ)
     env.update({f"USARSIM_{k.upper()}": v for k, v in values.items()})
     env["USARSIM_TEAM_JSON"] = json.dumps([m.as_dict() for m in run.team])
-    out_path = tmp / "controller.log"
-    with (
-        open(out_path, "w+b") as out,
-        connect(server.host, server.port, lockstep=False, truth_port=server.ports["truth"]) as clock,
-    ):
+    try:
+        return subprocess.Popen(
+            argv, cwd=run.cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT, env=env
+        )
+    except OSError as exc:
+        raise RunFailed(f"the controller command cannot start: {exc}") from None
+
+
+def _wait_commands(run: Run, server: Any, clock: Any, procs: list[subprocess.Popen], deadline: float) -> bool:
+    """Wait until every process exits, the watchdog's deadline, or the simulated duration
+    (True: they were stopped then)."""
+    reached: float | None = None  # when the simulated time reached the duration (wall)
+    # isolated controllers each spawn their robot: the duration counts from when all stand
+    started: float | None = None if run.controller.isolate else 0.0
+    team = {m.name.lower() for m in run.team}
+    while any(p.poll() is None for p in procs):
+        if any(p.returncode not in (None, 0) for p in procs):
+            return False  # one failed: the run fails now
+        if time.monotonic() > deadline:
+            return False  # the watchdog says so
+        if server.proc.poll() is not None:
+            raise RunFailed("the simulator stopped while the controller ran (see its log)")
+        if reached is None:
+            objects = clock.truth()
+            now = max((o.time for o in objects), default=None)
+            if started is None and now is not None and team <= {o.name.lower() for o in objects}:
+                started = now
+            if started is not None and now is not None and now - started >= run.duration_s - 1e-9:
+                reached = time.monotonic()
+        if reached is not None and (run.clock != "lockstep" or time.monotonic() - reached > GRACE_S):
+            return True
+        time.sleep(POLL_S)
+    return False
+
+
+def stop_process(proc: subprocess.Popen) -> None:
+    """SIGTERM, then SIGKILL 5 s later."""
+    if proc.poll() is None:
+        proc.terminate()
         try:
-            proc = subprocess.Popen(
-                argv, cwd=run.cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT, env=env
-            )
-        except OSError as exc:
-            raise RunFailed(f"the controller command cannot start: {exc}") from None
-        phases["setup_s"] = time.monotonic() - t
-        t = time.monotonic()
-        stopped = False
-        reached: float | None = None  # when the simulated time reached the duration (wall)
-        try:
-            while proc.poll() is None:
-                if time.monotonic() > deadline:
-                    break  # the watchdog says so
-                if server.proc.poll() is not None:
-                    raise RunFailed("the simulator stopped while the controller ran (see its log)")
-                if reached is None:
-                    now = [o.time for o in clock.truth()]
-                    if now and max(now) >= run.duration_s - 1e-9:
-                        reached = time.monotonic()
-                if reached is not None and (run.clock != "lockstep" or time.monotonic() - reached > GRACE_S):
-                    stopped = True
-                    break
-                time.sleep(POLL_S)
-        finally:
-            if proc.poll() is None:
-                proc.terminate()
-                try:
-                    proc.wait(5)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
-                    proc.wait(5)
-        phases["control_s"] = time.monotonic() - t
-        if not stopped and proc.returncode != 0 and time.monotonic() <= deadline:
-            out.seek(0)
-            tail = out.read().decode("utf-8", "replace")[-OUTPUT_TAIL_CHARS:].strip()
-            raise RunFailed(
-                f"the controller exited with code {proc.returncode}" + (f": {tail}" if tail else " and printed nothing")
-            )
+            proc.wait(5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
 
 
 def server_arguments(run: Run) -> list[str]:
