@@ -51,7 +51,9 @@ NOT_RUN = (
 COMMENT = re.compile(r"\s#\s?")
 SERVER = re.compile(r"^(usarsim serve|bash scripts/serve\.sh)\b")
 LISTENING = re.compile(r"usarsim: control listening on|listening on \S+:\d+")
-COMMAND_TIMEOUT_S = 300
+# The pages' commands run beside the shared phase of the suite (scripts/test.sh), which slows them
+# down up to five times on two cores: the README's sample sweep takes 50 s alone and 5 min there.
+COMMAND_TIMEOUT_S = 600
 
 
 class PortGuard:
