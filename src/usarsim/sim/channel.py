@@ -309,12 +309,6 @@ class Channel:
         with self.lock:
             return self._put(now, src, dst, payload, token)
 
-    def submit_many(self, now: float, messages: list[tuple[str, str, bytes, Any]]) -> list[Drop]:
-        """:meth:`submit` for each (src, dst, payload, token) in order; the drops."""
-        with self.lock:
-            drops = [self._put(now, *m) for m in messages]
-        return [d for d in drops if d is not None]
-
     def _put(self, now: float, src: str, dst: str, payload: bytes, token: Any) -> Drop | None:
         ln = self._named.get((src, dst)) or self.link(src, dst)
         radio = ln.radio
