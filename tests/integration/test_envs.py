@@ -258,3 +258,27 @@ def test_messages_cross_only_links_the_radio_model_holds_and_a_flipped_robot_lea
         assert not obs["robot_0"]["inbox"].any() and obs["robot_0"]["inbox_mask"].tolist() == [0, 1, 0, 0]
     finally:
         env.close()
+
+
+def test_team_messages_go_through_the_servers_channel_with_its_delay(tmp_path):
+    # a channel of 0.25 s latency (docs/wireless.md): a message sent before step k (at t_k) is
+    # judged at t_k+1 and delivered at the first evaluation past t_k + 0.25, t_k+3, which ends
+    # step k + 2; over USARSim's ideal channel it is in the inbox at the end of its own step
+    slow = tmp_path / "slow.yaml"
+    slow.write_text("channel: {latency_s: 0.25}\n")
+    inboxes = {}
+    for name, config in (("ideal", None), ("slow", str(slow))):
+        env = TeamExplore(robots=2, message_size=1, wireless_config=config, time_limit_s=2.0)
+        try:
+            env.reset(seed=1)
+            got = []
+            for k in range(6):
+                actions = {a: {"move": STOP, "message": np.array([k / 10], np.float32)} for a in env.agents}
+                obs, *_ = env.step(actions)
+                got.append(float(obs["robot_0"]["inbox"][1][0]) if obs["robot_0"]["inbox_mask"][1] else None)
+            inboxes[name] = got
+        finally:
+            env.close()
+    assert inboxes["ideal"] == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
+    assert inboxes["slow"][:2] == [None, None]
+    assert inboxes["slow"][2:] == pytest.approx([0.0, 0.1, 0.2, 0.3])

@@ -18,6 +18,7 @@ import logging
 import socket
 import struct
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from usarsim.errors import ProtocolError
@@ -84,6 +85,10 @@ class Radio:
     def ask(self, request: WcsRegister | WcsListen | WcsOpen | WcsGetSS | WcsGetNeighbors) -> WcsReply:
         """Send one command, return its reply."""
         self._ctl.sendall(format_wcs_request(request).encode("ascii"))
+        return self._reply(request)
+
+    def _reply(self, request: WcsRegister | WcsListen | WcsOpen | WcsGetSS | WcsGetNeighbors) -> WcsReply:
+        """The next reply, to ``request``."""
         deadline = time.monotonic() + self.timeout
         while not self._replies:
             left = deadline - time.monotonic()
@@ -122,6 +127,13 @@ class Radio:
         model (GETSS), or None when the ComServer cannot give one."""
         reply = self.ask(WcsGetSS(self.name, peer))
         return reply.dbm if isinstance(reply, WcsSignal) else None
+
+    def signals(self, peers: Sequence[str]) -> list[float | None]:
+        """:meth:`signal` to each of ``peers``, asked in one write."""
+        asks = [WcsGetSS(self.name, p) for p in peers]
+        if asks:
+            self._ctl.sendall("".join(format_wcs_request(a) for a in asks).encode("ascii"))
+        return [r.dbm if isinstance(r := self._reply(a), WcsSignal) else None for a in asks]
 
     def neighbours(self) -> list[Neighbor]:
         """Every robot whose link with this one holds now, with its signal strength (dBm) and

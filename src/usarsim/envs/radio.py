@@ -1,25 +1,15 @@
-"""The signal between two robots, asked of the simulator's own ComServer (``GETSS a b;``,
-protocol.md 12.1): the environments carry a team message only when the simulator's radio
-model says the link holds."""
+"""The team's radios on the simulator's own ComServer (protocol.md 12.1, docs/wireless.md): the
+environments' team messages go as every robot's do, over the ComServer's links, which open only
+while the simulator's radio model says a link holds, and through the server's channel
+(capacity, loss, delay).  The signal between two robots is asked of it too (``GETSS``)."""
 
 from __future__ import annotations
 
-import socket
-import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
-from usarsim.client import ClientError, ClientTimeout
+from usarsim.client import ClientError
+from usarsim.client.radio import Radio, RadioError, link
 from usarsim.config.world import WirelessConfig
-from usarsim.protocol.wireless import (
-    CommandSplitter,
-    WcsFail,
-    WcsGetSS,
-    WcsOk,
-    WcsRegister,
-    WcsSignal,
-    format_wcs_request,
-    parse_wcs_reply,
-)
 
 
 def radio_model(world_wireless: WirelessConfig | None, model: str | None = None, config_file: str | None = None):
@@ -34,73 +24,59 @@ def radio_model(world_wireless: WirelessConfig | None, model: str | None = None,
     return resolve_model(world_wireless, layer, model=model)
 
 
-class SignalMeter:
-    """A ComServer connection that registered ``names`` (robots spawned by this client) and
-    asks GETSS for pairs of them, all pairs of a call in one write."""
+class TeamRadio:
+    """A :class:`~usarsim.client.radio.Radio` for each of ``names`` (robots spawned by this
+    client) on the ComServer at ``host``:``port``.  A message sent goes on the open links of
+    its sender; what arrives is read after the simulation has stepped."""
 
     def __init__(self, host: str, port: int, names: Sequence[str], timeout: float = 10.0):
-        self.timeout = timeout
+        self.radios: dict[str, Radio] = {}
         try:
-            self.sock = socket.create_connection((host, port), timeout=timeout)
-        except OSError as exc:
-            raise ClientError(
-                f"cannot connect to the ComServer at {host}:{port} ({exc}); was the simulator "
-                "started with its wireless servers?"
-            ) from exc
-        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._split = CommandSplitter()
-        self._replies: list[str] = []
-        ip = self.sock.getsockname()[0]  # GETSS is answered only to a robot's own address
-        self._send([WcsRegister(n, ip) for n in names])
-        for name, reply in zip(names, self._read(len(names))):
-            if not isinstance(reply, WcsOk):
-                raise ClientError(f"the ComServer refused REGISTER {name}: {getattr(reply, 'reason', reply)}")
+            for name in names:
+                self.radios[name] = Radio(host, port, name, timeout=timeout)
+        except RadioError as exc:
+            self.close()
+            raise ClientError(f"{exc}; was the simulator started with its wireless servers?") from exc
 
-    def _send(self, cmds: list) -> None:
-        try:
-            self.sock.sendall("".join(format_wcs_request(c) for c in cmds).encode("ascii"))
-        except OSError as exc:
-            raise ClientError(f"the ComServer closed the connection ({exc})") from exc
-
-    def _read(self, n: int) -> list:
-        deadline = time.monotonic() + self.timeout
-        while len(self._replies) < n:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise ClientTimeout(
-                    f"ComServer: {n - len(self._replies)} of {n} replies did not arrive within {self.timeout:g} s"
-                )
-            self.sock.settimeout(left)
+    def signals(self, agents: Sequence[str]) -> dict[tuple[str, str], float | None]:
+        """The signal strength (dBm) between each pair of ``agents`` now (None where the
+        ComServer cannot tell), each agent asking of its later teammates in one write."""
+        out: dict[tuple[str, str], float | None] = {}
+        for i, a in enumerate(agents):
+            later = list(agents[i + 1 :])
             try:
-                data = self.sock.recv(1 << 16)
-            except TimeoutError:
-                continue
-            except OSError as exc:
-                raise ClientError(f"the ComServer closed the connection ({exc})") from exc
-            if not data:
-                raise ClientError("the ComServer closed the connection")
-            self._replies += self._split.feed(data)
-        out, self._replies = self._replies[:n], self._replies[n:]
-        return [parse_wcs_reply(r) for r in out]
-
-    def strengths(self, pairs: Sequence[tuple[str, str]]) -> list[float | None]:
-        """The signal strength in dBm between each pair of robots, now (None where the
-        ComServer cannot tell, e.g. a robot that has left the world)."""
-        if not pairs:
-            return []
-        self._send([WcsGetSS(a, b) for a, b in pairs])
-        out: list[float | None] = []
-        for reply in self._read(len(pairs)):
-            if isinstance(reply, WcsSignal):
-                out.append(reply.dbm)
-            elif isinstance(reply, WcsFail):
-                out.append(None)
-            else:
-                raise ClientError(f"the ComServer answered GETSS with {reply!r}")
+                values = self.radios[a].signals(later)
+            except RadioError as exc:
+                raise ClientError(str(exc)) from exc
+            out.update(((a, b), v) for b, v in zip(later, values, strict=True))
         return out
 
+    def link_up(self, signals: dict[tuple[str, str], float | None], holds: Callable[[float], bool]) -> None:
+        """Open a link for each pair whose signal holds and that has none open."""
+        for (a, b), dbm in signals.items():
+            if dbm is not None and holds(dbm) and b not in self.radios[a].links:
+                try:
+                    link(self.radios[a], self.radios[b])
+                except RadioError as exc:
+                    raise ClientError(str(exc)) from exc
+
+    def send(self, src: str, payload: bytes) -> None:
+        """``payload`` from ``src`` to each teammate it has a link with."""
+        self.radios[src].broadcast(payload)
+
+    def receive(self, agents: Sequence[str]) -> dict[str, list[tuple[str, bytes]]]:
+        """What each of ``agents`` received since the last call: (sender, payload) in order."""
+        return {a: self.radios[a].poll() for a in agents}
+
+    def leave(self, agent: str) -> None:
+        """``agent`` is done: its links close and its radio goes."""
+        radio = self.radios.pop(agent, None)
+        if radio is not None:
+            radio.close()
+        for r in self.radios.values():
+            r.forget(agent)
+
     def close(self) -> None:
-        try:
-            self.sock.close()
-        except OSError:
-            pass
+        for r in self.radios.values():
+            r.close()
+        self.radios = {}

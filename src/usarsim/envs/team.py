@@ -3,16 +3,17 @@
 Each robot observes, acts and earns as the robot of :class:`~usarsim.envs.ExploreEnv`
 does, on a coverage grid and a list of victims shared by the team (a cell or a victim pays
 once, to the first robot that sees it).  With ``message_size`` > 0 every robot also sends
-a small vector each step; it reaches another robot only when the simulator's radio model
-says the link between the two holds: the environment asks the simulator's ComServer for
-the signal strength (``GETSS``) and delivers at or above the model's cutoff.
+a small vector each step, through the simulator's ComServer as any robot's messages go: on
+the links the ComServer opens while the radio model says they hold (the signal at or above
+the cutoff, asked with ``GETSS`` before each step), and through the server's channel
+(capacity, loss and delay: ``--wireless-config``).  A message is in its receiver's inbox at
+the end of the step in which it arrives.
 """
 
 from __future__ import annotations
 
 import copy
 import dataclasses
-import itertools
 import weakref
 from collections.abc import Sequence
 from typing import Any
@@ -26,7 +27,7 @@ from usarsim.coverage import CoverageGrid
 
 from .explore import check_common, rewards_of
 from .explorer import Explorer, Outcome, Rewards
-from .radio import SignalMeter, radio_model
+from .radio import TeamRadio, radio_model
 from .session import PRELAUNCH_AFTER_STEPS, SEED_RANGE, Pose, Simulator, next_seed, spawn_at
 from .spec import action_space, check_robot, observation_space, robot_config, world_bounds
 
@@ -159,7 +160,7 @@ class TeamExplore(ParallelEnv):
         }
         self.coverage = CoverageGrid(self.bounds, self.rewards.cell_m)
         self.explorers: dict[str, Explorer] = {}
-        self.meter: SignalMeter | None = None
+        self.team_radio: TeamRadio | None = None
         self._rng: np.random.Generator | None = None
         self.prelaunch = bool(prelaunch)
         self._steps = 0
@@ -181,7 +182,7 @@ class TeamExplore(ParallelEnv):
         ``options`` are not used."""
         if seed is not None or self._rng is None:
             self._rng = np.random.default_rng(seed)
-        self._close_meter()
+        self._close_radio()
         world = self.sim.start(int(self._rng.integers(0, SEED_RANGE)))
         victims = {o.name: (o.location[0], o.location[1]) for o in world.truth(class_name="Victim")}
         self.coverage.clear()
@@ -201,10 +202,14 @@ class TeamExplore(ParallelEnv):
                 found,
             )
         if self.message_size:
-            self.meter = SignalMeter(self.sim.address, self.sim.comserver_port, self.possible_agents, self.sim.timeout)
+            self.team_radio = TeamRadio(
+                self.sim.address, self.sim.comserver_port, self.possible_agents, self.sim.timeout
+            )
         self.sim.step(self.control_period_s)
         self._t0 = world.time
         self.agents = list(self.possible_agents)
+        if self.team_radio is not None and self.radio is not None:  # the links of the first step
+            self.team_radio.link_up(self.team_radio.signals(self.agents), self.radio.holds)
         outs = {a: self.explorers[a].update() for a in self.agents}
         self._clear_inbox()
         self._signals = {}
@@ -232,9 +237,10 @@ class TeamExplore(ParallelEnv):
             if move is None:  # no action for a live agent: it stands still
                 move = 4 if self.discrete else np.zeros(2, np.float32)
             self.explorers[agent].drive(move, self.discrete)
+        self._send(sent)
         t = self.sim.step(self.control_period_s, [r for e in self.explorers.values() for r in e.take_sent()])
         outs = {a: self.explorers[a].update() for a in self.agents}  # in agent order: first seen, first paid
-        self._deliver(sent)
+        self._deliver()
         own = {a: self.explorers[a].reward(outs[a]) for a in self.agents}
         total = float(sum(own.values()))
         rewards = {a: total if self.shared_reward else float(own[a]) for a in self.agents}
@@ -250,43 +256,54 @@ class TeamExplore(ParallelEnv):
             if terminations[a] and not truncations[a]:
                 self.explorers[a].drive(4 if self.discrete else np.zeros(2, np.float32), self.discrete)
         self.agents = [a for a in self.agents if not (terminations[a] or truncations[a])]
+        if self.team_radio is not None:
+            for a in sorted((set(self.possible_agents) - set(self.agents)) & set(self.team_radio.radios)):
+                self.team_radio.leave(a)  # done: it neither sends nor receives any more
         return observations, rewards, terminations, truncations, infos
 
     def render(self) -> None:
         return None
 
     def close(self) -> None:
-        self._close_meter()
+        self._close_radio()
         self.explorers = {}
         self.agents = []
         self.sim.stop()
 
     # ------------------------------------------------------------------------------------
-    def _close_meter(self) -> None:
-        if self.meter is not None:
-            self.meter.close()
-            self.meter = None
+    def _close_radio(self) -> None:
+        if self.team_radio is not None:
+            self.team_radio.close()
+            self.team_radio = None
 
     def _clear_inbox(self) -> None:
         self._inbox[:] = 0.0
         self._mask[:] = 0.0
 
-    def _deliver(self, sent: dict[str, np.ndarray]) -> None:
-        """Each message to every other live robot whose link with the sender holds now."""
-        self._clear_inbox()
+    def _send(self, sent: dict[str, np.ndarray]) -> None:
+        """Each message on its sender's open links; then the signal of every pair, asked of
+        the ComServer (the answers also say the messages are in its hands before the STEP),
+        and a link opened for each pair that holds and has none."""
         self._signals = {}
-        if self.radio is None or self.meter is None or len(self.agents) < 2:
+        if self.radio is None or self.team_radio is None or len(self.agents) < 2:
             return
-        pairs = list(itertools.combinations(self.agents, 2))
-        for pair, dbm in zip(pairs, self.meter.strengths(pairs)):
-            self._signals[pair] = dbm
-            if dbm is None or not self.radio.holds(dbm):
-                continue
-            a, b = pair
-            for src, dst in ((a, b), (b, a)):
-                if src in sent:
-                    i, j = self._index[src], self._index[dst]
-                    self._inbox[j, i] = sent[src]
+        for src, msg in sent.items():
+            self.team_radio.send(src, msg.astype(np.float32).tobytes())
+        self._signals = self.team_radio.signals(self.agents)
+        self.team_radio.link_up(self._signals, self.radio.holds)
+
+    def _deliver(self) -> None:
+        """What arrived during the step: each sender's latest message in its receiver's inbox."""
+        self._clear_inbox()
+        if self.team_radio is None:
+            return
+        for dst, messages in self.team_radio.receive(self.agents).items():
+            j = self._index[dst]
+            for src, payload in messages:
+                vec = np.frombuffer(payload, np.float32)
+                if src in self._index and vec.shape == (self.message_size,):
+                    i = self._index[src]
+                    self._inbox[j, i] = vec
                     self._mask[j, i] = 1.0
 
     def _observe(self, agent: str) -> dict[str, np.ndarray]:
