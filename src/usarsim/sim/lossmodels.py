@@ -145,5 +145,6 @@ def describe_channel(cfg: ChannelConfig) -> str:
         if rate is not None:
             parts.append(f"{rate:g} bytes/s a {what}")
     if cfg.latency_s or cfg.jitter_s:
-        parts.append(f"latency {cfg.latency_s:g} s + up to {cfg.jitter_s:g} s")
+        jitter = f" + up to {cfg.jitter_s:g} s" if cfg.jitter_s else ""
+        parts.append(f"latency {cfg.latency_s:g} s{jitter}")
     return "; ".join(parts) or "ideal"

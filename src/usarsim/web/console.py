@@ -26,7 +26,8 @@ lines, as GETGEO and GETCONF would answer) and, when the robot leaves the world,
 message that says so.  Nothing the page sends on that socket goes anywhere.
 
 Routes: ``/`` the page, ``/static/*`` its files, ``/api/info``, ``/api/world``,
-``/api/classes``, ``/api/truth``, ``/api/view3d``, ``/ws/control``, ``/ws/video``, ``/ws/watch``.
+``/api/classes``, ``/api/truth``, ``/api/radio``, ``/api/view3d``, ``/ws/control``, ``/ws/video``,
+``/ws/watch``.
 The robot sessions and pictures are :class:`usarsim.web.bridge.BridgeRoutes`, the watched
 robots :class:`usarsim.web.watch.WatchRoutes`: parts of :class:`WebConsole`.
 """
@@ -45,6 +46,7 @@ from aiohttp import web
 from usarsim import __version__
 from usarsim.errors import UsarsimError
 from usarsim.server.connection import refuse
+from usarsim.sim.types import describe_channel
 from usarsim.web.bridge import MAX_PAGE_MESSAGE, NAME_RE, BridgeRoutes, ControlBridge, TruthClient
 from usarsim.web.bridge import raw_to_jpeg as raw_to_jpeg
 from usarsim.web.bridge import truth_row as truth_row
@@ -149,6 +151,7 @@ class WebConsole(BridgeRoutes, WatchRoutes):
         web_app.router.add_get("/api/world", self._world)
         web_app.router.add_get("/api/classes", self._classes_json)
         web_app.router.add_get("/api/truth", self._truth_json)
+        web_app.router.add_get("/api/radio", self._radio_json)
         web_app.router.add_get("/api/view3d", self._view3d)
         web_app.router.add_get("/ws/control", self._control_ws)
         web_app.router.add_get("/ws/video", self._video_ws)
@@ -292,6 +295,18 @@ class WebConsole(BridgeRoutes, WatchRoutes):
                 {"error": f"the ground-truth service did not answer: {exc}", "objects": []}, status=503
             )
         return web.json_response({"objects": rows})
+
+    async def _radio_json(self, request: web.Request) -> web.Response:
+        """What the radio channel carried, link by link (docs/wireless.md): ``channel`` in a few
+        words (None without wireless servers; ``ideal``, USARSim's, counts nothing) and each
+        link's messages delivered and dropped by cause, and their mean delay."""
+        wireless = self.app.wireless
+        if wireless is None or wireless.service.ideal:
+            return web.json_response({"channel": None if wireless is None else "ideal", "links": []})
+        svc = wireless.service
+        counts = await svc.counts()
+        links = [{"from": a, "to": b, **c.as_dict()} for (a, b), c in counts.items()]
+        return web.json_response({"channel": describe_channel(svc.channel), "links": links})
 
     # the 3-D view ---------------------------------------------------------------------------
     def _view_renderer(self):

@@ -81,6 +81,7 @@ class Console {
       this.status(`cannot load the console's data: ${exc}`);
     }
     this.pollTruth();
+    this.pollRadio();
   }
 
   status(text) {
@@ -129,6 +130,36 @@ class Console {
       wait = 1000;
     }
     setTimeout(() => this.pollTruth(), wait);
+  }
+
+  // the radio channel's traffic, link by link (nothing to show under USARSim's ideal channel)
+  async pollRadio() {
+    let data;
+    try {
+      data = await (await fetch("/api/radio")).json();
+    } catch (exc) {
+      setTimeout(() => this.pollRadio(), 2000);
+      return;
+    }
+    if (!data.channel || data.channel === "ideal") return; // it counts nothing: no panel
+    $("radio-traffic").hidden = false;
+    $("radio-channel").textContent = data.channel;
+    const rows = data.links.map((l) => {
+      const tr = document.createElement("tr");
+      const lost = l.dropped.range + l.dropped.loss + l.dropped.capacity;
+      const why = `out of range ${l.dropped.range}, lost ${l.dropped.loss}, queue full ${l.dropped.capacity}`;
+      const ms = 1000 * l.mean_delay_s;
+      const cells = [`${l.from} → ${l.to}`, String(l.delivered), String(lost), ms < 10 ? ms.toFixed(1) : ms.toFixed(0)];
+      for (const [i, text] of cells.entries()) {
+        const td = document.createElement("td");
+        td.textContent = text;
+        if (i === 2) td.title = why;
+        tr.append(td);
+      }
+      return tr;
+    });
+    $("radio-links").querySelector("tbody").replaceChildren(...rows);
+    setTimeout(() => this.pollRadio(), 1000);
   }
 
   updateRobotList() {
