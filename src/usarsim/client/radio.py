@@ -130,10 +130,18 @@ class Radio:
 
     def signals(self, peers: Sequence[str]) -> list[float | None]:
         """:meth:`signal` to each of ``peers``, asked in one write."""
-        asks = [WcsGetSS(self.name, p) for p in peers]
-        if asks:
-            self._ctl.sendall("".join(format_wcs_request(a) for a in asks).encode("ascii"))
-        return [r.dbm if isinstance(r := self._reply(a), WcsSignal) else None for a in asks]
+        self.ask_signals(peers)
+        return self.read_signals(peers)
+
+    def ask_signals(self, peers: Sequence[str]) -> None:
+        """Ask the signal to each of ``peers`` in one write; :meth:`read_signals` reads them
+        (the radios of a team ask, then read, in two rounds: one round trip in all)."""
+        if peers:
+            self._ctl.sendall("".join(format_wcs_request(WcsGetSS(self.name, p)) for p in peers).encode("ascii"))
+
+    def read_signals(self, peers: Sequence[str]) -> list[float | None]:
+        """The answers to :meth:`ask_signals` of ``peers``: dBm, or None."""
+        return [r.dbm if isinstance(r := self._reply(WcsGetSS(self.name, p)), WcsSignal) else None for p in peers]
 
     def neighbours(self) -> list[Neighbor]:
         """Every robot whose link with this one holds now, with its signal strength (dBm) and

@@ -40,15 +40,17 @@ class TeamRadio:
 
     def signals(self, agents: Sequence[str]) -> dict[tuple[str, str], float | None]:
         """The signal strength (dBm) between each pair of ``agents`` now (None where the
-        ComServer cannot tell), each agent asking of its later teammates in one write."""
+        ComServer cannot tell): each agent asks of its later teammates in one write, all
+        before any answer is read."""
         out: dict[tuple[str, str], float | None] = {}
-        for i, a in enumerate(agents):
-            later = list(agents[i + 1 :])
-            try:
-                values = self.radios[a].signals(later)
-            except RadioError as exc:
-                raise ClientError(str(exc)) from exc
-            out.update(((a, b), v) for b, v in zip(later, values, strict=True))
+        asks = [(a, list(agents[i + 1 :])) for i, a in enumerate(agents)]
+        try:
+            for a, later in asks:
+                self.radios[a].ask_signals(later)
+            for a, later in asks:
+                out.update(((a, b), v) for b, v in zip(later, self.radios[a].read_signals(later), strict=True))
+        except (RadioError, OSError) as exc:
+            raise ClientError(f"the ComServer: {exc}") from exc
         return out
 
     def link_up(self, signals: dict[tuple[str, str], float | None], holds: Callable[[float], bool]) -> None:
