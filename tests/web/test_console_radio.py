@@ -28,11 +28,19 @@ def radio_json(srv: ServerThread) -> dict:
 
 @pytest.fixture(scope="module")
 def channel_server(tmp_path_factory):
+    from usarsim.config.catalog import ROBOTS_DIR
     from usarsim.config.world_file import load_world
 
-    p = tmp_path_factory.mktemp("radio") / "RadioPanelArena.yaml"
+    folder = tmp_path_factory.mktemp("radio")
+    p = folder / "RadioPanelArena.yaml"
     p.write_text(WORLD)
-    srv = ServerThread(load_world(p), seed=3, lockstep=False, speed=1.0).start()
+    # a P2AT carrying one radio relay
+    head = (ROBOTS_DIR / "P2AT.yaml").read_text().split("\nsensors:")[0]
+    (folder / "Courier.yaml").write_text(
+        head.replace("class_name: P2AT", "class_name: Courier")
+        + "\nsensors:\n  - {type: RelayDropper, name: Relays, location: [-0.2, 0.0, 0.08], capacity: 1}\n"
+    )
+    srv = ServerThread(load_world(p), seed=3, lockstep=False, speed=1.0, robot_dirs=(str(folder),)).start()
     clients = []
     for name, x in (("A0", -10.0), ("B0", 10.0)):
         c = srv.connect()
@@ -77,5 +85,36 @@ def test_the_radio_panel_shows_each_links_messages(browser, channel_server):
         cells = page.locator("#radio-links tbody tr").first.locator("td").all_text_contents()
         assert cells[:3] == ["a0 → b0", "20", "0"] and float(cells[3]) > 4.0  # the mean delay, ms
         assert "50000 bytes/s a link" in page.text_content("#radio-channel")
+    finally:
+        context.close()
+
+
+def test_a_dropped_relay_is_an_orange_square_on_the_map(browser, channel_server):
+    srv = channel_server
+    with srv.connect() as courier:
+        courier.nfo()
+        courier.send("INIT {ClassName USARBot.Courier} {Name Courier} {Location 0,8,-0.2}")
+        courier.sync()
+        wait_for(lambda: "Courier" in {r.name for r in srv.app.facade.robots()}, what="the courier to stand")
+        reply = courier.ask("SET {Type RelayDropper} {Name Relays} {Opcode Drop}", "RES")
+        assert "{Status OK}" in reply.text, reply.text
+    wait_for(lambda: srv.robot_count() == 2, what="the courier to leave")  # its relay stays
+    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    try:
+        page = context.new_page()
+        page.goto(f"http://127.0.0.1:{srv.app.web.port}/")
+        page.wait_for_function(
+            "window.usarsimConsole.truthRows && window.usarsimConsole.truthRows.some((o) => o.class === 'RadioRelay')",
+            timeout=DEFAULT_TIMEOUT * 1000,
+        )
+        page.wait_for_timeout(500)  # drawn
+        rgb = page.evaluate("""() => {
+            const map = window.usarsimConsole.map;
+            const relay = window.usarsimConsole.truthRows.find((o) => o.class === 'RadioRelay');
+            const [sx, sy] = map.toScreen(relay.location[0], relay.location[1]);
+            const d = map.canvas.getContext('2d').getImageData(Math.round(sx * map.dpr), Math.round(sy * map.dpr), 1, 1).data;
+            return [relay.name, d[0], d[1], d[2]];
+        }""")
+        assert rgb == ["Courier-Relay1", 255, 140, 0]  # #ff8c00
     finally:
         context.close()
