@@ -25,6 +25,13 @@ start_poses:
 """
 
 
+# a bursty, faded, jittery, capped channel (the lock-step determinism tests)
+BURSTY = (
+    "{loss: {model: gilbert_elliott, p_good_bad: 0.1, p_bad_good: 0.3}, fading: rayleigh, "
+    "link_bytes_per_s: 20000, latency_s: 0.02, jitter_s: 0.03}"
+)
+
+
 def channel_server(tmp_path, channel: str, seed: int = 4, **serve_options) -> ServerThread:
     from usarsim.config.world_file import load_world
 
@@ -165,12 +172,7 @@ def handed(srv: ServerThread) -> int:
 def run_bursty(tmp_path, sockets, seed: int) -> list[tuple[int, list[int]]]:
     """(STEP number, messages that arrived by it) over 3 s of 0.05 s STEPs, with 20 messages
     of 100 bytes sent before each STEP, on a bursty, faded, jittery, capped channel."""
-    srv = channel_server(
-        tmp_path,
-        "{loss: {model: gilbert_elliott, p_good_bad: 0.1, p_bad_good: 0.3}, fading: rayleigh, "
-        "link_bytes_per_s: 20000, latency_s: 0.02, jitter_s: 0.03}",
-        seed=seed,
-    )
+    srv = channel_server(tmp_path, BURSTY, seed=seed)
     try:
         a, b, _w = open_link(srv, sockets)
         ctl = srv.connect()
@@ -233,6 +235,46 @@ def test_a_wss_relay_carries_its_bytes_through_the_capped_channel_both_ways(tmp_
         assert times["up"] == pytest.approx(2.0, abs=0.11) and times["down"] == pytest.approx(1.0, abs=0.11)
     finally:
         srv.stop()
+
+
+def run_wss_bursty(tmp_path, sockets, seed: int) -> list[tuple[int, list[int]]]:
+    """(STEP number, messages that arrived by it) over 2 s of 0.05 s STEPs through a WSS relay,
+    5 messages of 100 bytes written before each STEP, each read by the relay alone (one
+    message: the next is written once it is in the channel's hands)."""
+    from test_wireless import wss_dns
+
+    from helpers import DEFAULT_TIMEOUT
+
+    srv = channel_server(tmp_path, BURSTY, seed=seed)
+    try:
+        la, lb = sockets(listener(), listener())
+        ca, cb, relay = wss_dns(srv, "A0", "B0", la, lb)
+        a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
+        b, _ = lb.accept()
+        sockets(a, b, ca.sock, cb.sock)
+        b.setblocking(False)
+        ctl = srv.connect()
+        out, got, sent = [], b"", 0
+        for step in range(40):
+            for _ in range(5):
+                a.sendall(struct.pack(">I", sent) * 25)
+                sent += 1
+                wait_for(lambda: handed(srv) == sent, what="the message to reach the channel")  # noqa: B023
+            ctl.step(0.05)
+            new = read_delivered(srv, b, len(got), ("a0", "b0"))
+            out.append((step, [struct.unpack(">I", new[i : i + 4])[0] for i in range(0, len(new), 100)]))
+            got += new
+        return out
+    finally:
+        srv.stop()
+
+
+def test_two_lockstep_runs_through_a_wss_relay_deliver_the_same_messages_at_the_same_times(tmp_path, sockets):
+    first = run_wss_bursty(tmp_path, sockets, seed=8)
+    assert first == run_wss_bursty(tmp_path, sockets, seed=8)
+    delivered = [m for _, ms in first for m in ms]
+    assert 40 < len(delivered) < 200 and delivered == sorted(delivered)  # some lost, the rest in order
+    assert run_wss_bursty(tmp_path, sockets, seed=9) != first
 
 
 def handed_bytes(srv: ServerThread) -> int:
