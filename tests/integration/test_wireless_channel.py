@@ -158,6 +158,31 @@ def test_an_independent_loss_of_20_percent_drops_20_percent_of_10000_messages(tm
     assert traffic[-1]["a0>b0"]["delivered"] == len(arrived)
 
 
+def test_a_gilbert_elliott_link_loses_in_bursts_of_the_documented_length(tmp_path, sockets):
+    # docs/wireless.md: a bad spell lasts 1 / p_bad_good messages on average (4 here) and the
+    # long-run loss is p_good_bad / (p_good_bad + p_bad_good) = 0.074
+    srv = channel_server(tmp_path, "{loss: {model: gilbert_elliott, p_good_bad: 0.02, p_bad_good: 0.25}}")
+    n = 40_000
+    try:
+        a, b, _w = open_link(srv, sockets)
+        a.sendall(frames([struct.pack(">I", k) for k in range(n)]))
+        wait_for(lambda: pending(srv) == n, what="the ComServer to hand every message to the channel")
+        srv.connect().step(0.1)
+        got = read_delivered(srv, b, 0)
+    finally:
+        srv.stop()
+    arrived = {struct.unpack(">I", got[i : i + 4])[0] for i in range(0, len(got), 4)}
+    runs, run = [], 0  # the lengths of the runs of lost messages
+    for k in range(n):
+        if k not in arrived:
+            run += 1
+        elif run:
+            runs.append(run)
+            run = 0
+    assert sum(runs) / len(runs) == pytest.approx(4.0, rel=0.1)
+    assert 1.0 - len(arrived) / n == pytest.approx(0.02 / 0.27, rel=0.1)
+
+
 def handed(srv: ServerThread) -> int:
     """Messages handed to the channel so far: under way, delivered or dropped."""
 
