@@ -366,3 +366,37 @@ def test_a_two_by_two_sweep_of_a_simulated_minute_with_the_explorer(local_ray, t
     for r in result.rows:
         assert r["error"] is None and 60.0 <= r["time_s"] <= 60.5
         assert r["area_m2"] > 30.0 and r["distance_m"] > 2.0
+
+
+def test_the_report_shows_the_team_messages_a_lossy_channel_lost(tmp_path, capsys):
+    # the team of explorers talks over the ComServer; a channel that loses a third of the
+    # messages counts them in the score, and the report's table shows them (none counted under
+    # USARSim's ideal channel: a dash)
+    from usarsim.sweep.worker import execute
+
+    (tmp_path / "lossy.yaml").write_text("channel: {loss: {model: independent, rate: 0.33}}\n")
+    command = (
+        f"{sys.executable} -m usarsim.brains.team --port {{port}} --wcs-port {{wcs_port}} --robots 2 "
+        "--seconds {seconds} --lockstep"
+    )
+    exp = load_experiment(
+        write(
+            tmp_path,
+            f"name: lossy\nseeds: [1]\nteam: [{{robot: P2AT, count: 2}}]\nduration: 8\nclock: lockstep\n"
+            f'controller: {{command: "{command}", label: team}}\ngrid:\n  wireless: [world, lossy.yaml]\n',
+        )
+    )
+    rows = [execute(run) for run in exp.runs]
+    assert [r["error"] for r in rows] == [None, None]
+    by = {Path(r["wireless"]).name: r for r in rows}
+    assert by["world"]["messages_lost"] is None  # not counted
+    lossy = by["lossy.yaml"]
+    sent = lossy["messages_delivered"] + lossy["messages_lost"]
+    assert sent > 20 and lossy["messages_lost"] / sent == pytest.approx(0.33, abs=0.15)
+    write_rows(rows, tmp_path / "results")
+    assert main(["report", str(tmp_path / "results")]) == 0
+    out = capsys.readouterr().out
+    assert "messages lost" in out
+    lines = {ln.split()[0]: ln for ln in out.splitlines() if ln.strip().startswith(("world", "lossy"))}
+    assert lines["world"].rstrip().endswith("–")
+    assert lines["lossy"].split()[-3] == f"{lossy['messages_lost']:.2f}"

@@ -202,7 +202,7 @@ TABLE_SCORES = (("score", "score"), ("victims_found", "victims found"), ("area_m
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from usarsim.sweep.report import AXIS_NAMES, build_report, digits_of, fmt_stat, method_of, short
+    from usarsim.sweep.report import AXIS_NAMES, build_report, digits_of, fmt_stat, method_of, short, shown_metrics
     from usarsim.sweep.results import PARQUET
 
     folder = Path(args.folder)
@@ -217,6 +217,9 @@ def cmd_report(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     shown = list(report.axes) or ["world", "controller"]
+    scores = list(TABLE_SCORES)
+    if "messages_lost" in shown_metrics(report.rows):  # a radio channel counted the team's messages
+        scores.append(("messages_lost", "messages lost"))
     t = Table(
         box=box.SIMPLE_HEAD,
         title=f"{len(report.rows)} runs in {len(report.groups)} configurations",
@@ -226,18 +229,18 @@ def cmd_report(args: argparse.Namespace) -> int:
         t.add_column(AXIS_NAMES[c])
     for c in ("runs", "failed"):
         t.add_column(c, justify="right")
-    for _, name in TABLE_SCORES:
+    for _, name in scores:
         t.add_column(f"{name}\nmean [95 % CI]", justify="right")
     for g in report.groups:
         cells = [short(g.config[c], 40) for c in shown] + [str(len(g.seeds)), str(g.failed)]
-        cells += [fmt_stat(g.stat(m), digits_of(m)) for m, _ in TABLE_SCORES]
+        cells += [fmt_stat(g.stat(m), digits_of(m)) for m, _ in scores]
         t.add_row(*cells)
     _print_table(t, _console())
     print(
         "mean [95 % confidence interval of the mean] over the seeds; the intervals: "
-        + "; ".join(f"{name}: {method_of(m)}" for m, name in TABLE_SCORES[:2])
+        + "; ".join(f"{name}: {method_of(m)}" for m, name in scores[:2])
         + ";\n"
-        + "; ".join(f"{name}: {method_of(m)}" for m, name in TABLE_SCORES[2:])
+        + "; ".join(f"{name}: {method_of(m)}" for m, name in scores[2:])
         + " (docs/experiments.md)"
     )
     print(f"usarsim: summary {report.summary_csv}; {len(report.plots)} plots in {folder}")

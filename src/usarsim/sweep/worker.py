@@ -129,6 +129,8 @@ def _read_score(path: Path, row: dict[str, Any]) -> None:
     team = data.get("team") or {}
     for c in SCORE_COLUMNS:
         row[c] = team.get(c)
+    if not data.get("radio"):  # no link counted a message (USARSim's ideal channel counts none)
+        row["messages_delivered"] = row["messages_lost"] = None
     row["time_s"] = data.get("time_s")
     row["robots"] = json.dumps(data.get("robots") or {}, sort_keys=True)
 
