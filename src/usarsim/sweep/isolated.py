@@ -18,6 +18,7 @@ import asyncio
 import ctypes
 import fcntl
 import functools
+import os
 import signal
 import socket
 import struct
@@ -56,6 +57,20 @@ async def join(reader: asyncio.StreamReader, writer: asyncio.StreamWriter, peer)
     finally:
         for w in (writer, w2):
             w.close()
+
+
+def namespaces() -> str:
+    """This process's network and mount namespaces, as ``NET,MNT`` (their inode numbers)."""
+    return ",".join(str(os.stat(f"/proc/self/ns/{ns}").st_ino) for ns in ("net", "mnt"))
+
+
+def in_own_namespaces(outside: str) -> bool:
+    """Whether this process's network and mount namespaces both differ from ``outside`` (the
+    starting process's :func:`namespaces`)."""
+    try:
+        return all(a != b for a, b in zip(namespaces().split(","), outside.split(","), strict=True))
+    except (OSError, ValueError):
+        return False
 
 
 def loopback_up() -> None:
@@ -103,12 +118,25 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--dir", required=True, type=Path, help="the folder of the worker's Unix sockets, PORT.sock")
     p.add_argument("--ports", required=True, help="the simulator ports to serve on 127.0.0.1, comma-separated")
+    p.add_argument(
+        "--outside", required=True, help="the starting process's network and mount namespaces (inodes NET,MNT)"
+    )
     p.add_argument("command", nargs=argparse.REMAINDER, help="-- then the controller command")
     args = p.parse_args(argv)
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
     if not command:
         p.error("no command given after --")
-    ports = [int(x) for x in args.ports.split(",") if x]
+    try:
+        ports = [int(x) for x in args.ports.split(",") if x]
+    except ValueError:
+        p.error(f"--ports takes port numbers separated by commas, got {args.ports!r}")
+    if not ports or not all(0 < x < 65536 for x in ports):
+        p.error(f"--ports takes port numbers from 1 to 65535, got {args.ports!r}")
+    if not in_own_namespaces(args.outside):
+        p.error(
+            "this runs inside a network and mount namespace of its own (the sweep starts it under "
+            "'unshare --net --mount'); here it would change the machine's /dev/shm"
+        )
     loopback_up()
     private_mounts()
     try:

@@ -23,7 +23,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-from usarsim.sweep.isolated import join
+from usarsim.sweep.isolated import join, namespaces
 
 # The simulator's listeners a controller may reach (launch.Server.ports names); not the ground
 # truth, the console, Foxglove or ROS 2.  The WSS is not among them: it connects to ports the
@@ -112,6 +112,8 @@ class HostRelay:
             str(self.dir),
             "--ports",
             ",".join(str(p) for p in self.ports),
+            "--outside",
+            namespaces(),
             "--",
             *command,
         ]
