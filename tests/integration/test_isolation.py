@@ -108,3 +108,19 @@ def test_isolation_is_refused_in_lockstep_and_for_brains(tmp_path):
         load_experiment(experiment(tmp_path, clock="lockstep"))
     with pytest.raises(ConfigError, match="isolation runs commands, one per robot"):
         load_experiment(experiment(tmp_path, controller="{brain: usarsim.brains.wander:Wander, isolate: true}"))
+
+
+def test_the_launcher_refuses_to_run_outside_a_namespace_of_its_own(tmp_path):
+    import subprocess
+
+    from usarsim.sweep.isolated import namespaces
+
+    out = subprocess.run(
+        [sys.executable, "-m", "usarsim.sweep.isolated", "--dir", str(tmp_path), "--ports", "3000"]
+        + ["--outside", namespaces(), "--", "true"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
+    assert out.returncode == 2 and "would change the machine's /dev/shm" in out.stderr
