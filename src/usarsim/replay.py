@@ -114,6 +114,7 @@ class Replayer:
         from usarsim.errors import UsarsimError
         from usarsim.server.app import Application
         from usarsim.server.config import ServeConfig
+        from usarsim.sim.settings import SimSettings
 
         info = self.rec.info
         try:
@@ -140,6 +141,8 @@ class Replayer:
                 web_port=None,
                 max_robots=opts.get("max_robots"),
                 max_line_bytes=int(opts.get("max_line_bytes") or 8192),
+                # the instants robots reported at (recordings made before the setting: the grid)
+                sim=SimSettings(report_phases=str(opts.get("report_phases") or "grid")),
             )
         )
 

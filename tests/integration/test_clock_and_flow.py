@@ -169,3 +169,29 @@ def test_lockstep_steps_add_up_below_one_physics_step(server_factory):
     assert all(0.0079 < b - a < 0.0121 for a, b in zip([0.0, *times], times))  # 2 or 3 steps of 4 ms
     c.step(0.004)
     assert float(segments(c.step(0.6)[-1].text)["Time"]) == pytest.approx(0.704, abs=1e-9)
+
+
+def test_spread_report_phases_put_a_second_robots_readings_half_a_period_after_the_firsts(test_world):
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.settings import SimSettings
+    from usarsim.sim.simulation import Simulation
+
+    robot = resolve_robot("P2AT")
+    sim = Simulation(test_world, seed=1, settings=SimSettings(report_phases="spread"))
+    for uid, pose in ((1, "Open"), (2, "Far")):
+        p = test_world.start_pose(pose)
+        sim.spawn(uid, robot, f"R{uid}", p.location, p.rotation)
+    sim.advance(1.0)
+    outs = sim.take_outputs()
+    period = robot.status_interval_s
+    for uid, share in ((1, 0.0), (2, 0.5)):
+        times = [o.time for o in outs if o.uid == uid and o.key == "STA"]
+        assert len(times) >= 4
+        for t in times:  # on the robot's own grid
+            k = (t - share * period) / period
+            assert abs(k - round(k)) < 1e-6, (uid, t)
+        sonar = [o.time for o in outs if o.uid == uid and o.key == "SEN:Sonar"]
+        assert sonar and all(t in times for t in sonar)  # its sensors keep its phase
+    # the readings are of the world: the second robot's scanner still sees walls within range
+    scans = [o.value for o in outs if o.uid == 2 and o.key.startswith("SEN:RangeScanner")]
+    assert scans and min(scans[-1].ranges_m) < 20.0

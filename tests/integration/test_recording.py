@@ -572,3 +572,20 @@ def test_a_server_with_a_port_offset_serves_foxglove_there():
             time.sleep(0.1)
         assert srv.ports.get("foxglove") == FOXGLOVE_PORT + offset, srv.ports
         assert srv.ports["control"] != 3000 + offset  # given explicitly (0): no offset
+
+
+def test_a_recording_with_spread_report_phases_replays_identically(tmp_path):
+    path = tmp_path / "spread.mcap"
+    with launch(world="DM-USAR_yellow", seed=5, record=path, extra_args=("--report-phases", "spread")) as srv:
+        with srv.connect() as world:
+            r1 = world.spawn("P2AT", name="R1", start="PlayerStart1")
+            r2 = world.spawn("P2AT", name="R2", start="PlayerStart2")
+            for _ in range(10):
+                r1.drive(left=1.0, right=1.0)
+                r2.drive(left=1.0, right=-1.0)
+                world.step(0.1)
+    meta, _ = read_all(path)
+    assert json.loads(meta["usarsim"]["options"])["report_phases"] == "spread"
+    out = usarsim("replay", str(path), "--check")
+    assert out.returncode == 0, out.stdout + out.stderr  # replayed with the recorded phases
+    assert "identical: all" in out.stdout

@@ -7,6 +7,7 @@ import heapq
 import itertools
 from types import SimpleNamespace
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -160,3 +161,41 @@ def test_plans_hand_on_a_sensors_item_and_a_status_report_itself_in_order():
         ]
         seen_status = seen_status or any(x.__class__ is not tuple for x in got)
     assert seen_status
+
+
+def test_spread_shares_put_robots_spawned_in_turn_as_far_apart_as_they_can_be():
+    from usarsim.sim.reports import SPREAD_SLOTS, spread_share
+
+    assert [spread_share(k) for k in range(4)] == [0.0, 0.5, 0.25, 0.75]
+    shares = [spread_share(k) for k in range(SPREAD_SLOTS)]
+    assert sorted(shares) == [i / SPREAD_SLOTS for i in range(SPREAD_SLOTS)]  # each slot once
+    assert spread_share(SPREAD_SLOTS) == 0.0  # then round again
+
+
+def test_with_spread_phases_each_robot_reports_on_its_own_shifted_grid_on_physics_steps():
+    sched = ReportSchedule("spread", dt=0.004)
+    a, b, c = (_robot(i, [(0.2, "Sonar")], 0.2) for i in (1, 2, 3))
+    for r in (a, b, c):
+        sched.add_robot(r, 0.31)
+    firsts = {r.uid: {rep.key: rep.t0 for rep in r.reports} for r in (a, b, c)}
+    # robot 1: the plain grid; robot 2 half a period later; robot 3 a quarter (0.05 held to a 4 ms step: 0.048)
+    assert firsts[1]["STA"] == pytest.approx(0.4)
+    assert firsts[2]["STA"] == pytest.approx(0.5)
+    assert firsts[3]["STA"] == pytest.approx(0.448)
+    seen: dict[int, list[float]] = {1: [], 2: [], 3: []}
+    while (due := sched.next_due()) is not None and due < 1.3:
+        for rep in sched.take_due(due):
+            if rep.key == "STA":
+                seen[rep.robot.uid].append(round(due, 6))
+    assert seen[1] == [0.4, 0.6, 0.8, 1.0, 1.2]
+    assert seen[2] == [0.5, 0.7, 0.9, 1.1]
+    assert seen[3] == [0.448, 0.648, 0.848, 1.048, 1.248]
+
+
+def test_report_phases_are_named_or_refused():
+    from usarsim.sim.settings import SimSettings
+
+    with pytest.raises(ValueError, match="grid, spread"):
+        ReportSchedule("staggered")
+    with pytest.raises(ValueError, match="report_phases"):
+        SimSettings(report_phases="staggered")

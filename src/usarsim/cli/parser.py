@@ -154,6 +154,13 @@ def build_parser() -> argparse.ArgumentParser:
         "delivery (docs/ros2.md)",
     )
     b.add_argument(
+        "--report-phases",
+        choices=("grid", "spread"),
+        default="spread",
+        help="with --ros2: the simulator's report phases, as 'usarsim serve --report-phases' "
+        "(default: %(default)s: each robot reports on a phase of its own)",
+    )
+    b.add_argument(
         "--counts",
         type=int,
         nargs="+",

@@ -128,6 +128,7 @@ def cmd_serve(args) -> int:
                 textures=not args.no_textures,
                 physics_threads=None if threads in (None, "auto") else int(threads),
                 sensor_thread=not args.sensors_inline,
+                report_phases=args.report_phases,
             ),
             host=args.host,
             port=control_port,
@@ -269,4 +270,5 @@ def run_options(args) -> dict:
         "max_robots": args.max_robots,
         "max_connections": args.max_connections,
         "max_line_bytes": args.max_line_bytes,
+        "report_phases": args.report_phases,
     }

@@ -290,6 +290,15 @@ def add_serve_parser(sub: argparse._SubParsersAction[_Parser]) -> argparse.Argum
         "that works while the physics runs on (the same readings either way; slower)",
     )
     s.add_argument(
+        "--report-phases",
+        choices=("grid", "spread"),
+        default="grid",
+        help="grid (default): every robot reports at the same instants, so the physics runs in the "
+        "longest stretches; spread: each robot on a phase of its own (an eighth of a period apart), "
+        "so many robots' readings come in small groups, not one burst: for the ROS 2 bridge with many "
+        "robots in real time (docs/ros2.md)",
+    )
+    s.add_argument(
         "--no-textures",
         action="store_true",
         help="cameras see plain colours instead of the materials' textures (the quickest pictures)",

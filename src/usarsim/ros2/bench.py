@@ -1,6 +1,8 @@
 """``usarsim bench --ros2 --robots N``: what the ROS 2 bridge costs and delivers.
 
-N P2ATs with their full kit in real time (speed 1), twice each way, alternately:
+N P2ATs with their full kit in real time (speed 1), twice each way, alternately, with the
+simulator's report phases spread (``serve --report-phases spread``: each robot reports on a phase
+of its own) unless ``--report-phases grid`` says:
 
 * **without** the bridge: an ordinary protocol client (``usarsim.bench``'s) spawns and drives
   them and reads every line;
@@ -21,6 +23,7 @@ from __future__ import annotations
 import bisect
 import importlib
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -31,7 +34,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-SETTLE_S = 2.0  # after the robots stand in the world, before the measured stretch
+SETTLE_S = 1.0  # after every topic has delivered, before the measured stretch
+STEADY_LIMIT_S = 90.0  # the most the subscriber may take to hear every topic
+DRAIN_S = 1.0  # after the measured stretch, for its last messages to arrive
+QUIET_S = 2.0  # discovery is taken as done when no new topic came in this long
 # the bench client's DRIVE pattern (usarsim.bench.clients), as Twists for a P2AT: m/s, rad/s
 DRIVE_PATTERN = ((0.26, 0.0), (0.0, 0.55), (0.195, 0.0), (0.0, -0.55))
 # published when something happens, not at a rate: no "missed" figure (clock: whenever the
@@ -50,13 +56,16 @@ def _kind(topic: str) -> str:
     return parts[0] if len(parts) == 1 else parts[1]
 
 
-def subscriber_main(n: int, seconds: float, out: str) -> int:
-    """Child process: subscribe to every topic of robot1..robotN and /clock, drive the robots
-    over cmd_vel, and after ``seconds`` of wall time write (topic, stamp, wall) of every message
-    to ``out`` (JSON)."""
+def subscriber_main(n: int, limit_s: float, out: str) -> int:
+    """Child process: subscribe to every topic of robot1..robotN and /clock and drive the robots
+    over cmd_vel; print "steady" once every robot's topics are known and each has delivered,
+    and when told "stop" on standard input (or after ``limit_s`` of wall time) write (topic,
+    stamp, wall) of every message to ``out`` (JSON)."""
     from usarsim.ros2.setup import prepare
 
     prepare()
+    import select
+
     import rclpy
     from geometry_msgs.msg import Twist
     from rclpy.experimental import EventsExecutor
@@ -69,6 +78,7 @@ def subscriber_main(n: int, seconds: float, out: str) -> int:
     executor.add_node(node)
     got: list[tuple[str, float, float]] = []
     subs: set[str] = set()
+    heard: set[str] = set()
     robots = [f"/robot{i + 1}" for i in range(n)]
     pubs = {r: node.create_publisher(Twist, f"{r}/cmd_vel", 10) for r in robots}
 
@@ -85,6 +95,7 @@ def subscriber_main(n: int, seconds: float, out: str) -> int:
 
         def keep(raw: bytes) -> None:
             wall = time.time()
+            heard.add(topic)
             if stamped:
                 sec, nsec = struct.unpack_from("<iI", raw, 4)
                 got.append((topic, sec + nsec * 1e-9, wall))
@@ -97,25 +108,48 @@ def subscriber_main(n: int, seconds: float, out: str) -> int:
 
         return keep
 
-    def discover() -> None:
+    def discover() -> bool:
+        """Subscribe to topics not seen before; True if there were any."""
+        new = False
         for topic, types in node.get_topic_names_and_types():
             if topic in subs or not (topic == "/clock" or any(topic.startswith(r + "/") for r in robots)):
                 continue
-            if topic.endswith("cmd_vel") or topic.endswith("cmd_vel_stamped"):
+            if node.count_publishers(topic) == 0:  # the bridge's subscriptions (cmd_vel, joint_commands...)
                 continue
             subs.add(topic)
+            new = True
             cls = _message_class(types[0])
             node.create_subscription(cls, topic, keeper(topic, cls), 10, raw=True)
+        return new
 
+    import gc
+
+    # the list of what arrived grows by thousands of tuples a second: the collector's full passes
+    # over it would stall this process (the instrument) by tens of milliseconds, so it stays off
+    gc.disable()
     start = time.monotonic()
     phase = -1
     print("subscriber: up", flush=True)
     next_discovery = start
-    while time.monotonic() - start < seconds:
-        if time.monotonic() >= next_discovery:
-            discover()
-            next_discovery = time.monotonic() + (0.2 if time.monotonic() - start < 3.0 else 1.0)
-        p = int((time.monotonic() - start) / 2.0)
+    last_new = start
+    steady = False
+    while time.monotonic() - start < limit_s:
+        now = time.monotonic()
+        if now >= next_discovery:
+            if discover():
+                last_new = now
+            next_discovery = now + (0.2 if not steady else 1.0)
+        if not steady and now - last_new > QUIET_S:
+            regular = {t for t in subs if _kind(t) not in IRREGULAR}
+            # the robots are P2ATs with the same kit: the same topics each once discovery is done
+            per_robot = {sum(t.startswith(r + "/") for t in regular) for r in robots}
+            if heard >= regular and len(per_robot) == 1 and 0 not in per_robot:
+                steady = True
+                print(f"subscriber: steady, {len(subs)} topics", flush=True)
+            elif now - start > STEADY_LIMIT_S:
+                print(f"subscriber: not steady, {len(heard & regular)} of {len(regular)} topics heard", flush=True)
+                break
+        p = int((now - start) / 2.0)
         if p != phase:
             phase = p
             for i, r in enumerate(robots):
@@ -123,10 +157,12 @@ def subscriber_main(n: int, seconds: float, out: str) -> int:
                 m.linear.x, m.angular.z = DRIVE_PATTERN[(phase + i) % 4]
                 pubs[r].publish(m)
         executor.spin_once(timeout_sec=0.01)
+        if select.select([sys.stdin], [], [], 0)[0] and sys.stdin.readline().strip() in ("stop", ""):
+            break
     Path(out).write_text(json.dumps({"topics": sorted(subs), "messages": got}))
     executor.shutdown()
     node.destroy_node()
-    rclpy.shutdown()
+    rclpy.try_shutdown()
     return 0
 
 
@@ -161,11 +197,14 @@ class _ClockSampler:
         self.thread.join(2)
 
 
-def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain: int) -> dict:
+def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain: int, phases: str) -> dict:
     from usarsim.bench.serving import ServedApp, bench_app
+    from usarsim.sim.settings import SimSettings
 
     n = len(spots)
-    app = bench_app(world, speed=1.0, lockstep=False, max_connections=max(64, 2 * n))
+    app = bench_app(
+        world, speed=1.0, lockstep=False, max_connections=max(64, 2 * n), sim=SimSettings(report_phases=phases)
+    )
     served = ServedApp(app)
     sim = app.facade.sim
     port = app.control.port
@@ -218,23 +257,30 @@ def _one_run(world: Any, spots: list, seconds: float, with_bridge: bool, domain:
                     "usarsim.ros2.bench",
                     "--subscribe",
                     str(n),
-                    str(SETTLE_S + seconds + 1.0),
+                    str(STEADY_LIMIT_S + SETTLE_S + seconds + DRAIN_S + 30.0),
                     str(out),
                 ],
                 env=env,
-                stdin=subprocess.DEVNULL,
+                stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 text=True,
             )
             procs.append(sub)
-            assert sub.stdout is not None  # stdout=PIPE
+            assert sub.stdin is not None and sub.stdout is not None  # PIPE
             sub.stdout.readline()  # up
-        time.sleep(SETTLE_S)
+            steady = sub.stdout.readline()  # every topic heard (or the subscriber gave up)
+            if not steady.startswith("subscriber: steady"):
+                raise SystemExit(f"usarsim bench: the subscriber did not hear every robot's topics ({steady.strip()})")
+        time.sleep(SETTLE_S if with_bridge else 2 * SETTLE_S)
         sim0, wall0, cpu0 = sim.time, time.perf_counter(), time.process_time()
         time.sleep(seconds)
         sim1, wall1, cpu1 = sim.time, time.perf_counter(), time.process_time()
         if with_bridge:
-            procs[-1].wait(60)
+            time.sleep(DRAIN_S)  # the window's last messages on their way
+            assert sub.stdin is not None  # PIPE
+            sub.stdin.write("stop\n")
+            sub.stdin.flush()
+            sub.wait(60)
         sampler.stop()
     finally:
         for p in reversed(procs):
@@ -271,8 +317,10 @@ def _topic_figures(messages: list, sampler: _ClockSampler, sim0: float, sim1: fl
         if len(stamps) >= 3 and _kind(topic) not in IRREGULAR:
             gaps = [b - a for a, b in zip(stamps, stamps[1:])]
             step = statistics.median(gaps)
-            expected = round((stamps[-1] - stamps[0]) / step) + 1 if step > 0 else len(stamps)
-            k["missed"].append(max(0, expected - len(stamps)) / expected)
+            # the readings a topic at its rate has in the window, whatever its phase: gaps inside,
+            # and a late start or an early end, count as missed
+            expected = math.floor((sim1 - sim0) / step + 1e-6) if step > 0 else len(stamps)
+            k["missed"].append(max(0, expected - len(stamps)) / max(1, expected))
         for stamp, wall in rows:
             at = sampler.wall_at(stamp)
             if at is not None:
@@ -322,13 +370,14 @@ def run_ros2_bench(args: Any) -> int:
                 file=sys.stderr,
                 flush=True,
             )
-        runs.append(_one_run(world, spots, seconds, with_bridge, domain))
+        runs.append(_one_run(world, spots, seconds, with_bridge, domain, args.report_phases))
     plain = [r for r in runs if not r["bridge"]]
     bridged = [r for r in runs if r["bridge"]]
     summary = {
         "robots": n,
         "seconds": seconds,
         "world": world.name,
+        "report_phases": args.report_phases,
         "runs": len(runs),
         "rtf_without": [round(r["rtf"], 4) for r in plain],
         "rtf_with": [round(r["rtf"], 4) for r in bridged],
@@ -350,8 +399,8 @@ def run_ros2_bench(args: Any) -> int:
         return 0
     drop = 1 - statistics.mean(summary["rtf_with"]) / statistics.mean(summary["rtf_without"])
     print(
-        f"{n} P2ATs in real time ({world.name}), {len(runs)} runs of {seconds:g} s alternately without and with "
-        f"the ROS 2 bridge:"
+        f"{n} P2ATs in real time ({world.name}, report phases: {args.report_phases}), {len(runs)} runs of "
+        f"{seconds:g} s alternately without and with the ROS 2 bridge:"
     )
     print(
         f"  real-time factor reached: without {_range(summary['rtf_without'], 3)}, with "
@@ -387,4 +436,4 @@ def _ms(v: float | None) -> str:
 if __name__ == "__main__":
     if len(sys.argv) == 5 and sys.argv[1] == "--subscribe":
         sys.exit(subscriber_main(int(sys.argv[2]), float(sys.argv[3]), sys.argv[4]))
-    sys.exit("usage: python -m usarsim.ros2.bench --subscribe N SECONDS OUT (usarsim bench --ros2 runs it)")
+    sys.exit("usage: python -m usarsim.ros2.bench --subscribe N LIMIT_SECONDS OUT (usarsim bench --ros2 runs it)")

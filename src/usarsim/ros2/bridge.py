@@ -68,7 +68,7 @@ class Bridge:
         self._halt = False
         self.context = rclpy.Context()
         rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
-        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.experimental import EventsExecutor
         from rclpy.node import Node
 
         self.node = Node(NODE_NAME, context=self.context)
@@ -101,7 +101,10 @@ class Bridge:
             from .bag import BagWriter
 
             self.recorder = BagWriter(bag)
-        self.executor = SingleThreadedExecutor(context=self.context)
+        # rclpy's events executor: the default one builds a wait set of every publisher's QoS
+        # events each time it looks (milliseconds with 16 robots' 420 publishers), holding the
+        # interpreter lock while the main thread publishes a burst of readings
+        self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.node)
         self._spin_thread = threading.Thread(target=self._spin, name="ros2-executor", daemon=True)
         self._spin_thread.start()

@@ -307,6 +307,8 @@ class SensorTopics:
 
         out = MarkerArray()
         clear = Marker()
+        clear.header.stamp = b_time(stamp)  # the array's time even with nothing in it
+        clear.header.frame_id = self.frame(sensor)
         clear.action = Marker.DELETEALL
         out.markers.append(clear)
         for ident, text, location in items:

@@ -140,6 +140,13 @@ class RobotBridge(SensorTopics):
         self.map_tf_sent = -1.0
         self.battery_full: int | None = None
         self.warned: set[str] = set()
+        from visualization_msgs.msg import MarkerArray
+
+        for item_type, topic in (("VictSensor", "victims"), ("RFID", "rfid")):
+            if item_type in self.types.values():
+                # published while something is in view: on the graph from the start all the same, so
+                # a subscriber finds it at once (and no discovery comes in the middle of a run)
+                self.publisher(topic, MarkerArray)
 
     def frame(self, name: str) -> str:
         return f"{self.prefix}{name}"

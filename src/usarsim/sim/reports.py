@@ -4,6 +4,13 @@ ScanInterval of simulated time (packed sensors of one type together, in one SEN 
 Every report falls on the world's grid of its period (multiples of it in simulated time,
 from the first one at or after the spawn): the reports of all robots fall on the same
 instants, so that the physics runs in long stretches between them.
+
+With the phases spread (``serve --report-phases spread``), each robot's grid is shifted by a
+share of the period of its own, as USARSim's sensor timers were by the robots' spawns: the k-th
+robot spawned reports at ``phase + n * period`` with ``phase`` = :func:`spread_share` (k) of the
+period, on a physics step.  The readings of many robots then come in small groups instead of
+one burst an instant (what a client that turns every line into something else, as the ROS 2
+bridge does, waits on), for a little more simulation CPU (the physics stops more often).
 """
 
 from __future__ import annotations
@@ -12,11 +19,23 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
 
+from usarsim.sim.settings import REPORT_PHASES
+
 if TYPE_CHECKING:
     from usarsim.sensors.base import Sensor
     from usarsim.sim.robot import SimRobot
 
 EPS = 1e-9
+SPREAD_SLOTS = 8  # report phases a period is shared into with the phases spread (a power of two)
+
+
+def spread_share(k: int) -> float:
+    """The k-th robot's share of a period with the phases spread: ``k`` modulo
+    :data:`SPREAD_SLOTS`, its bits reversed, so that robots spawned one after another fall
+    as far apart as they can (0, 1/2, 1/4, 3/4, 1/8, ...)."""
+    bits = SPREAD_SLOTS.bit_length() - 1
+    i = k % SPREAD_SLOTS
+    return int(format(i, f"0{bits}b")[::-1], 2) / SPREAD_SLOTS
 
 
 @dataclass(eq=False)
@@ -78,9 +97,14 @@ class ReportSchedule:
     reports a simulated second fall due, in a few runs an instant.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, phases: str = "grid", dt: float = 0.0) -> None:
+        if phases not in REPORT_PHASES:
+            raise ValueError(f"report phases are one of {', '.join(REPORT_PHASES)}, got {phases!r}")
         self._lists: dict[float, list[_Cohort]] = {}
         self._next: float | None = None  # the soonest instant a list is kept for
+        self._spread = phases == "spread"
+        self._dt = dt  # phases fall on physics steps
+        self._added = 0  # robots added so far (the k of spread_share)
 
     def next_due(self) -> float | None:
         return self._next
@@ -101,10 +125,17 @@ class ReportSchedule:
 
     def add_robot(self, r: SimRobot, now: float) -> None:
         """Every report of ``r`` on its own period, from the first grid instant at or after
-        ``now``."""
+        ``now`` (the grid shifted by the robot's phase when the phases are spread)."""
+        share = spread_share(self._added) if self._spread else 0.0
+        self._added += 1
 
         def on_grid(interval: float) -> float:
-            return math.ceil(now / interval - 1e-6) * interval
+            if not share:
+                return math.ceil(now / interval - 1e-6) * interval
+            phase = share * interval
+            if self._dt > 0:
+                phase = round(phase / self._dt) * self._dt
+            return math.ceil((now - phase) / interval - 1e-6) * interval + phase
 
         period = r.config.status_interval_s
         reports = [Report(r, [], period, on_grid(period), "STA", status=True)]

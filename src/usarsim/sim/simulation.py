@@ -120,7 +120,7 @@ class Simulation:
         self.entities = Entities(world)
         self.entities.resolve(self.model)
         self.caster = RayCaster(self.model, self.data, see_through=self.entities.see_through)
-        self.reports = ReportSchedule()
+        self.reports = ReportSchedule(self.settings.report_phases, self.dt)
         self.guard = BlowUpGuard()
         self.batteries = Batteries()
         self.cameras = Cameras(self)
