@@ -213,3 +213,29 @@ def test_lag_warning_adds_up_and_comes_at_most_every_10_s(caplog):
         )
         r._note_lag(0.0, now=130.0)  # nothing since: nothing to say
         assert len(caplog.records) == 2
+
+
+# --------------------------------------------------------------------------- --report-phases
+
+
+@pytest.mark.parametrize(
+    "argv, phases",
+    [
+        (["serve"], "grid"),
+        (["serve", "--ros2", "P2AT@PlayerStart1:robot1"], "spread"),  # the bridge's readings in small groups
+        (["serve", "--ros2", "P2AT", "--report-phases", "grid"], "grid"),
+        (["serve", "--report-phases", "spread"], "spread"),
+    ],
+)
+def test_serve_spreads_the_report_phases_with_the_ros2_bridge_unless_told(argv, phases):
+    from usarsim.cli.serve import report_phases, run_options
+
+    args = build_parser().parse_args(argv)
+    assert report_phases(args) == phases
+    assert run_options(args)["report_phases"] == phases  # what a recording keeps for its replay
+
+
+def test_an_unknown_report_phase_is_refused_by_name(capsys):
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["serve", "--report-phases", "staggered"])
+    assert "spread" in capsys.readouterr().err

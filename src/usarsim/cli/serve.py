@@ -128,7 +128,7 @@ def cmd_serve(args) -> int:
                 textures=not args.no_textures,
                 physics_threads=None if threads in (None, "auto") else int(threads),
                 sensor_thread=not args.sensors_inline,
-                report_phases=args.report_phases,
+                report_phases=report_phases(args),
             ),
             host=args.host,
             port=control_port,
@@ -270,5 +270,11 @@ def run_options(args) -> dict:
         "max_robots": args.max_robots,
         "max_connections": args.max_connections,
         "max_line_bytes": args.max_line_bytes,
-        "report_phases": args.report_phases,
+        "report_phases": report_phases(args),
     }
+
+
+def report_phases(args) -> str:
+    """``--report-phases``, else spread with the ROS 2 bridge (its readings in small groups) and
+    the grid without."""
+    return args.report_phases or ("spread" if args.ros2 else "grid")

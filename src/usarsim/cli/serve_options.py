@@ -292,11 +292,11 @@ def add_serve_parser(sub: argparse._SubParsersAction[_Parser]) -> argparse.Argum
     s.add_argument(
         "--report-phases",
         choices=("grid", "spread"),
-        default="grid",
-        help="grid (default): every robot reports at the same instants, so the physics runs in the "
-        "longest stretches; spread: each robot on a phase of its own (an eighth of a period apart), "
-        "so many robots' readings come in small groups, not one burst: for the ROS 2 bridge with many "
-        "robots in real time (docs/ros2.md)",
+        default=None,
+        help="grid (the default without --ros2): every robot reports at the same instants, so the "
+        "physics runs in the longest stretches; spread (the default with --ros2): each robot on a "
+        "phase of its own (an eighth of a period apart), so many robots' readings come in small "
+        "groups, not one burst, and reach ROS 2 sooner (docs/ros2.md)",
     )
     s.add_argument(
         "--no-textures",
