@@ -960,3 +960,54 @@ def test_parse_message_raises_only_protocol_error(line: str) -> None:
         parse_message(line)
     except ProtocolError:
         pass
+
+
+# ---- readings sent in several layouts (declare.Variants), joined fields and item groups
+
+
+def test_a_gps_without_a_fix_leaves_out_the_coordinates_it_may_still_hold():
+    fix = r.GpsReading("GPS", True, 8, (39, 8.0341, "N"), (77, 12.5, "W"))
+    lost = r.GpsReading("GPS", False, 2, (39, 8.0341, "N"), (77, 12.5, "W"))
+    assert format_reading(fix, 3.0) == (
+        "SEN {Time 3.0000} {Type GPS} {Name GPS} {Latitude 39,8.0341,N} {Longitude 77,12.5000,W} "
+        "{Fix 1} {Satellites 8}\r\n"
+    )
+    assert format_reading(lost, 3.0) == "SEN {Time 3.0000} {Type GPS} {Name GPS} {Fix 0} {Satellites 2}\r\n"
+    # the coordinates are read whenever a line has them
+    assert parse_message("SEN {Type GPS} {Name G} {Fix 0} {Satellites 1} {Latitude 1,2.5,S}\r\n").reading.latitude == (
+        1,
+        2.5,
+        "S",
+    )
+
+
+def test_a_split_3d_sweep_sends_a_line_a_row_that_reads_back_as_its_row():
+    sweep = r.RangeScan3DReading("S", (0.1, 0.2), (0.5, 1.0), (1.0, 2.0, 3.0, 4.0), frames=2, split=True)
+    lines = format_reading(sweep, 1.0).split("\r\n")[:-1]
+    assert lines == [
+        "SEN {Time 1.0000} {Type RangeScanner3D} {Name S} {Frames 2} {Frame 0} {Resolution 0.1000,0.2000} "
+        "{FOV 0.5000,1.0000} {Range 1.0000,2.0000}",
+        "SEN {Time 1.0000} {Type RangeScanner3D} {Name S} {Frames 2} {Frame 1} {Resolution 0.1000,0.2000} "
+        "{FOV 0.5000,1.0000} {Range 3.0000,4.0000}",
+    ]
+    row = parse_message(lines[1] + "\r\n").reading
+    assert (row.frames, row.frame, row.split, row.ranges_m) == (2, 1, True, (3.0, 4.0))
+    whole = parse_message("SEN {Type RangeScanner3D} {Name S} {Resolution 0.1,0.2} {FOV 0.5,1} {Range}\r\n").reading
+    assert (whole.frame, whole.split, whole.ranges_m) == (None, False, ())
+
+
+def test_joined_fields_and_item_groups_print_and_refuse_by_their_keys():
+    assert format_reading(r.OdometryReading("Odo", 1.5, -2.25, 0.3)) == (
+        "SEN {Type Odometry} {Name Odo} {Pose 1.5000,-2.2500,0.3000}\r\n"
+    )
+    with pytest.raises(ProtocolError, match="bad value '1,2' for key Pose: expected 3 comma-separated numbers"):
+        parse_message("SEN {Type Odometry} {Name Odo} {Pose 1,2}\r\n")
+    tags = r.RfidReading(
+        "R", (r.RfidTag(3, (1.0, 2.0, 0.0), ""), r.RfidTag(4, (0.0, 0.0, 0.0), "a b"), r.RfidTag(5, (0, 0, 0)))
+    )
+    assert format_reading(tags) == (
+        "SEN {Type RFID} {Name R} {ID 3} {Location 1.0000,2.0000,0.0000} {Mem} "
+        "{ID 4} {Location 0.0000,0.0000,0.0000} {Mem a b} {ID 5} {Location 0.0000,0.0000,0.0000}\r\n"
+    )
+    with pytest.raises(ProtocolError, match=r"\{ID 7\} has no \{Location x,y,z\}"):
+        parse_message("SEN {Type RFID} {Name R} {ID 7} {Mem x}\r\n")

@@ -16,6 +16,10 @@ A field is one of:
   those the message gives a value when absent (``group(LinkState, torque=0.0)``); its last
   field may itself be a group (a mission package's links, after its name).
 
+* :func:`joined`: several fields of a reading in one segment, ``{Pose x,y,theta}``.
+* :func:`items`: a reading's repeated groups, its item class's keys named beside it.
+
+A reading sent in several layouts is :class:`Variants` (the first layout whose test holds).
 ``fixed`` segments (``{Type AerialVehicle}``) follow the message's word.  :func:`message`
 compiles a class's layout once: its format is one function written for it (as
 :mod:`dataclasses` writes its methods), as fast as one written by hand; its parser reads a
@@ -45,7 +49,7 @@ class Kind:
     back."""
 
     spec: str
-    fmt: Callable[[Any], str] | None
+    fmt: Callable[[Any], Any] | None  # to a str for %s, an int for %d
     read: Callable[[_Reader, Segment, str], Any]  # (reader, segment, the key as declared)
     empty: str | None = None  # what follows the key, for an empty value, instead of " value"
 
@@ -135,10 +139,22 @@ class Packed:
 
 @dataclass(frozen=True, slots=True)
 class Group:
-    """Repeated groups of keys, each a ``cls``; ``defaults`` of keys this message may lack."""
+    """Repeated groups of keys, each a ``cls``; ``defaults`` of keys this message may lack;
+    ``keys``: the cls's fields and their keys where the cls carries no protocol (a reading's
+    items), in the wire order."""
 
     cls: type
     defaults: tuple[tuple[str, Any], ...] = ()
+    keys: tuple[tuple[str, Key], ...] | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Joined:
+    """Several fields in one segment, comma-separated (the odometry's ``{Pose x,y,theta}``)."""
+
+    wire: str
+    kind: Kind
+    fields: tuple[str, ...]
 
 
 def key(
@@ -165,6 +181,21 @@ def pairs(kind: Kind) -> Any:
 def group(cls: type, **defaults: Any) -> Any:
     """A field of repeated groups, each a ``cls`` (a dataclass of :func:`key` fields whose first opens it)."""
     return dataclasses.field(default=(), metadata={WIRE: Group(cls, tuple(defaults.items()))})
+
+
+def items(cls: type, **keys: Key) -> Group:
+    """A reading's field of repeated groups, each a ``cls`` of :mod:`usarsim.readings` (which
+    carries no protocol): ``keys`` name its fields and their keys, the first opening a group."""
+    return Group(cls, (), tuple(keys.items()))
+
+
+def joined(wire: str, kind: Kind, *fields: str) -> Joined:
+    """A reading's ``fields`` sent together as ``{wire a,b,c}``, each printed as ``kind``."""
+    return Joined(wire, kind, fields)
+
+
+def _group_keys(spec: Group) -> list[tuple[str, Any, Any]]:
+    return [(n, k, None) for n, k in spec.keys] if spec.keys is not None else _declared(spec.cls)
 
 
 def _packed_segment(r: _Reader, seg: Segment, field: str) -> tuple[str, str]:
@@ -225,13 +256,15 @@ class Layout:
         fixed: tuple[tuple[str, str], ...] = (),
         read_first: tuple[str, ...] = (),
         wire_first: tuple[str, ...] = (),
-        keys: dict[str, Key | Packed] | None = None,
+        keys: dict[str, Key | Packed | Group | Joined] | None = None,
         end: str = _CRLF,
+        constants: dict[str, Any] | None = None,
     ):
         self.cls = cls
         self.word = word
         self.fixed = fixed
         self.end = end
+        self.constants = dict(constants or {})  # fields a parsed message of this layout always has
         declared = _declared(cls) if keys is None else [(name, k, None) for name, k in keys.items()]
         by_name = {name: (name, spec, f) for name, spec, f in declared}
         # the wire order: the field order, but for fields a positional dataclass must keep
@@ -239,9 +272,9 @@ class Layout:
         self.fields = [by_name[n] for n in wire_first] + [e for e in by_name.values() if e[0] not in wire_first]
         # the order fields are read in (which error a line with several faults gets)
         self.read_order = [by_name[n] for n in read_first] + [e for e in self.fields if e[0] not in read_first]
-        self.own = frozenset(spec.wire.lower() for _, spec, _ in self.fields if isinstance(spec, Key)) | frozenset(
-            w.lower() for w, _ in fixed
-        )
+        self.own = frozenset(
+            spec.wire.lower() for _, spec, _ in self.fields if isinstance(spec, (Key, Joined))
+        ) | frozenset(w.lower() for w, _ in fixed)
         self.format: Callable[[Any], str] = self._compile_format()
 
     # ---- formatting
@@ -273,6 +306,10 @@ class Layout:
             if isinstance(spec, Key) and not spec.optional and spec.kind.empty is None:
                 run.append(" {%s %s}" % (spec.wire, spec.kind.spec))
                 args.append(value_of(name, spec.kind, f"m.{name}"))
+                continue
+            if isinstance(spec, Joined):
+                run.append(" {%s %s}" % (spec.wire, ",".join([spec.kind.spec] * len(spec.fields))))
+                args += [value_of(f, spec.kind, f"m.{f}") for f in spec.fields]
                 continue
             flush(first=not started)
             started = True
@@ -326,8 +363,19 @@ class Layout:
             run.clear()
             args.clear()
 
-        for sub, sk, _ in _declared(spec.cls):
-            if isinstance(sk, Key):
+        for sub, sk, _ in _group_keys(spec):
+            if isinstance(sk, Key) and sk.optional:  # left out when None; an empty value: {Key}
+                flush()
+                value = value_of(f"{name}_{sub}", sk.kind, f"{var}.{sub}")
+                lines.append(f"{pad}    if {var}.{sub} is not None:")
+                if sk.kind.empty is None:
+                    lines.append(f"{pad}        s += ' {{{sk.wire} {sk.kind.spec}}}' % {value}")
+                else:
+                    lines += [
+                        f"{pad}        s += ' {{{sk.wire} {sk.kind.spec}}}' % {value} if {var}.{sub} else "
+                        + repr(" {%s%s}" % (sk.wire, sk.kind.empty))
+                    ]
+            elif isinstance(sk, Key):
                 run.append(" {%s %s}" % (sk.wire, sk.kind.spec))
                 args.append(value_of(f"{name}_{sub}", sk.kind, f"{var}.{sub}"))
             else:
@@ -339,10 +387,12 @@ class Layout:
     def parse(self, r: _Reader) -> Any:
         """The message of a line already known to be this one's (its word checked, and its
         variant chosen when a word has several)."""
-        values: dict[str, Any] = {}
+        values: dict[str, Any] = dict(self.constants)
         for name, spec, _ in self.read_order:
             if isinstance(spec, Key):
                 values[name] = _read_key(r, spec)
+            elif isinstance(spec, Joined):
+                values.update(zip(spec.fields, r.vector(spec.wire, r.text(spec.wire), len(spec.fields))))
             elif isinstance(spec, Pairs):
                 values[name] = tuple(
                     (s.key, spec.kind.read(r, s, s.key)) for s in r.raw.segments if s.key.lower() not in self.own
@@ -356,10 +406,10 @@ class Layout:
     def _read_groups(self, r: _Reader, spec: Group, segments: tuple[Segment, ...] | None = None) -> tuple[Any, ...]:
         """The groups of ``segments`` (the line's by default).  A group's keys are read from its
         segments before a group inside it starts; the groups inside are read first."""
-        keys = _declared(spec.cls)
+        keys = _group_keys(spec)
         defaults = dict(spec.defaults)
         inner = [(name, k) for name, k, _ in keys if isinstance(k, Group)]
-        inner_start = _declared(inner[0][1].cls)[0][1].wire.lower() if inner else None
+        inner_start = _group_keys(inner[0][1])[0][1].wire.lower() if inner else None
         out = []
         for found in _groups(r.raw.segments if segments is None else segments, keys[0][1].wire):
             own = [s for s in found if s.key.lower() not in self.own]
@@ -393,8 +443,38 @@ def packed(cls: type, wire: str, kind: Kind) -> Packed:
     return Packed(cls, wire, kind)
 
 
-def reading(cls: type, *, fixed: tuple[tuple[str, str], ...] = (), **keys: Key | Packed) -> Layout:
+def reading(
+    cls: type,
+    *,
+    fixed: tuple[tuple[str, str], ...] = (),
+    read_first: tuple[str, ...] = (),
+    constants: dict[str, Any] | None = None,
+    **keys: Key | Packed | Group | Joined,
+) -> Layout:
     """The compiled layout of a SEN body (what follows ``SEN [{Time t}]``) for a reading class
     of :mod:`usarsim.readings`, which carries no protocol of its own: ``keys`` name its fields
-    and their keys, in the wire order (after ``fixed``)."""
-    return Layout(cls, "", fixed, keys=keys, end="")
+    and their keys, in the wire order (after ``fixed``); ``read_first`` as :func:`message`'s;
+    ``constants``: fields every reading read with this layout has (not on the wire)."""
+    return Layout(cls, "", fixed, read_first, keys=keys, end="", constants=constants)
+
+
+class Variants:
+    """A reading sent in one of several layouts, the first whose test holds (a test of None
+    always does): a GPS with a fix and without.  ``parse``: how a line is read back, one of
+    the layouts' parsers or a rule of the sensor's own."""
+
+    def __init__(
+        self,
+        cls: type,
+        choices: tuple[tuple[Callable[[Any], bool] | None, Layout], ...],
+        parse: Callable[[_Reader], Any],
+    ):
+        self.cls = cls
+        self.choices = choices
+        self.parse = parse
+
+    def format(self, m: Any) -> str:
+        for test, layout in self.choices:
+            if test is None or test(m):
+                return layout.format(m)
+        raise TypeError(f"no layout of {self.cls.__name__} fits {m!r}")

@@ -35,8 +35,8 @@ from usarsim.readings import (
     VictimReading,
 )
 
-from ..grammar import Segment, format_segment, parse_float, parse_int
-from ..numbers import f4, vec4, vec_t4
+from ..grammar import Segment, parse_float, parse_int
+from ..numbers import f4
 from .common import _CRLF, _Reader
 from .declare import (
     ANGLES4,
@@ -52,6 +52,10 @@ from .declare import (
     VALUES4,
     VEC4,
     Key,
+    Kind,
+    Variants,
+    items,
+    joined,
     packed,
     reading,
 )
@@ -67,24 +71,6 @@ class SensorMessage:
 
 
 # ---- SEN bodies: everything after "{Type T}" is produced per reading type.
-
-
-def _range_list(values: tuple[float, ...]) -> str:
-    return "{Range %s}" % vec4(values) if values else "{Range}"
-
-
-def _sen_scan3d(r: RangeScan3DReading) -> str:
-    # a line of the split form holds one row and names it like the RangeImager's frames
-    # (protocol.md 6.3); a whole sweep is the one line of the RangeScanner3D row there
-    frame = "" if r.frame is None else "{Frames %d} {Frame %d} " % (r.frames or 0, r.frame)
-    return "{Type %s} {Name %s} %s{Resolution %s} {FOV %s} %s" % (
-        r.sensor_type,
-        r.name,
-        frame,
-        vec_t4(r.resolution_rad),
-        vec_t4(r.fov_rad),
-        _range_list(r.ranges_m),
-    )
 
 
 def _scan3d_rows(r: RangeScan3DReading) -> list[RangeScan3DReading] | None:
@@ -121,55 +107,6 @@ def image_frames(r: RangeImageReading) -> list[RangeImageReading]:
         RangeImageReading(r.name, r.pixels, r.fov_rad, r.ranges_m[k * n : (k + 1) * n], frames=r.frames, frame=k)
         for k in range(r.frames)
     ]
-
-
-def _sen_odometry(r: OdometryReading) -> str:
-    # Theta is printed as the sensor integrated it (UT examples show values in [0, 2 pi)).
-    return "{Type Odometry} {Name %s} {Pose %s,%s,%s}" % (
-        r.name,
-        f4(r.x_m),
-        f4(r.y_m),
-        f4(r.theta_rad),
-    )
-
-
-def _gps_coordinate(c: tuple[int, float, str]) -> str:
-    return "%d,%s,%s" % (c[0], f4(c[1]), c[2])
-
-
-def _sen_gps(r: GpsReading) -> str:
-    if r.fix and r.latitude is not None and r.longitude is not None:
-        return "{Type GPS} {Name %s} {Latitude %s} {Longitude %s} {Fix 1} {Satellites %d}" % (
-            r.name,
-            _gps_coordinate(r.latitude),
-            _gps_coordinate(r.longitude),
-            r.satellites,
-        )
-    return "{Type GPS} {Name %s} {Fix %d} {Satellites %d}" % (
-        r.name,
-        1 if r.fix else 0,
-        r.satellites,
-    )
-
-
-def _sen_victim(r: VictimReading) -> str:
-    if not r.parts:
-        return "{Type VictSensor} {Status NoVictims}"
-    parts = " ".join(["{PartName %s} {Location %s}" % (p.part_name, vec4(p.location)) for p in r.parts])
-    return "{Type VictSensor} {Name %s} %s" % (r.name, parts)
-
-
-def _rfid_tag(t: RfidTag) -> str:
-    s = "{ID %d} {Location %s}" % (t.tag_id, vec4(t.location))
-    if t.memory is not None:
-        s += " " + format_segment("Mem", t.memory)
-    return s
-
-
-def _sen_rfid(r: RfidReading) -> str:
-    if not r.tags:
-        return "{Type RFID} {Name %s}" % r.name
-    return "{Type RFID} {Name %s} %s" % (r.name, " ".join(map(_rfid_tag, r.tags)))
 
 
 # the readings of fixed layout, declared: their SEN bodies and parsers follow
@@ -231,6 +168,154 @@ _IMAGE = reading(
 _RANGE = reading(RangeReading, sensor_type=Key("Type", TEXT), items=packed(RangeItem, "Range", F4))
 _ENCODER = reading(EncoderReading, fixed=(("Type", "Encoder"),), items=packed(EncoderItem, "Tick", INT))
 _TOUCH = reading(TouchReading, fixed=(("Type", "Touch"),), items=packed(TouchItem, "Touch", BOOL))
+# the odometry's pose of three fields in one segment (Theta as the sensor integrated it: UT
+# examples show values in [0, 2 pi))
+_ODOMETRY = reading(
+    OdometryReading,
+    fixed=(("Type", "Odometry"),),
+    read_first=("pose",),
+    name=Key("Name", TEXT),
+    pose=joined("Pose", F4, "x_m", "y_m", "theta_rad"),
+)
+
+
+def _gps_coordinate(r: _Reader, seg: Segment, wire: str) -> tuple[int, float, str]:
+    parts = [p.strip() for p in seg.value.split(",")]
+    if len(parts) != 3 or parts[2] not in ("N", "S", "E", "W"):
+        raise r.error(wire, seg.value, "degrees,minutes,hemisphere such as 39,8.0341,N")
+    try:
+        return parse_int(parts[0]), parse_float(parts[1]), parts[2]
+    except ProtocolError as exc:
+        raise r.error(wire, seg.value, "degrees,minutes,hemisphere such as 39,8.0341,N") from exc
+
+
+# degrees, minutes (4 decimals) and hemisphere: 39,8.0341,N
+COORDINATE = Kind("%s", lambda c: "%d,%s,%s" % (c[0], f4(c[1]), c[2]), _gps_coordinate)
+FIX = Kind("%d", int, lambda r, seg, wire: r.integer(seg) != 0)  # {Fix 1}, {Fix 0}
+_GPS_KEYS: dict[str, Any] = {
+    "name": Key("Name", TEXT),
+    "latitude": Key("Latitude", COORDINATE, optional=True, has_absent=True),
+    "longitude": Key("Longitude", COORDINATE, optional=True, has_absent=True),
+    "fix": Key("Fix", FIX),
+    "satellites": Key("Satellites", INT),
+}
+_GPS_FIX = reading(
+    GpsReading, fixed=(("Type", "GPS"),), read_first=("name", "fix", "satellites", "latitude"), **_GPS_KEYS
+)
+_GPS_NO_FIX = reading(
+    GpsReading,
+    fixed=(("Type", "GPS"),),
+    name=_GPS_KEYS["name"],
+    fix=_GPS_KEYS["fix"],
+    satellites=_GPS_KEYS["satellites"],
+)
+_GPS = Variants(
+    GpsReading,
+    ((lambda g: g.fix and g.latitude is not None and g.longitude is not None, _GPS_FIX), (None, _GPS_NO_FIX)),
+    _GPS_FIX.parse,  # the coordinates whenever the line has them
+)
+
+# a 3D sweep: one line, or one line a row ({Frames rows} {Frame k} after the Name); a row's
+# number is named as declared in errors, its count as the line spells it
+FRAMES = Kind("%d", lambda n: n or 0, lambda r, seg, wire: r.integer(seg))
+FRAME = Kind("%d", None, lambda r, seg, wire: r.integer(Segment(wire, seg.value)))
+_SCAN3D_KEYS: dict[str, Any] = {
+    "sensor_type": Key("Type", TEXT),
+    "name": Key("Name", TEXT),
+    "frames": Key("Frames", FRAMES),
+    "frame": Key("Frame", FRAME),
+    "resolution_rad": Key("Resolution", PAIR_T4),
+    "fov_rad": Key("FOV", PAIR_T4),
+    "ranges_m": Key("Range", RANGES4),
+}
+_SCAN3D_FIRST = ("sensor_type", "name", "resolution_rad", "fov_rad", "ranges_m")
+_SCAN3D_ROW = reading(RangeScan3DReading, read_first=_SCAN3D_FIRST, constants={"split": True}, **_SCAN3D_KEYS)
+_SCAN3D_WHOLE = reading(
+    RangeScan3DReading,
+    read_first=_SCAN3D_FIRST,
+    **{k: v for k, v in _SCAN3D_KEYS.items() if k not in ("frames", "frame")},
+)
+_SCAN3D = Variants(
+    RangeScan3DReading,
+    ((lambda r: r.frame is not None, _SCAN3D_ROW), (None, _SCAN3D_WHOLE)),
+    lambda r: (_SCAN3D_ROW if r.raw.get("Frame") is not None else _SCAN3D_WHOLE).parse(r),
+)
+
+
+def _victim_parts(r: _Reader) -> VictimReading:
+    """A victim sensor's line: each part's {PartName} before its {Location} (a name without a
+    location is left out, as UT's sensor never sent one); "{Status NoVictims}" lines carry no
+    Name, and the UT sensor is named VictSensor."""
+    parts: list[VictimPart] = []
+    part: str | None = None
+    for s in r.raw.segments:
+        k = s.key.lower()
+        if k == "partname":
+            part = s.value
+        elif k == "location":
+            if part is None:
+                raise r.error(s.key, s.value, "{PartName p} before each {Location}")
+            location = r.vector(s.key, s.value)
+            parts.append(VictimPart(part_name=part, location=location))  # type: ignore[arg-type]
+            part = None
+    return VictimReading(name=r.raw.get("Name") or "VictSensor", parts=tuple(parts))
+
+
+_VICTIM = Variants(
+    VictimReading,
+    (
+        (lambda v: not v.parts, reading(VictimReading, fixed=(("Type", "VictSensor"), ("Status", "NoVictims")))),
+        (
+            None,
+            reading(
+                VictimReading,
+                fixed=(("Type", "VictSensor"),),
+                name=Key("Name", TEXT),
+                parts=items(VictimPart, part_name=Key("PartName", TEXT), location=Key("Location", VEC4)),
+            ),
+        ),
+    ),
+    _victim_parts,
+)
+
+# a tag's memory is {Mem text}, {Mem} when empty, left out when it has none
+MEMORY = Kind("%s", None, lambda r, seg, wire: seg.value, empty="")
+
+
+def _tag(r: _Reader, tag: dict[str, Any]) -> RfidTag:
+    if "location" not in tag:
+        raise ProtocolError(f"{r.what}: {{ID {tag['tag_id']}}} has no {{Location x,y,z}}")
+    return RfidTag(**tag)
+
+
+def _rfid_tags(r: _Reader) -> RfidReading:
+    """An RFID reader's line: each tag from its {ID}, its {Location} required, its {Mem} if any."""
+    tags: list[RfidTag] = []
+    tag: dict[str, Any] | None = None
+    for s in r.raw.segments:
+        k = s.key.lower()
+        if k == "id":
+            if tag is not None:
+                tags.append(_tag(r, tag))
+            tag = {"tag_id": r.integer(s)}
+        elif tag is not None and k == "location":
+            tag["location"] = r.vector(s.key, s.value)
+        elif tag is not None and k == "mem":
+            tag["memory"] = s.value
+    if tag is not None:
+        tags.append(_tag(r, tag))
+    return RfidReading(name=r.text("Name"), tags=tuple(tags))
+
+
+_RFID_LAYOUT = reading(
+    RfidReading,
+    fixed=(("Type", "RFID"),),
+    name=Key("Name", TEXT),
+    tags=items(
+        RfidTag, tag_id=Key("ID", INT), location=Key("Location", VEC4), memory=Key("Mem", MEMORY, optional=True)
+    ),
+)
+_RFID = Variants(RfidReading, ((None, _RFID_LAYOUT),), _rfid_tags)
 _DECLARED = {
     layout.cls: layout
     for layout in (
@@ -245,17 +330,12 @@ _DECLARED = {
         _ENCODER,
         _TOUCH,
         _IMAGE,
+        _ODOMETRY,
+        _GPS,
+        _SCAN3D,
+        _VICTIM,
+        _RFID,
     )
-}
-
-# the others (a GPS with and without a fix, a victim sensor with nothing in sight, tags with
-# and without memory, a 3D sweep split into rows, the odometry's pose of three fields), by hand
-_SEN_BODIES: dict[type, Callable[[Any], str]] = {
-    RangeScan3DReading: _sen_scan3d,
-    OdometryReading: _sen_odometry,
-    GpsReading: _sen_gps,
-    VictimReading: _sen_victim,
-    RfidReading: _sen_rfid,
 }
 
 
@@ -268,19 +348,15 @@ def format_reading(reading: Reading, time: float | None = None) -> str:
     if isinstance(reading, RangeImageReading) and reading.frame is None:
         head = "SEN" if time is None else "SEN {Time %s}" % f4(time)
         return "".join([head + _IMAGE.format(part) + _CRLF for part in image_frames(reading)])
-    declared = _DECLARED.get(type(reading))
-    if declared is not None:
-        return ("SEN" if time is None else "SEN {Time %s}" % f4(time)) + declared.format(reading) + _CRLF
-    head = "SEN " if time is None else "SEN {Time %s} " % f4(time)
-    if isinstance(reading, RangeScan3DReading) and reading.split:
+    if isinstance(reading, RangeScan3DReading) and reading.split and reading.frame is None:
         rows = _scan3d_rows(reading)
         if rows is not None:
-            return "".join([head + _sen_scan3d(row) + _CRLF for row in rows])
-    try:
-        body = _SEN_BODIES[type(reading)](reading)
-    except KeyError:
-        raise TypeError(f"not a sensor reading: {reading!r}") from None
-    return head + body + _CRLF
+            head = "SEN" if time is None else "SEN {Time %s}" % f4(time)
+            return "".join([head + _SCAN3D.format(row) + _CRLF for row in rows])
+    declared = _DECLARED.get(type(reading))
+    if declared is None:
+        raise TypeError(f"not a sensor reading: {reading!r}")
+    return ("SEN" if time is None else "SEN {Time %s}" % f4(time)) + declared.format(reading) + _CRLF
 
 
 def _fmt_sensor(m: SensorMessage) -> str:
@@ -290,89 +366,6 @@ def _fmt_sensor(m: SensorMessage) -> str:
 # ---- parsing
 
 
-def _sen_parse_scan3d(r: _Reader, t: str) -> Reading:
-    frame = r.raw.get("Frame")
-    return RangeScan3DReading(
-        sensor_type=t,
-        name=r.text("Name"),
-        resolution_rad=r.vector("Resolution", r.text("Resolution"), 2),  # type: ignore[arg-type]
-        fov_rad=r.vector("FOV", r.text("FOV"), 2),  # type: ignore[arg-type]
-        ranges_m=r.vector("Range", r.text("Range"), None),
-        frames=None if frame is None else r.req_int("Frames"),
-        frame=None if frame is None else r.integer(Segment("Frame", frame)),
-        split=frame is not None,
-    )
-
-
-def _sen_parse_odometry(r: _Reader, t: str) -> Reading:
-    x, y, theta = r.req_vec3("Pose")
-    return OdometryReading(name=r.text("Name"), x_m=x, y_m=y, theta_rad=theta)
-
-
-def _gps_parse(r: _Reader, key: str) -> tuple[int, float, str] | None:
-    value = r.raw.get(key)
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",")]
-    if len(parts) != 3 or parts[2] not in ("N", "S", "E", "W"):
-        raise r.error(key, value, "degrees,minutes,hemisphere such as 39,8.0341,N")
-    try:
-        return parse_int(parts[0]), parse_float(parts[1]), parts[2]
-    except ProtocolError as exc:
-        raise r.error(key, value, "degrees,minutes,hemisphere such as 39,8.0341,N") from exc
-
-
-def _sen_parse_gps(r: _Reader, t: str) -> Reading:
-    return GpsReading(
-        name=r.text("Name"),
-        fix=r.req_int("Fix") != 0,
-        satellites=r.req_int("Satellites"),
-        latitude=_gps_parse(r, "Latitude"),
-        longitude=_gps_parse(r, "Longitude"),
-    )
-
-
-def _sen_parse_victim(r: _Reader, t: str) -> Reading:
-    parts: list[VictimPart] = []
-    part: str | None = None
-    for s in r.raw.segments:
-        k = s.key.lower()
-        if k == "partname":
-            part = s.value
-        elif k == "location":
-            if part is None:
-                raise r.error(s.key, s.value, "{PartName p} before each {Location}")
-            location = r.vector(s.key, s.value)
-            parts.append(VictimPart(part_name=part, location=location))  # type: ignore[arg-type]
-            part = None
-    # "{Status NoVictims}" lines carry no Name; the UT sensor is named VictSensor.
-    return VictimReading(name=r.raw.get("Name") or "VictSensor", parts=tuple(parts))
-
-
-def _rfid_tag_from(r: _Reader, tag: dict[str, Any]) -> RfidTag:
-    if "location" not in tag:
-        raise ProtocolError(f"{r.what}: {{ID {tag['tag_id']}}} has no {{Location x,y,z}}")
-    return RfidTag(**tag)
-
-
-def _sen_parse_rfid(r: _Reader, t: str) -> Reading:
-    tags: list[RfidTag] = []
-    tag: dict[str, Any] | None = None
-    for s in r.raw.segments:
-        k = s.key.lower()
-        if k == "id":
-            if tag is not None:
-                tags.append(_rfid_tag_from(r, tag))
-            tag = {"tag_id": r.integer(s)}
-        elif tag is not None and k == "location":
-            tag["location"] = r.vector(s.key, s.value)
-        elif tag is not None and k == "mem":
-            tag["memory"] = s.value
-    if tag is not None:
-        tags.append(_rfid_tag_from(r, tag))
-    return RfidReading(name=r.text("Name"), tags=tuple(tags))
-
-
 _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
     "sonar": lambda r, t: _RANGE.parse(r),
     "ir": lambda r, t: _RANGE.parse(r),
@@ -380,19 +373,19 @@ _SEN_PARSERS: dict[str, Callable[[_Reader, str], Reading]] = {
     "rangescanner": lambda r, t: _SCAN.parse(r),
     "irscanner": lambda r, t: _SCAN.parse(r),
     "rangeimager": lambda r, t: _IMAGE.parse(r),
-    "rangescanner3d": _sen_parse_scan3d,
-    "3drangescanner": _sen_parse_scan3d,
-    "odometry": _sen_parse_odometry,
+    "rangescanner3d": lambda r, t: _SCAN3D.parse(r),
+    "3drangescanner": lambda r, t: _SCAN3D.parse(r),
+    "odometry": lambda r, t: _ODOMETRY.parse(r),
     "encoder": lambda r, t: _ENCODER.parse(r),
     "groundtruth": lambda r, t: _POSE.parse(r),
     "ins": lambda r, t: _POSE.parse(r),
     "inu": lambda r, t: _ORIENTATION.parse(r),
     "touch": lambda r, t: _TOUCH.parse(r),
-    "gps": _sen_parse_gps,
+    "gps": lambda r, t: _GPS.parse(r),
     "tachometer": lambda r, t: _TACHOMETER.parse(r),
     "imu": lambda r, t: _IMU.parse(r),
-    "victsensor": _sen_parse_victim,
-    "rfid": _sen_parse_rfid,
+    "victsensor": lambda r, t: _VICTIM.parse(r),
+    "rfid": lambda r, t: _RFID.parse(r),
     "sound": lambda r, t: _SOUND.parse(r),
     "humanmotion": lambda r, t: _HUMAN_MOTION.parse(r),
 }
