@@ -14,6 +14,12 @@ from usarsim.protocol import messages as m
 from usarsim.protocol.grammar import Segment
 from usarsim.protocol.messages import format_message, format_reading, parse_message
 
+
+def _sta(time: float, vehicle_type: str = "GroundVehicle", **status) -> m.StatusMessage:
+    """A STA message: its time and the robot's status (RobotStatus, the payload)."""
+    return m.StatusMessage(time, r.RobotStatus(vehicle_type, **status))
+
+
 SCAN_RANGES = (11.3059, 11.3133, 0.25, 20.0)
 
 GOLDEN = [
@@ -53,18 +59,18 @@ GOLDEN = [
     ),
     # §6.2
     (
-        m.GroundVehicleStatus(time=31.2, battery_s=1200),
+        _sta(31.2, battery_s=1200),
         "STA {Type GroundVehicle} {Time 31.20} {FrontSteer 0.0000} {RearSteer 0.0000} "
         "{LightToggle False} {LightIntensity 0} {Battery 1200} {View -1}",
     ),
     (
-        m.GroundVehicleStatus(time=5609.45, battery_s=1199, view=0, light_toggle=True, light_intensity=100),
+        _sta(5609.45, battery_s=1199, view=0, light_toggle=True, light_intensity=100),
         "STA {Type GroundVehicle} {Time 5609.45} {FrontSteer 0.0000} {RearSteer 0.0000} "
         "{LightToggle True} {LightIntensity 100} {Battery 1199} {View 0}",
     ),
     (
-        m.GroundVehicleStatus(
-            time=120.3,
+        _sta(
+            120.3,
             joints=(
                 ("FRFlipper", -0.0006),
                 ("FLFlipper", -0.0006),
@@ -78,14 +84,12 @@ GOLDEN = [
         "{LightToggle False} {LightIntensity 0} {Battery 1187} {View -1}",
     ),
     (
-        m.GroundVehicleStatus(
-            time=3.2, front_steer=0.5236, rear_steer=-0.5236, battery_s=3600, vehicle_type="LeggedRobot"
-        ),
+        _sta(3.2, front_steer=0.5236, rear_steer=-0.5236, battery_s=3600, vehicle_type="LeggedRobot"),
         "STA {Type LeggedRobot} {Time 3.20} {FrontSteer 0.5236} {RearSteer -0.5236} "
         "{LightToggle False} {LightIntensity 0} {Battery 3600} {View -1}",
     ),
     (
-        m.AerialVehicleStatus(time=268.5, battery_s=1192),
+        _sta(268.5, battery_s=1192, vehicle_type="AerialVehicle"),
         "STA {Type AerialVehicle} {Time 268.50} {LightToggle False} {LightIntensity 0} {Battery 1192} {View -1}",
     ),
     # §6.3
@@ -761,9 +765,9 @@ MESSAGE_STRATEGIES = {
     m.StartPoses: st.builds(m.StartPoses, poses=_tuples(_pose)),
     m.PathNodes: st.builds(m.PathNodes, nodes=_tuples(_pose)),
     m.ClosestPathNode: st.builds(m.ClosestPathNode, name=_names, location=_v2),
-    m.GroundVehicleStatus: st.builds(
-        m.GroundVehicleStatus,
-        time=_time2,
+    m.StatusMessage: st.builds(
+        _sta,
+        _time2,
         front_steer=_f4,
         rear_steer=_f4,
         joints=_tuples(st.tuples(_names.filter(lambda n: n.lower() not in {
@@ -774,9 +778,8 @@ MESSAGE_STRATEGIES = {
         battery_s=st.integers(0, 10**5),
         view=st.integers(-1, 3),
         vehicle_type=st.sampled_from(["GroundVehicle", "LeggedRobot", "NauticalVehicle", "StaticPlatform"]),
-    ),
-    m.AerialVehicleStatus: st.builds(
-        m.AerialVehicleStatus, time=_time2, light_toggle=st.booleans(),
+    ) | st.builds(  # an aerial robot's line has no steer angles or joints
+        _sta, _time2, light_toggle=st.booleans(), vehicle_type=st.just("AerialVehicle"),
         light_intensity=st.integers(0, 100), battery_s=st.integers(0, 10**5), view=st.integers(-1, 3),
     ),
     m.SensorMessage: st.builds(m.SensorMessage, time=st.none() | _time4, reading=READINGS),

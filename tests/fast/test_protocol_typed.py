@@ -152,8 +152,9 @@ def test_a_zoom_result_becomes_a_camera_res_line():
 
 
 def test_other_outputs_keep_their_messages():
-    assert isinstance(message_for(RobotStatus("GroundVehicle", battery_s=100), 1.0), M.GroundVehicleStatus)
-    assert isinstance(message_for(RobotStatus("AerialVehicle", battery_s=100), 1.0), M.AerialVehicleStatus)
+    ground, aerial = RobotStatus("GroundVehicle", battery_s=100), RobotStatus("AerialVehicle", battery_s=100)
+    assert message_for(ground, 1.0) == M.StatusMessage(1.0, ground)  # the status is the message's payload
+    assert message_for(aerial, 1.0) == M.StatusMessage(1.0, aerial)
     assert isinstance(message_for(PackageState("CameraPanTilt", ((1, 0.1, 0.0),)), 1.0), M.MisPkgStatus)
     sen = message_for(RangeReading("Sonar", (RangeItem("F1", 1.5),)), None)
     assert M.format_message(sen) == "SEN {Type Sonar} {Name F1 Range 1.5000}\r\n"

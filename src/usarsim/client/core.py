@@ -25,6 +25,7 @@ from usarsim.readings import (
     OdometryReading,
     PoseReading,
     RangeScanReading,
+    RobotStatus,
     VictimPart,
     VictimReading,
 )
@@ -118,7 +119,7 @@ class ConnectionState:
         self.buffer = LineBuffer(max_line_bytes=MAX_LINE_BYTES)
         self.readings: dict[str, Any] = {}
         self.reading_times: dict[str, float | None] = {}
-        self.status: M.GroundVehicleStatus | M.AerialVehicleStatus | None = None
+        self.status: RobotStatus | None = None  # the latest STA's
         self.packages: dict[str, M.MisPkgStatus] = {}  # the latest MISSTA of each mission package
         self.time: float | None = None
         self.messages: list[Any] = []
@@ -149,8 +150,8 @@ class ConnectionState:
             key = reading_key(msg.reading)
             self.readings[key] = msg.reading
             self.reading_times[key] = msg.time
-        elif isinstance(msg, (M.GroundVehicleStatus, M.AerialVehicleStatus)):
-            self.status = msg
+        elif isinstance(msg, M.StatusMessage):
+            self.status = msg.status
         elif isinstance(msg, M.MisPkgStatus):
             self.packages[msg.name] = msg
         elif isinstance(msg, REPLIES):

@@ -41,26 +41,7 @@ def message_for(value: Any, time: float | None) -> M.Message:
     (None: a sensor without time stamps)."""
     v = value
     if isinstance(v, RobotStatus):
-        time = _stamped(time)
-        if v.vehicle_type == "AerialVehicle":
-            return M.AerialVehicleStatus(
-                time=time,
-                light_toggle=v.light_toggle,
-                light_intensity=v.light_intensity,
-                battery_s=v.battery_s,
-                view=v.view,
-            )
-        return M.GroundVehicleStatus(
-            time=time,
-            front_steer=v.front_steer,
-            rear_steer=v.rear_steer,
-            joints=v.joints,
-            light_toggle=v.light_toggle,
-            light_intensity=v.light_intensity,
-            battery_s=v.battery_s,
-            view=v.view,
-            vehicle_type=v.vehicle_type,
-        )
+        return M.StatusMessage(time=_stamped(time), status=v)
     if isinstance(v, EffecterState):
         return M.EffecterStatus(
             time=_stamped(time), effecter_type=v.effecter_type, name=v.name, status=effecter_status(v.closed)

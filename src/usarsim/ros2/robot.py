@@ -283,9 +283,9 @@ class RobotBridge(SensorTopics):
             elif isinstance(r, TachometerReading):
                 for i, (v, p) in enumerate(zip(r.velocities_rad_s, r.positions_rad)):
                     self.wheels[f"{r.name}_wheel{i}"] = (float(p), float(v))
-        elif isinstance(msg, (M.GroundVehicleStatus, M.AerialVehicleStatus)):
-            self.publish_battery(stamp, msg.battery_s)
-            for name, value in getattr(msg, "joints", ()):
+        elif isinstance(msg, M.StatusMessage):
+            self.publish_battery(stamp, msg.status.battery_s)
+            for name, value in msg.status.joints:
                 self.joints[name] = float(value)
             if self.joints or self.wheels:
                 self.publish_joint_states(stamp)

@@ -89,7 +89,7 @@ from .results import (
     error_reply,
 )
 from .sensors import SensorMessage, format_reading
-from .status import ActuatorStatus, AerialVehicleStatus, GroundVehicleStatus, LinkState, MisPkgStatus
+from .status import ActuatorStatus, LinkState, MisPkgStatus, StatusMessage
 
 __all__ = [
     "ActuatorConfig",
@@ -99,7 +99,6 @@ __all__ = [
     "ActuatorLinkGeometry",
     "ActuatorPose",
     "ActuatorStatus",
-    "AerialVehicleStatus",
     "CameraZoom",
     "CameraZoomResult",
     "ClosestPathNode",
@@ -108,7 +107,6 @@ __all__ = [
     "EmptyConfiguration",
     "EmptyGeometry",
     "GameInfo",
-    "GroundVehicleStatus",
     "ItemConf",
     "ItemConfiguration",
     "ItemGeometry",
@@ -129,6 +127,7 @@ __all__ = [
     "RobotConfiguration",
     "RobotGeometry",
     "SensorMessage",
+    "StatusMessage",
     "StartPose",
     "StartPoses",
     "Stepped",
@@ -150,8 +149,7 @@ Message = (
     | StartPoses
     | PathNodes
     | ClosestPathNode
-    | GroundVehicleStatus
-    | AerialVehicleStatus
+    | StatusMessage
     | SensorMessage
     | RobotGeometry
     | RobotConfiguration

@@ -31,7 +31,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -256,15 +256,19 @@ class Layout:
         fixed: tuple[tuple[str, str], ...] = (),
         read_first: tuple[str, ...] = (),
         wire_first: tuple[str, ...] = (),
-        keys: dict[str, Key | Packed | Group | Joined] | None = None,
+        keys: Mapping[str, Key | Pairs | Packed | Group | Joined] | None = None,
         end: str = _CRLF,
         constants: dict[str, Any] | None = None,
+        nested: dict[str, type] | None = None,
     ):
         self.cls = cls
         self.word = word
         self.fixed = fixed
         self.end = end
         self.constants = dict(constants or {})  # fields a parsed message of this layout always has
+        # a field that is a payload of its own (a STA's RobotStatus): its fields are named
+        # "status.battery_s" in ``keys``, and read into an instance of its class
+        self.nested = dict(nested or {})
         declared = _declared(cls) if keys is None else [(name, k, None) for name, k in keys.items()]
         by_name = {name: (name, spec, f) for name, spec, f in declared}
         # the wire order: the field order, but for fields a positional dataclass must keep
@@ -299,8 +303,9 @@ class Layout:
         def value_of(name: str, kind: Kind, expr: str) -> str:
             if kind.fmt is None:
                 return expr
-            env[f"fmt_{name}"] = kind.fmt
-            return f"fmt_{name}({expr})"
+            ident = "fmt_" + name.replace(".", "_")
+            env[ident] = kind.fmt
+            return f"{ident}({expr})"
 
         for name, spec, _ in self.fields:
             if isinstance(spec, Key) and not spec.optional and spec.kind.empty is None:
@@ -401,6 +406,10 @@ class Layout:
                 values[name] = tuple(spec.cls(n, spec.kind.read(r, seg, spec.wire)) for n, seg in _named(r, spec.wire))
             else:
                 values[name] = self._read_groups(r, spec)
+        for field, cls in self.nested.items():
+            head = field + "."
+            inner = {n[len(head) :]: values.pop(n) for n in list(values) if n.startswith(head)}
+            values[field] = cls(**inner)
         return self.cls(**values)
 
     def _read_groups(self, r: _Reader, spec: Group, segments: tuple[Segment, ...] | None = None) -> tuple[Any, ...]:

@@ -8,39 +8,26 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from usarsim.readings import RobotStatus
+
 from .common import _Reader
-from .declare import BOOL, F2, F4, INT, TEXT, group, key, message, pairs
+from .declare import BOOL, F2, F4, INT, TEXT, Key, Layout, Pairs, Variants, group, key, message
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
-class GroundVehicleStatus:
-    """Periodic ``STA`` of a ground robot (§6.2).
+@dataclass(frozen=True, slots=True)
+class StatusMessage:
+    """A robot's periodic ``STA`` (§6.2): its time (2 decimals) and its status then, a
+    :class:`usarsim.readings.RobotStatus` (the payload, as a SEN line's is its reading).
 
-    ``joints`` are flipper angles printed after ``RearSteer`` (TeleMax).  ``battery_s`` is the
-    remaining battery life in whole seconds.  ``vehicle_type`` names the other non-aerial
-    kinds (``LeggedRobot``, ``NauticalVehicle``, ``StaticPlatform``) with the same layout.
+    A ground robot's line (``{Type GroundVehicle}``, and the other non-aerial kinds,
+    ``LeggedRobot``, ``NauticalVehicle``, ``StaticPlatform``, with the same layout) has its
+    steer angles and its joints (flipper angles, printed after ``RearSteer``); an aerial
+    robot's (``{Type AerialVehicle}``) has neither.  ``battery_s`` is the remaining battery
+    life in whole seconds.
     """
 
-    vehicle_type: str = key("Type", TEXT, default="GroundVehicle")
-    time: float = key("Time", F2)
-    front_steer: float = key("FrontSteer", F4, default=0.0, absent=0.0)
-    rear_steer: float = key("RearSteer", F4, default=0.0, absent=0.0)
-    joints: tuple[tuple[str, float], ...] = pairs(F4)
-    light_toggle: bool = key("LightToggle", BOOL, default=False, absent=False)
-    light_intensity: int = key("LightIntensity", INT, default=0, absent=0)
-    battery_s: int = key("Battery", INT)
-    view: int = key("View", INT, default=-1, absent=-1)
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class AerialVehicleStatus:
-    """Periodic ``STA {Type AerialVehicle}`` of an aerial robot (§6.2)."""
-
-    time: float = key("Time", F2)
-    light_toggle: bool = key("LightToggle", BOOL, default=False, absent=False)
-    light_intensity: int = key("LightIntensity", INT, default=0, absent=0)
-    battery_s: int = key("Battery", INT)
-    view: int = key("View", INT, default=-1, absent=-1)
+    time: float
+    status: RobotStatus
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,36 +60,58 @@ class ActuatorStatus:
     gripper: int | None = key("Gripper", INT, default=None, optional=True)
 
 
-StatusMessage = GroundVehicleStatus | AerialVehicleStatus | MisPkgStatus | ActuatorStatus
+StatusMessages = StatusMessage | MisPkgStatus | ActuatorStatus
 
 # ---- formatting and parsing, from the declarations above
 
-_GROUND = message(
-    GroundVehicleStatus,
+_LIGHTS_AND_BATTERY = {
+    "status.light_toggle": Key("LightToggle", BOOL, absent=False, has_absent=True),
+    "status.light_intensity": Key("LightIntensity", INT, absent=0, has_absent=True),
+    "status.battery_s": Key("Battery", INT),
+    "status.view": Key("View", INT, absent=-1, has_absent=True),
+}
+_GROUND = Layout(
+    StatusMessage,
     "STA",
-    read_first=("vehicle_type", "time", "battery_s", "light_toggle", "light_intensity", "view", "joints"),
+    read_first=("status.vehicle_type", "time", "status.battery_s", "status.light_toggle", "status.light_intensity")
+    + ("status.view", "status.joints"),
+    keys={
+        "status.vehicle_type": Key("Type", TEXT),
+        "time": Key("Time", F2),
+        "status.front_steer": Key("FrontSteer", F4, absent=0.0, has_absent=True),
+        "status.rear_steer": Key("RearSteer", F4, absent=0.0, has_absent=True),
+        "status.joints": Pairs(F4),
+        **_LIGHTS_AND_BATTERY,
+    },
+    nested={"status": RobotStatus},
 )
-_AERIAL = message(AerialVehicleStatus, "STA", fixed=(("Type", "AerialVehicle"),), read_first=("time", "battery_s"))
+_AERIAL = Layout(
+    StatusMessage,
+    "STA",
+    fixed=(("Type", "AerialVehicle"),),
+    read_first=("time", "status.battery_s"),
+    keys={"time": Key("Time", F2), **_LIGHTS_AND_BATTERY},
+    constants={"status.vehicle_type": "AerialVehicle"},
+    nested={"status": RobotStatus},
+)
+_STA = Variants(
+    StatusMessage,
+    ((lambda m: m.status.vehicle_type == "AerialVehicle", _AERIAL), (None, _GROUND)),
+    # Type, Time and Battery are required; UDK lines may lack the others (defaults used)
+    lambda r: (_AERIAL if r.text("Type") == "AerialVehicle" else _GROUND).parse(r),
+)
 _MISSTA = message(MisPkgStatus, "MISSTA", read_first=("links",))
 _ASTA = message(ActuatorStatus, "ASTA", read_first=("links",))
 
 
-def _parse_sta(r: _Reader) -> GroundVehicleStatus | AerialVehicleStatus:
-    # Type, Time and Battery are required; UDK lines may lack the others (defaults used).
-    layout = _AERIAL if r.text("Type") == "AerialVehicle" else _GROUND
-    status: GroundVehicleStatus | AerialVehicleStatus = layout.parse(r)
-    return status
-
-
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    GroundVehicleStatus: _GROUND.format,
-    AerialVehicleStatus: _AERIAL.format,
+    StatusMessage: _STA.format,
     MisPkgStatus: _MISSTA.format,
     ActuatorStatus: _ASTA.format,
 }
 
-PARSERS: dict[str, Callable[[_Reader], StatusMessage]] = {
-    "STA": _parse_sta,
+PARSERS: dict[str, Callable[[_Reader], StatusMessages]] = {
+    "STA": _STA.parse,
     "MISSTA": _MISSTA.parse,
     "ASTA": _ASTA.parse,
 }
