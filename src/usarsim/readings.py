@@ -280,11 +280,21 @@ class RobotStatus:
 
 
 @dataclass(frozen=True, slots=True)
+class PackageLink:
+    """One link of a mission package at one instant: its number (from 1), its joint's position
+    (rad, or m for a prismatic joint) and the torque it applies."""
+
+    link: int
+    value: float
+    torque: float
+
+
+@dataclass(frozen=True, slots=True)
 class PackageState:
-    """MISSTA: a mission package's links, (link number, position, torque) each."""
+    """MISSTA: a mission package's links at one instant."""
 
     name: str
-    links: tuple[tuple[int, float, float], ...]
+    links: tuple[PackageLink, ...]
 
 
 @dataclass(frozen=True, slots=True)

@@ -420,12 +420,14 @@ GOLDEN = [
     ),
     # §6.4
     (
-        m.MisPkgStatus(
-            time=102.09,
-            name="CameraPanTilt",
-            links=(
-                m.LinkState(link=1, value=0.0, torque=-20.0),
-                m.LinkState(link=2, value=-0.16, torque=-20.0),
+        m.MisPkgMessage(
+            102.09,
+            r.PackageState(
+                "CameraPanTilt",
+                (
+                    r.PackageLink(link=1, value=0.0, torque=-20.0),
+                    r.PackageLink(link=2, value=-0.16, torque=-20.0),
+                ),
             ),
         ),
         "MISSTA {Time 102.09} {Name CameraPanTilt} {Link 1} {Value 0.0000} {Torque -20.0000} "
@@ -502,7 +504,7 @@ GOLDEN = [
     # UDK actuator API (§5.8, §6.4, §6.7, §6.8)
     (
         m.ActuatorStatus(
-            time=1.5, name="arm", links=(m.LinkState(1, 0.5, -2.0), m.LinkState(2, -0.25, 0.0)), gripper=1
+            time=1.5, name="arm", links=(r.PackageLink(1, 0.5, -2.0), r.PackageLink(2, -0.25, 0.0)), gripper=1
         ),
         "ASTA {Time 1.5000} {Name arm} {Link 1} {Value 0.5000} {Torque -2.0000} {Link 2} {Value -0.2500} "
         "{Torque 0.0000} {Gripper 1}",
@@ -842,9 +844,9 @@ MESSAGE_STRATEGIES = {
             1, 3,
         ),
     ),
-    m.MisPkgStatus: st.builds(
-        m.MisPkgStatus, time=_time2, name=_names,
-        links=_tuples(st.builds(m.LinkState, link=st.integers(1, 20), value=_f4, torque=_f4)),
+    m.MisPkgMessage: st.builds(
+        m.MisPkgMessage, time=_time2, state=st.builds(r.PackageState, name=_names,
+        links=_tuples(st.builds(r.PackageLink, link=st.integers(1, 20), value=_f4, torque=_f4))),
     ),
     m.ActuatorConfiguration: st.builds(
         m.ActuatorConfiguration,
@@ -876,7 +878,7 @@ MESSAGE_STRATEGIES = {
     ),
     m.ActuatorStatus: st.builds(
         m.ActuatorStatus, time=_time4, name=_names,
-        links=_tuples(st.builds(m.LinkState, link=st.integers(1, 20), value=_f4, torque=_f4)),
+        links=_tuples(st.builds(r.PackageLink, link=st.integers(1, 20), value=_f4, torque=_f4)),
         gripper=st.none() | st.integers(0, 1),
     ),
     m.Result: st.builds(

@@ -12,6 +12,7 @@ from usarsim.protocol.outputs import message_for
 from usarsim.readings import (
     CommandResult,
     EffecterState,
+    PackageLink,
     PackageState,
     RangeItem,
     RangeReading,
@@ -155,6 +156,7 @@ def test_other_outputs_keep_their_messages():
     ground, aerial = RobotStatus("GroundVehicle", battery_s=100), RobotStatus("AerialVehicle", battery_s=100)
     assert message_for(ground, 1.0) == M.StatusMessage(1.0, ground)  # the status is the message's payload
     assert message_for(aerial, 1.0) == M.StatusMessage(1.0, aerial)
-    assert isinstance(message_for(PackageState("CameraPanTilt", ((1, 0.1, 0.0),)), 1.0), M.MisPkgStatus)
+    pkg = PackageState("CameraPanTilt", (PackageLink(1, 0.1, 0.0),))
+    assert message_for(pkg, 1.0) == M.MisPkgMessage(1.0, pkg)  # the package's state is the payload
     sen = message_for(RangeReading("Sonar", (RangeItem("F1", 1.5),)), None)
     assert M.format_message(sen) == "SEN {Type Sonar} {Name F1 Range 1.5000}\r\n"

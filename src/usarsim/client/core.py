@@ -23,6 +23,7 @@ from usarsim.protocol.framing import LineBuffer
 from usarsim.protocol.grammar import format_segment
 from usarsim.readings import (
     OdometryReading,
+    PackageState,
     PoseReading,
     RangeScanReading,
     RobotStatus,
@@ -120,7 +121,7 @@ class ConnectionState:
         self.readings: dict[str, Any] = {}
         self.reading_times: dict[str, float | None] = {}
         self.status: RobotStatus | None = None  # the latest STA's
-        self.packages: dict[str, M.MisPkgStatus] = {}  # the latest MISSTA of each mission package
+        self.packages: dict[str, PackageState] = {}  # the latest MISSTA of each mission package
         self.time: float | None = None
         self.messages: list[Any] = []
         self.replies: deque[Any] = deque()
@@ -152,8 +153,8 @@ class ConnectionState:
             self.reading_times[key] = msg.time
         elif isinstance(msg, M.StatusMessage):
             self.status = msg.status
-        elif isinstance(msg, M.MisPkgStatus):
-            self.packages[msg.name] = msg
+        elif isinstance(msg, M.MisPkgMessage):
+            self.packages[msg.state.name] = msg.state
         elif isinstance(msg, REPLIES):
             self.replies.append(msg)
 

@@ -47,9 +47,7 @@ def message_for(value: Any, time: float | None) -> M.Message:
             time=_stamped(time), effecter_type=v.effecter_type, name=v.name, status=effecter_status(v.closed)
         )
     if isinstance(v, PackageState):
-        return M.MisPkgStatus(
-            time=_stamped(time), name=v.name, links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links)
-        )
+        return M.MisPkgMessage(time=_stamped(time), state=v)
     if isinstance(v, ZoomResult):
         return M.CameraZoomResult(
             time=_stamped(time),

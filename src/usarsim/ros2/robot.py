@@ -289,9 +289,9 @@ class RobotBridge(SensorTopics):
                 self.joints[name] = float(value)
             if self.joints or self.wheels:
                 self.publish_joint_states(stamp)
-        elif isinstance(msg, M.MisPkgStatus):
-            for link in msg.links:
-                self.joints[f"{msg.name}_link{link.link}"] = float(link.value)
+        elif isinstance(msg, M.MisPkgMessage):
+            for link in msg.state.links:
+                self.joints[f"{msg.state.name}_link{link.link}"] = float(link.value)
             self.publish_joint_states(stamp)
 
     def publish_joint_states(self, stamp: float) -> None:

@@ -57,9 +57,7 @@ def actuator_status(o: Output) -> M.ActuatorStatus:
     v: PackageState = o.value
     t = o.time
     assert t is not None  # a package's state always has its time (its MISSTA was formatted first)
-    return M.ActuatorStatus(
-        time=t, name=v.name, links=tuple(M.LinkState(link=n, value=q, torque=f) for n, q, f in v.links)
-    )
+    return M.ActuatorStatus(time=t, name=v.name, links=v.links)
 
 
 class Connection(ServerConnection):

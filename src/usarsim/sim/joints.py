@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import mujoco
 
 from usarsim.config.robot import Link
-from usarsim.readings import PackageState
+from usarsim.readings import PackageLink, PackageState
 from usarsim.sim import robotspec
 
 if TYPE_CHECKING:
@@ -124,5 +124,8 @@ def package_state(d: mujoco.MjData, r: SimRobot, pkg) -> PackageState:
     h = r.handle
     return PackageState(
         pkg.name,
-        tuple((i + 1, position(d, r, n), float(d.actuator_force[h.actuator[n]])) for i, n in enumerate(pkg.links)),
+        tuple(
+            PackageLink(i + 1, position(d, r, n), float(d.actuator_force[h.actuator[n]]))
+            for i, n in enumerate(pkg.links)
+        ),
     )

@@ -89,7 +89,7 @@ from .results import (
     error_reply,
 )
 from .sensors import SensorMessage, format_reading
-from .status import ActuatorStatus, LinkState, MisPkgStatus, StatusMessage
+from .status import ActuatorStatus, MisPkgMessage, StatusMessage
 
 __all__ = [
     "ActuatorConfig",
@@ -114,11 +114,10 @@ __all__ = [
     "LINE_LIMIT",
     "LinkConfiguration",
     "LinkGeometry",
-    "LinkState",
     "Message",
     "MisPkgConfiguration",
     "MisPkgGeometry",
-    "MisPkgStatus",
+    "MisPkgMessage",
     "PackageConfiguration",
     "PackageGeometry",
     "PathNodes",
@@ -159,7 +158,7 @@ Message = (
     | EmptyConfiguration
     | MisPkgGeometry
     | MisPkgConfiguration
-    | MisPkgStatus
+    | MisPkgMessage
     | ActuatorConfiguration
     | ActuatorGeometry
     | ActuatorStatus

@@ -13,7 +13,7 @@ A field is one of:
   touch sensors).
 * :func:`group`: repeated groups, each opened by its first key (``{Link n} {Value v}
   {Torque t}``), declared as a small dataclass of keys, every one required of a group but
-  those the message gives a value when absent (``group(LinkState, torque=0.0)``); its last
+  those the message gives a value when absent (``group(PackageLink, LINK, torque=0.0)``); its last
   field may itself be a group (a mission package's links, after its name).
 
 * :func:`joined`: several fields of a reading in one segment, ``{Pose x,y,theta}``.
@@ -178,9 +178,11 @@ def pairs(kind: Kind) -> Any:
     return dataclasses.field(default=(), metadata={WIRE: Pairs(kind)})
 
 
-def group(cls: type, **defaults: Any) -> Any:
-    """A field of repeated groups, each a ``cls`` (a dataclass of :func:`key` fields whose first opens it)."""
-    return dataclasses.field(default=(), metadata={WIRE: Group(cls, tuple(defaults.items()))})
+def group(cls: type, keys: Mapping[str, Key] | None = None, **defaults: Any) -> Any:
+    """A field of repeated groups, each a ``cls`` (a dataclass of :func:`key` fields whose first
+    opens it, or, for a class that carries no protocol, of the fields ``keys`` names)."""
+    spec = Group(cls, tuple(defaults.items()), None if keys is None else tuple(keys.items()))
+    return dataclasses.field(default=(), metadata={WIRE: spec})
 
 
 def items(cls: type, **keys: Key) -> Group:

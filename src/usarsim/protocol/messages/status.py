@@ -8,10 +8,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from usarsim.readings import RobotStatus
+from usarsim.readings import PackageLink, PackageState, RobotStatus
 
 from .common import _Reader
-from .declare import BOOL, F2, F4, INT, TEXT, Key, Layout, Pairs, Variants, group, key, message
+from .declare import BOOL, F2, F4, INT, TEXT, Key, Layout, Pairs, Variants, group, items, key, message
 
 
 @dataclass(frozen=True, slots=True)
@@ -30,23 +30,17 @@ class StatusMessage:
     status: RobotStatus
 
 
-@dataclass(frozen=True, slots=True)
-class LinkState:
-    """One link of a ``MISSTA`` or ``ASTA`` line (§6.4): ``{Link n} {Value v} {Torque q}``, the joint's position
-    (rad, or m for a prismatic joint) and the torque it applies."""
-
-    link: int = key("Link", INT)
-    value: float = key("Value", F4)
-    torque: float = key("Torque", F4)
+# a link of a MISSTA or ASTA line (§6.4): {Link n} {Value v} {Torque q}
+LINK = {"link": Key("Link", INT), "value": Key("Value", F4), "torque": Key("Torque", F4)}
 
 
 @dataclass(frozen=True, slots=True)
-class MisPkgStatus:
-    """``MISSTA {Time t} {Name P} {Link 1} {Value v} {Torque q} ...`` (§6.4)."""
+class MisPkgMessage:
+    """``MISSTA {Time t} {Name P} {Link 1} {Value v} {Torque q} ...`` (§6.4): its time and the
+    mission package's state then (a :class:`usarsim.readings.PackageState`, the payload)."""
 
-    time: float = key("Time", F2)
-    name: str = key("Name", TEXT)
-    links: tuple[LinkState, ...] = group(LinkState)
+    time: float
+    state: PackageState
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,11 +50,11 @@ class ActuatorStatus:
 
     time: float = key("Time", F4)
     name: str = key("Name", TEXT)
-    links: tuple[LinkState, ...] = group(LinkState, torque=0.0)  # UDK lines may lack a link's Torque
+    links: tuple[PackageLink, ...] = group(PackageLink, LINK, torque=0.0)  # UDK lines may lack a link's Torque
     gripper: int | None = key("Gripper", INT, default=None, optional=True)
 
 
-StatusMessages = StatusMessage | MisPkgStatus | ActuatorStatus
+StatusMessages = StatusMessage | MisPkgMessage | ActuatorStatus
 
 # ---- formatting and parsing, from the declarations above
 
@@ -100,13 +94,19 @@ _STA = Variants(
     # Type, Time and Battery are required; UDK lines may lack the others (defaults used)
     lambda r: (_AERIAL if r.text("Type") == "AerialVehicle" else _GROUND).parse(r),
 )
-_MISSTA = message(MisPkgStatus, "MISSTA", read_first=("links",))
+_MISSTA = Layout(
+    MisPkgMessage,
+    "MISSTA",
+    read_first=("state.links",),
+    keys={"time": Key("Time", F2), "state.name": Key("Name", TEXT), "state.links": items(PackageLink, **LINK)},
+    nested={"state": PackageState},
+)
 _ASTA = message(ActuatorStatus, "ASTA", read_first=("links",))
 
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
     StatusMessage: _STA.format,
-    MisPkgStatus: _MISSTA.format,
+    MisPkgMessage: _MISSTA.format,
     ActuatorStatus: _ASTA.format,
 }
 
