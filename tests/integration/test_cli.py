@@ -673,6 +673,20 @@ def test_bench_env_prints_steps_per_second():
     assert result["env_steps_per_s"] > 0 and result["team"] == 2 and result["team_steps_per_s"] > 0
 
 
+def test_bench_env_profile_splits_a_steps_time_between_the_processes_and_the_physics():
+    out = usarsim("bench", "--env", "--profile", "--steps", "20", "--team", "2", "--json", timeout=300)
+    assert out.returncode == 0, out.stderr
+    import json
+
+    one, team = json.loads(out.stdout.strip().splitlines()[-1])
+    for p, robots in ((one, 1), (team, 2)):
+        assert p["robots"] == robots and p["steps_per_s"] > 0
+        assert p["env_cpu_ms"] > 0 and p["physics_ms"] > 0
+        assert p["sim_cpu_ms"] is not None and p["sim_cpu_ms"] >= 0  # read from /proc on Linux
+        # a step cannot take less wall time than the environment's own processor time in it
+        assert p["wall_ms"] >= p["env_cpu_ms"] * 0.9
+
+
 def test_talk_sends_typed_lines_and_prints_the_answers(serve):
     port = serve("--port", "0", "--lockstep").port()
     lines = "GETSTARTPOSES\nINIT {ClassName USARBot.P2AT} {Name R1} {Start PlayerStart1}\nSTEP {Time 0.2}\n"

@@ -228,6 +228,19 @@ def run_env_bench(args) -> int:
 
     from usarsim.envs import bench_env
 
+    if args.profile:
+        from usarsim.envs.profile import env_profile, print_profile
+
+        print(f"Where an env step's time goes ({args.world}, {args.steps} steps, random actions):")
+        profiles = [env_profile(args.steps, world=args.world)]
+        if args.team > 0:
+            profiles.append(env_profile(max(1, args.steps // 3), team=args.team, world=args.world))
+        if args.json:
+            print(json.dumps(profiles))
+        else:
+            for p in profiles:
+                print_profile(p)
+        return 0
     one = bench_env(args.steps, world=args.world)
     team = bench_env(max(1, args.steps // 3), team=args.team, world=args.world) if args.team > 0 else None
     result = {

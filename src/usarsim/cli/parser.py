@@ -110,7 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="profile the simulation thread, the measuring thread and the server's event loop during "
         "the run and print where the time goes (physics, split by MuJoCo's timers into collision, "
         "making and solving the constraints and the rest; each sensor type, ray casting, report "
-        "scheduling, building readings, formatting, socket writes, waiting for the interpreter lock)",
+        "scheduling, building readings, formatting, socket writes, waiting for the interpreter lock); "
+        "with --env: each env step's wall time, the environment's and the simulator's processor "
+        "time, and bare mj_step of the same robots for one control period",
     )
     b.add_argument(
         "--record",

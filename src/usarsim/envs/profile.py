@@ -1,0 +1,126 @@
+"""Where an environment step's time goes (``usarsim bench --env --profile``).
+
+An environment step sends its robots' commands, asks the lock-step simulator for one control
+period and reads every line the robots got.  Over the same timed steps as
+:func:`usarsim.envs.bench_env`, this measures the wall time of a step, the processor time
+the environment's own process spent in it (the client: formatting commands, parsing the
+readings, building the observation), the processor time of the simulator's process (its
+event loop, the session, the physics, the sensors, formatting the readings) and, beside
+them, what bare ``mj_step`` of the same robots at the same start poses takes for one control
+period: the physics a step cannot do without.  The simulator's processor time is read from
+``/proc`` (Linux); elsewhere it is left out.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+TICKS = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
+def process_cpu_s(pid: int) -> float | None:
+    """User and system processor seconds of process ``pid`` so far (None: not readable)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / TICKS  # utime, stime (proc(5), fields 14 and 15)
+
+
+def bare_step_ms(world: str, robot: str, starts: list[Any], period_s: float, seconds: float = 4.0) -> float:
+    """Milliseconds of bare ``mj_step`` (one thread) for one control period of ``robot`` at
+    each of ``starts`` (start pose names, or (location, rotation)) in ``world``."""
+    from usarsim.bench.rtf import raw_mujoco_rtf
+    from usarsim.config.catalog import resolve_robot, resolve_world
+    from usarsim.sim.simulation import Simulation
+
+    w = resolve_world(world)
+    cfg = resolve_robot(robot)
+    sim = Simulation(w, seed=0)
+    for uid, start in enumerate(starts, 1):
+        if isinstance(start, str):
+            pose = w.start_pose(start)
+            if pose is None:
+                raise ValueError(f"{world} has no start pose {start!r}")
+            sim.spawn(uid, cfg, f"r{uid}", pose.location, pose.rotation, set_down=True)
+        else:
+            location, rotation = start
+            sim.spawn(uid, cfg, f"r{uid}", tuple(location), tuple(rotation))
+    sim.advance(0.5)  # settled on the floor, as the environment's robots are after a reset
+    return period_s / raw_mujoco_rtf(sim.model, seconds) * 1000.0
+
+
+def env_profile(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any) -> dict[str, Any]:
+    """Per step of :class:`~usarsim.envs.ExploreEnv` (``team`` 0) or of a
+    :class:`~usarsim.envs.TeamExplore` of ``team`` robots, with random actions seeded with
+    ``seed``: steps a second, wall, environment and simulator processor milliseconds, and bare
+    physics milliseconds (see the module's text).  ``kwargs`` go to the environment."""
+    from .explore import ExploreEnv
+    from .team import TeamExplore
+
+    if steps < 1:
+        raise ValueError(f"steps must be at least 1, got {steps!r}")
+    period = float(kwargs.get("control_period_s", 0.1))
+    kwargs.setdefault("time_limit_s", period * (steps + 10))
+    kwargs.setdefault("prelaunch", False)
+    env: Any = TeamExplore(robots=team, **kwargs) if team else ExploreEnv(**kwargs)
+    wall = cpu = 0.0
+    try:
+        env.reset(seed=seed)
+        if team:
+            for i, a in enumerate(env.possible_agents):
+                env.action_space(a).seed(seed + i)
+        else:
+            env.action_space.seed(seed)
+        # the simulator's processor time over all the steps (it works only when a step asks,
+        # and /proc counts in ticks of 10 ms): None when a reset launched another one
+        server = env.sim.server
+        pid = server.proc.pid if server is not None else None
+        s0 = process_cpu_s(pid) if pid is not None else None
+        for _ in range(steps):
+            if team:
+                if not env.agents:
+                    env.reset()
+                action: Any = {a: env.action_space(a).sample() for a in env.agents}
+            else:
+                action = env.action_space.sample()
+            c0, t0 = time.process_time(), time.perf_counter()
+            out = env.step(action)
+            wall += time.perf_counter() - t0
+            cpu += time.process_time() - c0
+            if not team and (out[2] or out[3]):
+                env.reset()
+        same = env.sim.server is server
+        s1 = process_cpu_s(pid) if pid is not None and same else None
+        server_s = None if s0 is None or s1 is None else s1 - s0
+        starts = list(env.starts) if team else [env.start]
+        robot = env.spec_robot.class_name
+        world = env.world_config.name
+    finally:
+        env.close()
+    return {
+        "robots": max(1, team),
+        "control_period_s": period,
+        "steps_per_s": steps / wall,
+        "wall_ms": wall / steps * 1000.0,
+        "env_cpu_ms": cpu / steps * 1000.0,
+        "sim_cpu_ms": None if server_s is None else server_s / steps * 1000.0,
+        "physics_ms": bare_step_ms(world, robot, starts, period),
+    }
+
+
+def print_profile(p: dict[str, Any]) -> None:
+    """The profile as a few lines of text."""
+    limit = 1000.0 / p["physics_ms"]
+    sim = "-" if p["sim_cpu_ms"] is None else f"{p['sim_cpu_ms']:.2f} ms"
+    print(
+        f"  {p['robots']} robot(s), {p['control_period_s']:g} s a step: {p['steps_per_s']:.0f} steps/s "
+        f"({p['wall_ms']:.2f} ms each), {p['steps_per_s'] / limit:.0%} of the {limit:.0f} bare mj_step allows"
+    )
+    print(
+        f"    a step's processor time: environment process {p['env_cpu_ms']:.2f} ms, simulator process {sim}, "
+        f"of which bare physics {p['physics_ms']:.2f} ms"
+    )
