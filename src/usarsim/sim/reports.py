@@ -10,7 +10,8 @@ share of the period of its own, as USARSim's sensor timers were by the robots' s
 robot spawned reports at ``phase + n * period`` with ``phase`` = :func:`spread_share` (k) of the
 period, on a physics step.  The readings of many robots then come in small groups instead of
 one burst an instant (what a client that turns every line into something else, as the ROS 2
-bridge does, waits on), for a little more simulation CPU (the physics stops more often).
+bridge does, waits on), for more simulation CPU (the physics stops more often: about a third
+more with 16 P2ATs in real time).
 """
 
 from __future__ import annotations
