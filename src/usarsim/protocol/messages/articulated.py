@@ -11,7 +11,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from .common import Vec3, _Reader
-from .declare import F4, INT, TEXT, VEC4, VT4, group, key, message
+from .declare import group, key, message
+from .kinds import F4, INT, TEXT, VEC4, VT4
 
 # ---- mission packages
 

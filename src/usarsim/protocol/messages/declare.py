@@ -17,6 +17,7 @@ A field is one of:
   field may itself be a group (a mission package's links, after its name).
 
 * :func:`joined`: several fields of a reading in one segment, ``{Pose x,y,theta}``.
+* ``FIELD`` pairs: an item's free-form fields (CONF, EFF, RES), printed as USARSim did.
 * :func:`items`: a reading's repeated groups, its item class's keys named beside it.
 
 A reading sent in several layouts is :class:`Variants` (the first layout whose test holds).
@@ -30,82 +31,15 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from ..grammar import RawMessage, Segment
-from ..numbers import bool_str, f2, f4, ints, t4, vec2, vec3d, vec4, vec_angle4, vec_t4
 from .common import _CRLF, _groups, _Reader
+from .kinds import Kind, _number
 
 WIRE = "usarsim.wire"  # the metadata key of a declared field
-
-
-@dataclass(frozen=True, slots=True)
-class Kind:
-    """A kind of value: ``spec``, its place in a ``%`` format (``%d``, ``%s``), ``fmt`` what
-    turns the value into that (None: the value itself), and ``read`` how a segment is read
-    back."""
-
-    spec: str
-    fmt: Callable[[Any], Any] | None  # to a str for %s, an int for %d
-    read: Callable[[_Reader, Segment, str], Any]  # (reader, segment, the key as declared)
-    empty: str | None = None  # what follows the key, for an empty value, instead of " value"
-
-
-def _text(r: _Reader, seg: Segment, wire: str) -> str:
-    return seg.value
-
-
-def _number(r: _Reader, seg: Segment, wire: str) -> float:
-    return r.number(seg)
-
-
-def _integer(r: _Reader, seg: Segment, wire: str) -> int:
-    return r.integer(seg)
-
-
-def _bool(r: _Reader, seg: Segment, wire: str) -> bool:
-    return r.bool(seg)
-
-
-def _vec3(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
-    return r.vector(wire, seg.value)
-
-
-def _values(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
-    return r.vector(wire, seg.value, None)
-
-
-TEXT = Kind("%s", None, _text)
-F2 = Kind("%s", f2, _number)
-F4 = Kind("%s", f4, _number)
-INT = Kind("%d", None, _integer)
-BOOL = Kind("%s", bool_str, _bool)
-VEC2 = Kind("%s", vec2, _vec3)  # x,y,z with 2 decimals
-VEC4 = Kind("%s", vec4, _vec3)  # x,y,z with 4 decimals
-VT4 = Kind("%s", vec_t4, _vec3)  # x,y,z truncated to 4 decimals
-T4 = Kind("%s", t4, _number)  # truncated to 4 decimals
-ANGLES4 = Kind("%s", vec_angle4, _vec3)  # roll,pitch,yaw in [0, 2 pi), 4 decimals
-VALUES4 = Kind("%s", vec4, _values)  # any number of values, 4 decimals
-RANGES4 = Kind("%s", vec4, _values, empty="")  # a sweep's ranges; none: a bare {Range}
-RANGES3 = Kind("%s", vec3d, _values, empty="")  # a depth picture's ranges, in millimetres
-
-
-def _ints(r: _Reader, seg: Segment, wire: str) -> tuple[int, ...]:
-    values = r.vector(wire, seg.value, None)
-    if not all(math.isfinite(v) and v == int(v) for v in values):
-        raise r.error(wire, seg.value, "whole numbers such as 320,240")
-    return tuple(int(v) for v in values)
-
-
-def _pair(r: _Reader, seg: Segment, wire: str) -> tuple[float, ...]:
-    return r.vector(wire, seg.value, 2)
-
-
-PAIR_T4 = Kind("%s", vec_t4, _pair)  # two values truncated to 4 decimals (a picture's FOV)
-INTS = Kind("%s", ints, _ints)  # whole numbers, comma-joined (a picture's columns and rows)
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,6 +69,7 @@ class Packed:
     cls: type
     wire: str
     kind: Kind
+    more: tuple[tuple[str, Kind], ...] = ()  # further fields in the segment (an item's GEO: Orientation, Mount)
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,7 +80,7 @@ class Group:
 
     cls: type
     defaults: tuple[tuple[str, Any], ...] = ()
-    keys: tuple[tuple[str, Key], ...] | None = None
+    keys: tuple[tuple[str, Key | Pairs], ...] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,7 +120,7 @@ def group(cls: type, keys: Mapping[str, Key] | None = None, **defaults: Any) -> 
     return dataclasses.field(default=(), metadata={WIRE: spec})
 
 
-def items(cls: type, **keys: Key) -> Group:
+def items(cls: type, **keys: Key | Pairs) -> Group:
     """A reading's field of repeated groups, each a ``cls`` of :mod:`usarsim.readings` (which
     carries no protocol): ``keys`` name its fields and their keys, the first opening a group."""
     return Group(cls, (), tuple(keys.items()))
@@ -333,16 +268,15 @@ class Layout:
                     f"        s += ' {{{spec.wire} {spec.kind.spec}}}' % {value_of(name, spec.kind, f'm.{name}')}",
                 ]
             elif isinstance(spec, Pairs):
-                lines += [
-                    f"    for n, v in m.{name}:",
-                    f"        s += ' {{%s {spec.kind.spec}}}' % (n, {value_of(name, spec.kind, 'v')})",
-                ]
+                Layout._emit_pairs(lines, value_of, spec, f"m.{name}", name, "    ")
             elif isinstance(spec, Packed):
-                item_name, item_value = (f.name for f in dataclasses.fields(spec.cls)[:2])
-                value = value_of(name, spec.kind, f"i.{item_value}")
+                item_fields = [f.name for f in dataclasses.fields(spec.cls)[: 2 + len(spec.more)]]
+                wires = ((spec.wire, spec.kind), *spec.more)
+                text = "".join(f" {w} {k.spec}" for w, k in wires)
+                vals = ", ".join(value_of(f"{name}_{f}", k, f"i.{f}") for f, (_, k) in zip(item_fields[1:], wires))
                 lines += [
                     f"    for i in m.{name}:",
-                    f"        s += ' {{Name %s {spec.wire} {spec.kind.spec}}}' % (i.{item_name}, {value})",
+                    f"        s += ' {{Name %s{text}}}' % (i.{item_fields[0]}, {vals})",
                 ]
             else:  # a group
                 self._emit_group(lines, value_of, spec, f"m.{name}", name, 1)
@@ -351,6 +285,21 @@ class Layout:
         exec("\n".join(lines), env)  # noqa: S102  (the text above, from the declarations only)
         fn: Callable[[Any], str] = env["format"]
         return fn
+
+    @staticmethod
+    def _emit_pairs(
+        lines: list[str], value_of: Callable[[str, Kind, str], str], spec: Pairs, pairs: str, name: str, pad: str
+    ) -> None:
+        """The lines that write ``{name value}`` for every pair (``{name}`` for an empty value
+        of a kind that has an empty form)."""
+        lines.append(f"{pad}for n, v in {pairs}:")
+        if spec.kind.empty is None:
+            lines.append(f"{pad}    s += ' {{%s {spec.kind.spec}}}' % (n, {value_of(name, spec.kind, 'v')})")
+        else:
+            lines += [
+                f"{pad}    x = {value_of(name, spec.kind, 'v')}",
+                f"{pad}    s += ' {{%s {spec.kind.spec}}}' % (n, x) if x else ' {{%s{spec.kind.empty}}}' % n",
+            ]
 
     @staticmethod
     def _emit_group(
@@ -385,6 +334,9 @@ class Layout:
             elif isinstance(sk, Key):
                 run.append(" {%s %s}" % (sk.wire, sk.kind.spec))
                 args.append(value_of(f"{name}_{sub}", sk.kind, f"{var}.{sub}"))
+            elif isinstance(sk, Pairs):
+                flush()
+                Layout._emit_pairs(lines, value_of, sk, f"{var}.{sub}", f"{name}_{sub}", pad + "    ")
             else:
                 flush()
                 Layout._emit_group(lines, value_of, sk, f"{var}.{sub}", f"{name}_{sub}", depth + 1)
@@ -449,9 +401,10 @@ def message(
     return Layout(cls, word, fixed, read_first, wire_first)
 
 
-def packed(cls: type, wire: str, kind: Kind) -> Packed:
-    """Items of ``cls`` each in one ``{Name n wire value}`` segment."""
-    return Packed(cls, wire, kind)
+def packed(cls: type, wire: str, kind: Kind, *more: tuple[str, Kind]) -> Packed:
+    """Items of ``cls`` each in one ``{Name n wire value}`` segment (``more``: further
+    ``(wire, kind)`` fields in it, ``{Name n Location l Orientation o Mount m}``)."""
+    return Packed(cls, wire, kind, more)
 
 
 def reading(

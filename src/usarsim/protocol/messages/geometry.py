@@ -13,7 +13,6 @@ from typing import Any
 from usarsim.readings import FieldValue
 
 from ..grammar import RawMessage
-from ..numbers import vec4
 from .articulated import (
     CONF_PARSERS,
     GEO_PARSERS,
@@ -22,8 +21,9 @@ from .articulated import (
     MisPkgConfiguration,
     MisPkgGeometry,
 )
-from .common import _CRLF, Vec3, _fields, _groups, _Reader
-from .declare import F4, TEXT, VEC4, key, message
+from .common import Vec3, _groups, _Reader
+from .declare import Key, Layout, Pairs, items, key, message, packed
+from .kinds import F4, FIELD, TEXT, VEC4
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -117,8 +117,7 @@ ConfigurationMessage = (
     RobotConfiguration | ItemConfiguration | EmptyConfiguration | MisPkgConfiguration | ActuatorConfiguration
 )
 
-# ---- formatting: the robot's lines and the empty replies from their declarations above; the
-# items' lines (several items, each its own keys) by hand
+# ---- formatting, from the declarations
 
 _ROBOT_GEO = message(RobotGeometry, "GEO")
 _ROBOT_CONF = message(RobotConfiguration, "CONF")
@@ -126,20 +125,21 @@ _EMPTY_GEO = message(EmptyGeometry, "GEO")
 _EMPTY_CONF = message(EmptyConfiguration, "CONF")
 
 
-def _fmt_item_geometry(m: ItemGeometry) -> str:
-    items = "".join(
-        " {Name %s Location %s Orientation %s Mount %s}" % (i.name, vec4(i.location), vec4(i.orientation), i.mount)
-        for i in m.items
-    )
-    return "GEO {Type %s}%s\r\n" % (m.item_type, items)
-
-
-def _fmt_item_configuration(m: ItemConfiguration) -> str:
-    parts = ["CONF {Type %s}" % m.item_type]
-    for item in m.items:
-        parts.append("{Name %s}" % item.name)
-        parts.extend(_fields(item.fields))
-    return " ".join(parts) + _CRLF
+# the items' lines: several items of a type, each its pose in one packed segment, or its own
+# CONF keys after its Name; read by the rules below (UT's packed and UDK's separate layouts)
+_ITEM_GEO = Layout(
+    ItemGeometry,
+    "GEO",
+    keys={
+        "item_type": Key("Type", TEXT),
+        "items": packed(ItemPose, "Location", VEC4, ("Orientation", VEC4), ("Mount", TEXT)),
+    },
+)
+_ITEM_CONF = Layout(
+    ItemConfiguration,
+    "CONF",
+    keys={"item_type": Key("Type", TEXT), "items": items(ItemConf, name=Key("Name", TEXT), fields=Pairs(FIELD))},
+)
 
 
 # ---- parsing
@@ -209,9 +209,9 @@ def _parse_conf(r: _Reader) -> ConfigurationMessage:
 FORMATTERS: dict[type, Callable[[Any], str]] = {
     RobotGeometry: _ROBOT_GEO.format,
     RobotConfiguration: _ROBOT_CONF.format,
-    ItemGeometry: _fmt_item_geometry,
+    ItemGeometry: _ITEM_GEO.format,
     EmptyGeometry: _EMPTY_GEO.format,
-    ItemConfiguration: _fmt_item_configuration,
+    ItemConfiguration: _ITEM_CONF.format,
     EmptyConfiguration: _EMPTY_CONF.format,
 }
 

@@ -10,7 +10,8 @@ from typing import Any
 from ..grammar import Segment
 from ..numbers import vec2
 from .common import Vec3, _Reader
-from .declare import INT, TEXT, VEC2, key, message
+from .declare import key, message
+from .kinds import INT, TEXT, VEC2
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

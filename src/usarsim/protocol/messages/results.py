@@ -13,9 +13,10 @@ from typing import Any
 from usarsim.readings import FieldValue
 
 from ..grammar import Segment, format_segment
-from ..numbers import f2, f4
-from .common import _CRLF, _fields, _Reader, format_value
-from .declare import F2, F4, TEXT, group, key, message
+from ..numbers import f2
+from .common import _CRLF, _Reader
+from .declare import group, key, message, pairs
+from .kinds import F2, F4, FIELD, FIELD_SPACED, TEXT
 
 
 @dataclass(frozen=True, slots=True)
@@ -27,11 +28,13 @@ class Result:
     segment out.
     """
 
-    time: float
-    item_type: str
-    name: str | None
-    status: str = "OK"
-    extra: tuple[tuple[str, FieldValue], ...] = ()
+    time: float = key("Time", F2)
+    item_type: str = key("Type", TEXT)
+    name: str | None = key("Name", TEXT, optional=True)
+    status: str = key("Status", TEXT, default="OK")
+    # {key value} even when the value is empty: a blank tag reads {Mem } (protocol.md 5.4,
+    # "{Mem <data>}" with no data), which a client looking for "{Mem " still finds
+    extra: tuple[tuple[str, FieldValue], ...] = pairs(FIELD_SPACED)
 
 
 @dataclass(frozen=True, slots=True)
@@ -84,11 +87,11 @@ class EffecterStatus:
     segment (``{On}``).
     """
 
-    time: float | None
-    effecter_type: str
-    name: str
-    status: str | None = None
-    extra: tuple[tuple[str, FieldValue], ...] = ()
+    time: float | None = key("Time", F4, optional=True)
+    effecter_type: str = key("Type", TEXT)
+    name: str = key("Name", TEXT)
+    status: str | None = key("Status", TEXT, default=None, optional=True)
+    extra: tuple[tuple[str, FieldValue], ...] = pairs(FIELD)
 
 
 @dataclass(frozen=True, slots=True)
@@ -155,17 +158,10 @@ _DIE = message(Die, "DIE")
 _STEPPED = message(Stepped, "STEPPED")
 _PONG = message(Pong, "PONG")
 _ERROR = message(ErrorReply, "ERROR")
-
-
-def _fmt_result(m: Result) -> str:
-    parts = ["RES {Time %s} {Type %s}" % (f2(m.time), m.item_type)]
-    if m.name is not None:
-        parts.append("{Name %s}" % m.name)
-    parts.append("{Status %s}" % m.status)
-    # {key value} even when the value is empty: a blank tag reads {Mem } (protocol.md 5.4,
-    # "{Mem <data>}" with no data), which a client looking for "{Mem " still finds
-    parts.extend(["{%s %s}" % (k, format_value(v)) for k, v in m.extra])
-    return " ".join(parts) + _CRLF
+# formats from the declarations; read by the rules below (an item's own segments after the
+# first Status of a RES, or after the first of each head key of an EFF)
+_RESULT = message(Result, "RES")
+_EFFECTER = message(EffecterStatus, "EFF")
 
 
 def _fmt_viewports(m: ViewportsResult) -> str:
@@ -176,17 +172,6 @@ def _fmt_viewports(m: ViewportsResult) -> str:
         m.config_status,
         views,
     )
-
-
-def _fmt_effecter(m: EffecterStatus) -> str:
-    parts = ["EFF"]
-    if m.time is not None:
-        parts.append("{Time %s}" % f4(m.time))
-    parts.append("{Type %s} {Name %s}" % (m.effecter_type, m.name))
-    if m.status is not None:
-        parts.append("{Status %s}" % m.status)
-    parts.extend(_fields(m.extra))
-    return " ".join(parts) + _CRLF
 
 
 def _fmt_unknown(m: UnknownMessage) -> str:
@@ -260,10 +245,10 @@ def _parse_eff(r: _Reader) -> EffecterStatus:
 
 
 FORMATTERS: dict[type, Callable[[Any], str]] = {
-    Result: _fmt_result,
+    Result: _RESULT.format,
     CameraZoomResult: _ZOOM.format,
     ViewportsResult: _fmt_viewports,
-    EffecterStatus: _fmt_effecter,
+    EffecterStatus: _EFFECTER.format,
     Die: _DIE.format,
     Stepped: _STEPPED.format,
     Pong: _PONG.format,

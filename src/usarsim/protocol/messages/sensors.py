@@ -38,27 +38,8 @@ from usarsim.readings import (
 from ..grammar import Segment, parse_float, parse_int
 from ..numbers import f4
 from .common import _CRLF, _Reader
-from .declare import (
-    ANGLES4,
-    BOOL,
-    F4,
-    INT,
-    INTS,
-    PAIR_T4,
-    RANGES3,
-    RANGES4,
-    T4,
-    TEXT,
-    VALUES4,
-    VEC4,
-    Key,
-    Kind,
-    Variants,
-    items,
-    joined,
-    packed,
-    reading,
-)
+from .declare import Key, Variants, items, joined, packed, reading
+from .kinds import ANGLES4, BOOL, F4, INT, INTS, PAIR_T4, RANGES3, RANGES4, T4, TEXT, VALUES4, VEC4, Kind
 from .results import UnknownMessage
 
 

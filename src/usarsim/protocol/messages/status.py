@@ -11,7 +11,8 @@ from typing import Any
 from usarsim.readings import PackageLink, PackageState, RobotStatus
 
 from .common import _Reader
-from .declare import BOOL, F2, F4, INT, TEXT, Key, Layout, Pairs, Variants, group, items, key, message
+from .declare import Key, Layout, Pairs, Variants, group, items, key, message
+from .kinds import BOOL, F2, F4, INT, TEXT
 
 
 @dataclass(frozen=True, slots=True)
