@@ -227,18 +227,24 @@ def test_two_lockstep_runs_with_the_same_seed_deliver_the_same_messages_at_the_s
     assert run_bursty(tmp_path, sockets, seed=9) != first
 
 
-def test_a_wss_relay_carries_its_bytes_through_the_capped_channel_both_ways(tmp_path, sockets):
+def relayed_pair(srv, sockets) -> tuple[socket.socket, socket.socket]:
+    """Robot A0's end and robot B0's end of a WSS relay from A0 to B0 (both closed with the test)."""
     from test_wireless import wss_dns
 
     from helpers import DEFAULT_TIMEOUT
 
+    la, lb = sockets(listener(), listener())
+    ca, cb, relay = wss_dns(srv, "A0", "B0", la, lb)
+    a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
+    b, _ = lb.accept()
+    sockets(a, b, ca.sock, cb.sock)
+    return a, b
+
+
+def test_a_wss_relay_carries_its_bytes_through_the_capped_channel_both_ways(tmp_path, sockets):
     srv = channel_server(tmp_path, "{link_bytes_per_s: 50000, queue_bytes: 1000000}")
     try:
-        la, lb = sockets(listener(), listener())
-        ca, cb, relay = wss_dns(srv, "A0", "B0", la, lb)
-        a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
-        b, _ = lb.accept()
-        sockets(a, b, ca.sock, cb.sock)
+        a, b = relayed_pair(srv, sockets)
         up, down = bytes(range(256)) * 400, bytes(range(255, -1, -1)) * 200  # 100 kB and 50 kB
         a.sendall(up)
         b.sendall(down)
@@ -266,17 +272,9 @@ def run_wss_bursty(tmp_path, sockets, seed: int) -> list[tuple[int, list[int]]]:
     """(STEP number, messages that arrived by it) over 2 s of 0.05 s STEPs through a WSS relay,
     5 messages of 100 bytes written before each STEP, each read by the relay alone (one
     message: the next is written once it is in the channel's hands)."""
-    from test_wireless import wss_dns
-
-    from helpers import DEFAULT_TIMEOUT
-
     srv = channel_server(tmp_path, BURSTY, seed=seed)
     try:
-        la, lb = sockets(listener(), listener())
-        ca, cb, relay = wss_dns(srv, "A0", "B0", la, lb)
-        a = socket.create_connection(("127.0.0.1", relay), timeout=DEFAULT_TIMEOUT)
-        b, _ = lb.accept()
-        sockets(a, b, ca.sock, cb.sock)
+        a, b = relayed_pair(srv, sockets)
         b.setblocking(False)
         ctl = srv.connect()
         out, got, sent = [], b"", 0

@@ -92,6 +92,13 @@ class Joined:
     fields: tuple[str, ...]
 
 
+def key_spec(wire: str, kind: Kind, *, optional: bool = False, absent: Any = dataclasses.MISSING) -> Key:
+    """A :class:`Key` (``optional`` and ``absent`` as :func:`key`'s), for a layout's ``keys``
+    where the class carries no protocol of its own (a reading, a message's payload)."""
+    has_absent = optional or absent is not dataclasses.MISSING
+    return Key(wire, kind, optional, None if absent is dataclasses.MISSING else absent, has_absent)
+
+
 def key(
     wire: str,
     kind: Kind,
@@ -103,9 +110,7 @@ def key(
     """A field sent as ``{wire value}``; ``optional``: left out of the line when None (and
     None when a line lacks it); ``absent``: the value of a line that lacks it (a key without
     either is required of a line, whatever the dataclass's ``default``)."""
-    has_absent = optional or absent is not dataclasses.MISSING
-    value = None if absent is dataclasses.MISSING else absent
-    return dataclasses.field(default=default, metadata={WIRE: Key(wire, kind, optional, value, has_absent)})
+    return dataclasses.field(default=default, metadata={WIRE: key_spec(wire, kind, optional=optional, absent=absent)})
 
 
 def pairs(kind: Kind) -> Any:

@@ -38,7 +38,7 @@ from usarsim.readings import (
 from ..grammar import Segment, parse_float, parse_int
 from ..numbers import f4
 from .common import _CRLF, _Reader
-from .declare import Key, Variants, items, joined, packed, reading
+from .declare import Key, Variants, items, joined, key_spec, packed, reading
 from .kinds import ANGLES4, BOOL, F4, INT, INTS, PAIR_T4, RANGES3, RANGES4, T4, TEXT, VALUES4, VEC4, Kind
 from .results import UnknownMessage
 
@@ -175,8 +175,8 @@ COORDINATE = Kind("%s", lambda c: "%d,%s,%s" % (c[0], f4(c[1]), c[2]), _gps_coor
 FIX = Kind("%d", int, lambda r, seg, wire: r.integer(seg) != 0)  # {Fix 1}, {Fix 0}
 _GPS_KEYS: dict[str, Any] = {
     "name": Key("Name", TEXT),
-    "latitude": Key("Latitude", COORDINATE, optional=True, has_absent=True),
-    "longitude": Key("Longitude", COORDINATE, optional=True, has_absent=True),
+    "latitude": key_spec("Latitude", COORDINATE, optional=True),
+    "longitude": key_spec("Longitude", COORDINATE, optional=True),
     "fix": Key("Fix", FIX),
     "satellites": Key("Satellites", INT),
 }
@@ -293,7 +293,7 @@ _RFID_LAYOUT = reading(
     fixed=(("Type", "RFID"),),
     name=Key("Name", TEXT),
     tags=items(
-        RfidTag, tag_id=Key("ID", INT), location=Key("Location", VEC4), memory=Key("Mem", MEMORY, optional=True)
+        RfidTag, tag_id=Key("ID", INT), location=Key("Location", VEC4), memory=key_spec("Mem", MEMORY, optional=True)
     ),
 )
 _RFID = Variants(RfidReading, ((None, _RFID_LAYOUT),), _rfid_tags)

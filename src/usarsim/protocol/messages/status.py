@@ -11,7 +11,7 @@ from typing import Any
 from usarsim.readings import PackageLink, PackageState, RobotStatus
 
 from .common import _Reader
-from .declare import Key, Layout, Pairs, Variants, group, items, key, message
+from .declare import Key, Layout, Pairs, Variants, group, items, key, key_spec, message
 from .kinds import BOOL, F2, F4, INT, TEXT
 
 
@@ -60,10 +60,10 @@ StatusMessages = StatusMessage | MisPkgMessage | ActuatorStatus
 # ---- formatting and parsing, from the declarations above
 
 _LIGHTS_AND_BATTERY = {
-    "status.light_toggle": Key("LightToggle", BOOL, absent=False, has_absent=True),
-    "status.light_intensity": Key("LightIntensity", INT, absent=0, has_absent=True),
+    "status.light_toggle": key_spec("LightToggle", BOOL, absent=False),
+    "status.light_intensity": key_spec("LightIntensity", INT, absent=0),
     "status.battery_s": Key("Battery", INT),
-    "status.view": Key("View", INT, absent=-1, has_absent=True),
+    "status.view": key_spec("View", INT, absent=-1),
 }
 _GROUND = Layout(
     StatusMessage,
@@ -73,8 +73,8 @@ _GROUND = Layout(
     keys={
         "status.vehicle_type": Key("Type", TEXT),
         "time": Key("Time", F2),
-        "status.front_steer": Key("FrontSteer", F4, absent=0.0, has_absent=True),
-        "status.rear_steer": Key("RearSteer", F4, absent=0.0, has_absent=True),
+        "status.front_steer": key_spec("FrontSteer", F4, absent=0.0),
+        "status.rear_steer": key_spec("RearSteer", F4, absent=0.0),
         "status.joints": Pairs(F4),
         **_LIGHTS_AND_BATTERY,
     },
