@@ -76,6 +76,19 @@ def settled(value):
     return future
 
 
+def same(a, b) -> bool:
+    """Observations, rewards or infos equal to the last bit."""
+    import numpy as np
+
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+    if isinstance(a, (tuple, list)):
+        return isinstance(b, type(a)) and len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    if isinstance(a, np.ndarray):
+        return isinstance(b, np.ndarray) and a.dtype == b.dtype and np.array_equal(a, b)
+    return type(a) is type(b) and a == b
+
+
 def segments(text: str) -> dict[str, str]:
     """``{Key Value}`` segments of a line as a dict (first occurrence of a key wins)."""
     out: dict[str, str] = {}

@@ -16,6 +16,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test
 
+from helpers import same
 from usarsim.client import launch
 from usarsim.config.catalog import ROBOTS_DIR
 from usarsim.envs import ExploreEnv, TeamExplore, parallel_env
@@ -25,17 +26,6 @@ FORWARD = np.array([0.8, 0.8], dtype=np.float32)
 STOP = np.zeros(2, dtype=np.float32)
 UPSIDE_DOWN_AT_START7 = ((-9.5, -8.0, -0.4), (math.pi, 0.0, 0.0))
 NE_CORNER = ((4.8, 6.4, -0.25), (0.0, 0.0, 0.0))  # inside the arena, walls between it and the entrance
-
-
-def same(a, b) -> bool:
-    """Observations, rewards or infos equal to the last bit."""
-    if isinstance(a, dict):
-        return isinstance(b, dict) and a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
-    if isinstance(a, (tuple, list)):
-        return isinstance(b, type(a)) and len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
-    if isinstance(a, np.ndarray):
-        return isinstance(b, np.ndarray) and a.dtype == b.dtype and np.array_equal(a, b)
-    return type(a) is type(b) and a == b
 
 
 @pytest.mark.parametrize("env_id", ["usarsim/Explore-v0", "usarsim/ExploreDiscrete-v0"])

@@ -35,6 +35,9 @@ class _Connection:
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.state = ConnectionState()
         self.sent = False  # a command went out since the last PING
+        # every command is carried out before send() returns (an in-process simulator's
+        # connection): no PING is needed to know it has arrived
+        self.synchronous = False
 
     def send(self, line: str) -> None:
         if self.state.closed:
@@ -125,7 +128,7 @@ class World:
         self.image_port = image_port if image_port is not None else port + 2003  # 3000 -> 5003
         self.comserver_port = comserver_port if comserver_port is not None else port + 2874  # 3000 -> 5874
         self.truth_port = truth_port if truth_port is not None else port + 989  # 3000 -> 3989
-        self._conn = _Connection(host, port, timeout, "world")
+        self._conn = self._open("world", timeout)
         try:
             info = self._conn.wait_for(lambda m: isinstance(m, M.GameInfo), "NFO greeting", None)
         except BaseException:
@@ -135,6 +138,10 @@ class World:
         self._robots: dict[str, Robot] = {}
         self._start_poses: list[M.StartPose] | None = None
         self.time = 0.0
+
+    def _open(self, what: str, timeout: float) -> _Connection:
+        """A new connection to the simulator (``what``: who it is for, as errors name it)."""
+        return _Connection(self.host, self.port, timeout, what)
 
     def __enter__(self) -> World:
         return self
@@ -170,7 +177,7 @@ class World:
         name = name or f"Robot{len(self._robots) + 1}"
         if name in self._robots:
             raise ClientError(f"this client has a robot named {name!r} already")
-        conn = _Connection(self.host, self.port, self.timeout if timeout is None else timeout, f"robot {name}")
+        conn = self._open(f"robot {name}", self.timeout if timeout is None else timeout)
         try:
             conn.wait_for(lambda m: isinstance(m, M.GameInfo), "NFO greeting", None)
             conn.send(init_line(class_name, name, start, location, rotation))
@@ -208,7 +215,7 @@ class World:
         pending = []
         for robot in list(self._robots.values()):
             conn = robot._conn
-            if only_sent and not conn.sent:
+            if conn.synchronous or (only_sent and not conn.sent):
                 continue
             pid = conn.state.next_ping()
             conn.send(f"PING {{Id {pid}}}\r\n")
@@ -246,6 +253,9 @@ class World:
     def truth(self, class_name: str | None = None, name: str | None = None) -> list[TruthObject]:
         """Where things are now, from the ground-truth service: robots, victims, RFID tags,
         false alarms and movable objects (``class_name``/``name`` filter)."""
+        return self._truth(class_name, name)
+
+    def _truth(self, class_name: str | None, name: str | None) -> list[TruthObject]:
         try:
             s = socket.create_connection((self.host, self.truth_port), timeout=self.timeout)
         except OSError as exc:

@@ -135,13 +135,37 @@ def launch(
     foxglove: bool = False,
     extra_args: tuple[str, ...] = (),
     timeout: float = DEFAULT_TIMEOUT_S,
-) -> Server:
+    transport: str = "tcp",
+) -> Any:
     """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file),
     ``seed``, lock-step (default) or real time at ``speed`` (None: as fast as it can).
     ``wireless``, ``image`` and ``web`` start those services too; ``record`` records the run
     to that MCAP file (written as it goes, closed when the server stops); ``foxglove`` serves it live to
     Foxglove (its port in ``ports["foxglove"]``).  Use it in a ``with`` block, or call
-    :meth:`Server.close`."""
+    :meth:`Server.close`.
+
+    ``transport="inproc"`` runs the simulator in this process instead, lock-step, driven on
+    the caller's thread without sockets or text (:mod:`usarsim.client.direct`): the same
+    readings, bit for bit, several times faster; it serves no port, so pictures, the radio
+    and the web console are not available on it."""
+    if transport not in TRANSPORTS:
+        raise ValueError(f"transport must be one of {', '.join(TRANSPORTS)}, got {transport!r}")
+    if transport == "inproc":
+        return _launch_inproc(
+            world,
+            seed=seed,
+            lockstep=lockstep,
+            robot_dirs=robot_dirs,
+            timeout=timeout,
+            asked={
+                "wireless": wireless,
+                "image": image,
+                "web": web,
+                "record": record is not None,
+                "foxglove": foxglove,
+                "extra_args": bool(extra_args),
+            },
+        )
     args = ["--world", str(world), "--seed", str(int(seed)), "--port", "0", "--truth-port", "0"]
     expected = {"control", "truth"} | ({"image"} if image else set()) | ({"web"} if web else set())
     expected |= {"comserver", "wss", "cominterface"} if wireless else set()
@@ -162,3 +186,23 @@ def launch(
     args += list(extra_args)
     # every listener asked for is waited for by name; options of the caller's may open others
     return Server(args, lockstep, timeout, frozenset(expected), more=bool(extra_args))
+
+
+TRANSPORTS = ("tcp", "inproc")
+
+
+def _launch_inproc(
+    world: str, *, seed: int, lockstep: bool, robot_dirs: tuple[str, ...], timeout: float, asked: dict[str, bool]
+) -> Any:
+    """An in-process simulator (:class:`usarsim.client.direct.InprocServer`)."""
+    if not lockstep:
+        raise ValueError("an in-process simulator runs in lock-step only (launch(..., lockstep=True))")
+    unserved = [name for name, wanted in asked.items() if wanted]
+    if unserved:
+        raise ValueError(
+            f"an in-process simulator serves no port: {', '.join(unserved)} need(s) transport='tcp' "
+            "(a usarsim serve process)"
+        )
+    from .direct import InprocServer  # loads the simulation: only when asked for
+
+    return InprocServer(world, seed=seed, robot_dirs=robot_dirs, timeout=timeout)

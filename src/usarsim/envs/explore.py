@@ -85,13 +85,20 @@ class ExploreEnv(gym.Env):
         timeout_s: float = 10.0,
         prelaunch: bool = True,
         render_mode: str | None = None,
+        transport: str = "tcp",
     ):
         if render_mode is not None:
             raise ValueError(f"ExploreEnv renders nothing (render_modes: []), got render_mode={render_mode!r}")
         self.world_config = resolve_world(world)
         cfg = robot_config(robot, tuple(robot_dirs))
         self.sim = Simulator(
-            world=world, host=host, port=port, truth_port=truth_port, robot_dirs=tuple(robot_dirs), timeout=timeout_s
+            world=world,
+            host=host,
+            port=port,
+            truth_port=truth_port,
+            robot_dirs=tuple(robot_dirs),
+            timeout=timeout_s,
+            transport=transport,
         )
         self._finalizer = weakref.finalize(self, self.sim.stop)
         self.spec_robot = self.sim.describe(cfg, start)

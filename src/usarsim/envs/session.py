@@ -55,6 +55,8 @@ def flush(robots: Sequence[Robot]) -> None:
     pending = []
     for robot in robots:
         conn = robot._conn
+        if conn.synchronous:  # carried out already (an in-process simulator)
+            continue
         pid = conn.state.next_ping()
         conn.send(f"PING {{Id {pid}}}\r\n")
         pending.append((conn, pid))
@@ -66,11 +68,16 @@ def flush(robots: Sequence[Robot]) -> None:
         conn.wait_for(is_pong, "PONG (the reply to PING)", None)
 
 
+TRANSPORTS = ("tcp", "inproc")
+
+
 class Simulator:
     """Where an environment's episodes run.  With ``port`` None each :meth:`start` launches
     a fresh lock-step simulator of ``world`` with the episode's seed (and its wireless
     servers when ``wireless``), and stops the previous one; otherwise every episode runs in
-    the lock-step simulator at ``host``:``port``, whose seed is its own."""
+    the lock-step simulator at ``host``:``port``, whose seed is its own.  ``transport="inproc"``
+    runs each episode's simulator in this process instead (:mod:`usarsim.client.direct`): the
+    same episodes, bit for bit, without sockets or text."""
 
     def __init__(
         self,
@@ -85,7 +92,17 @@ class Simulator:
         wireless_config: str | None = None,
         robot_dirs: tuple[str, ...] = (),
         timeout: float = 10.0,
+        transport: str = "tcp",
     ):
+        if transport not in TRANSPORTS:
+            raise ValueError(f"transport must be one of {', '.join(TRANSPORTS)}, got {transport!r}")
+        if transport == "inproc" and port is not None:
+            raise ValueError("transport='inproc' runs its own simulator in this process: give no port")
+        if transport == "inproc" and wireless:
+            raise ValueError(
+                "the radio (message_size > 0) needs transport='tcp': an in-process simulator has no ComServer"
+            )
+        self.transport = transport
         self.world_name = world
         self.host, self.port, self.truth_port = host, port, truth_port
         self._comserver_port = comserver_port
@@ -125,7 +142,14 @@ class Simulator:
         if key in _DESCRIBED:
             return _DESCRIBED[key]
         if self.launches:
-            server = launch(self.world_name, seed=0, lockstep=True, robot_dirs=self.robot_dirs, timeout=self.timeout)
+            server = launch(
+                self.world_name,
+                seed=0,
+                lockstep=True,
+                robot_dirs=self.robot_dirs,
+                timeout=self.timeout,
+                transport=self.transport,
+            )
             try:
                 with server.connect() as world:
                     spec = describe_robot(cfg, spawn_at(world, cfg.class_name, PROBE_NAME, start))
@@ -179,7 +203,7 @@ class Simulator:
         """Launch simulators for the seeds the next episodes may ask for, in the background,
         so that a reset need not wait for one to start (at most :data:`MAX_SPARES`; those
         launched before for other seeds are stopped)."""
-        if not self.launches:
+        if not self.launches or self.transport == "inproc":  # built at the reset, on this thread
             return
         wanted = list(dict.fromkeys(int(s) for s in seeds))[:MAX_SPARES]
         for seed in [s for s in self._spares if s not in wanted]:
@@ -194,6 +218,10 @@ class Simulator:
         self._spares.clear()
 
     def _launch(self, seed: int) -> Server:
+        if self.transport == "inproc":
+            return launch(  # type: ignore[no-any-return]  # an InprocServer, with Server's connect and close
+                self.world_name, seed=seed, robot_dirs=self.robot_dirs, timeout=self.timeout, transport="inproc"
+            )
         return launch(
             self.world_name,
             seed=seed,

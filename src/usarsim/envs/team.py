@@ -84,6 +84,7 @@ class TeamExplore(ParallelEnv):
         timeout_s: float = 10.0,
         prelaunch: bool = True,
         render_mode: str | None = None,
+        transport: str = "tcp",
     ):
         if render_mode is not None:
             raise ValueError(f"TeamExplore renders nothing (render_modes: []), got render_mode={render_mode!r}")
@@ -117,6 +118,7 @@ class TeamExplore(ParallelEnv):
             wireless_config=wireless_config,
             robot_dirs=tuple(robot_dirs),
             timeout=timeout_s,
+            transport=transport,
         )
         self._finalizer = weakref.finalize(self, self.sim.stop)
         self.spec_robot = self.sim.describe(cfg, self.starts[0])

@@ -23,6 +23,7 @@ from usarsim.controls import DriveCommand, JointOrder
 from usarsim.readings import CommandResult, ItemParams
 from usarsim.sim.api import Position, RobotEntry, settle
 from usarsim.sim.channel import Channel, LinkCounts, LinkView
+from usarsim.sim.inline import InlineRunner
 from usarsim.sim.outputs import ItemDescription, LinkFrame, Output, RobotNumbers, VelocityLimits, package_frames
 from usarsim.sim.plugins import PluginSet, builtin_plugins
 from usarsim.sim.radio import Link, Pair, RadioModel, RadioNet
@@ -58,7 +59,12 @@ class SimFacade:
         deliver: Callable[[list[Output]], None] | None = None,
         settings: SimSettings | None = None,
         plugins: PluginSet | None = None,
+        inline: bool = False,
     ):
+        """``inline``: no simulation thread; every request is carried out at once on the thread
+        that makes it (lock-step only: :mod:`usarsim.sim.inline`, the in-process simulator)."""
+        if inline and not lockstep:
+            raise ValueError("an inline simulation runs in lock-step only")
         self.world = world
         self.plugins = plugins = plugins or builtin_plugins()
         self.sim = Simulation(
@@ -67,7 +73,11 @@ class SimFacade:
         self.lockstep = lockstep
         self.speed = speed
         self._deliver = deliver or (lambda outs: None)
-        self.runner = SimulationRunner(self.sim, self._on_outputs, speed=speed, lockstep=lockstep)
+        self.runner = (
+            InlineRunner(self.sim, self._on_outputs)
+            if inline
+            else SimulationRunner(self.sim, self._on_outputs, speed=speed, lockstep=lockstep)
+        )
         self._descriptions: dict[str, list[ItemDescription]] = {}
         self._radio: RadioNet | None = None
         self._watchers: tuple[Callable[[list[Output]], None], ...] = ()

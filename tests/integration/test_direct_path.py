@@ -1,0 +1,96 @@
+"""The direct path (usarsim.client.direct): an in-process simulator gives the episodes the
+control port gives, to the last bit, and passes the environments' checkers."""
+
+from __future__ import annotations
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from pettingzoo.test import parallel_api_test
+
+from helpers import same
+from usarsim.client import ClientTimeout, ServerError, launch
+from usarsim.envs import ExploreEnv, TeamExplore
+
+
+def episode(transport: str, seed: int, steps: int) -> list:
+    """What ``steps`` random actions (drawn with ``seed``) give: every observation, reward,
+    termination, truncation and info, resets included."""
+    env = ExploreEnv(transport=transport, prelaunch=False, time_limit_s=12.0)
+    env.action_space.seed(seed)
+    try:
+        out = [env.reset(seed=seed)]
+        for _ in range(steps):
+            step = env.step(env.action_space.sample())
+            out.append(step)
+            if step[2] or step[3]:
+                out.append(env.reset())
+    finally:
+        env.close()
+    return out
+
+
+@pytest.mark.parametrize("seed", [3, 11])
+def test_direct_and_tcp_paths_give_identical_episodes(seed):
+    tcp = episode("tcp", seed, 200)
+    direct = episode("inproc", seed, 200)
+    assert len(tcp) == len(direct) == 202  # 200 steps, a truncation at 12 s and its reset
+    assert same(tcp, direct)
+    odometry = [s[0]["odometry"] for s in direct]
+    assert max(float(np.hypot(o[0], o[1])) for o in odometry) > 0.3  # the robot went somewhere
+    assert sum(s[1] for s in direct[1:] if len(s) == 5) > 0  # and saw new floor
+
+
+def test_team_episodes_are_identical_on_both_paths():
+    def run(transport: str) -> list:
+        env = TeamExplore(robots=3, transport=transport, prelaunch=False, time_limit_s=3.0)
+        try:
+            out = [env.reset(seed=5)]
+            rng = np.random.default_rng(5)
+            while env.agents:
+                out.append(env.step({a: rng.uniform(-1, 1, 2).astype(np.float32) for a in env.agents}))
+        finally:
+            env.close()
+        return out
+
+    tcp, direct = run("tcp"), run("inproc")
+    assert len(direct) == 31 and same(tcp, direct)
+
+
+def test_gymnasium_and_pettingzoo_checkers_pass_on_the_direct_path():
+    env = gymnasium.make("usarsim/Explore-v0", transport="inproc", time_limit_s=2.0)
+    try:
+        check_env(env.unwrapped)
+    finally:
+        env.close()
+    team = TeamExplore(robots=2, transport="inproc", time_limit_s=1.0)
+    try:
+        parallel_api_test(team, num_cycles=15)
+    finally:
+        team.close()
+
+
+def test_the_client_drives_an_in_process_simulator():
+    with launch("DM-USAR_yellow", seed=2, transport="inproc") as server:
+        world = server.connect()
+        robot = world.spawn("P2AT", start="PlayerStart1")
+        world.step(0.1)
+        x0 = robot.odometry()
+        for _ in range(20):
+            robot.drive(left=2.0, right=2.0)
+            world.step(0.1)
+        assert world.time == pytest.approx(2.1)
+        assert robot.odometry()[0] - x0[0] > 0.3  # it drove forwards
+        assert robot.scan().ranges.shape == (181,)
+        assert {o.name for o in world.truth(class_name="Victim")}  # the world's victims
+        with pytest.raises(ServerError, match="unknown start pose"):
+            world.spawn("P2AT", "Other", start="Nowhere")
+        with pytest.raises(ClientTimeout, match="did not answer"):  # at once: nothing is in flight
+            robot._conn.wait_for(lambda m: False, "a reply never asked for", None)
+    with pytest.raises(ValueError, match="serves no port: image"):
+        launch(transport="inproc", image=True)
+    with pytest.raises(ValueError, match="lock-step only"):
+        launch(transport="inproc", lockstep=False)
+    with pytest.raises(ValueError, match="give no port"):
+        ExploreEnv(transport="inproc", port=3000)
