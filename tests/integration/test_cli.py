@@ -665,24 +665,35 @@ def test_serve_refuses_a_robot_dir_file_named_unlike_its_class(tmp_path):
 
 
 def test_bench_env_prints_steps_per_second():
-    out = usarsim("bench", "--env", "--steps", "20", "--team", "2", "--json", timeout=300)
+    out = usarsim("bench", "--env", "--steps", "20", "--team", "2", "--worlds", "2", "--json", timeout=300)
     assert out.returncode == 0, out.stderr
     import json
 
-    result = json.loads(out.stdout.strip().splitlines()[-1])
-    assert result["env_steps_per_s"] > 0 and result["team"] == 2 and result["team_steps_per_s"] > 0
+    rows = json.loads(out.stdout.strip().splitlines()[-1])["rows"]
+    assert [(r["transport"], r["env"]) for r in rows] == [
+        ("tcp", "Explore-v0"),
+        ("tcp", "TeamExplore"),
+        ("inproc", "Explore-v0"),
+        ("inproc", "ExploreVectorEnv(2)"),
+        ("inproc", "TeamExplore"),
+    ]
+    assert rows[3]["worlds"] == 2 and rows[3]["times_one"] > 0
+    assert all(r["steps_per_s"] > 0 for r in rows)
 
 
 def test_bench_env_profile_splits_a_steps_time_between_the_processes_and_the_physics():
-    out = usarsim("bench", "--env", "--profile", "--steps", "20", "--team", "2", "--json", timeout=300)
+    out = usarsim("bench", "--env", "--profile", "--steps", "20", "--team", "2", "--worlds", "0", "--json", timeout=300)
     assert out.returncode == 0, out.stderr
     import json
 
-    one, team = json.loads(out.stdout.strip().splitlines()[-1])
-    for p, robots in ((one, 1), (team, 2)):
-        assert p["robots"] == robots and p["steps_per_s"] > 0
-        assert p["env_cpu_ms"] > 0 and p["physics_ms"] > 0
-        assert p["sim_cpu_ms"] is not None and p["sim_cpu_ms"] >= 0  # read from /proc on Linux
+    profiles = json.loads(out.stdout.strip().splitlines()[-1])
+    assert [(p["transport"], p["robots"]) for p in profiles] == [("tcp", 1), ("tcp", 2), ("inproc", 1), ("inproc", 2)]
+    for p in profiles:
+        assert p["steps_per_s"] > 0 and p["env_cpu_ms"] > 0 and p["physics_ms"] > 0
+        if p["transport"] == "tcp":
+            assert p["sim_cpu_ms"] is not None and p["sim_cpu_ms"] >= 0  # read from /proc on Linux
+        else:
+            assert p["sim_cpu_ms"] is None  # the simulator's time is the environment process's own
         # a step cannot take less wall time than the environment's own processor time in it
         assert p["wall_ms"] >= p["env_cpu_ms"] * 0.9
 

@@ -94,3 +94,36 @@ def test_the_client_drives_an_in_process_simulator():
         launch(transport="inproc", lockstep=False)
     with pytest.raises(ValueError, match="give no port"):
         ExploreEnv(transport="inproc", port=3000)
+
+
+def test_a_vector_of_worlds_runs_each_as_a_single_env_with_its_seed_and_autoresets():
+    from usarsim.envs import make_vector
+
+    env = make_vector(3, workers=2, time_limit_s=1.0)
+    rng = np.random.default_rng(9)
+    actions = [rng.uniform(-1, 1, (3, 2)).astype(np.float32) for _ in range(12)]
+    try:
+        assert env.observation_space["laser"].shape == (3, 30) and env.action_space.shape == (3, 2)
+        batch = [env.reset(seed=4)]
+        batch += [env.step(a) for a in actions]
+    finally:
+        env.close()
+    single = ExploreEnv(transport="inproc", time_limit_s=1.0, prelaunch=False)
+    try:
+        alone = [single.reset(seed=5)]  # world 1 of the vector: seed 4 + 1
+        for a in actions:
+            if alone[-1][-3:-1] in ((False, True), (True, False), (True, True)):  # next_step autoreset
+                obs, info = single.reset()
+                alone.append((obs, 0.0, False, False, info))
+            else:
+                alone.append(single.step(a[1]))
+    finally:
+        single.close()
+    for k, (got, want) in enumerate(zip(batch, alone)):
+        assert same({key: v[1] for key, v in got[0].items()}, want[0]), k  # world 1's observation
+        if k:
+            assert float(got[1][1]) == want[1] and bool(got[3][1]) == want[3], k
+    truncated = [k for k in range(1, 13) if batch[k][3].all()]
+    assert truncated == [10]  # 1 s at 0.1 s a step, every world; step 11 starts the next episodes
+    assert not batch[11][3].any() and (batch[11][1] == 0.0).all()
+    assert batch[12][4]["time_s"][0] == pytest.approx(0.1) and batch[12][4]["_time_s"].all()

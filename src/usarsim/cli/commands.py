@@ -228,32 +228,60 @@ def run_env_bench(args) -> int:
 
     from usarsim.envs import bench_env
 
+    transports = ("tcp", "inproc") if args.transport == "both" else (args.transport,)
     if args.profile:
         from usarsim.envs.profile import env_profile, print_profile
 
         print(f"Where an env step's time goes ({args.world}, {args.steps} steps, random actions):")
-        profiles = [env_profile(args.steps, world=args.world)]
-        if args.team > 0:
-            profiles.append(env_profile(max(1, args.steps // 3), team=args.team, world=args.world))
+        profiles = []
+        for transport in transports:
+            profiles.append(env_profile(args.steps, world=args.world, transport=transport))
+            if args.team > 0:
+                profiles.append(
+                    env_profile(max(1, args.steps // 3), team=args.team, world=args.world, transport=transport)
+                )
         if args.json:
             print(json.dumps(profiles))
         else:
             for p in profiles:
                 print_profile(p)
         return 0
-    one = bench_env(args.steps, world=args.world)
-    team = bench_env(max(1, args.steps // 3), team=args.team, world=args.world) if args.team > 0 else None
-    result = {
-        "env_steps_per_s": round(one, 1),
-        "control_period_s": 0.1,
-        "team": args.team,
-        "team_steps_per_s": None if team is None else round(team, 1),
-        "cpu_count": os.cpu_count(),
-    }
+    from usarsim.envs.bench import bench_vector
+
+    rows = []
+    for transport in transports:
+        one = bench_env(args.steps, world=args.world, transport=transport)
+        rows.append({"transport": transport, "env": "Explore-v0", "robots": 1, "steps_per_s": round(one, 1)})
+        if transport == "inproc" and args.worlds > 1:
+            vec = bench_vector(max(1, args.steps // args.worlds), args.worlds, world=args.world)
+            rows.append(
+                {
+                    "transport": transport,
+                    "env": f"ExploreVectorEnv({args.worlds})",
+                    "robots": 1,
+                    "worlds": args.worlds,
+                    "steps_per_s": round(vec, 1),
+                    "times_one": round(vec / one, 2),
+                }
+            )
+        if args.team > 0:
+            team = bench_env(max(1, args.steps // 3), team=args.team, world=args.world, transport=transport)
+            rows.append(
+                {"transport": transport, "env": "TeamExplore", "robots": args.team, "steps_per_s": round(team, 1)}
+            )
     if args.json:
-        print(json.dumps(result))
-    else:
-        print(f"Explore-v0, one P2AT at 0.1 s: {one:.0f} env steps/s ({one * 0.1:.0f}x real time)")
-        if team is not None:
-            print(f"TeamExplore, {args.team} P2ATs: {team:.0f} team steps/s ({team * 0.1:.0f}x real time)")
+        print(json.dumps({"control_period_s": 0.1, "cpu_count": os.cpu_count(), "rows": rows}))
+        return 0
+    for row in rows:
+        path = "in-process" if row["transport"] == "inproc" else "over TCP"
+        what = "one P2AT" if row["robots"] == 1 else f"{row['robots']} P2ATs"
+        unit = "env steps/s" if row["robots"] == 1 else "team steps/s"
+        rate = row["steps_per_s"]
+        if "worlds" in row:
+            print(
+                f"{row['env']}, {row['worlds']} worlds of one P2AT at 0.1 s, {path} in worker processes: "
+                f"{rate:.0f} env steps/s in all ({row['times_one']:.2f} times one world)"
+            )
+            continue
+        print(f"{row['env']}, {what} at 0.1 s, {path}: {rate:.0f} {unit} ({rate * 0.1:.0f}x real time)")
     return 0

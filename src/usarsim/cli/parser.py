@@ -177,6 +177,20 @@ def build_parser() -> argparse.ArgumentParser:
         "0.1 s control period in lock-step, and PettingZoo steps per second of a team (--team)",
     )
     b.add_argument("--team", type=int, default=8, help="with --env: robots in the team (default: %(default)s)")
+    b.add_argument(
+        "--worlds",
+        type=int,
+        default=4,
+        help="with --env: worlds of the vector environment timed on the direct path (0 or 1: none; "
+        "default: %(default)s)",
+    )
+    b.add_argument(
+        "--transport",
+        choices=("tcp", "inproc", "both"),
+        default="both",
+        help="with --env: the environments' path to the simulator: a usarsim serve process over TCP, "
+        "the in-process direct path, or both one after the other (default: %(default)s)",
+    )
     b.add_argument("--steps", type=int, default=300, help="with --env: steps timed (default: %(default)s)")
     rp = sub.add_parser(
         "replay",

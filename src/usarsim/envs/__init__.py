@@ -7,6 +7,8 @@
 * :func:`parallel_env` (PettingZoo): a team of robots explores together and may send each
   other messages that get through only while the simulator's radio link holds
   (:class:`TeamExplore`).
+* :func:`make_vector` (Gymnasium vector): several worlds of ``Explore-v0`` stepped together
+  in worker processes, each world's simulator in-process (:class:`ExploreVectorEnv`).
 * :func:`bench_env`: environment steps per second.
 """
 
@@ -18,8 +20,19 @@ from .bench import bench_env
 from .explore import ExploreEnv
 from .explorer import Rewards
 from .team import TeamExplore, parallel_env
+from .vector import ExploreVectorEnv, make_vector
 
-__all__ = ["ENV_IDS", "ExploreEnv", "Rewards", "TeamExplore", "bench_env", "parallel_env", "register_envs"]
+__all__ = [
+    "ENV_IDS",
+    "ExploreEnv",
+    "ExploreVectorEnv",
+    "Rewards",
+    "TeamExplore",
+    "bench_env",
+    "make_vector",
+    "parallel_env",
+    "register_envs",
+]
 
 ENV_IDS = {
     "usarsim/Explore-v0": {},

@@ -53,3 +53,29 @@ def bench_env(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any) 
     finally:
         single.close()
     return steps / elapsed
+
+
+def bench_vector(steps: int = 100, worlds: int = 4, *, seed: int = 0, **kwargs: Any) -> float:
+    """Environment steps a second (every world's steps counted) of an
+    :class:`~usarsim.envs.ExploreVectorEnv` of ``worlds`` worlds over ``steps`` vector steps
+    with random actions (seeded with ``seed``); ``kwargs`` as :func:`bench_env`'s.  Resets are
+    not counted (an episode that ends starts again within a step: that step is counted)."""
+    from .vector import make_vector
+
+    if steps < 1:
+        raise ValueError(f"steps must be at least 1, got {steps!r}")
+    period = float(kwargs.get("control_period_s", 0.1))
+    kwargs.setdefault("time_limit_s", period * (steps + 10))
+    env = make_vector(worlds, **kwargs)
+    try:
+        env.reset(seed=seed)
+        env.action_space.seed(seed)
+        elapsed = 0.0
+        for _ in range(steps):
+            actions = env.action_space.sample()
+            t = time.perf_counter()
+            env.step(actions)
+            elapsed += time.perf_counter() - t
+    finally:
+        env.close()
+    return steps * worlds / elapsed

@@ -78,7 +78,8 @@ def env_profile(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any
         # the simulator's processor time over all the steps (it works only when a step asks,
         # and /proc counts in ticks of 10 ms): None when a reset launched another one
         server = env.sim.server
-        pid = server.proc.pid if server is not None else None
+        proc = getattr(server, "proc", None)  # None: an in-process simulator (its time is the env's)
+        pid = proc.pid if proc is not None else None
         s0 = process_cpu_s(pid) if pid is not None else None
         for _ in range(steps):
             if team:
@@ -102,6 +103,7 @@ def env_profile(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any
     finally:
         env.close()
     return {
+        "transport": kwargs.get("transport", "tcp"),
         "robots": max(1, team),
         "control_period_s": period,
         "steps_per_s": steps / wall,
@@ -115,11 +117,19 @@ def env_profile(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any
 def print_profile(p: dict[str, Any]) -> None:
     """The profile as a few lines of text."""
     limit = 1000.0 / p["physics_ms"]
-    sim = "-" if p["sim_cpu_ms"] is None else f"{p['sim_cpu_ms']:.2f} ms"
+    inproc = p.get("transport") == "inproc"
     print(
-        f"  {p['robots']} robot(s), {p['control_period_s']:g} s a step: {p['steps_per_s']:.0f} steps/s "
-        f"({p['wall_ms']:.2f} ms each), {p['steps_per_s'] / limit:.0%} of the {limit:.0f} bare mj_step allows"
+        f"  {p['robots']} robot(s), {p['control_period_s']:g} s a step, {'in-process' if inproc else 'over TCP'}: "
+        f"{p['steps_per_s']:.0f} steps/s ({p['wall_ms']:.2f} ms each), "
+        f"{p['steps_per_s'] / limit:.0%} of the {limit:.0f} bare mj_step allows"
     )
+    if inproc:
+        print(
+            f"    a step's processor time: {p['env_cpu_ms']:.2f} ms in the one process (environment and simulator), "
+            f"beside bare physics of {p['physics_ms']:.2f} ms"
+        )
+        return
+    sim = "-" if p["sim_cpu_ms"] is None else f"{p['sim_cpu_ms']:.2f} ms"
     print(
         f"    a step's processor time: environment process {p['env_cpu_ms']:.2f} ms, simulator process {sim}, "
         f"of which bare physics {p['physics_ms']:.2f} ms"

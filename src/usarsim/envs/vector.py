@@ -1,0 +1,216 @@
+"""Batched environments: ``num_envs`` worlds of ``usarsim/Explore-v0`` stepped together by a few
+worker processes, each running its worlds' simulators in-process (the direct path), so that
+the worlds use every processor (:class:`ExploreVectorEnv`, :func:`make_vector`).
+
+A Gymnasium vector environment: observations, rewards and ends are stacked per world, infos
+merged as Gymnasium merges them (each key with its ``_key`` mask); a world whose episode ended
+starts its next one at its next step (Gymnasium's ``next_step`` autoreset: that step returns
+the new episode's first observation, reward 0 and no end); ``reset(seed=s)`` seeds world ``i``
+with ``s + i``, so that world ``i`` runs exactly the episodes a single :class:`ExploreEnv` reset
+with ``s + i`` runs, bit for bit.
+
+The worlds are shared among ``workers`` processes (by default one per processor, at most one
+per world): each steps its worlds one after the other and answers with all of them in one
+message.  Gymnasium's :class:`~gymnasium.vector.AsyncVectorEnv` keeps a process per world;
+with four worlds on two cores that made 1.1 to 1.4 times the env steps a second of one world,
+the processes taking turns at every step.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import traceback
+from multiprocessing.connection import Connection
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space, iterate
+
+from .explore import ExploreEnv
+
+__all__ = ["ExploreVectorEnv", "make_vector"]
+
+
+def _worker(pipe: Connection, kwargs: dict[str, Any], count: int) -> None:
+    """A worker process: ``count`` worlds, stepped as the main process asks."""
+    envs: list[ExploreEnv] = []
+    try:
+        envs = [ExploreEnv(**kwargs) for _ in range(count)]
+        ended = [False] * count
+        pipe.send(("ready", None))
+        while True:
+            command, data = pipe.recv()
+            if command == "reset":
+                seeds, options = data
+                out = [env.reset(seed=s, options=options) for env, s in zip(envs, seeds)]
+                ended = [False] * count
+                pipe.send(("ok", out))
+            elif command == "step":
+                results = []
+                for k, (env, action) in enumerate(zip(envs, data)):
+                    if ended[k]:  # next_step autoreset: the new episode's first observation
+                        obs, info = env.reset()
+                        results.append((obs, 0.0, False, False, info))
+                        ended[k] = False
+                    else:
+                        obs, reward, terminated, truncated, info = env.step(action)
+                        ended[k] = terminated or truncated
+                        results.append((obs, reward, terminated, truncated, info))
+                pipe.send(("ok", results))
+            elif command == "close":
+                break
+    except (EOFError, KeyboardInterrupt):  # the main process is gone
+        pass
+    except Exception:
+        try:
+            pipe.send(("error", traceback.format_exc()))
+        except OSError:
+            pass
+    finally:
+        for env in envs:
+            env.close()
+        pipe.close()
+
+
+class ExploreVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` :class:`ExploreEnv` worlds (``env_kwargs`` go to each; the direct path by
+    default) in ``workers`` processes (see the module's text)."""
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int = 4,
+        *,
+        workers: int | None = None,
+        context: str = "spawn",
+        **env_kwargs: Any,
+    ):
+        if int(num_envs) < 1:
+            raise ValueError(f"num_envs must be at least 1, got {num_envs!r}")
+        self.num_envs = n = int(num_envs)
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        w = min(n, max(1, cores if workers is None else int(workers)))
+        kwargs = {"transport": "inproc", **env_kwargs}
+        kwargs.setdefault("prelaunch", kwargs["transport"] != "inproc")
+        probe = ExploreEnv(**kwargs)  # the spaces (and any mistake in the arguments, here)
+        self.single_observation_space = probe.observation_space
+        self.single_action_space = probe.action_space
+        probe.close()
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+        self._counts = [n // w + (1 if i < n % w else 0) for i in range(w)]
+        ctx = mp.get_context(context)
+        self._pipes: list[Connection] = []
+        self.processes = []
+        for i, count in enumerate(self._counts):
+            parent, child = ctx.Pipe()
+            proc = ctx.Process(target=_worker, args=(child, kwargs, count), name=f"usarsim-vector-{i}", daemon=True)
+            proc.start()
+            child.close()
+            self._pipes.append(parent)
+            self.processes.append(proc)
+        self.closed = False
+        self._receive()  # every world built
+
+    def _receive(self) -> list[Any]:
+        out = []
+        for pipe in self._pipes:
+            try:
+                status, data = pipe.recv()
+            except EOFError:
+                self.close()
+                raise RuntimeError("a worker of the vector environment ended unexpectedly") from None
+            if status == "error":
+                self.close()
+                raise RuntimeError(f"a worker of the vector environment failed:\n{data}")
+            if status == "ok":
+                out.extend(data)
+        return out
+
+    def _split(self, values: list[Any]) -> list[list[Any]]:
+        out, at = [], 0
+        for count in self._counts:
+            out.append(values[at : at + count])
+            at += count
+        return out
+
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
+        if seed is None or isinstance(seed, int):
+            seeds: list[int | None] = [None if seed is None else seed + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} worlds")
+        for pipe, part in zip(self._pipes, self._split(seeds)):
+            pipe.send(("reset", (part, options)))
+        results = self._receive()
+        return self._stack([o for o, _ in results]), self._infos([info for _, info in results])
+
+    def step(self, actions):
+        for pipe, part in zip(self._pipes, self._split(list(iterate(self.action_space, actions)))):
+            pipe.send(("step", part))
+        results = self._receive()
+        rewards = np.array([r[1] for r in results], dtype=np.float64)
+        terminations = np.array([r[2] for r in results], dtype=np.bool_)
+        truncations = np.array([r[3] for r in results], dtype=np.bool_)
+        return (
+            self._stack([r[0] for r in results]),
+            rewards,
+            terminations,
+            truncations,
+            self._infos([r[4] for r in results]),
+        )
+
+    def _stack(self, observations: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+        """The worlds' observations as one batch of the vector observation space (each key's
+        arrays stacked: what Gymnasium's ``concatenate`` gives for a Dict of Boxes)."""
+        return {key: np.stack([o[key] for o in observations]) for key in self.single_observation_space.spaces}
+
+    def _infos(self, infos: list[dict[str, Any]]) -> dict[str, Any]:
+        """The worlds' infos merged as Gymnasium merges them (``_add_info``), when every world
+        has the same keys (an ExploreEnv's always do): each key's values in an array, and
+        its ``_key`` mask."""
+        keys = infos[0].keys()
+        if any(info.keys() != keys for info in infos):
+            merged: dict[str, Any] = {}
+            for i, info in enumerate(infos):
+                merged = self._add_info(merged, info, i)
+            return merged
+        out: dict[str, Any] = {}
+        everyone = np.ones(self.num_envs, dtype=np.bool_)
+        for key in keys:
+            values = [info[key] for info in infos]
+            kind = type(values[0])
+            if kind in (int, float, bool) and all(type(v) is kind for v in values):
+                out[key] = np.array(values, dtype=kind)
+            else:
+                array = np.empty(self.num_envs, dtype=object)
+                array[:] = [None] * self.num_envs
+                for i, v in enumerate(values):
+                    array[i] = v
+                out[key] = array
+            out[f"_{key}"] = everyone.copy()
+        return out
+
+    def close_extras(self, **kwargs: Any) -> None:
+        for pipe in self._pipes:
+            try:
+                pipe.send(("close", None))
+            except OSError:
+                pass
+        for proc in self.processes:
+            proc.join(30)
+            if proc.is_alive():
+                proc.kill()
+        for pipe in self._pipes:
+            pipe.close()
+
+
+def make_vector(num_envs: int = 4, **kwargs: Any) -> ExploreVectorEnv:
+    """An :class:`ExploreVectorEnv` of ``num_envs`` worlds (``workers``, ``context`` and the
+    :class:`ExploreEnv` arguments as keywords)."""
+    return ExploreVectorEnv(num_envs, **kwargs)
