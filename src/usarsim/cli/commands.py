@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 
 def validate_target(text: str) -> str:
@@ -248,7 +249,7 @@ def run_env_bench(args) -> int:
         return 0
     from usarsim.envs.bench import bench_vector
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for transport in transports:
         one = bench_env(args.steps, world=args.world, transport=transport)
         rows.append({"transport": transport, "env": "Explore-v0", "robots": 1, "steps_per_s": round(one, 1)})

@@ -103,7 +103,7 @@ class ExploreVectorEnv(gym.vector.VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
         self._counts = [n // w + (1 if i < n % w else 0) for i in range(w)]
-        ctx = mp.get_context(context)
+        ctx: Any = mp.get_context(context)  # a start method's context (its Process and Pipe)
         self._pipes: list[Connection] = []
         self.processes = []
         for i, count in enumerate(self._counts):
@@ -168,7 +168,8 @@ class ExploreVectorEnv(gym.vector.VectorEnv):
     def _stack(self, observations: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
         """The worlds' observations as one batch of the vector observation space (each key's
         arrays stacked: what Gymnasium's ``concatenate`` gives for a Dict of Boxes)."""
-        return {key: np.stack([o[key] for o in observations]) for key in self.single_observation_space.spaces}
+        keys = list(getattr(self.single_observation_space, "spaces", observations[0]))  # the Dict space's order
+        return {key: np.stack([o[key] for o in observations]) for key in keys}
 
     def _infos(self, infos: list[dict[str, Any]]) -> dict[str, Any]:
         """The worlds' infos merged as Gymnasium merges them (``_add_info``), when every world
