@@ -10,7 +10,7 @@ from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test
 
 from helpers import same
-from usarsim.client import ClientTimeout, ServerError, launch
+from usarsim.client import ClientError, ClientTimeout, ServerError, launch
 from usarsim.envs import ExploreEnv, TeamExplore
 
 
@@ -127,3 +127,28 @@ def test_a_vector_of_worlds_runs_each_as_a_single_env_with_its_seed_and_autorese
     assert truncated == [10]  # 1 s at 0.1 s a step, every world; step 11 starts the next episodes
     assert not batch[11][3].any() and (batch[11][1] == 0.0).all()
     assert batch[12][4]["time_s"][0] == pytest.approx(0.1) and batch[12][4]["_time_s"].all()
+
+
+def test_read_only_measures_the_sensors_named_and_leaves_their_readings_as_they_were():
+    def sweeps(only: tuple[str, ...]) -> tuple[set[str], list]:
+        with launch("DM-USAR_yellow", seed=4, transport="inproc") as server:
+            world = server.connect()
+            robot = world.spawn("P2AT", start="PlayerStart1")
+            if only:
+                robot.read_only(*only)
+            out = []
+            for _ in range(15):
+                robot.drive(left=1.5, right=2.0)
+                world.step(0.1)
+                out += [m for m in robot.take_messages() if getattr(m, "reading", None) is not None]
+            return {type(m.reading).__name__ for m in out}, [m for m in out if getattr(m.reading, "name", None) == "Scanner1"]
+
+    kinds_all, scans_all = sweeps(())
+    kinds, scans = sweeps(("RangeScanner", "Odometry"))
+    assert {"GpsReading", "RfidReading", "EncoderReading"} <= kinds_all
+    assert kinds == {"RangeScanReading", "OdometryReading"}
+    assert len(scans) == 8 and repr(scans) == repr(scans_all)  # every sweep, to the last bit
+    with launch("DM-USAR_yellow", seed=4) as server:  # a usarsim serve process measures everything
+        robot = server.connect().spawn("P2AT", start="PlayerStart1")
+        with pytest.raises(ClientError, match="in-process"):
+            robot.read_only("RangeScanner")

@@ -81,6 +81,11 @@ class DirectClientConnection:
 
     ping = _Connection.ping  # PING, answered at once
 
+    def read_only(self, wanted: frozenset[str] | None) -> None:
+        """Have the simulator measure only the robot's sensors whose type or name is in
+        ``wanted`` (None: every one again)."""
+        self._end.read_only(wanted)
+
     def close(self) -> None:
         if not self.state.closed:
             self.state.closed = True

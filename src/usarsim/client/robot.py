@@ -155,6 +155,17 @@ class Robot:
         self._conn.send(report_line(location, name))
         return self._conn.wait_for(is_report_reply, "RES of REPORT", "REPORT")
 
+    def read_only(self, *wanted: str) -> None:
+        """Have an in-process simulator (``launch(..., transport="inproc")``) measure only this
+        robot's sensors of these types or names (``read_only("RangeScanner", "Odometry")``;
+        none given: every one again).  The others send nothing; the readings of those named
+        are the same, bit for bit, as when every sensor is measured.  A server over TCP
+        measures every sensor: there it raises :class:`ClientError`."""
+        read_only = getattr(self._conn, "read_only", None)
+        if read_only is None:
+            raise ClientError("only an in-process simulator (transport='inproc') measures some sensors only")
+        read_only(frozenset(wanted) if wanted else None)
+
     def picture(self, camera: str = "Camera", timeout: float | None = None) -> Any:
         """A picture of the robot's camera ``camera`` from the image server, as a (height,
         width, 3) uint8 RGB NumPy array (the server needs its image service: ``launch(...,

@@ -145,6 +145,8 @@ class ExploreEnv(gym.Env):
             victims,
             set(),
         )
+        if self.sim.transport == "inproc":  # the sensors nobody reads are not measured
+            robot.read_only(*self.explorer.readings_used())
         self.sim.step(self.control_period_s)
         self._t0 = world.time
         out = self.explorer.update()  # the first sweep's floor is where the robot starts: no reward

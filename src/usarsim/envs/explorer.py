@@ -111,6 +111,17 @@ class Explorer:
         self.speeds: tuple[float, float] | None = None  # of the last DRIVE sent
         self.sent = False  # a command sent since the last step
 
+    def readings_used(self) -> tuple[str, ...]:
+        """The types and names of the sensors whose readings the observation and the reward
+        read (the rest go unread: an in-process simulator need not measure them)."""
+        used = ["GroundTruth", "Touch"]  # the pose of every sweep, and collisions
+        if self.spec.laser is not None:
+            used.append(self.spec.laser.name)
+        if self.spec.victim_sensor is not None:
+            used.append(self.spec.victim_sensor)
+        used += [{"sonar": "Sonar", "odometry": "Odometry"}[k] for k in self.keys if k in ("sonar", "odometry")]
+        return tuple(used)
+
     # commands -----------------------------------------------------------------------------
     def drive(self, action, discrete: bool) -> None:
         """Send the action's side speeds as one DRIVE (percent of the top speed), unless

@@ -203,6 +203,8 @@ class TeamExplore(ParallelEnv):
                 victims,
                 found,
             )
+            if self.sim.transport == "inproc":  # the sensors nobody reads are not measured
+                robot.read_only(*self.explorers[agent].readings_used())
         if self.message_size:
             self.team_radio = TeamRadio(
                 self.sim.address, self.sim.comserver_port, self.possible_agents, self.sim.timeout

@@ -65,6 +65,11 @@ class DirectConnection:
             if line:
                 self.session.handle_line(line)
 
+    def read_only(self, wanted: frozenset[str] | None) -> None:
+        """Measure only the robot's sensors whose type or name is in ``wanted`` (None: every
+        one): the readings of the others would go unread (:meth:`SimFacade.read_only`)."""
+        self.server.facade.read_only(self.session.uid, wanted).result()
+
     def close(self) -> None:
         """The client is gone: its robot leaves the world."""
         if self.closed:

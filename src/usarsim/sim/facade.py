@@ -238,6 +238,19 @@ class SimFacade:
         exact = next((e for e in entries if e.name == name), None)
         return exact or next((e for e in entries if e.name.lower() == name.lower()), None)
 
+    def read_only(self, uid: int, wanted: frozenset[str] | None) -> Future[object]:
+        """Measure only the sensors of robot ``uid`` whose type or name is in ``wanted`` (None:
+        every one), for a client that reads no other (:meth:`ReportSchedule.read_only
+        <usarsim.sim.reports.ReportSchedule.read_only>`: the readings taken are those it
+        would take anyway)."""
+
+        def mute(sim: Simulation) -> None:
+            r = sim.robots.get(uid)
+            if r is not None:
+                sim.reports.read_only(r, wanted)
+
+        return self._ask(mute)
+
     def drive(self, uid: int, command: DriveCommand) -> None:
         """One DRIVE: its parts go to the robot's drive model, which applies those its kind
         understands; Flip, Light and joint orders apply to any robot."""

@@ -53,6 +53,7 @@ class Report:
     status: bool = False
     package: object = None  # a MissionPackage: MISSTA
     item: tuple = ()  # what the measuring thread is given: (robot id, sensors, key)
+    muted: bool = False  # a sensor report nobody reads: it falls due, and is not measured
 
     def __post_init__(self) -> None:
         self.item = (self.robot.uid, self.sensors, self.key)
@@ -82,7 +83,9 @@ class _Cohort:
         (robot id, sensors, key) for a sensor's, the Report itself for a status or a
         mission package's (usarsim.sim.status); kept until its reports change."""
         if self._plan is None:
-            self._plan = [rep if rep.status or rep.package is not None else rep.item for rep in self.reports]
+            self._plan = [
+                rep if rep.status or rep.package is not None else rep.item for rep in self.reports if not rep.muted
+            ]
         return self._plan
 
 
@@ -178,6 +181,18 @@ class ReportSchedule:
                 del self._lists[due]
         self._next = min(self._lists) if self._lists else None
         r.reports = []
+
+    def read_only(self, r: SimRobot, wanted: frozenset[str] | None) -> None:
+        """Measure only the sensors of ``r`` whose type or name is in ``wanted`` (None: every
+        one).  The others' reports still fall due at their instants, so that the physics runs
+        in the same stretches and every reading taken is the same, bit for bit; they are not
+        measured (each sensor's noise comes from a generator of its own)."""
+        for rep in r.reports:
+            if rep.sensors:
+                rep.muted = wanted is not None and not any(s.TYPE in wanted or s.name in wanted for s in rep.sensors)
+        for runs in self._lists.values():
+            for run in runs:
+                run.set_reports(run.reports)  # its plan made again
 
     def take_due(self, now: float) -> list[Report]:
         """The reports due at ``now``, in order; each is scheduled
