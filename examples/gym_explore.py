@@ -2,6 +2,7 @@
 yours).  Prints the return and the floor the robot saw.
 
     python examples/gym_explore.py --steps 200
+    python examples/gym_explore.py --steps 200 --transport inproc   # the simulator in this process
 """
 
 from __future__ import annotations
@@ -17,8 +18,15 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=200, help="steps of 0.1 s (default 200)")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument(
+        "--transport",
+        choices=("tcp", "inproc"),
+        default="tcp",
+        help="tcp: a usarsim serve process (default); inproc: the simulator in this process, "
+        "the same episode several times faster",
+    )
     args = ap.parse_args()
-    env = gymnasium.make("usarsim/Explore-v0")
+    env = gymnasium.make("usarsim/Explore-v0", transport=args.transport)
     try:
         obs, info = env.reset(seed=args.seed)
         env.action_space.seed(args.seed)
