@@ -141,7 +141,9 @@ def test_read_only_measures_the_sensors_named_and_leaves_their_readings_as_they_
                 robot.drive(left=1.5, right=2.0)
                 world.step(0.1)
                 out += [m for m in robot.take_messages() if getattr(m, "reading", None) is not None]
-            return {type(m.reading).__name__ for m in out}, [m for m in out if getattr(m.reading, "name", None) == "Scanner1"]
+            return {type(m.reading).__name__ for m in out}, [
+                m for m in out if getattr(m.reading, "name", None) == "Scanner1"
+            ]
 
     kinds_all, scans_all = sweeps(())
     kinds, scans = sweeps(("RangeScanner", "Odometry"))
