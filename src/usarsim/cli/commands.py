@@ -202,6 +202,10 @@ def _bench(args) -> int:
         from usarsim.bench.targets import run_targets_bench
 
         return run_targets_bench(args)
+    if getattr(args, "league", False):
+        from usarsim.bench.league import run_league_bench
+
+        return run_league_bench(args)
     if args.ros2:
         from usarsim.ros2.bench import run_ros2_bench
 

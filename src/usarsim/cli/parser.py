@@ -132,7 +132,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--runs",
         type=int,
         default=3,
-        help="with --targets: runs of each benchmark; with --ros2: runs each way (default: %(default)s)",
+        help="with --targets: runs of each benchmark; with --ros2: runs each way; with --league: runs "
+        "(default: %(default)s)",
     )
     b.add_argument(
         "--radio-load",
@@ -169,6 +170,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=[16, 64, 256],
         metavar="N",
         help="with --targets: robot counts (default: 16 64 256; the targets are set at those)",
+    )
+    b.add_argument(
+        "--league",
+        action="store_true",
+        help="the RoboCup Rescue virtual robot league's load: 4 P2ATs in real time, each with a 320x240 "
+        "colour camera asked for 30 pictures a second and a 160x120 thermal camera asked for 10 through "
+        "the image server, a 1040-beam laser at 30 sweeps a second and the rest of the kit; the real-time "
+        "factor, each camera's pictures a second and each laser's sweeps a second over --seconds of wall "
+        "time, --runs times",
     )
     b.add_argument(
         "--env",
