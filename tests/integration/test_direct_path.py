@@ -150,7 +150,7 @@ def test_read_only_measures_the_sensors_named_and_leaves_their_readings_as_they_
     assert {"GpsReading", "RfidReading", "EncoderReading"} <= kinds_all
     assert kinds == {"RangeScanReading", "OdometryReading"}
     assert len(scans) == 8 and repr(scans) == repr(scans_all)  # every sweep, to the last bit
-    with launch("DM-USAR_yellow", seed=4) as server:  # a usarsim serve process measures everything
-        robot = server.connect().spawn("P2AT", start="PlayerStart1")
+    with launch("DM-USAR_yellow", seed=4) as server, server.connect() as world:  # usarsim serve measures all
+        robot = world.spawn("P2AT", start="PlayerStart1")
         with pytest.raises(ClientError, match="in-process"):
             robot.read_only("RangeScanner")

@@ -38,7 +38,7 @@ def league_robot_file(directory: Path) -> Path:
     """``P2ATLeague.yaml`` in ``directory``: the shipped P2AT with the league's laser in place of
     its SICK (1,040 beams 0.25 degrees apart, 30 m, 30 sweeps a second) and a thermal camera
     (160 x 120, usarsim.sensors.camera.ThermalCamera) beside its camera."""
-    import yaml
+    import yaml  # type: ignore[import-untyped]  # PyYAML ships no type information
 
     from usarsim.config.catalog import robot_files
 
