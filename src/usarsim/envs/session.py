@@ -235,6 +235,10 @@ class Simulator:
     def _retire(self) -> None:
         """The current episode's connections closed (in a shared simulator, once its robots
         have left) and its simulator stopped in the background."""
+        if self.server is not None and self.transport == "inproc":
+            # stopped first, on this thread (it is quick): its robots then leave with the world
+            # instead of being removed one by one, each a rebuild of a model nobody will step
+            self.server.close()
         if self.world is not None:
             if not self.launches:
                 try:
@@ -244,7 +248,8 @@ class Simulator:
             self.world.close()
             self.world = None
         if self.server is not None:
-            self._background(self.server.close)
+            if self.transport != "inproc":
+                self._background(self.server.close)
             self.server = None
 
     def _background(self, fn) -> None:
