@@ -11,9 +11,10 @@ with ``s + i`` runs, bit for bit.
 
 The worlds are shared among ``workers`` processes (by default one per processor, at most one
 per world): each steps its worlds one after the other, writes their observations into one block
-of shared memory and answers for all of them in one message.  Gymnasium's :class:`~gymnasium.vector.AsyncVectorEnv` keeps a process per world;
-with four worlds on two cores that made 1.1 to 1.4 times the env steps a second of one world,
-the processes taking turns at every step.
+of shared memory and answers for all of them in one message.  Gymnasium's
+:class:`~gymnasium.vector.AsyncVectorEnv` keeps a process per world; with four worlds on two
+cores that made 1.1 to 1.4 times the env steps a second of one world, the processes taking
+turns at every step.
 """
 
 from __future__ import annotations
