@@ -43,3 +43,27 @@ def test_a_short_league_run_reports_every_camera_and_laser():
     assert all(f > 0 for f in run["colour_fps"] + run["thermal_fps"])  # every camera delivered pictures
     assert all(math.isclose(h, 30.0, rel_tol=0.2) for h in run["laser_hz"])  # 30 sweeps a second
     assert isinstance(run["at_rate"], bool) and LASER_BEAMS == 1040
+
+
+def test_antialias_0_draws_without_multisampling_the_same_scene(test_world):
+    """serve --antialias 0: the model's offsamples, and a picture that differs from the
+    multisampled one only along edges."""
+    import numpy as np
+
+    from usarsim.config.catalog import resolve_robot
+    from usarsim.sim.render import camera_renderer
+    from usarsim.sim.settings import SimSettings
+    from usarsim.sim.simulation import Simulation
+
+    pictures = []
+    for samples in (4, 0):
+        sim = Simulation(test_world, seed=1, settings=SimSettings(antialias=samples))
+        sim.spawn(1, resolve_robot("P2AT"), "R", (-6.0, 0.0, -0.3), (0.0, 0.0, 0.0))
+        sim.advance(0.3)
+        assert sim.model.vis.quality.offsamples == samples
+        r = camera_renderer(sim.model, 160, 120, False)
+        r.update_scene(sim.data, camera=next(c.cam_id for c in sim.cameras.render_snapshot(None).cameras.values()))
+        pictures.append(r.render())
+        r.close()
+    differ = (pictures[0] != pictures[1]).any(axis=2).mean()
+    assert 0.0 < differ < 0.2 and np.abs(pictures[0].mean() - pictures[1].mean()) < 5.0

@@ -141,10 +141,12 @@ def rate(stamps: list[float], t0: float, t1: float) -> float:
     return sum(1 for t in stamps if t0 <= t <= t1) / (t1 - t0)
 
 
-def league_run(world: str = "DM-USAR_yellow", seconds: float = 20.0, warmup_s: float = 4.0) -> dict[str, Any]:
+def league_run(
+    world: str = "DM-USAR_yellow", seconds: float = 20.0, warmup_s: float = 4.0, antialias: int = 4
+) -> dict[str, Any]:
     """One run of the league's load (see the module's text): the real-time factor, each
     camera's pictures a second and each laser's sweeps a second over ``seconds`` of wall time,
-    after ``warmup_s``."""
+    after ``warmup_s``; ``antialias``: the simulator's multisampling (serve --antialias)."""
     from usarsim.client.launch import launch
 
     with tempfile.TemporaryDirectory(prefix="usarsim-league-") as tmp:
@@ -155,7 +157,10 @@ def league_run(world: str = "DM-USAR_yellow", seconds: float = 20.0, warmup_s: f
             speed=1.0,
             image=True,
             robot_dirs=(tmp,),
-            extra_args=("--image-size", COLOUR_SIZE, "--max-fps", "0", "--image-type", "normal"),
+            extra_args=(
+                *("--image-size", COLOUR_SIZE, "--max-fps", "0", "--image-type", "normal"),
+                *("--antialias", str(int(antialias))),
+            ),
             timeout=60.0,
         )
         stop = threading.Event()
@@ -203,6 +208,7 @@ def league_run(world: str = "DM-USAR_yellow", seconds: float = 20.0, warmup_s: f
     return {
         "robots": ROBOTS,
         "seconds": seconds,
+        "antialias": antialias,
         "rtf": round(rtf, 3),
         "colour_fps": [round(x, 1) for x in colour],
         "thermal_fps": [round(x, 1) for x in thermal],
@@ -218,7 +224,7 @@ def run_league_bench(args) -> int:
     """``usarsim bench --league``: ``--runs`` runs of ``--seconds`` wall seconds each."""
     runs = []
     for i in range(max(1, int(getattr(args, "runs", 1)))):
-        r = league_run(args.world, seconds=float(args.seconds))
+        r = league_run(args.world, seconds=float(args.seconds), antialias=int(getattr(args, "antialias", 4)))
         runs.append(r)
         if not args.json:
             print(

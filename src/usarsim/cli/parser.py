@@ -181,6 +181,14 @@ def build_parser() -> argparse.ArgumentParser:
         "time, --runs times",
     )
     b.add_argument(
+        "--antialias",
+        type=int,
+        choices=(0, 2, 4, 8),
+        default=4,
+        help="with --league: the simulator's multisampling of pictures, as 'usarsim serve --antialias' "
+        "(default: %(default)s)",
+    )
+    b.add_argument(
         "--env",
         action="store_true",
         help="measure the learning environments instead: Gymnasium steps per second of one P2AT at a "

@@ -126,6 +126,7 @@ def cmd_serve(args) -> int:
             sim=SimSettings(
                 shadows=args.shadows,
                 textures=not args.no_textures,
+                antialias=args.antialias,
                 physics_threads=None if threads in (None, "auto") else int(threads),
                 sensor_thread=not args.sensors_inline,
                 report_phases=report_phases(args),

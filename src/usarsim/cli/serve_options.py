@@ -304,6 +304,14 @@ def add_serve_parser(sub: argparse._SubParsersAction[_Parser]) -> argparse.Argum
         help="cameras see plain colours instead of the materials' textures (the quickest pictures)",
     )
     s.add_argument(
+        "--antialias",
+        type=int,
+        choices=(0, 2, 4, 8),
+        default=4,
+        help="multisampling of the cameras' pictures, samples a pixel (default: %(default)s; 0: none, about "
+        "twice the pictures a second on a machine without a GPU, with jagged edges)",
+    )
+    s.add_argument(
         "--record",
         default=None,
         metavar="FILE.mcap",

@@ -101,7 +101,7 @@ def _dress(spec: mujoco.MjSpec, g, mat, box_size=None, textured: bool = True) ->
         markings.add_road_markings(spec, g, along_x, kind.specular)
 
 
-def world_spec(world: WorldConfig, *, textures: bool = True) -> mujoco.MjSpec:
+def world_spec(world: WorldConfig, *, textures: bool = True, antialias: int = 4) -> mujoco.MjSpec:
     s = mujoco.MjSpec()
     s.modelname = world.name
     s.compiler.degree = False  # joint ranges are in radians, as everywhere in usarsim
@@ -117,6 +117,7 @@ def world_spec(world: WorldConfig, *, textures: bool = True) -> mujoco.MjSpec:
     s.visual.global_.offwidth = MAX_PICTURE_WIDTH
     s.visual.global_.offheight = MAX_PICTURE_HEIGHT
     s.visual.quality.shadowsize = SHADOW_MAP_PX
+    s.visual.quality.offsamples = antialias  # multisampling of pictures (SimSettings.antialias)
     # a sky for the cameras (a pale gradient, lighter at the horizon) instead of black
     sky = s.add_texture()
     sky.name = "sky"

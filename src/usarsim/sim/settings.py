@@ -10,6 +10,7 @@ from dataclasses import dataclass
 # A number of MuJoCo pool threads asked for is held to this (serve --physics-threads takes no more).
 PHYSICS_THREADS_LIMIT = 256
 REPORT_PHASES = ("grid", "spread")  # usarsim.sim.reports
+ANTIALIAS = (0, 2, 4, 8)  # multisampling samples a pixel of a picture (4: MuJoCo's default)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -23,10 +24,13 @@ class SimSettings:
     runs on (:mod:`usarsim.sim.measuring`); ``report_phases``: "grid" (every robot reports at
     the same instants, the physics runs in the longest stretches) or "spread" (each robot on a
     phase of its own, the readings of many robots in small groups: :mod:`usarsim.sim.reports`;
-    a reading is then taken at other instants, so this one does change what robots report)."""
+    a reading is then taken at other instants, so this one does change what robots report);
+    ``antialias``: the multisampling of pictures, samples a pixel (MuJoCo's ``offsamples``; 0:
+    none, about twice the pictures a second on a software renderer, with jagged edges)."""
 
     shadows: bool = False
     textures: bool = True
+    antialias: int = 4
     physics_threads: int | None = None
     sensor_thread: bool = True
     report_phases: str = "grid"
@@ -35,5 +39,7 @@ class SimSettings:
         n = self.physics_threads
         if n is not None and not 0 <= n <= PHYSICS_THREADS_LIMIT:
             raise ValueError(f"physics_threads must be within 0..{PHYSICS_THREADS_LIMIT} (or None: automatic), got {n}")
+        if self.antialias not in ANTIALIAS:
+            raise ValueError(f"antialias must be one of {', '.join(map(str, ANTIALIAS))}, got {self.antialias!r}")
         if self.report_phases not in REPORT_PHASES:
             raise ValueError(f"report_phases must be one of {', '.join(REPORT_PHASES)}, got {self.report_phases!r}")

@@ -105,7 +105,7 @@ class Simulation:
         self.plugins = plugins or builtin_plugins()
         self.settings = settings or SimSettings()
         self.dt = world.timestep_s
-        self.spec = builder.world_spec(world, textures=self.settings.textures)
+        self.spec = builder.world_spec(world, textures=self.settings.textures, antialias=self.settings.antialias)
         self.model = self.spec.compile()
         self.data = mujoco.MjData(self.model)
         self.threads = 0  # MuJoCo's thread pool: none until the robots are many (physics_threads)
