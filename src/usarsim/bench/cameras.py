@@ -10,7 +10,7 @@ import statistics
 import threading
 import time
 
-from usarsim.bench.serving import ServedApp, logging_quiet
+from usarsim.bench.serving import ServedApp, fetch_picture, logging_quiet
 
 ROUNDS = 5  # the camera bench alternates this many served and bare runs and takes the medians
 
@@ -75,16 +75,7 @@ class _ServedCamera:
             raise
 
     def frame(self) -> None:
-        from usarsim.protocol import upis
-
-        self.viewer.sendall(upis.ask_whole())
-        reader = upis.FrameReader()
-        while True:
-            data = self.viewer.recv(min(1 << 20, reader.wanted()))
-            if not data:
-                raise ConnectionError("the image server closed the connection")
-            if reader.feed(data):
-                return
+        fetch_picture(self.viewer)
 
     def fps(self, count: int) -> float:
         t0 = time.perf_counter()

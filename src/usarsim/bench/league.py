@@ -23,6 +23,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from usarsim.bench.serving import fetch_picture
+
 LEAGUE_CLASS = "P2ATLeague"
 ROBOTS = 4
 COLOUR_FPS = 30.0  # the league's colour camera: 320 x 240 at 30 frames a second
@@ -109,24 +111,12 @@ class _Viewer(threading.Thread):
     def local_port(self) -> int:
         return int(self.sock.getsockname()[1])
 
-    def picture(self) -> None:
-        from usarsim.protocol import upis
-
-        self.sock.sendall(upis.ask_whole())
-        reader = upis.FrameReader()
-        while True:
-            data = self.sock.recv(max(1, reader.wanted()))
-            if not data:
-                raise ConnectionError("the image server closed the connection")
-            if reader.feed(data):
-                return
-
     def run(self) -> None:
         period = 1.0 / self.fps
         due = time.perf_counter()
         try:
             while not self.stop.is_set():
-                self.picture()
+                fetch_picture(self.sock)
                 now = time.perf_counter()
                 self.frames.append(now)
                 due = max(due + period, now)  # late: the next one at once, not a burst

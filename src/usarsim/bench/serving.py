@@ -79,3 +79,18 @@ def logging_quiet() -> None:
     import logging
 
     logging.getLogger("usarsim").setLevel(logging.WARNING)
+
+
+def fetch_picture(sock) -> None:
+    """Ask an image server for one whole picture on ``sock`` and read it to its end (UPIS,
+    protocol.md 10); ConnectionError when the server closes the connection."""
+    from usarsim.protocol import upis
+
+    sock.sendall(upis.ask_whole())
+    reader = upis.FrameReader()
+    while True:
+        data = sock.recv(max(1, min(1 << 20, reader.wanted())))
+        if not data:
+            raise ConnectionError("the image server closed the connection")
+        if reader.feed(data):
+            return

@@ -7,6 +7,7 @@ import argparse
 from usarsim import __version__
 from usarsim.cli.options import _add_verbose, _Parser, _size
 from usarsim.cli.serve_options import add_serve_parser
+from usarsim.sim.settings import ANTIALIAS
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -183,7 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--antialias",
         type=int,
-        choices=(0, 2, 4, 8),
+        choices=ANTIALIAS,
         default=4,
         help="with --league: the simulator's multisampling of pictures, as 'usarsim serve --antialias' "
         "(default: %(default)s)",

@@ -15,6 +15,7 @@ from usarsim.cli.options import (
     _speed,
     _threads,
 )
+from usarsim.sim.settings import ANTIALIAS
 
 
 def _model_name(text: str) -> str:
@@ -306,7 +307,7 @@ def add_serve_parser(sub: argparse._SubParsersAction[_Parser]) -> argparse.Argum
     s.add_argument(
         "--antialias",
         type=int,
-        choices=(0, 2, 4, 8),
+        choices=ANTIALIAS,
         default=4,
         help="multisampling of the cameras' pictures, samples a pixel (default: %(default)s; 0: none, about "
         "twice the pictures a second on a machine without a GPU, with jagged edges)",

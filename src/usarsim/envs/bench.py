@@ -6,6 +6,15 @@ import time
 from typing import Any
 
 
+def timed(steps: int, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """An environment's arguments for ``steps`` timed steps: a time limit long enough for every
+    one unless given, and no simulator launched ahead (it would compete with the steps timed)."""
+    if steps < 1:
+        raise ValueError(f"steps must be at least 1, got {steps!r}")
+    period = float(kwargs.get("control_period_s", 0.1))
+    return {"time_limit_s": period * (steps + 10), "prelaunch": False, **kwargs}
+
+
 def bench_env(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any) -> float:
     """Environment steps per second over ``steps`` steps with random actions (seeded with
     ``seed``): of :class:`~usarsim.envs.ExploreEnv` when ``team`` is 0, else of a
@@ -16,11 +25,7 @@ def bench_env(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any) 
     from .explore import ExploreEnv
     from .team import TeamExplore
 
-    if steps < 1:
-        raise ValueError(f"steps must be at least 1, got {steps!r}")
-    period = float(kwargs.get("control_period_s", 0.1))
-    kwargs.setdefault("time_limit_s", period * (steps + 10))
-    kwargs.setdefault("prelaunch", False)  # no simulator starting beside the steps timed
+    kwargs = timed(steps, kwargs)
     if team:
         env = TeamExplore(robots=team, **kwargs)
         try:
@@ -62,11 +67,7 @@ def bench_vector(steps: int = 100, worlds: int = 4, *, seed: int = 0, **kwargs: 
     not counted (an episode that ends starts again within a step: that step is counted)."""
     from .vector import make_vector
 
-    if steps < 1:
-        raise ValueError(f"steps must be at least 1, got {steps!r}")
-    period = float(kwargs.get("control_period_s", 0.1))
-    kwargs.setdefault("time_limit_s", period * (steps + 10))
-    env = make_vector(worlds, **kwargs)
+    env = make_vector(worlds, **timed(steps, kwargs))
     try:
         env.reset(seed=seed)
         env.action_space.seed(seed)

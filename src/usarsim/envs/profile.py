@@ -58,14 +58,12 @@ def env_profile(steps: int = 200, team: int = 0, *, seed: int = 0, **kwargs: Any
     :class:`~usarsim.envs.TeamExplore` of ``team`` robots, with random actions seeded with
     ``seed``: steps a second, wall, environment and simulator processor milliseconds, and bare
     physics milliseconds (see the module's text).  ``kwargs`` go to the environment."""
+    from .bench import timed
     from .explore import ExploreEnv
     from .team import TeamExplore
 
-    if steps < 1:
-        raise ValueError(f"steps must be at least 1, got {steps!r}")
+    kwargs = timed(steps, kwargs)
     period = float(kwargs.get("control_period_s", 0.1))
-    kwargs.setdefault("time_limit_s", period * (steps + 10))
-    kwargs.setdefault("prelaunch", False)
     env: Any = TeamExplore(robots=team, **kwargs) if team else ExploreEnv(**kwargs)
     wall = cpu = 0.0
     try:
