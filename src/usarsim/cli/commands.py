@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 from pathlib import Path
@@ -86,13 +87,27 @@ def cmd_validate(args) -> int:
             print(describe_route_file(path))
         elif kind == "world":
             from usarsim.config.world_file import check_world_file
+            from usarsim.maps.variation import apply_variant, check_arena
             from usarsim.sim.simulation import Simulation
 
+            variant = getattr(args, "variant", None)
             w = check_world_file(path)
+            if variant is not None:
+                w = apply_variant(w, variant)
+            problems = check_arena(w)
+            for found in problems:
+                if variant is not None:  # a variant's placing must keep every rule
+                    print(f"usarsim: error: {w.name} variant {variant}: {found}", file=sys.stderr)
+                else:  # a world as written may hide a victim where few robots get (a void under a slab)
+                    logging.getLogger("usarsim.validate").info("%s: %s", w.name, found)
+            if problems and variant is not None:
+                return 1
+            notes = "" if not problems else f", {len(problems)} placement notes (-v lists them)"
             sim = Simulation(w)
             print(
-                f"ok: world {w.name}: {len(w.objects)} objects, {len(w.start_poses)} start poses, "
-                f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms"
+                f"ok: world {w.name}{'' if variant is None else f' variant {variant}'}: {len(w.objects)} objects, "
+                f"{len(w.start_poses)} start poses, {len(w.victims)} victims, "
+                f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms{notes}"
             )
         else:
             from usarsim.config.robot import class_name_problem, load_robot

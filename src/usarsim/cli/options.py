@@ -57,6 +57,17 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _variant(text: str) -> int:
+    """A world's variant: a whole number >= 0 (usarsim.maps.variation)."""
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a variant is a whole number >= 0, got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"a variant is a whole number >= 0, got {text!r}")
+    return n
+
+
 # The ports ``usarsim serve`` listens on when none is given, by option; ``--port-offset N``
 # adds N to each (a second server beside the first needs nothing else).
 FOXGLOVE_PORT = 8765  # Foxglove's own default for a live WebSocket connection

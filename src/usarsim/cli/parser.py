@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from usarsim import __version__
-from usarsim.cli.options import _add_verbose, _Parser, _size
+from usarsim.cli.options import _add_verbose, _Parser, _size, _variant
 from usarsim.cli.serve_options import add_serve_parser
 from usarsim.sim.settings import ANTIALIAS
 
@@ -43,6 +43,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PATH|NAME",
         help="path of a .yaml world or robot file, or of a .rndf or .mdf file; or the name of a "
         "shipped world (DM-USAR_yellow) or robot class (P2AT)",
+    )
+    v.add_argument(
+        "--variant",
+        type=_variant,
+        metavar="N",
+        help="a world: check its variant N (victims, false alarms, RFID tags and debris placed from the "
+        "seed N, docs/world-files.md): every victim reachable, nothing inside a solid",
     )
 
     w = sub.add_parser("worlds", help="list the worlds that come with usarsim")
@@ -242,6 +249,9 @@ def build_parser() -> argparse.ArgumentParser:
     from usarsim.sweep.cli import add_parsers as add_sweep_parsers
 
     add_sweep_parsers(sub)  # 'usarsim sweep' and 'usarsim report' (docs/experiments.md)
+    from usarsim.maps.cli import add_parsers as add_map_parsers
+
+    add_map_parsers(sub)  # 'usarsim map' and 'usarsim score-map' (docs/scoring.md)
     from usarsim.ros2.cli import add_parser as add_ros2_parser
 
     r2 = add_ros2_parser(sub)  # 'usarsim ros2' (docs/ros2.md)

@@ -42,14 +42,14 @@ def _raise_file_limit(want: int = 65536) -> None:
 
 
 def cmd_serve(args) -> int:
-    from usarsim.config.catalog import resolve_world
     from usarsim.errors import UsarsimError
+    from usarsim.maps.variation import load_arena
     from usarsim.server.app import Application
     from usarsim.server.config import ServeConfig
     from usarsim.server.listener import call_on_loop
 
     try:
-        world = resolve_world(args.world)
+        world = load_arena(args.world, args.variant)
     except UsarsimError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
@@ -155,6 +155,7 @@ def cmd_serve(args) -> int:
             record_camera_size=args.record_camera_size,
             score=args.score,
             score_file=args.score_file,
+            team_map=args.team_map,
             step_grace_s=_step_grace_s(args),
         )
     except ValueError as exc:
@@ -192,7 +193,14 @@ def cmd_serve(args) -> int:
             )
         bridge = await _start_ros2_bridge(args, app) if args.ros2 else None
         mode = "lock-step" if args.lockstep else ("max speed" if args.speed is None else f"speed {args.speed:g}x")
-        log.info("world %s loaded (%d start poses), %s, seed %d", world.name, len(world.start_poses), mode, args.seed)
+        log.info(
+            "world %s%s loaded (%d start poses), %s, seed %d",
+            world.name,
+            "" if world.variant is None else f" variant {world.variant}",
+            len(world.start_poses),
+            mode,
+            args.seed,
+        )
         await stop.wait()
         failure = app.facade.failure
         if failure is not None:

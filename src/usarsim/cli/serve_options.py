@@ -14,6 +14,7 @@ from usarsim.cli.options import (
     _size,
     _speed,
     _threads,
+    _variant,
 )
 from usarsim.sim.settings import ANTIALIAS
 
@@ -39,6 +40,14 @@ def add_serve_parser(sub: argparse._SubParsersAction[_Parser]) -> argparse.Argum
         "--world",
         default="DM-USAR_yellow",
         help="world name (see 'usarsim worlds') or path of a world file (default: %(default)s)",
+    )
+    s.add_argument(
+        "--variant",
+        type=_variant,
+        metavar="N",
+        help="serve variant N of the world: its victims, false alarms, RFID tags and movable debris placed "
+        "from the seed N by the world's variation rules, some doorways closed or opened (docs/world-files.md, "
+        "'Variants'); the same N gives the same arena. Default: the world as its file places things",
     )
     s.add_argument(
         "--host",
@@ -361,6 +370,14 @@ def add_serve_parser(sub: argparse._SubParsersAction[_Parser]) -> argparse.Argum
         default=None,
         metavar="FILE.json",
         help="write the run's final score as JSON when the server stops (docs/scoring.md)",
+    )
+    s.add_argument(
+        "--team-map",
+        default=None,
+        metavar="MAP.yaml",
+        help="where the team hands its map in (a map_server YAML file and its picture, written by the "
+        "controller before the run ends): when the server stops the map is scored against the world's "
+        "ground truth and its score goes into --score-file under 'map' (docs/scoring.md, 'Map quality')",
     )
     s.add_argument(
         "--foxglove",

@@ -12,10 +12,19 @@ from collections.abc import Callable
 from typing import Any
 
 from usarsim.protocol import messages as M
-from usarsim.protocol.truth import TruthObject, format_truth_request, parse_truth_object
+from usarsim.protocol.truth import (
+    DEFAULT_MAP_HEIGHT_M,
+    DEFAULT_MAP_RESOLUTION_M,
+    TruthObject,
+    format_map_request,
+    format_truth_request,
+    parse_map_answer,
+    parse_truth_object,
+)
 
 from .core import DEFAULT_TIMEOUT_S, ClientError, ClientTimeout, ConnectionState, init_line
 from .robot import Robot
+from .truthmap import GroundTruthGrid
 
 __all__ = ["Robot", "World", "connect"]
 
@@ -256,24 +265,48 @@ class World:
         return self._truth(class_name, name)
 
     def _truth(self, class_name: str | None, name: str | None) -> list[TruthObject]:
+        out: list[TruthObject] = []
+        for line in self._truth_lines(format_truth_request(class_name, name)):
+            obj = parse_truth_object(line)
+            if obj is not None:
+                out.append(obj)
+        return out
+
+    def ground_truth_map(
+        self, resolution: float = DEFAULT_MAP_RESOLUTION_M, height: float = DEFAULT_MAP_HEIGHT_M
+    ) -> GroundTruthGrid:
+        """The world's ground-truth occupancy map from the ground-truth service (``{Map}``, our
+        extension): the world as served (its variant applied), ``resolution`` metres a cell,
+        ``height`` metres above the floor (docs/scoring.md, "Map quality")."""
+        import zlib
+
+        import numpy as np
+
+        lines = self._truth_lines(format_map_request(resolution, height))
+        header, payload = parse_map_answer(lines)
+        data = np.frombuffer(zlib.decompress(payload), np.int8).reshape(header.height, header.width)
+        return GroundTruthGrid(header, data)
+
+    def _truth_lines(self, request: str) -> list[str]:
+        """The lines of the ground-truth service's answer to ``request``, before ``{End}``."""
         try:
             s = socket.create_connection((self.host, self.truth_port), timeout=self.timeout)
         except OSError as exc:
             raise ClientError(
                 f"cannot reach the ground-truth service at {self.host}:{self.truth_port} ({exc})"
             ) from exc
-        out: list[TruthObject] = []
+        out: list[str] = []
         with s:
-            s.sendall(format_truth_request(class_name, name).encode("ascii"))
+            s.sendall(request.encode("ascii"))
             buf = b""
             deadline = time.monotonic() + self.timeout
             while True:
                 while b"\n" in buf:
-                    line, buf = buf.split(b"\n", 1)
-                    obj = parse_truth_object(line.decode("ascii", "replace"))
-                    if obj is None:
+                    raw, buf = buf.split(b"\n", 1)
+                    line = raw.decode("ascii", "replace")
+                    if line.strip() == "{End}":
                         return out
-                    out.append(obj)
+                    out.append(line)
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise ClientTimeout(f"no {{End}} from the ground-truth service within {self.timeout:g} s")

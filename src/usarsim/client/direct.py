@@ -20,10 +20,10 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-from usarsim.config.catalog import resolve_world
+from usarsim.maps.variation import load_arena
 from usarsim.protocol import messages as M
 from usarsim.protocol.received import as_received
-from usarsim.protocol.truth import TruthObject, format_truth_object, parse_truth_object
+from usarsim.protocol.truth import TruthObject, format_truth_object, parse_truth_object, parse_truth_request
 from usarsim.server.direct import DirectServer
 from usarsim.sim.settings import SimSettings
 
@@ -104,6 +104,16 @@ class DirectWorld(World):
     def _open(self, what: str, timeout: float) -> Any:
         return DirectClientConnection(self._server.direct, what, timeout)
 
+    def _truth_lines(self, request: str) -> list[str]:
+        # a {Map} request answered as the ground-truth service answers it
+        from usarsim.server.truth import map_answer
+
+        asked = parse_truth_request(request)
+        if asked.map is None:
+            raise ClientError(f"the direct path answers ground-truth maps here, not {request.strip()!r}")
+        lines = map_answer(self._server.direct.world, asked.map).split("\r\n")
+        return [line for line in lines if line and line != "{End}"]
+
     def _truth(self, class_name: str | None, name: str | None) -> list[TruthObject]:
         # each object as the ground-truth service prints it and a client reads it back
         out = []
@@ -126,6 +136,7 @@ class InprocServer:
         world: str | os.PathLike = "DM-USAR_yellow",
         *,
         seed: int = 0,
+        variant: int | None = None,
         robot_dirs: tuple[str, ...] = (),
         settings: SimSettings | None = None,
         timeout: float = DEFAULT_TIMEOUT_S,
@@ -133,7 +144,7 @@ class InprocServer:
         self.timeout = timeout
         self.ports: dict[str, int] = {}
         self.direct = DirectServer(
-            resolve_world(os.fspath(world)), seed=int(seed), settings=settings, robot_dirs=tuple(robot_dirs)
+            load_arena(os.fspath(world), variant), seed=int(seed), settings=settings, robot_dirs=tuple(robot_dirs)
         )
 
     def connect(self, timeout: float | None = None) -> DirectWorld:

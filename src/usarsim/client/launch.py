@@ -136,9 +136,11 @@ def launch(
     extra_args: tuple[str, ...] = (),
     timeout: float = DEFAULT_TIMEOUT_S,
     transport: str = "tcp",
+    variant: int | None = None,
 ) -> Any:
-    """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file),
-    ``seed``, lock-step (default) or real time at ``speed`` (None: as fast as it can).
+    """Start a simulator on free ports of 127.0.0.1: ``world`` (a shipped name or a file; its
+    ``variant``, ``usarsim serve --variant``, when given), ``seed``, lock-step (default) or
+    real time at ``speed`` (None: as fast as it can).
     ``wireless``, ``image`` and ``web`` start those services too; ``record`` records the run
     to that MCAP file (written as it goes, closed when the server stops); ``foxglove`` serves it live to
     Foxglove (its port in ``ports["foxglove"]``).  Use it in a ``with`` block, or call
@@ -154,6 +156,7 @@ def launch(
         return _launch_inproc(
             world,
             seed=seed,
+            variant=variant,
             lockstep=lockstep,
             robot_dirs=robot_dirs,
             timeout=timeout,
@@ -167,6 +170,8 @@ def launch(
             },
         )
     args = ["--world", str(world), "--seed", str(int(seed)), "--port", "0", "--truth-port", "0"]
+    if variant is not None:
+        args += ["--variant", str(int(variant))]
     expected = {"control", "truth"} | ({"image"} if image else set()) | ({"web"} if web else set())
     expected |= {"comserver", "wss", "cominterface"} if wireless else set()
     expected |= {"foxglove"} if foxglove else set()
@@ -192,7 +197,14 @@ TRANSPORTS = ("tcp", "inproc")
 
 
 def _launch_inproc(
-    world: str, *, seed: int, lockstep: bool, robot_dirs: tuple[str, ...], timeout: float, asked: dict[str, bool]
+    world: str,
+    *,
+    seed: int,
+    variant: int | None,
+    lockstep: bool,
+    robot_dirs: tuple[str, ...],
+    timeout: float,
+    asked: dict[str, bool],
 ) -> Any:
     """An in-process simulator (:class:`usarsim.client.direct.InprocServer`)."""
     if not lockstep:
@@ -205,4 +217,4 @@ def _launch_inproc(
         )
     from .direct import InprocServer  # loads the simulation: only when asked for
 
-    return InprocServer(world, seed=seed, robot_dirs=robot_dirs, timeout=timeout)
+    return InprocServer(world, seed=seed, variant=variant, robot_dirs=robot_dirs, timeout=timeout)

@@ -290,6 +290,10 @@ class WorldConfig:
     # kind; their solids are among ``objects``, their landmarks here
     elements: tuple[tuple[str, tuple[Any, ...]], ...] = ()
     landmarks: tuple[Landmark, ...] = ()
+    # the ``variation`` section: how variants place things (usarsim.config.variation's
+    # VariationRules; None: the defaults), and the variant this world is (None: as written)
+    variation: Any = None
+    variant: int | None = None
     extra: dict = field(default_factory=dict)
 
     def start_pose(self, name: str) -> StartPose | None:

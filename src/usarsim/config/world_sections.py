@@ -15,6 +15,7 @@ from typing import Any
 from usarsim.config.channel import read_channel
 from usarsim.config.reader import FieldDefaults, Section
 from usarsim.config.utm import UTM_LETTERS, UtmCoordinate, utm_band_limits_deg, utm_to_latlon
+from usarsim.config.variation import read_variation
 from usarsim.config.world import (
     LIGHT_TYPES,
     VICTIM_BUILDS,
@@ -81,6 +82,7 @@ def read_world(data: dict[Any, Any], path: str) -> WorldConfig:
         raise top.error("ambient_light", f"each colour component must be within [0, 1], got {list(ambient)}")
 
     wireless = read_wireless(top.section("wireless")) if top.has("wireless") else d.wireless
+    variation = read_variation(top.section("variation"), names) if top.has("variation") else d.variation
 
     top.finish()
     return WorldConfig(
@@ -105,6 +107,7 @@ def read_world(data: dict[Any, Any], path: str) -> WorldConfig:
         wireless=wireless,
         elements=elements,
         landmarks=landmarks,
+        variation=variation,
     )
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -58,6 +59,10 @@ class ExploreEnv(gym.Env):
     the next reset and by :meth:`close`); with ``host``/``port`` the episodes run in that
     lock-step simulator, whose seed is its own, and each reset spawns the robot again (the
     rest of the world is not reset, so episodes are not reproducible there).  With
+    ``variants`` (a range or list of the world's variants, ``usarsim serve --variant``) an
+    episode of seed s plays variant ``variants[s % len(variants)]``, its victims, tags and
+    debris placed anew: train on ``range(0, 800)`` and test on ``range(800, 1000)``, and no
+    policy can learn where a victim lies.  With
     ``prelaunch``, once an episode has run a few steps, the simulator the next reset
     without a seed will need (with the next seed the generator will draw) is launched in
     the background, so that such a reset after a long episode takes a fraction of a second.
@@ -86,6 +91,7 @@ class ExploreEnv(gym.Env):
         prelaunch: bool = True,
         render_mode: str | None = None,
         transport: str = "tcp",
+        variants: Sequence[int] | None = None,
     ):
         if render_mode is not None:
             raise ValueError(f"ExploreEnv renders nothing (render_modes: []), got render_mode={render_mode!r}")
@@ -99,6 +105,7 @@ class ExploreEnv(gym.Env):
             robot_dirs=tuple(robot_dirs),
             timeout=timeout_s,
             transport=transport,
+            variants=variants,
         )
         self._finalizer = weakref.finalize(self, self.sim.stop)
         self.spec_robot = self.sim.describe(cfg, start)
@@ -178,7 +185,8 @@ class ExploreEnv(gym.Env):
         return 0.0 if self.sim.world is None else self.sim.world.time - self._t0
 
     def _info(self, out: Outcome) -> dict[str, Any]:
-        return {
+        variant = {"variant": self.sim.variant} if self.sim.variants else {}
+        return variant | {
             "time_s": round(self.elapsed_s, 6),
             "new_area_m2": len(out.new_cells) * self.coverage.cell_area_m2,
             "explored_m2": self.coverage.seen_m2,

@@ -71,6 +71,19 @@ def flush(robots: Sequence[Robot]) -> None:
 TRANSPORTS = ("tcp", "inproc")
 
 
+def check_variants(variants: Sequence[int] | None) -> tuple[int, ...]:
+    """The environments' ``variants`` (a range or list of whole numbers >= 0) as a tuple."""
+    if variants is None:
+        return ()
+    out = tuple(variants)
+    if not out:
+        raise ValueError("variants: give at least one variant (a range such as range(0, 800), or a list)")
+    bad = [v for v in out if isinstance(v, bool) or not isinstance(v, int) or v < 0]
+    if bad:
+        raise ValueError(f"variants are whole numbers >= 0, got {bad[0]!r}")
+    return out
+
+
 class Simulator:
     """Where an environment's episodes run.  With ``port`` None each :meth:`start` launches
     a fresh lock-step simulator of ``world`` with the episode's seed (and its wireless
@@ -93,6 +106,7 @@ class Simulator:
         robot_dirs: tuple[str, ...] = (),
         timeout: float = 10.0,
         transport: str = "tcp",
+        variants: Sequence[int] | None = None,
     ):
         if transport not in TRANSPORTS:
             raise ValueError(f"transport must be one of {', '.join(TRANSPORTS)}, got {transport!r}")
@@ -104,6 +118,10 @@ class Simulator:
             )
         self.transport = transport
         self.world_name = world
+        self.variants = check_variants(variants)
+        self.variant: int | None = None  # the current episode's
+        if self.variants and port is not None:
+            raise ValueError("variants need a simulator launched for each episode: give no port")
         self.host, self.port, self.truth_port = host, port, truth_port
         self._comserver_port = comserver_port
         self.wireless = wireless
@@ -170,6 +188,7 @@ class Simulator:
         """The world of a new episode, without robots: a simulator launched with ``seed``
         (one launched ahead by :meth:`prelaunch` if it has that seed), or the shared one."""
         if self.launches:
+            self.variant = self.variant_for(seed)
             spare = self._spares.pop(seed, None)
             self._discard_spares()  # launched for a reset that did not come
             server = spare.result() if spare is not None else self._launch(seed)
@@ -217,14 +236,26 @@ class Simulator:
             self._background(spare.discard)
         self._spares.clear()
 
+    def variant_for(self, seed: int) -> int | None:
+        """The world's variant an episode of ``seed`` plays: ``variants[seed % len(variants)]``
+        (None without variants: the world as written)."""
+        return self.variants[seed % len(self.variants)] if self.variants else None
+
     def _launch(self, seed: int) -> Server:
+        variant = self.variant_for(seed)
         if self.transport == "inproc":
             return launch(  # type: ignore[no-any-return]  # an InprocServer, with Server's connect and close
-                self.world_name, seed=seed, robot_dirs=self.robot_dirs, timeout=self.timeout, transport="inproc"
+                self.world_name,
+                seed=seed,
+                variant=variant,
+                robot_dirs=self.robot_dirs,
+                timeout=self.timeout,
+                transport="inproc",
             )
         return launch(
             self.world_name,
             seed=seed,
+            variant=variant,
             lockstep=True,
             wireless=self.wireless,
             robot_dirs=self.robot_dirs,

@@ -53,7 +53,7 @@ class TeamExplore(ParallelEnv):
     (``--wireless-model``) and ``wireless_config`` (``--wireless-config``), which a launched
     simulator is started with and which give the cutoff; with ``host``/``port``, give
     ``comserver_port`` and, if the running simulator uses another model, ``cutoff_dbm``.
-    Episodes run as ExploreEnv's do (``prelaunch`` likewise).
+    Episodes run as ExploreEnv's do (``prelaunch`` and ``variants`` likewise).
     """
 
     metadata = {"name": "usarsim_team_explore_v0", "render_modes": [], "is_parallelizable": True}
@@ -85,6 +85,7 @@ class TeamExplore(ParallelEnv):
         prelaunch: bool = True,
         render_mode: str | None = None,
         transport: str = "tcp",
+        variants: Sequence[int] | None = None,
     ):
         if render_mode is not None:
             raise ValueError(f"TeamExplore renders nothing (render_modes: []), got render_mode={render_mode!r}")
@@ -119,6 +120,7 @@ class TeamExplore(ParallelEnv):
             robot_dirs=tuple(robot_dirs),
             timeout=timeout_s,
             transport=transport,
+            variants=variants,
         )
         self._finalizer = weakref.finalize(self, self.sim.stop)
         self.spec_robot = self.sim.describe(cfg, self.starts[0])

@@ -35,9 +35,11 @@ class ScoreKeeper:
         print_every_s: float = 0.0,
         on_line: Callable[[str], None] | None = None,
         weights: Weights | None = None,
+        team_map: str | None = None,
     ):
         self.world = world
         self.path = path
+        self.team_map = team_map
         self.print_every_s = print_every_s
         self.on_line = on_line or (lambda line: None)
         self.scorer = Scorer(world, seed=seed, weights=weights)
@@ -62,6 +64,8 @@ class ScoreKeeper:
             self._q.put(None)
             self._thread.join()
         result = self.scorer.result()
+        if self.team_map is not None:
+            result["map"] = score_team_map(self.team_map, self.world)
         if self.print_every_s > 0:
             self.on_line(self.scorer.line())
         if self.path is not None:
@@ -103,3 +107,24 @@ class ScoreKeeper:
                 if self.error is None:
                     self.error = exc
                     log.exception("score: cannot score %s", type(item).__name__)
+
+
+def score_team_map(path: str, world: WorldConfig) -> dict:
+    """The score of the map the team handed in at ``path`` (docs/scoring.md, "Map quality"), or
+    ``{"error": ...}`` saying why there is none."""
+    from usarsim.errors import UsarsimError
+    from usarsim.maps.mapfile import read_map
+    from usarsim.maps.quality import score_map
+    from usarsim.maps.truth import ground_truth_map
+
+    if not os.path.exists(path):
+        log.warning("score: no map was handed in at %s", path)
+        return {"error": f"no map was handed in at {path}"}
+    try:
+        team = read_map(path)
+        result: dict = score_map(team, ground_truth_map(world, variant=world.variant)).as_dict()
+    except (UsarsimError, ValueError) as exc:
+        log.warning("score: the map handed in at %s cannot be scored: %s", path, exc)
+        return {"error": f"the map handed in at {path} cannot be scored: {exc}"}
+    log.info("score: map %s scored (coverage %.3f, accuracy %.3f)", path, result["coverage"], result["accuracy"])
+    return result

@@ -121,6 +121,7 @@ class Application:
                 world,
                 seed=c.seed,
                 path=c.score_file,
+                team_map=c.team_map,
                 print_every_s=c.score_every_s if c.score else 0.0,
                 on_line=on_score_line,
             )

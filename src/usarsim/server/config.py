@@ -66,6 +66,7 @@ class ServeConfig:
     record_camera_size: tuple[int, int] = (320, 240)
     score: bool = False
     score_file: str | None = None
+    team_map: str | None = None  # the team's map_server map, scored into the score file at the end
     score_every_s: float = 10.0
 
     def __post_init__(self) -> None:

@@ -14,12 +14,21 @@ exceed asyncio's high-water mark no further request is asked.
 
 from __future__ import annotations
 
+import asyncio
 import collections
 import logging
 
 from usarsim.errors import ProtocolError
 from usarsim.protocol.framing import LineBuffer
-from usarsim.protocol.truth import END, TruthObject, format_truth_object, parse_truth_request
+from usarsim.protocol.truth import (
+    END,
+    MapHeader,
+    MapRequest,
+    TruthObject,
+    format_map_answer,
+    format_truth_object,
+    parse_truth_request,
+)
 from usarsim.server.connection import ServerConnection
 from usarsim.server.listener import TcpListener
 from usarsim.sim.api import Facade, when_done
@@ -74,7 +83,22 @@ class TruthConnection(ServerConnection):
                 self.write_text(END)
                 continue
             self._busy = True
+            if request.map is not None:
+                self.server.ground_truth_map(request.map).add_done_callback(self._answer_map)
+                continue
             when_done(self.server.facade.truth(request.class_name, request.name), self._answer_threadsafe)
+
+    def _answer_map(self, future: asyncio.Future) -> None:
+        self._busy = False
+        if future.cancelled():
+            return
+        exc = future.exception()
+        if exc is not None:
+            log.error("%s: no ground-truth map: %s", self.label, exc)
+            self.write_text(END)
+        else:
+            self.write_text(future.result())
+        self._next()
 
     def _answer(self, rows, error) -> None:
         self._busy = False
@@ -92,6 +116,45 @@ class TruthServer(TcpListener):
         super().__init__(host, port)
         self.facade = facade
         self.max_connections = max_connections
+        self._maps: dict[tuple[float, float], asyncio.Future] = {}
 
     def make_protocol(self) -> TruthConnection:
         return TruthConnection(self)
+
+    def ground_truth_map(self, request: MapRequest) -> asyncio.Future:
+        """The answer to a ``{Map}`` request (a text), made once per resolution and height on a
+        worker thread (usarsim.maps.truth: the world as served, its variant applied)."""
+        key = (request.resolution, request.height)
+        future = self._maps.get(key)
+        if future is None or (future.done() and future.exception() is not None):
+            future = asyncio.get_running_loop().run_in_executor(None, map_answer, self.facade.world, request)
+            self._maps[key] = future
+        return future
+
+
+# the most cells a ground-truth map may have (a 200 x 200 m world at 5 cm)
+MAX_MAP_CELLS = 16_000_000
+
+
+def map_answer(world, request: MapRequest) -> str:
+    import math
+    import zlib
+
+    from usarsim.maps.truth import ground_truth_map
+
+    (sx, sy) = world.floor.size
+    cells = math.ceil(sx / request.resolution) * math.ceil(sy / request.resolution)
+    if cells > MAX_MAP_CELLS:
+        raise ValueError(f"{cells} cells at {request.resolution:g} m: more than {MAX_MAP_CELLS}; ask a coarser one")
+    truth = ground_truth_map(world, resolution=request.resolution, height=request.height, variant=world.variant)
+    g = truth.grid
+    header = MapHeader(
+        world=world.name,
+        variant=-1 if world.variant is None else int(world.variant),
+        resolution=g.resolution,
+        origin=g.origin,
+        width=g.shape[1],
+        height=g.shape[0],
+        sensing_height=request.height,
+    )
+    return format_map_answer(header, zlib.compress(g.data.astype("int8").tobytes(), 6))
