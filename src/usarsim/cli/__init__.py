@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     from usarsim.extras import MissingExtraError, require
 
     try:
-        if args.command in ("sweep", "report"):
+        if args.command in ("sweep", "report", "compete"):
             require("sweep", f"usarsim {args.command}")
         elif args.command == "replay":
             require("record", "usarsim replay")

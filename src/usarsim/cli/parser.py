@@ -252,6 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
     from usarsim.maps.cli import add_parsers as add_map_parsers
 
     add_map_parsers(sub)  # 'usarsim map' and 'usarsim score-map' (docs/scoring.md)
+    from usarsim.compete.cli import add_parser as add_compete_parser
+
+    add_compete_parser(sub)  # 'usarsim compete' (docs/competitions.md)
     from usarsim.ros2.cli import add_parser as add_ros2_parser
 
     r2 = add_ros2_parser(sub)  # 'usarsim ros2' (docs/ros2.md)

@@ -132,7 +132,7 @@ def cmd_score_map(args) -> int:
     if args.picture:
         from usarsim.maps.picture import draw_overlay
 
-        draw_overlay(args.picture, team.grid, truth, score)
+        draw_overlay(args.picture, team.grid, truth, result)
         result["picture"] = args.picture
     if args.json:
         print(json.dumps(result, indent=2))
@@ -147,10 +147,10 @@ def format_score(r: dict, world: str, variant: int | None) -> str:
     lines = [
         f"map scored against {world}{'' if variant is None else f' variant {variant}'}:",
         f"  alignment       turned {a['theta_deg']:+.2f} deg, moved ({a['tx']:+.3f}, {a['ty']:+.3f}) m, "
-        f"residual {r['residual_m']:.3f} m",
+        f"residual {'-' if r['residual_m'] is None else format(r['residual_m'], '.3f')} m",
         f"  coverage        {100 * r['coverage']:.1f} % of the reachable free floor",
-        f"  accuracy        {100 * r['accuracy']:.1f} % of the map's known cells "
-        f"(occupied {100 * r['occupied_accuracy']:.1f} %, free {100 * r['free_accuracy']:.1f} %)",
+        f"  accuracy        {100 * r['accuracy']:.1f} % (occupied cells {100 * r['occupied_accuracy']:.1f} % "
+        f"right, free cells {100 * r['free_accuracy']:.1f} % right)",
         f"  victims on map  {r['victims_on_map']} of {r['victims_total']} ({r['victims_reported']} reported)",
     ]
     return "\n".join(lines)

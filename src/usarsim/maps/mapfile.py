@@ -26,9 +26,11 @@ import numpy as np
 from usarsim.errors import ConfigError
 from usarsim.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
-# map_saver's pixel values and thresholds (nav2_map_server's defaults)
+# map_saver's pixel values and the thresholds it writes into the YAML (ROS's map_server
+# documentation, wiki.ros.org/map_server: occupied_thresh 0.65, free_thresh 0.196): an unknown
+# cell's 205 reads back as (255 - 205) / 255 = 0.196..., not below free_thresh, so unknown
 PIXEL_OCCUPIED, PIXEL_FREE, PIXEL_UNKNOWN = 0, 254, 205
-OCCUPIED_THRESH, FREE_THRESH = 0.65, 0.25
+OCCUPIED_THRESH, FREE_THRESH = 0.65, 0.196
 MODES = ("trinary", "scale", "raw")
 
 
@@ -132,7 +134,7 @@ def _read_picture(image: Path, bad) -> np.ndarray:
 
 def _occupancy(pixels: np.ndarray, mode: str, negate: bool, occ_t: float, free_t: float) -> np.ndarray:
     """map_server's reading of the picture, bottom row first."""
-    values = np.flipud(pixels).astype(float)
+    values = np.flipud(pixels).astype(np.float64)
     data = np.full(values.shape, UNKNOWN, np.int8)
     if mode == "raw":
         known = values <= 100
@@ -145,45 +147,9 @@ def _occupancy(pixels: np.ndarray, mode: str, negate: bool, occ_t: float, free_t
     return data
 
 
-# colours of the picture for people (RGB)
-COLOURS = {
-    FREE: (255, 255, 255),
-    OCCUPIED: (30, 30, 30),
-    UNKNOWN: (190, 190, 200),
-    "victim": (220, 40, 40),
-    "tag": (40, 120, 220),
-    "start": (30, 160, 60),
-}
-
-
 def draw_map(path: str | Path, grid: OccupancyMap, markers=(), *, scale: int = 2) -> Path:
-    """A PNG of ``grid`` for people (north up: the map's X points up the page, its Y to the
-    left), with ``markers`` (usarsim.maps.truth.Marker) drawn: victims as red discs, RFID tags
-    as blue squares, start poses as green triangles."""
-    from PIL import Image, ImageDraw
+    """A PNG of ``grid`` for people (usarsim.maps.picture: north up, victims, tags and start
+    poses drawn)."""
+    from usarsim.maps.picture import draw_grid
 
-    rows, cols = grid.shape
-    rgb = np.zeros((rows, cols, 3), np.uint8)
-    for value in (FREE, OCCUPIED, UNKNOWN):
-        rgb[grid.data == value] = COLOURS[value]
-    # north up: the picture's row is the map's column (X) from the top, its column the map's
-    # row (Y) from the right
-    picture = np.ascontiguousarray(np.flip(rgb.transpose(1, 0, 2), axis=(0, 1)))
-    im = Image.fromarray(picture).resize((rows * scale, cols * scale), Image.Resampling.NEAREST)
-    draw = ImageDraw.Draw(im)
-    px = scale / grid.resolution
-    for m in markers:
-        u = (rows - (m.y - grid.origin[1]) / grid.resolution) * scale
-        v = (cols - (m.x - grid.origin[0]) / grid.resolution) * scale
-        r = max(3.0, 0.25 * px)
-        if m.kind == "victim":
-            draw.ellipse((u - r, v - r, u + r, v + r), fill=COLOURS["victim"], outline=(0, 0, 0))
-        elif m.kind == "tag":
-            s = r * 0.6
-            draw.rectangle((u - s, v - s, u + s, v + s), fill=COLOURS["tag"])
-        else:
-            draw.polygon([(u, v - r), (u - r, v + r), (u + r, v + r)], fill=COLOURS["start"])
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    im.save(path)
-    return path
+    return draw_grid(path, grid, markers, scale=scale)

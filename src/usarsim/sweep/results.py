@@ -28,6 +28,10 @@ SCORE_COLUMNS = (
     "messages_delivered",
     "messages_lost",
 )
+# The score of the map the team handed in (serve --team-map; docs/scoring.md "Map quality"),
+# from the score file's "map": coverage, accuracy (both shares), the alignment's residual
+# (metres) and the victims placed on the map within 1 m of one
+MAP_COLUMNS = ("map_coverage", "map_accuracy", "map_residual_m", "map_victims")
 _INT_SCORES = {
     "victims_found",
     "victims_reported",
@@ -43,6 +47,7 @@ COLUMNS: tuple[tuple[str, str], ...] = (
     ("run_id", "string"),
     ("experiment", "string"),
     ("world", "string"),
+    ("variant", "int64"),
     ("seed", "int64"),
     ("team", "string"),
     ("robots_n", "int64"),
@@ -51,6 +56,7 @@ COLUMNS: tuple[tuple[str, str], ...] = (
     ("clock", "string"),
     ("controller", "string"),
     *((c, "int64" if c in _INT_SCORES else "float64") for c in SCORE_COLUMNS),
+    *((c, "int64" if c == "map_victims" else "float64") for c in MAP_COLUMNS),
     ("time_s", "float64"),
     ("wall_s", "float64"),
     ("start_s", "float64"),

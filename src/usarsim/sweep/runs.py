@@ -48,6 +48,8 @@ PLACEHOLDERS = (
     "name",
     "start",
     "team",
+    "variant",
+    "map",
 )
 # The parameters a brain is given by the sweep itself, never in ``params``.
 SWEEP_GIVES = ("robot", "origin")
@@ -119,10 +121,15 @@ class Run:
     timeout_s: float = DEFAULT_TIMEOUT_S
     robot_dirs: tuple[str, ...] = ()
     cwd: str = "."  # the experiment file's folder: where a controller command runs
+    variant: int | None = None  # the world's variant (serve --variant); None: as written
+    # where the team's map and its picture are kept (a competition's maps folder); "": the
+    # team hands no map in
+    maps_dir: str = ""
 
     def identity(self) -> dict[str, Any]:
         """What makes two runs the same run (the label, timeout and folder do not)."""
-        return {
+        variant = {} if self.variant is None else {"variant": self.variant}
+        return variant | {
             "world": self.world,
             "seed": self.seed,
             "team": [m.as_dict() for m in self.team],
@@ -145,6 +152,7 @@ class Run:
             "run_id": self.run_id,
             "experiment": self.experiment,
             "world": self.world,
+            "variant": self.variant,
             "seed": self.seed,
             "team": self.team_label,
             "robots_n": len(self.team),

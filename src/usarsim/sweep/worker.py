@@ -10,6 +10,7 @@ of the simulator's log.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import platform
 import shlex
@@ -23,9 +24,12 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from usarsim.sweep.results import SCORE_COLUMNS
+from usarsim.sweep.results import MAP_COLUMNS, SCORE_COLUMNS
 from usarsim.sweep.runs import Run, brain_parameters, resolve_brain
 
+log = logging.getLogger("usarsim.sweep")
+
+TEAM_MAP = "team_map.yaml"  # where a run's team hands its map in (its folder; serve --team-map)
 LOG_TAIL_CHARS = 3000  # of the simulator's log (stderr), kept in the row of a failed run
 OUTPUT_TAIL_CHARS = 1500  # of a controller command's output, in its error
 POLL_S = 0.05  # how often the clock of a run driven by a command is looked at (wall seconds)
@@ -45,7 +49,7 @@ def execute(run: Run) -> dict[str, Any]:
     from usarsim.client import launch
 
     row: dict[str, Any] = run.columns()
-    row.update({c: None for c in SCORE_COLUMNS})
+    row.update({c: None for c in (*SCORE_COLUMNS, *MAP_COLUMNS)})
     row.update(time_s=None, robots=None, error=None, log="", node=platform.node())
     t0 = time.monotonic()
     phases = {"start_s": 0.0, "setup_s": 0.0, "control_s": 0.0, "stop_s": 0.0}
@@ -57,8 +61,11 @@ def execute(run: Run) -> dict[str, Any]:
     error: str | None = None
     try:
         extra = ["--score-file", str(score_path), *server_arguments(run)]
+        if run.maps_dir:
+            extra += ["--team-map", str(tmp / TEAM_MAP)]
         server = launch(
             world=run.world,
+            variant=run.variant,
             seed=run.seed,
             lockstep=run.clock == "lockstep",
             speed=None,
@@ -77,7 +84,7 @@ def execute(run: Run) -> dict[str, Any]:
         watchdog.daemon = True
         watchdog.start()
         if run.controller.kind == "brain":
-            _run_brain(run, server, phases)
+            _run_brain(run, server, phases, tmp / TEAM_MAP)
         else:
             _run_command(run, server, tmp, phases, deadline=t0 + run.timeout_s)
     except Exception as exc:  # a failed run is a row, never the end of the sweep
@@ -97,6 +104,8 @@ def execute(run: Run) -> dict[str, Any]:
                 _read_score(score_path, row)
             except RunFailed as exc:
                 error = error or str(exc)
+            if run.maps_dir:
+                _keep_map(run, tmp, score_path)
         phases["stop_s"] = time.monotonic() - t_stop
         shutil.rmtree(tmp, ignore_errors=True)
     row.update({k: round(v, 4) for k, v in phases.items()})
@@ -105,7 +114,7 @@ def execute(run: Run) -> dict[str, Any]:
     if error is None:
         row["log"] = ""
     else:  # what the simulator scored of a failed run stays out of the score columns (time_s tells how far it got)
-        row.update({c: None for c in SCORE_COLUMNS})
+        row.update({c: None for c in (*SCORE_COLUMNS, *MAP_COLUMNS)})
     row["finished_at"] = datetime.now(UTC).isoformat(timespec="seconds")
     row["_finished_epoch"] = time.time()
     return row
@@ -133,6 +142,38 @@ def _read_score(path: Path, row: dict[str, Any]) -> None:
         row["messages_delivered"] = row["messages_lost"] = None
     row["time_s"] = data.get("time_s")
     row["robots"] = json.dumps(data.get("robots") or {}, sort_keys=True)
+    m = data.get("map")
+    if isinstance(m, dict) and "coverage" in m:
+        row.update(
+            map_coverage=m["coverage"],
+            map_accuracy=m["accuracy"],
+            map_residual_m=m["residual_m"],
+            map_victims=m["victims_on_map"],
+        )
+
+
+def _keep_map(run: Run, tmp: Path, score_path: Path) -> None:
+    """The team's map (as handed in) and a picture of it over the ground truth, in the run's maps
+    folder as ``<run_id>.yaml``, ``.pgm`` and ``.png`` (the ground truth alone when no map came)."""
+    from usarsim.maps.mapfile import read_map, write_map
+    from usarsim.maps.picture import draw_overlay
+    from usarsim.maps.truth import ground_truth_map
+    from usarsim.maps.variation import load_arena
+
+    folder = Path(run.maps_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        score = json.loads(score_path.read_text(encoding="utf-8")).get("map") or {}
+    except (OSError, ValueError):
+        score = {}
+    try:
+        truth = ground_truth_map(load_arena(run.world, run.variant), variant=run.variant)
+        team = read_map(tmp / TEAM_MAP) if (tmp / TEAM_MAP).exists() else None
+        if team is not None:
+            write_map(folder / f"{run.run_id}.yaml", team.grid, victims=team.victims)
+        draw_overlay(folder / f"{run.run_id}.png", None if team is None else team.grid, truth, score)
+    except Exception as exc:  # a picture that cannot be drawn never fails the run
+        log.warning("run %s: the map's picture cannot be drawn: %s", run.run_id, exc)
 
 
 def _spawn_team(run: Run, world: Any) -> list[tuple[Any, tuple[float, float, float]]]:
@@ -172,7 +213,7 @@ def brain_kwargs(run: Run, factory: Callable[..., Any], index: int) -> dict[str,
     return kwargs
 
 
-def _run_brain(run: Run, server: Any, phases: dict[str, float]) -> None:
+def _run_brain(run: Run, server: Any, phases: dict[str, float], map_path: Path) -> None:
     from usarsim.brains.runner import run as run_brains
 
     t = time.monotonic()
@@ -189,10 +230,15 @@ def _run_brain(run: Run, server: Any, phases: dict[str, float]) -> None:
         t = time.monotonic()
         run_brains(world, brains, run.duration_s, period=period, until_done="never")
         phases["control_s"] = time.monotonic() - t
+        if run.maps_dir:  # the team hands its map in before the simulator stops
+            from usarsim.brains.teammap import write_team_map
+
+            write_team_map(brains, map_path)
 
 
-def command_values(run: Run, server: Any) -> dict[str, str]:
-    """What a controller command's placeholders stand for (docs/experiments.md)."""
+def command_values(run: Run, server: Any, map_path: str = "") -> dict[str, str]:
+    """What a controller command's placeholders stand for (docs/experiments.md); ``map_path``:
+    where the team hands its map in (empty when it hands none in)."""
     first = run.team[0]
     team = [f"{m.robot}:{m.name}:{m.start or ''}" for m in run.team]
     return {
@@ -208,6 +254,8 @@ def command_values(run: Run, server: Any) -> dict[str, str]:
         "name": first.name,
         "start": first.start or "",
         "team": ",".join(team),
+        "variant": "" if run.variant is None else str(run.variant),
+        "map": map_path,
     }
 
 
@@ -218,7 +266,7 @@ def _run_command(run: Run, server: Any, tmp: Path, phases: dict[str, float], dea
     from usarsim.client import connect
 
     t = time.monotonic()
-    values = command_values(run, server)
+    values = command_values(run, server, str(tmp / TEAM_MAP) if run.maps_dir else "")
     relay = None
     if run.controller.isolate:
         from usarsim.sweep.isolation import REACHABLE, HostRelay, isolation_problem
