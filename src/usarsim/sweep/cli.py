@@ -178,7 +178,7 @@ def print_plan(exp: Any, done: set[str], failed_before: set[str], console: Any) 
         t.add_row(
             str(i),
             r.run_id,
-            short(r.world),
+            short(r.world) + ("" if r.variant is None else f" variant {r.variant}"),
             str(r.seed),
             r.team_label,
             r.wireless,

@@ -191,6 +191,7 @@ class Reader:
                     timeout_s=timeout,
                     robot_dirs=self.robot_dirs,
                     cwd=str(self.folder),
+                    variant=values["variant"],
                 )
                 if run.run_id not in seen:  # a configuration given twice runs once
                     seen.add(run.run_id)
@@ -208,6 +209,7 @@ class Reader:
     def value(self, axis: str, v: Any, key: str) -> Any:
         return {
             "world": self.world,
+            "variant": self.variant,
             "team": self.team,
             "wireless": self.wireless,
             "duration": self.duration,
@@ -238,6 +240,14 @@ class Reader:
         except ConfigError as exc:
             raise self.error(key, exc.message) from None
         return cfg.name, cfg
+
+    def variant(self, v: Any, key: str) -> int | None:
+        """A world's variant (serve --variant): a whole number >= 0, or null for the world as written."""
+        if v is None:
+            return None
+        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            raise self.error(key, f"a variant is a whole number >= 0 (or null: the world as written), got {v!r}")
+        return v
 
     def team(self, v: Any, key: str) -> tuple[MemberSpec, ...]:
         entries = [v] if isinstance(v, (str, dict)) else v

@@ -18,13 +18,14 @@ from typing import Any
 from usarsim.config.reader import did_you_mean
 
 # The run parameters a grid or a runs entry may vary, and what each key is called in a row.
-AXES = ("world", "team", "wireless", "duration", "clock", "controller")
+AXES = ("world", "variant", "team", "wireless", "duration", "clock", "controller")
 CLOCKS = ("lockstep", "max")
 # "world": the world's own radio model (its ``wireless:`` section, else WAF); "off": no
 # wireless servers (ComServer, WSS); a model name: that model (serve --wireless-model).
 WIRELESS = ("world", "off", "waf", "waf2009", "distance", "perfect")
 DEFAULTS = {
     "world": "DM-USAR_yellow",
+    "variant": None,  # the world as written (serve --variant)
     "team": "P2AT",
     "wireless": "world",
     "duration": 60.0,
@@ -178,7 +179,7 @@ class Experiment:
 
 
 # The columns of a row that, with the seed, make a configuration.
-CONFIG_COLUMNS = ("world", "team", "wireless", "duration_s", "clock", "controller")
+CONFIG_COLUMNS = ("world", "variant", "team", "wireless", "duration_s", "clock", "controller")
 
 
 def varying_axes(rows: list[dict[str, Any]]) -> tuple[str, ...]:

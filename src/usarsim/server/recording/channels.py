@@ -22,6 +22,7 @@ from .transcript import SCHEMA, SCHEMA_NAME
 WORLD_TOPIC = "/usarsim/world"
 ROBOTS_TOPIC = "/usarsim/robots"
 OBJECTS_TOPIC = "/usarsim/objects"
+MAP_TOPIC = "/usarsim/map"  # the ground-truth occupancy map (usarsim.maps.truth), once
 TF_TOPIC = "/tf"
 LOG_TOPIC = "/usarsim/log"
 RADIO_PREFIX = "/usarsim/radio/"
@@ -108,6 +109,7 @@ TRANSCRIPT = json_channel(SCHEMA)
 assert SCHEMA["title"] == SCHEMA_NAME
 # the makers of each kind of channel, made once
 SCENE = typed(fch.SceneUpdateChannel)
+GRID = typed(fch.GridChannel)
 LOG = typed(fch.LogChannel)
 LASER = typed(fch.LaserScanChannel)
 CLOUD = typed(fch.PointCloudChannel)
@@ -142,4 +144,37 @@ def point_cloud(robot: str, v: RangeScan3DReading, t: float) -> PointCloud:
     xyz = np.column_stack((r * c * np.cos(yaw), -r * c * np.sin(yaw), r * np.sin(pitch))).astype("<f4")
     return PointCloud(
         timestamp=scene.timestamp(t), frame_id=f"{robot}/{v.name}", point_stride=12, fields=_XYZ, data=xyz.tobytes()
+    )
+
+
+# the ground-truth map of a recording: 5 cm cells, coarser (twice, four times...) for a world
+# so large that it would have more than MAP_MAX_CELLS of them
+MAP_MAX_CELLS = 4_000_000
+
+
+def ground_truth_grid(world, t: float) -> object:
+    """The world's ground-truth occupancy map (usarsim.maps.truth; its variant applied) as a
+    foxglove Grid in the world frame, one signed byte a cell: 0 free, 100 occupied, -1 unknown."""
+    from foxglove.messages import Grid, Pose, Quaternion, Vector2, Vector3
+
+    from usarsim.maps.truth import DEFAULT_RESOLUTION_M, ground_truth_map
+
+    res = DEFAULT_RESOLUTION_M
+    sx, sy = world.floor.size
+    while (sx / res) * (sy / res) > MAP_MAX_CELLS:
+        res *= 2.0
+    g = ground_truth_map(world, resolution=res, variant=world.variant).grid
+    rows, cols = g.shape
+    return Grid(
+        timestamp=scene.timestamp(t),
+        frame_id=scene.WORLD_FRAME,
+        # the map frame is the recording's world frame (x north, y west): the grid's corner at
+        # its origin, a millimetre above the floor
+        pose=Pose(position=Vector3(x=g.origin[0], y=g.origin[1], z=0.001), orientation=Quaternion(x=0, y=0, z=0, w=1)),
+        column_count=cols,
+        cell_size=Vector2(x=g.resolution, y=g.resolution),
+        row_stride=cols,
+        cell_stride=1,
+        fields=[PackedElementField(name="occupancy", offset=0, type=PackedElementFieldNumericType.Int8)],
+        data=g.data.astype(np.int8).tobytes(),
     )

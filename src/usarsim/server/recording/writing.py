@@ -117,6 +117,7 @@ class RecordingWriter:
     _relays: int
     _waiting: dict[int, list[Output]]
     _last_refresh: float
+    _map: Any = None  # the ground-truth map's Grid, made once
 
     def _log(self, topic: str, make, msg, t: float, sinks: list[Sink] | None = None) -> None:
         ns = scene.to_ns(t)
@@ -136,6 +137,9 @@ class RecordingWriter:
 
     def _write_world(self, sinks: list[Sink] | None = None) -> None:
         self._log(ch.WORLD_TOPIC, ch.SCENE, scene.world_scene(self.world, 0.0), 0.0, sinks)
+        if self._map is None:
+            self._map = ch.ground_truth_grid(self.world, 0.0)
+        self._log(ch.MAP_TOPIC, ch.GRID, self._map, 0.0, sinks)
 
     def _resend_static(self) -> None:
         """A live viewer subscribed to the world: it gets the static geometry now."""
