@@ -87,16 +87,17 @@ def main(argv: list[str] | None = None) -> int:
     except MissingExtraError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
-    if hasattr(args, "handler"):  # sweep, report
-        return args.handler(args)
-    handler = {
-        "serve": cmd_serve,
-        "validate": cmd_validate,
-        "worlds": cmd_worlds,
-        "robots": cmd_robots,
-        "bench": cmd_bench,
-        "replay": cmd_replay,
-    }[args.command]
+    handler = (
+        getattr(args, "handler", None)
+        or {
+            "serve": cmd_serve,
+            "validate": cmd_validate,
+            "worlds": cmd_worlds,
+            "robots": cmd_robots,
+            "bench": cmd_bench,
+            "replay": cmd_replay,
+        }[args.command]
+    )  # sweep, report, compete, map, score-map, ros2 bring their own handler
     try:
         return handler(args)
     except BrokenPipeError:  # 'usarsim robots | head': the reader has all it wanted

@@ -143,7 +143,7 @@ def cmd_score_map(args) -> int:
 
 def format_score(r: dict, world: str, variant: int | None) -> str:
     """The score of a map as the terminal shows it."""
-    a = r["alignment"]
+    a = {k: (round(v, 3) + 0.0 if isinstance(v, float) else v) for k, v in r["alignment"].items()}  # no -0.000
     lines = [
         f"map scored against {world}{'' if variant is None else f' variant {variant}'}:",
         f"  alignment       turned {a['theta_deg']:+.2f} deg, moved ({a['tx']:+.3f}, {a['ty']:+.3f}) m, "

@@ -49,7 +49,6 @@ PLACEHOLDERS = (
     "name",
     "start",
     "team",
-    "variant",
     "map",
 )
 # The parameters a brain is given by the sweep itself, never in ``params``.

@@ -254,7 +254,6 @@ def command_values(run: Run, server: Any, map_path: str = "") -> dict[str, str]:
         "name": first.name,
         "start": first.start or "",
         "team": ",".join(team),
-        "variant": "" if run.variant is None else str(run.variant),
         "map": map_path,
     }
 
