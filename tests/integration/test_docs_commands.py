@@ -28,6 +28,7 @@ import os
 import re
 import selectors
 import shlex
+import shutil
 import signal
 import socket
 import subprocess
@@ -283,7 +284,38 @@ def test_every_command_of_the_page_runs_as_printed(page, clone_folder, port_guar
         port_guard.hold()
 
 
-INLINE = re.compile(r"`(usarsim (?:serve|validate|worlds|robots|bench|replay|sweep|report|ros2)\b[^`]*)`")
+@pytest.mark.ports
+def test_the_readme_competitions_leaderboard_opens_in_chromium(clone_folder):
+    """The README's sample competition ran above (in the reader's folder): its leaderboard page
+    opens in a real browser without a console error, with every map shown."""
+    page_file = clone_folder / "results" / "rescue_cup" / "leaderboard.html"
+    assert page_file.exists(), "the README's usarsim compete examples/rescue_cup.yaml did not write its page"
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        pytest.skip("no Chromium on this machine (Debian: apt-get install chromium; scripts/test.sh installs it)")
+    from playwright.sync_api import sync_playwright
+
+    errors: list[str] = []
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=exe, args=["--no-sandbox"])
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 900})
+            page.on("console", lambda m: errors.append(f"console.{m.type}: {m.text}") if m.type == "error" else None)
+            page.on("pageerror", lambda e: errors.append(f"uncaught: {e}"))
+            page.goto(page_file.as_uri())
+            page.wait_for_load_state("load")
+            shown = page.eval_on_selector_all("img", "imgs => imgs.map(i => i.complete && i.naturalWidth > 0)")
+            teams = page.eval_on_selector_all("table:first-of-type td.name", "tds => tds.map(t => t.textContent)")
+        finally:
+            browser.close()
+    assert errors == []
+    assert sorted(teams) == ["frontier", "victim", "wander"]
+    assert len(shown) == 4 + 3 * 4 and all(shown)  # each scenario's ground truth and every team's map of it
+
+
+INLINE = re.compile(
+    r"`(usarsim (?:serve|validate|worlds|robots|bench|replay|sweep|report|ros2|compete|map|score-map)\b[^`]*)`"
+)
 
 
 def test_every_usarsim_command_named_in_the_text_has_options_that_exist(capsys):

@@ -72,6 +72,13 @@ class VictimApproacher(FrontierExplorer):
         self._last_reading: Any = None
         self._approach_plan = -math.inf
 
+    @property
+    def victims_found(self) -> list[tuple[str, float, float]]:
+        """The victims confirmed so far, (name, x, y) in the world frame: what the team's map
+        lists (usarsim.brains.teammap)."""
+        confirmed = [s for s in self.sightings if s.confirmed]
+        return [(f"V{i + 1}", *s.position) for i, s in enumerate(confirmed)]
+
     def look(self, pose: tuple[float, float, float]) -> None:
         """Place the parts of a new VictSensor reading in the world and group them."""
         reading = next((r for r in self.robot.readings.values() if isinstance(r, VictimReading)), None)

@@ -106,7 +106,7 @@ def cmd_validate(args) -> int:
             sim = Simulation(w)
             print(
                 f"ok: world {w.name}{'' if variant is None else f' variant {variant}'}: {len(w.objects)} objects, "
-                f"{len(w.start_poses)} start poses, {len(w.victims)} victims, "
+                f"{len(w.start_poses)} start poses, "
                 f"floor {w.floor.size[0]:g} x {w.floor.size[1]:g} m, MuJoCo model with {sim.model.ngeom} geoms{notes}"
             )
         else:

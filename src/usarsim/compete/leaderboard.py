@@ -220,8 +220,8 @@ def leaderboard_html(
     out.append("</table><h2>Maps</h2>")
     out.append(
         "<p class='legend'><span>grey: the ground truth's walls</span><span>green: floor the team mapped</span>"
-        "<span>red: walls the team mapped</span><span>red discs: victims, blue squares: RFID tags, "
-        "green triangles: start poses</span></p>"
+        "<span>red: walls the team mapped</span><span>red crosses: victims the team put on its map</span>"
+        "<span>red discs: victims, blue squares: RFID tags, green triangles: start poses</span></p>"
     )
     by_id = {r["run_id"]: r for r in rows}
     for s in comp.scenarios:

@@ -132,7 +132,7 @@ def cmd_score_map(args) -> int:
     if args.picture:
         from usarsim.maps.picture import draw_overlay
 
-        draw_overlay(args.picture, team.grid, truth, result)
+        draw_overlay(args.picture, team.grid, truth, result, victims=team.victims)
         result["picture"] = args.picture
     if args.json:
         print(json.dumps(result, indent=2))

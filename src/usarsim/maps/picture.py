@@ -4,12 +4,15 @@ competition's leaderboard).
 
 North is up: the map's X (USARSim's X, north) points up the page and its Y (west) to the left,
 so east is on the right as on a plan of the arena.  Victims are red discs, RFID tags blue
-squares, start poses green triangles.
+squares, start poses green triangles; on an overlay, the victims the team reported are dark red
+crosses.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -40,11 +43,18 @@ def draw_grid(path: str | Path, grid: OccupancyMap, markers=(), *, scale: int = 
 
 
 def draw_overlay(
-    path: str | Path, team: OccupancyMap | None, truth: Any, score: dict | None, *, scale: int = 2
+    path: str | Path,
+    team: OccupancyMap | None,
+    truth: Any,
+    score: dict | None,
+    *,
+    victims: Sequence[tuple[str, float, float]] = (),
+    scale: int = 2,
 ) -> Path:
     """A PNG of ``truth`` (usarsim.maps.truth.GroundTruthMap) with ``team``'s map laid over it,
-    moved by the alignment of ``score`` (usarsim.maps.quality's, as a dict); the ground truth
-    alone when there is no team map."""
+    moved by the alignment of ``score`` (usarsim.maps.quality's, as a dict), and the victims the
+    team reported (``victims``, its map's frame) as dark red crosses; the ground truth alone
+    when there is no team map."""
     g = truth.grid
     rgb = np.zeros((*g.shape, 3), np.uint8)
     rgb[g.data == FREE] = TRUTH_FREE
@@ -69,7 +79,19 @@ def draw_overlay(
                 k = int(math.ceil(team.resolution / g.resolution))
                 hit = cv2.dilate(hit, np.ones((k, k), np.uint8))
             rgb[hit.astype(bool)] = colour
-    return _save(path, rgb, g, truth.markers, scale)
+    reports: list[Any] = []
+    if team is not None and a and victims:
+        moved = np.array([(x, y) for _, x, y in victims]) @ rot.T + shift
+        reports = [_Report("report", name, float(x), float(y)) for (name, _, _), (x, y) in zip(victims, moved)]
+    return _save(path, rgb, g, [*truth.markers, *reports], scale)
+
+
+@dataclass(frozen=True)
+class _Report:
+    kind: str
+    name: str
+    x: float
+    y: float
 
 
 def _save(path: str | Path, rgb: np.ndarray, grid: OccupancyMap, markers, scale: int) -> Path:
@@ -88,6 +110,10 @@ def _save(path: str | Path, rgb: np.ndarray, grid: OccupancyMap, markers, scale:
         r = max(3.0, 0.25 * px)
         if m.kind == "victim":
             draw.ellipse((u - r, v - r, u + r, v + r), fill=COLOURS["victim"], outline=(0, 0, 0))
+        elif m.kind == "report":  # a victim the team put on its map
+            r *= 1.4
+            draw.line((u - r, v - r, u + r, v + r), fill=TEAM_OCCUPIED, width=3)
+            draw.line((u - r, v + r, u + r, v - r), fill=TEAM_OCCUPIED, width=3)
         elif m.kind == "tag":
             h = r * 0.6
             draw.rectangle((u - h, v - h, u + h, v + h), fill=COLOURS["tag"])

@@ -83,12 +83,11 @@ class _Placer:
         return solid_cells(self.grid, [Solid.of(o) for o in objects if o.mass_kg <= 0], heights)
 
     def _clear(self, objects: Sequence[StaticObject]) -> np.ndarray:
-        """Cells where a robot of the rules' radius fits between the static solids."""
-        import cv2
+        """Cells where a robot of the rules' radius stands clear of everything it cannot
+        drive on (usarsim.maps.terrain: the floor, ramps and what they lead up to)."""
+        from usarsim.maps.terrain import clear_cells
 
-        solid = self._static(objects, ROBOT_HEIGHTS)
-        clearance = cv2.distanceTransform((~solid).astype(np.uint8), cv2.DIST_L2, 5) * RESOLUTION_M
-        return clearance >= self.rules.robot_radius_m
+        return clear_cells(self.grid, [Solid.of(o) for o in objects if o.mass_kg <= 0], self.rules.robot_radius_m)
 
     def _drivable(self, objects: Sequence[StaticObject]) -> np.ndarray:
         """Cells a robot of the rules' radius can drive to from a start pose."""

@@ -42,6 +42,7 @@ METRICS = {
 PLOTTED = ("score", "victims_found", "area_m2")
 AXIS_NAMES = {
     "world": "world",
+    "variant": "world variant",
     "team": "team",
     "wireless": "wireless model",
     "duration_s": "duration (s)",

@@ -171,7 +171,13 @@ def _keep_map(run: Run, tmp: Path, score_path: Path) -> None:
         team = read_map(tmp / TEAM_MAP) if (tmp / TEAM_MAP).exists() else None
         if team is not None:
             write_map(folder / f"{run.run_id}.yaml", team.grid, victims=team.victims)
-        draw_overlay(folder / f"{run.run_id}.png", None if team is None else team.grid, truth, score)
+        draw_overlay(
+            folder / f"{run.run_id}.png",
+            None if team is None else team.grid,
+            truth,
+            score,
+            victims=() if team is None else team.victims,
+        )
     except Exception as exc:  # a picture that cannot be drawn never fails the run
         log.warning("run %s: the map's picture cannot be drawn: %s", run.run_id, exc)
 
