@@ -62,8 +62,12 @@ def cmd_compete(args: argparse.Namespace) -> int:
                 comp.experiment(), out, workers=args.workers, address=args.address, progress=not args.no_progress
             )
     except SweepInterrupted as exc:
-        print(f"usarsim: compete stopped ({exc}); run the same command to finish it", file=sys.stderr)
-        return 130
+        print(
+            f"usarsim: compete stopped by {exc}: {len(exc.outcome.rows)} runs finished now and stored in {out}; "
+            "run the same command again to run the others",
+            file=sys.stderr,
+        )
+        return 128 + exc.signum
     except SweepError as exc:
         print(f"usarsim: error: {exc}", file=sys.stderr)
         return 1
@@ -94,6 +98,13 @@ def _finish(comp: Any, out: Path, outcome: Any, console: Any) -> int:
             pct(r["map_accuracy"]),
         )
     console.print(table)
+    for row in outcome.rows:
+        if row.get("error"):
+            print(
+                f"usarsim: run {row['run_id']} ({row['controller']}, {row['world']}, seed {row['seed']}) failed: "
+                f"{row['error']}",
+                file=sys.stderr,
+            )
     failed = sum(1 for r in rows if r.get("error"))
     console.print(
         f"{len(outcome.rows)} runs now, {outcome.skipped} done before, {failed} failed; "
