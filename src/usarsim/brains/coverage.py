@@ -23,23 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from usarsim.config.world import WorldConfig
+from usarsim.maps.grid import rotation
 
 SAMPLE_HEIGHTS = (0.03, 0.1, 0.2, 0.35)  # m above the floor where solids are looked for
 MAX_TILT = math.radians(2.0)  # a sweep taken tilted more than this is not counted
 NEAR_M = 3.0  # m: "seen from near" (Referee.near)
-
-
-def _rotation(rpy: tuple[float, float, float]) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll), as world files define their rotations."""
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 @dataclass
@@ -68,7 +56,7 @@ class FloorMap:
         for obj in world.objects:
             if obj.mass_kg > 0 or obj.shape not in ("box", "cylinder"):
                 continue
-            rot = _rotation(obj.rotation)
+            rot = rotation(obj.rotation)
             if obj.shape == "box":
                 half = np.asarray(obj.size, float) / 2.0
             else:

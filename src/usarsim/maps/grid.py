@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from usarsim.config.solids import mesh_depth
+from usarsim.config.solids import mesh_depth, rotation_matrix
 from usarsim.config.world import StaticObject, WorldConfig
 
 FREE = 0
@@ -97,17 +97,10 @@ def floor_grid(world: WorldConfig, resolution: float) -> OccupancyMap:
     return OccupancyMap(resolution, origin, np.zeros((rows, cols), np.int8))
 
 
-def _rotation(rpy: Sequence[float]) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll), as world files define rotations (object -> world)."""
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
+def rotation(rpy: Sequence[float]) -> np.ndarray:
+    """The object-to-world rotation of a world file's (roll, pitch, yaw) as an array
+    (usarsim.config.solids.rotation_matrix)."""
+    return np.array(rotation_matrix(rpy))
 
 
 @dataclass(frozen=True)
@@ -137,6 +130,26 @@ class Solid:
             return np.array([self.size[0], self.size[1], self.size[2] / 2.0])
         return np.full(3, _mesh_radius(self.mesh_file, self.scale))
 
+    def world_box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rotation, lowest corner, highest corner) of the solid's bounding box in the world
+        (USARSim frame)."""
+        rot = rotation(self.rotation)
+        corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * self.half_extents()
+        pts = corners @ rot.T + np.asarray(self.center)
+        return rot, pts.min(axis=0), pts.max(axis=0)
+
+    def cell_window(self, grid: OccupancyMap) -> tuple[np.ndarray, np.ndarray, slice, slice]:
+        """(rotation, world box's lowest corner, rows, columns) of the cells of ``grid`` its
+        footprint may touch, a cell's width around it (empty slices when none)."""
+        rot, lo, hi = self.world_box()
+        res = grid.resolution
+        rows, cols = grid.shape
+        c0 = max(0, int(math.floor((lo[0] - res - grid.origin[0]) / res)))
+        c1 = min(cols, int(math.ceil((hi[0] + res - grid.origin[0]) / res)))
+        r0 = max(0, int(math.floor((-hi[1] - res - grid.origin[1]) / res)))
+        r1 = min(rows, int(math.ceil((-lo[1] + res - grid.origin[1]) / res)))
+        return rot, np.concatenate((lo, hi)), slice(r0, max(r0, r1)), slice(c0, max(c0, c1))
+
 
 def _mesh_radius(mesh_file: str, scale: Sequence[float]) -> float:
     from pathlib import Path
@@ -159,24 +172,16 @@ def solid_cells(grid: OccupancyMap, solids: Iterable[Solid], heights: Sequence[f
     A cell counts when the solid overlaps it (half a cell each way), so that a wall thinner
     than a cell still splits the floor."""
     res = grid.resolution
-    rows, cols = grid.shape
     out = np.zeros(grid.shape, bool)
     pad = np.array([res / 2.0, res / 2.0, 0.0])
     for solid in solids:
-        rot = _rotation(solid.rotation)
+        rot, box, rs, cs = solid.cell_window(grid)
         half = solid.half_extents()
-        corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * half
-        world_corners = corners @ rot.T + np.asarray(solid.center)
-        lo, hi = world_corners.min(axis=0), world_corners.max(axis=0)
-        if not any(-hi[2] - 1e-9 <= h <= -lo[2] + 1e-9 for h in heights):
+        if not any(-box[5] - 1e-9 <= h <= -box[2] + 1e-9 for h in heights):
             continue  # wholly above or below the heights looked at
-        # the map-frame box of the footprint: x as in USARSim, y = -USARSim y
-        c0 = max(0, int(math.floor((lo[0] - res - grid.origin[0]) / res)))
-        c1 = min(cols, int(math.ceil((hi[0] + res - grid.origin[0]) / res)))
-        r0 = max(0, int(math.floor((-hi[1] - res - grid.origin[1]) / res)))
-        r1 = min(rows, int(math.ceil((-lo[1] + res - grid.origin[1]) / res)))
-        if c0 >= c1 or r0 >= r1:
+        if rs.start == rs.stop or cs.start == cs.stop:
             continue
+        r0, r1, c0, c1 = rs.start, rs.stop, cs.start, cs.stop
         rr, cc = np.mgrid[r0:r1, c0:c1]
         wx = grid.origin[0] + (cc.ravel() + 0.5) * res
         wy = -(grid.origin[1] + (rr.ravel() + 0.5) * res)

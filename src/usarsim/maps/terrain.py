@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from usarsim.maps.grid import OccupancyMap, Solid, _rotation
+from usarsim.maps.grid import OccupancyMap, Solid
 
 MAX_GROUND_M = 0.6  # ground higher than this is the top of a wall or a stack, not a place to drive
 # the most the ground may rise from one cell to the next, as a slope: tan(30 degrees), steeper
@@ -35,20 +35,13 @@ def _intervals(grid: OccupancyMap, solid: Solid) -> tuple[np.ndarray, np.ndarray
     through the cells' centres meet ``solid`` (a cell counts when the solid overlaps it by half
     a cell each way, as usarsim.maps.grid.solid_cells counts it)."""
     res = grid.resolution
-    rows, cols = grid.shape
-    rot = _rotation(solid.rotation)
+    cols = grid.shape[1]
+    rot, box, rs, cs = solid.cell_window(grid)
     half = solid.half_extents()
-    corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * half
-    wc = corners @ rot.T + np.asarray(solid.center)
-    lo, hi = wc.min(axis=0), wc.max(axis=0)
-    c0 = max(0, int(math.floor((lo[0] - res - grid.origin[0]) / res)))
-    c1 = min(cols, int(math.ceil((hi[0] + res - grid.origin[0]) / res)))
-    r0 = max(0, int(math.floor((-hi[1] - res - grid.origin[1]) / res)))
-    r1 = min(rows, int(math.ceil((-lo[1] + res - grid.origin[1]) / res)))
     empty = (np.zeros(0, np.intp), np.zeros(0), np.zeros(0))
-    if c0 >= c1 or r0 >= r1 or -lo[2] < 0.0:
+    if rs.start == rs.stop or cs.start == cs.stop or -box[2] < 0.0:  # none, or wholly below the floor
         return empty
-    rr, cc = (a.ravel() for a in np.mgrid[r0:r1, c0:c1])
+    rr, cc = (a.ravel() for a in np.mgrid[rs, cs])
     wx = grid.origin[0] + (cc + 0.5) * res
     wy = -(grid.origin[1] + (rr + 0.5) * res)
     o = (np.column_stack((wx, wy, np.zeros_like(wx))) - np.asarray(solid.center)) @ rot  # local, at height 0

@@ -33,7 +33,7 @@ import numpy as np
 from usarsim.config.variation import VariationRules
 from usarsim.config.world import StaticObject, WorldConfig
 from usarsim.errors import ConfigError
-from usarsim.maps.grid import OccupancyMap, Solid, floor_grid, solid_cells, to_map_frame
+from usarsim.maps.grid import Solid, floor_grid, solid_cells, to_map_frame
 from usarsim.maps.truth import connected_to
 
 RESOLUTION_M = 0.05  # the grid the placement works on
@@ -123,12 +123,13 @@ class _Placer:
             return dataclasses.replace(w, variant=self.variant)  # nothing to vary
         objects = self._doorways(list(w.objects))
         drivable = self._drivable(objects)
-        self.region = self._region_mask(objects) & self._floor_only(objects)
+        self.tall_solid = self._static(objects, VICTIM_HEIGHTS)
+        # nothing is placed on a platform: only where no solid stands at a victim's heights
+        self.region = self._region_mask(objects) & ~self.tall_solid
         # where a robot within reach_m of a point can be: drivable cells grown by reach_m
         k = int(math.ceil(self.rules.reach_m / RESOLUTION_M))
         kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * k + 1, 2 * k + 1))
         self.near_drivable = cv2.dilate(drivable.astype(np.uint8), kernel).astype(bool)
-        self.tall_solid = self._static(objects, VICTIM_HEIGHTS)
         self.tall_clear = cv2.distanceTransform((~self.tall_solid).astype(np.uint8), cv2.DIST_L2, 5) * RESOLUTION_M
         self.placed: list[tuple[str, float, float]] = []  # (kind, x, y) in the USARSim frame
 
@@ -168,10 +169,6 @@ class _Placer:
             rfid_tags=tuple(tags),
             variant=self.variant,
         )
-
-    def _floor_only(self, objects: Sequence[StaticObject]) -> np.ndarray:
-        """Cells with no solid at all at a victim's heights (nothing is placed on a platform)."""
-        return ~self._static(objects, VICTIM_HEIGHTS)
 
     def _spot(self, footprint, kind: str, what: str, *, spacing: float) -> tuple[float, float, float]:
         """A free (x, y, yaw) for a thing of ``footprint`` (x min, x max, y min, y max in its own
@@ -272,14 +269,8 @@ def _yawed(rotation, yaw: float) -> tuple[float, float, float]:
 
 
 def _solids_box(objects: Sequence[StaticObject]) -> tuple[float, float, float, float]:
-    from usarsim.maps.grid import _rotation
-
-    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
-    for o in objects:
-        half = Solid.of(o).half_extents()
-        corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * half
-        pts = corners @ _rotation(o.rotation).T + np.asarray(o.center)
-        lo, hi = np.minimum(lo, pts[:, :2].min(axis=0)), np.maximum(hi, pts[:, :2].max(axis=0))
+    boxes = np.array([Solid.of(o).world_box()[1:] for o in objects])  # (n, 2 corners, 3)
+    lo, hi = boxes[:, 0, :2].min(axis=0), boxes[:, 1, :2].max(axis=0)
     return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
 
 
@@ -303,9 +294,9 @@ def check_arena(world: WorldConfig) -> list[str]:
         solid = world.solid_at(t.location, movable=False)
         if solid is not None:
             problems.append(f"RFID tag {t.tag_id} lies inside {solid}")
+    statics = dataclasses.replace(world, objects=tuple(x for x in world.objects if x.mass_kg <= 0))
     for o in world.objects:
         if o.mass_kg > 0:
-            statics = dataclasses.replace(world, objects=tuple(x for x in world.objects if x.mass_kg <= 0))
             solid = statics.solid_at(o.center, movable=False)
             if solid is not None:
                 problems.append(f"movable object '{o.name}' lies inside {solid}")
@@ -323,8 +314,3 @@ def check_arena(world: WorldConfig) -> list[str]:
                     f"gets within {placer.rules.reach_m:g} m of it from a start pose"
                 )
     return problems
-
-
-def grid_for(world: WorldConfig) -> OccupancyMap:
-    """The placement grid of ``world`` (for tests and pictures)."""
-    return floor_grid(world, RESOLUTION_M)
