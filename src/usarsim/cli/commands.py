@@ -266,24 +266,28 @@ def run_env_bench(args) -> int:
             for p in profiles:
                 print_profile(p)
         return 0
-    from usarsim.envs.bench import bench_vector
+    from usarsim.envs.bench import bench_one_and_vector
 
     rows: list[dict[str, Any]] = []
     for transport in transports:
-        one = bench_env(args.steps, world=args.world, transport=transport)
-        rows.append({"transport": transport, "env": "Explore-v0", "robots": 1, "steps_per_s": round(one, 1)})
-        if transport == "inproc" and args.worlds > 1:
-            vec = bench_vector(max(1, args.steps // args.worlds), args.worlds, world=args.world)
+        if transport == "inproc" and args.worlds > 1:  # the one world timed in turns with the vector
+            both = bench_one_and_vector(args.steps, args.worlds, world=args.world)
+            one = both["one"]
+            rows.append({"transport": transport, "env": "Explore-v0", "robots": 1, "steps_per_s": round(one, 1)})
             rows.append(
                 {
                     "transport": transport,
                     "env": f"ExploreVectorEnv({args.worlds})",
                     "robots": 1,
                     "worlds": args.worlds,
-                    "steps_per_s": round(vec, 1),
-                    "times_one": round(vec / one, 2),
+                    "steps_per_s": round(both["vector"], 1),
+                    "times_one": round(both["times_one"], 2),
+                    "stretches": both["blocks"],
                 }
             )
+        else:
+            one = bench_env(args.steps, world=args.world, transport=transport)
+            rows.append({"transport": transport, "env": "Explore-v0", "robots": 1, "steps_per_s": round(one, 1)})
         if args.team > 0:
             team = bench_env(max(1, args.steps // 3), team=args.team, world=args.world, transport=transport)
             rows.append(
@@ -298,9 +302,11 @@ def run_env_bench(args) -> int:
         unit = "env steps/s" if row["robots"] == 1 else "team steps/s"
         rate = row["steps_per_s"]
         if "worlds" in row:
+            spread = row["stretches"]
             print(
                 f"{row['env']}, {row['worlds']} worlds of one P2AT at 0.1 s, {path} in worker processes: "
-                f"{rate:.0f} env steps/s in all ({row['times_one']:.2f} times one world)"
+                f"{rate:.0f} env steps/s in all ({row['times_one']:.2f} times one world: the median of "
+                f"{len(spread)} stretches timed in turns with it, {min(spread):.2f} - {max(spread):.2f})"
             )
             continue
         print(f"{row['env']}, {what} at 0.1 s, {path}: {rate:.0f} {unit} ({rate * 0.1:.0f}x real time)")

@@ -207,26 +207,11 @@ def init_line(
     )
 
 
-DRIVE_KEYS = (
-    "left",
-    "right",
-    "normalized",
-    "light",
-    "flip",
-    "speed",
-    "front_steer",
-    "rear_steer",
-    "altitude_velocity",
-    "linear_velocity",
-    "lateral_velocity",
-    "rotational_velocity",
-    "propeller",
-    "rudder",
-    "stern_plane",
-)
+# the keys of a plain DRIVE: skid speeds and the flags first, as most robots are driven
+DRIVE_KEYS = (*C.DRIVE_NUMBERS[:2], *C.DRIVE_FLAGS, *C.DRIVE_NUMBERS[2:])
 
 
-def drive_line(**kwargs: Any) -> str:
+def drive_command(**kwargs: Any) -> C.Drive:
     """``DRIVE`` with the keys given: skid ``left``/``right`` (rad/s, or percent with
     ``normalized=True``), Ackermann ``speed``/``front_steer``/``rear_steer``, aerial and legged
     ``altitude_velocity``/``linear_velocity``/``lateral_velocity``/``rotational_velocity``,
@@ -237,7 +222,12 @@ def drive_line(**kwargs: Any) -> str:
     values = {k: v for k, v in kwargs.items() if v is not None}
     if not values:
         raise TypeError("drive() needs at least one key, e.g. drive(left=1.0, right=1.0)")
-    return C.format_command(C.Drive(**values))
+    return C.Drive(**values)
+
+
+def drive_line(**kwargs: Any) -> str:
+    """The line of :func:`drive_command` ``(**kwargs)``."""
+    return C.format_command(drive_command(**kwargs))
 
 
 def mispkg_line(package: str, values: dict[int, float], order: int = 0) -> str:

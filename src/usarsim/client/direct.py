@@ -6,9 +6,11 @@ What a robot's client receives is exactly what it would read from the control po
 message the session answers with or the simulation reports is handed over as the message a
 client parses from its printed line (:func:`usarsim.protocol.received.as_received`: the
 numbers at the precision the line prints them), so that an episode gives the same readings,
-bit for bit, on either path.  The client's commands are still lines, handled by the session
-before :meth:`DirectClientConnection.send` returns: every request is answered at once, and a
-wait that finds no answer fails at once instead of running into its timeout.
+bit for bit, on either path.  The client's commands are handled by the session before
+:meth:`DirectClientConnection.send` returns: every request is answered at once, and a wait that
+finds no answer fails at once instead of running into its timeout.  Commands are lines, except
+those :func:`usarsim.protocol.commands.as_parsed` covers (a robot's ``DRIVE``), handed over as the
+session would parse them from their lines (:meth:`DirectClientConnection.send_command`).
 
 This module loads the simulation (MuJoCo); ``usarsim.client`` imports it only when asked for
 the direct path.
@@ -21,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 
 from usarsim.maps.variation import load_arena
+from usarsim.protocol import commands as C
 from usarsim.protocol import messages as M
 from usarsim.protocol.received import as_received
 from usarsim.protocol.truth import TruthObject, format_truth_object, parse_truth_object, parse_truth_request
@@ -62,6 +65,18 @@ class DirectClientConnection:
             raise ClientError(f"{self.what}: the connection is closed")
         self.sent = True
         self._end.handle(line)
+
+    def send_command(self, cmd: Any) -> None:
+        """``cmd`` (a protocol command), without its text where the session's parse of it is
+        known (:func:`~usarsim.protocol.commands.as_parsed`), else as its line."""
+        parsed = C.as_parsed(cmd)
+        if parsed is None:
+            self.send(C.format_command(cmd))
+            return
+        if self.state.closed:
+            raise ClientError(f"{self.what}: the connection is closed")
+        self.sent = True
+        self._end.handle_command(parsed)
 
     def read(self, wait: float) -> bool:
         """Nothing arrives between two commands: everything has been received already."""

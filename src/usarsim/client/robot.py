@@ -16,6 +16,7 @@ from .core import (
     Scan,
     accepts_reply,
     decode_picture,
+    drive_command,
     drive_line,
     first_scan_name,
     is_report_reply,
@@ -112,8 +113,12 @@ class Robot:
 
     # commands ---------------------------------------------------------------------------
     def drive(self, **keys: Any) -> None:
-        """``DRIVE``: ``drive(left=2, right=2)``; see :func:`usarsim.client.core.drive_line`."""
-        self._conn.send(drive_line(**keys))
+        """``DRIVE``: ``drive(left=2, right=2)``; see :func:`usarsim.client.core.drive_command`."""
+        send_command = getattr(self._conn, "send_command", None)
+        if send_command is not None:  # the direct path: the command without its text
+            send_command(drive_command(**keys))
+        else:
+            self._conn.send(drive_line(**keys))
 
     def move(self, package: str, values: dict[int, float], order: int = 0) -> None:
         """Mission-package links (an arm, a pan-tilt) to positions: ``move("CameraPanTilt",

@@ -3,7 +3,8 @@ caller's thread, without sockets, an event loop or text (the direct path of the 
 and the environments, :mod:`usarsim.client.direct`).
 
 Each connection is a :class:`~usarsim.server.session.Session`, the same one a control
-connection runs: it is handed the client's command lines and answers with message objects,
+connection runs: it is handed the client's command lines (or the commands themselves, as the
+session would parse them) and answers with message objects,
 which go to the connection's ``emit`` instead of being printed; the simulation's outputs for
 its robot go there too, as the control server would write them (a mission package's ASTA
 after its MISSTA for a client of the actuator API).  The simulation runs inline
@@ -64,6 +65,11 @@ class DirectConnection:
         for line in text.splitlines():
             if line:
                 self.session.handle_line(line)
+
+    def handle_command(self, cmd: Any) -> None:
+        """A command as the session would parse it from its line (:func:`usarsim.protocol.commands.as_parsed`)."""
+        if not self.closed:
+            self.session.handle_command(cmd)
 
     def read_only(self, wanted: frozenset[str] | None) -> None:
         """Measure only the robot's sensors whose type or name is in ``wanted`` (None: every

@@ -175,6 +175,10 @@ class Session(Articulation, Queries):
             else:
                 self.log_once("malformed", "ignored a malformed line (%s): %.200r", exc, line)
             return
+        self.handle_command(cmd)
+
+    def handle_command(self, cmd: C.Command) -> None:
+        """A parsed command (a line's, or one the direct path hands over), to its handler."""
         handler = self.handlers.get(type(cmd))
         if handler is None:
             if isinstance(cmd, C.UnknownCommand):

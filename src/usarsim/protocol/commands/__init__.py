@@ -35,7 +35,8 @@ One module per family of commands holds the declarations:
 * :mod:`.common`: what they share (the value readers, the line builder).
 
 This module dispatches on them: a line's command word to its parser, a command's class to its
-format.
+format.  :func:`as_parsed` gives, without the text, the command a server parses from a line a
+client formatted (the in-process direct path hands commands over so).
 """
 
 from __future__ import annotations
@@ -56,7 +57,10 @@ from .queries import GetClosestPathNode, GetConf, GetGeo, GetPathNodes, GetStart
 from .robot import JOINT_ORDERS, Drive, Init, JointDrive, MultiDrive, WheelDrive
 
 __all__ = [
+    "DRIVE_FLAGS",
+    "DRIVE_NUMBERS",
     "Act",
+    "as_parsed",
     "Camera",
     "Command",
     "Control",
@@ -155,6 +159,48 @@ _FORMATTERS: dict[type, Callable[[Any], str]] = {
     **control.FORMATTERS,
     **extensions.FORMATTERS,
 }
+
+
+# the number keys and the flags of a plain DRIVE (no wheel or joint groups), as its fields
+DRIVE_NUMBERS = (
+    "left",
+    "right",
+    "speed",
+    "front_steer",
+    "rear_steer",
+    "altitude_velocity",
+    "linear_velocity",
+    "lateral_velocity",
+    "rotational_velocity",
+    "propeller",
+    "rudder",
+    "stern_plane",
+)
+DRIVE_FLAGS = ("normalized", "light", "flip")
+
+
+def as_parsed(cmd: Command) -> Command | None:
+    """What :func:`parse_command` makes of :func:`format_command` ``(cmd)``, when a quick
+    rule is sure of it; None otherwise (format it and parse it).  Numbers are written exactly,
+    so a finite one reads back as the same float and a flag as the same bool; a ``DRIVE`` of
+    such keys alone (no wheel or joint groups) is covered."""
+    if type(cmd) is not Drive or cmd.wheels or cmd.joints:
+        return None
+    values: dict[str, Any] = {}
+    for name in DRIVE_NUMBERS:
+        v = getattr(cmd, name)
+        if v is None:
+            continue
+        if type(v) not in (float, int) or not math.isfinite(v):  # a bool, NaN, an infinity: the parser says
+            return None
+        values[name] = float(v)
+    for name in DRIVE_FLAGS:
+        v = getattr(cmd, name)
+        if v is not None:
+            if type(v) is not bool:
+                return None
+            values[name] = v
+    return Drive(**values) if values else None
 
 
 def format_command(cmd: Command) -> str:
