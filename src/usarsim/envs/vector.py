@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import multiprocessing as mp
 import os
+import time
 import traceback
 from multiprocessing.connection import Connection
 from typing import Any
@@ -35,6 +36,10 @@ from .explore import ExploreEnv
 
 __all__ = ["ExploreVectorEnv", "make_vector"]
 
+# How long a worker polls for the next command before it sleeps: longer than the main
+# process's turn between two steps (a few tenths of a millisecond), so that the worker's
+# processor is not given up (in a virtual machine, taken back by the host) at every step.
+POLL_S = 0.002
 # The thread counts of the BLAS libraries NumPy may be built with, read when they load.
 BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -73,6 +78,14 @@ def _aligned(n: int) -> int:
     return (n + 7) // 8 * 8
 
 
+def _await(pipe: Connection, poll_s: float) -> None:
+    """Poll ``pipe`` for up to ``poll_s`` seconds, giving the processor to anything else that
+    wants it between looks (then :meth:`~Connection.recv` waits as usual)."""
+    end = time.perf_counter() + poll_s
+    while not pipe.poll(0) and time.perf_counter() < end:
+        os.sched_yield()
+
+
 def _worker(
     pipe: Connection,
     kwargs: dict[str, Any],
@@ -96,6 +109,7 @@ def _worker(
         ended = [False] * count
         pipe.send(("ready", None))
         while True:
+            _await(pipe, POLL_S)
             command, data = pipe.recv()
             if command == "reset":
                 seeds, options = data
