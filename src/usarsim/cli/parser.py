@@ -120,7 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
         "making and solving the constraints and the rest; each sensor type, ray casting, report "
         "scheduling, building readings, formatting, socket writes, waiting for the interpreter lock); "
         "with --env: each env step's wall time, the environment's and the simulator's processor "
-        "time, and bare mj_step of the same robots for one control period",
+        "time, and bare mj_step of the same robots for one control period, timed after each of five "
+        "stretches of steps (the share of bare physics is the stretches' median)",
     )
     b.add_argument(
         "--record",
@@ -207,8 +208,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--worlds",
         type=int,
         default=4,
-        help="with --env: worlds of the vector environment timed on the direct path (0 or 1: none; "
-        "default: %(default)s)",
+        help="with --env: worlds of the vector environment timed on the direct path, in turns with "
+        "one world (0 or 1: none; default: %(default)s)",
     )
     b.add_argument(
         "--transport",
