@@ -60,10 +60,13 @@ class DirectClientConnection:
         for m in received:
             state.record(m)
 
-    def send(self, line: str) -> None:
+    def _sending(self) -> None:
         if self.state.closed:
             raise ClientError(f"{self.what}: the connection is closed")
         self.sent = True
+
+    def send(self, line: str) -> None:
+        self._sending()
         self._end.handle(line)
 
     def send_command(self, cmd: Any) -> None:
@@ -73,9 +76,7 @@ class DirectClientConnection:
         if parsed is None:
             self.send(C.format_command(cmd))
             return
-        if self.state.closed:
-            raise ClientError(f"{self.what}: the connection is closed")
-        self.sent = True
+        self._sending()
         self._end.handle_command(parsed)
 
     def read(self, wait: float) -> bool:

@@ -66,28 +66,6 @@ def _single_steps(env: Any, steps: int) -> float:
     return elapsed
 
 
-def bench_vector(steps: int = 100, worlds: int = 4, *, seed: int = 0, **kwargs: Any) -> float:
-    """Environment steps a second (every world's steps counted) of an
-    :class:`~usarsim.envs.ExploreVectorEnv` of ``worlds`` worlds over ``steps`` vector steps
-    with random actions (seeded with ``seed``); ``kwargs`` as :func:`bench_env`'s.  Resets are
-    not counted (an episode that ends starts again within a step: that step is counted)."""
-    from .vector import make_vector
-
-    env = make_vector(worlds, **timed(steps, kwargs))
-    try:
-        env.reset(seed=seed)
-        env.action_space.seed(seed)
-        elapsed = 0.0
-        for _ in range(steps):
-            actions = env.action_space.sample()
-            t = time.perf_counter()
-            env.step(actions)
-            elapsed += time.perf_counter() - t
-    finally:
-        env.close()
-    return steps * worlds / elapsed
-
-
 # Untimed steps that start each stretch of bench_one_and_vector: the side that waited while
 # the other was timed starts from cold caches, its workers asleep.
 WARM_STEPS = 2
@@ -111,6 +89,7 @@ def bench_one_and_vector(
 
     blocks = max(1, min(int(blocks), steps))
     per_block = max(1, steps // blocks)
+    vector_block = max(1, per_block // worlds)  # vector steps a stretch: as many world steps
     kwargs = timed((per_block + WARM_STEPS) * blocks, {"transport": "inproc", **kwargs})
     single = ExploreEnv(**kwargs)
     vector = make_vector(worlds, **kwargs)
@@ -124,7 +103,7 @@ def bench_one_and_vector(
         for _ in range(blocks):
             _single_steps(single, WARM_STEPS)  # each stretch starts warm (not timed)
             a, b = _single_steps(single, per_block), 0.0
-            for k in range(WARM_STEPS + max(1, per_block // worlds)):
+            for k in range(WARM_STEPS + vector_block):
                 actions = vector.action_space.sample()
                 t = time.perf_counter()
                 vector.step(actions)
@@ -132,14 +111,13 @@ def bench_one_and_vector(
                     b += time.perf_counter() - t
             one_s += a
             vec_s += b
-            ratios.append((max(1, per_block // worlds) * worlds / b) / (per_block / a))
+            ratios.append((vector_block * worlds / b) / (per_block / a))
     finally:
         single.close()
         vector.close()
-    vector_steps = blocks * max(1, per_block // worlds) * worlds
     return {
         "one": blocks * per_block / one_s,
-        "vector": vector_steps / vec_s,
+        "vector": blocks * vector_block * worlds / vec_s,
         "times_one": statistics.median(ratios),
         "blocks": [round(r, 3) for r in ratios],
     }

@@ -86,7 +86,6 @@ def env_profile(
     period = float(kwargs.get("control_period_s", 0.1))
     env: Any = TeamExplore(robots=team, **kwargs) if team else ExploreEnv(**kwargs)
     wall = cpu = 0.0
-    bare: BarePhysics | None = None
     stretches: list[tuple[float, float]] = []  # (wall ms a step, bare physics ms a step) of each
     blocks = max(1, min(int(blocks), steps))
     try:
